@@ -290,7 +290,7 @@ def _check_keys(table: dict[str, Any], allowed: set[str], source: str, prefix: s
     for key in table:
         if key not in allowed:
             raise SceneError(
-                f"{source}: unknown key {prefix}{key!r} (expected one of: "
+                f"{source}: unknown key '{prefix}{key}' (expected one of: "
                 f"{', '.join(sorted(allowed))})"
             )
 
