@@ -67,8 +67,14 @@ def _write(tmp_path, text):
 @pytest.mark.parametrize(
     ("text", "pattern"),
     [
-        ("[[targets]]\nposition_m = [0, 0]\nvelocty_mps = [1, 0]\n", r"unknown key 'targets\[0\]\.velocty_mps'"),
-        ("[[targets]]\nposition_m = [0, 'a']\n", r"targets\[0\]\.position_m must be .* got \[0, 'a'\]"),
+        (
+            "[[targets]]\nposition_m = [0, 0]\nvelocty_mps = [1, 0]\n",
+            r"unknown key 'targets\[0\]\.velocty_mps'",
+        ),
+        (
+            "[[targets]]\nposition_m = [0, 'a']\n",
+            r"targets\[0\]\.position_m must be .* got \[0, 'a'\]",
+        ),
         ("[[targets]]\nvelocity_mps = [1, 0]\n", r"targets\[0\]\.position_m is missing"),
         ("colour = 3\n[[targets]]\nposition_m = [0, 0]\n", "unknown key 'colour'"),
         ("[trajectory]\nkind = 'spiral'\n[[targets]]\nposition_m = [0, 0]\n", "trajectory.kind"),

@@ -55,7 +55,7 @@ def test_chirp_compresses_to_width_one_over_b_at_the_delay():
 def test_passband_pulse_is_the_paper_formula():
     t = np.linspace(-3e-9, 3e-9, 101)
     f = passband_gaussian_pulse(t, carrier_hz=9.6e9, bandwidth_hz=622e6)
-    np.testing.assert_allclose(f, np.cos(2 * np.pi * 9.6e9 * t) * np.exp(-(622e6 * t) ** 2 / 2))
+    np.testing.assert_allclose(f, np.cos(2 * np.pi * 9.6e9 * t) * np.exp(-((622e6 * t) ** 2) / 2))
     env = baseband_gaussian_pulse(t, bandwidth_hz=622e6)
     assert np.all(np.abs(f) <= env + 1e-15)
 

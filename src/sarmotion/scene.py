@@ -185,8 +185,12 @@ class Scene:
         traj = dict(raw.get("trajectory", {}))
         kind = traj.get("kind", "circular")
         if kind not in ("circular", "linear"):
-            raise SceneError(f"{source}: trajectory.kind must be 'circular' or 'linear', got {kind!r}")
-        _check_keys(traj, _CIRCULAR_KEYS if kind == "circular" else _LINEAR_KEYS, source, "trajectory.")
+            raise SceneError(
+                f"{source}: trajectory.kind must be 'circular' or 'linear', got {kind!r}"
+            )
+        _check_keys(
+            traj, _CIRCULAR_KEYS if kind == "circular" else _LINEAR_KEYS, source, "trajectory."
+        )
         traj["kind"] = kind
         for key, value in traj.items():
             if key in ("centre_m", "direction"):

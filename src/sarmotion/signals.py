@@ -25,9 +25,7 @@ __all__ = [
 ]
 
 
-def lfm_chirp(
-    t_s: ArrayLike, *, bandwidth_hz: float, duration_s: float
-) -> NDArray[np.complex128]:
+def lfm_chirp(t_s: ArrayLike, *, bandwidth_hz: float, duration_s: float) -> NDArray[np.complex128]:
     """Baseband linear-FM chirp ``exp(i pi (B/T) t^2)`` on ``|t| <= T/2``, zero outside.
 
     Parameters

@@ -155,7 +155,9 @@ def simulate(
     traj = trajectory if trajectory is not None else scene.trajectory()
     rad = radar if radar is not None else scene.radar
     ref = scene.reference_point_m
-    stat = to_fast_time(simulate_phase_history(scene.stationary, traj, rad, ref, spreading=spreading))
+    stat = to_fast_time(
+        simulate_phase_history(scene.stationary, traj, rad, ref, spreading=spreading)
+    )
     mov = to_fast_time(simulate_phase_history(scene.moving, traj, rad, ref, spreading=spreading))
     data = stat + mov
     if snr_db is not None:

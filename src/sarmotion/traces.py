@@ -54,8 +54,7 @@ class Traces:
             d = d.astype(np.complex128)
         if d.shape[0] != self.trajectory.n_pulses:
             raise ValueError(
-                f"data has {d.shape[0]} pulses but the trajectory has "
-                f"{self.trajectory.n_pulses}"
+                f"data has {d.shape[0]} pulses but the trajectory has {self.trajectory.n_pulses}"
             )
         if d.shape[1] != self.radar.n_samples:
             raise ValueError(
@@ -145,7 +144,9 @@ class Traces:
 
     def with_data(self, data: ArrayLike, **metadata: Any) -> Traces:
         """A copy with new ``data`` (same axes), metadata updated with ``metadata``."""
-        return dataclasses.replace(self, data=np.asarray(data), metadata={**self.metadata, **metadata})
+        return dataclasses.replace(
+            self, data=np.asarray(data), metadata={**self.metadata, **metadata}
+        )
 
     def select_pulses(self, start: int, stop: int) -> Traces:
         """Pulses ``start:stop`` with slow time re-centred (a sub-aperture)."""
