@@ -74,7 +74,7 @@ def test_noise_has_requested_snr():
 def test_inject_equals_simulating_the_target():
     base = load_scene("example1")
     mover = PointTarget(position_m=[4.0, -3.0], velocity_mps=[-5.0, 2.0])
-    with_mover = _scene([*base.targets, mover])
+    with_mover = _scene([*base.targets, mover], radar=base.radar)
     sim = simulate(base)
     injected = inject(sim.traces, [mover])
     np.testing.assert_allclose(injected.data, simulate(with_mover).traces.data, atol=1e-12)

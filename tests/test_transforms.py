@@ -67,7 +67,7 @@ def test_moving_filter_annihilates_the_mover_it_is_tuned_to():
     m1 = sim.scene.moving[0]
     tr = sim.traces.with_data(sim.moving)
     out = annihilate(tr, m1.position_m, velocities_mps=m1.velocity_mps, kind="mean").data
-    one = simulate(Scene(name="m2", targets=(sim.scene.moving[1],))).moving
+    one = simulate(Scene(name="m2", targets=(sim.scene.moving[1],), radar=sim.scene.radar)).moving
     # What remains is (the projection of) the second mover alone.
     assert np.linalg.norm(out) == pytest.approx(np.linalg.norm(one), rel=0.1)
 

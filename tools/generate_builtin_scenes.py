@@ -28,6 +28,8 @@ def write(name, description, stationary, movers, trajectory=None, extra=""):
         f'description = """{description}"""\n',
         "reference_point_m = [0.0, 0.0]\n",
     ]
+    # The paper's compressed pulse cos(w t) exp(-B^2 t^2 / 2) (eq:compPulse).
+    lines.append('\n[radar]\npulse = "gaussian"\n')
     if trajectory:
         lines.append("\n[trajectory]\n")
         for k, v in trajectory.items():

@@ -1,0 +1,401 @@
+"""Command-line interface: ``sarmotion simulate | image | inject | separate | demo``.
+
+The only module that parses arguments and configures logging. Bad input never shows
+a traceback: one line on stderr (``sarmotion: error: ...``) and exit status 2; outputs
+are staged in a hidden sibling directory and moved into place only on success, so a
+failed run leaves nothing half-written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import os
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+
+from . import __version__
+
+log = logging.getLogger("sarmotion")
+
+EXIT_BAD_INPUT = 2
+
+
+class InputError(Exception):
+    """Bad user input: reported as one line, exit status 2."""
+
+
+# --------------------------------------------------------------------------- helpers
+@contextlib.contextmanager
+def staged_directory(out: Path) -> Iterator[Path]:
+    """Yield a hidden staging directory; move its files into ``out`` only on success."""
+    out = Path(out)
+    parent = out.resolve().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} exists and is not a directory")
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=parent))
+    try:
+        yield stage
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    out.mkdir(parents=True, exist_ok=True)
+    for item in sorted(stage.iterdir()):
+        target = out / item.name
+        if target.is_dir() and item.is_dir():
+            shutil.rmtree(target)
+        os.replace(item, target)
+    shutil.rmtree(stage, ignore_errors=True)
+
+
+class Progress:
+    """A tqdm progress bar driven by ``callback(done, total)`` calls from the library."""
+
+    def __init__(self, description: str, *, enabled: bool = True) -> None:
+        self.description = description
+        self.enabled = enabled
+        self._bar: Any = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        if self._bar is None:
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=total, desc=self.description, unit="step", leave=False)
+        self._bar.n = done
+        self._bar.refresh()
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def __enter__(self) -> Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _is_scene_reference(text: str) -> bool:
+    from .scene import builtin_scene_names
+
+    return text in builtin_scene_names() or text.lower().endswith(".toml")
+
+
+def load_input(
+    inputs: Sequence[str],
+    *,
+    speed_mps: float = 70.0,
+    autofocus: bool = False,
+    snr_db: float | None = None,
+    seed: int = 0,
+) -> tuple[Any, Any]:
+    """Read ``inputs`` as traces.
+
+    Returns ``(traces, simulation_or_None)``: a built-in scene name or scene ``.toml`` is
+    simulated (with its ground truth), a ``.h5`` file is read as native traces, and
+    ``.mat`` files are read as GOTCHA phase history (several files form one aperture).
+    """
+    from .io import load_traces, read_gotcha
+    from .scene import load_scene
+    from .simulate import simulate
+
+    if not inputs:
+        raise InputError("no INPUT given")
+    first = inputs[0]
+    if len(inputs) == 1 and _is_scene_reference(first):
+        sim = simulate(load_scene(first), snr_db=snr_db, rng=seed)
+        return sim.traces, sim
+    for p in inputs:
+        if not Path(p).exists():
+            raise InputError(f"input not found: {p}")
+    suffixes = {Path(p).suffix.lower() for p in inputs}
+    if suffixes == {".h5"} or suffixes == {".hdf5"}:
+        if len(inputs) != 1:
+            raise InputError("give one native traces file (.h5) at a time")
+        return load_traces(first), None
+    if suffixes == {".mat"}:
+        return read_gotcha(list(inputs), speed_mps=speed_mps, autofocus=autofocus), None
+    raise InputError(
+        f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
+        "a native traces .h5 file, or GOTCHA .mat files"
+    )
+
+
+def _parse_target(text: str) -> Any:
+    from .scene import PointTarget
+
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"--target {text!r}: expected numbers X,Y[,UX,UY[,AMP]]") from None
+    if len(values) not in (2, 4, 5) or not np.all(np.isfinite(values)):
+        raise InputError(f"--target {text!r}: expected X,Y or X,Y,UX,UY or X,Y,UX,UY,AMP")
+    x, y = values[:2]
+    u = values[2:4] if len(values) >= 4 else [0.0, 0.0]
+    amp = values[4] if len(values) == 5 else None
+    return PointTarget(position_m=[x, y], velocity_mps=u), amp
+
+
+def _write_json(path: Path, payload: dict[str, Any]) -> None:
+    path.write_text(json.dumps(payload, indent=2, default=_json_default) + "\n")
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.floating, np.integer)):
+        return obj.item()
+    if isinstance(obj, complex):
+        return [obj.real, obj.imag]
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON-serialisable: {type(obj).__name__}")
+
+
+def _grid(size_m: float, spacing_m: float, centre: tuple[float, float]) -> Any:
+    from .imaging import ImageGrid
+
+    if not (size_m > 0 and spacing_m > 0):
+        raise InputError(f"--size and --spacing must be positive, got {size_m}, {spacing_m}")
+    if size_m / spacing_m > 4096:
+        raise InputError(f"--size/--spacing gives {size_m / spacing_m:.0f} pixels a side (max 4096)")
+    return ImageGrid.square(centre_m=centre, size_m=size_m, spacing_m=spacing_m)
+
+
+# --------------------------------------------------------------------------- commands
+@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(__version__, prog_name="sarmotion")
+@click.option("-v", "--verbose", count=True, help="More log output (-v info, -vv debug).")
+@click.option("-q", "--quiet", is_flag=True, help="No progress bars.")
+@click.pass_context
+def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
+    """Single-antenna SAR imaging and motion estimation of complex scenes.
+
+    Separates the echoes of stationary and moving targets (travel-time annihilation
+    filters, windowed robust PCA), estimates the movers' velocities and positions, and
+    images everything in focus (Borcea, Callaghan & Papanicolaou). Inputs are built-in
+    scenes (example1, example2, scene1, filter10, filter30, hyperbola, rotscatt), scene
+    .toml files, native .h5 traces, or GOTCHA .mat phase-history files.
+    """
+    level = logging.WARNING - 10 * min(verbose, 2)
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    ctx.ensure_object(dict)
+    ctx.obj["progress"] = not quiet and sys.stderr.isatty()
+
+
+@main.command()
+@click.argument("scene")
+@click.option("--out", "out", required=True, type=click.Path(path_type=Path),
+              help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
+@click.option("--snr-db", type=float, default=None, help="Add white noise at this SNR (dB).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Noise seed.")
+@click.option("--spreading/--no-spreading", default=False, show_default=True,
+              help="Include the 1/R^2 amplitude decay.")
+def simulate(scene: str, out: Path, snr_db: float | None, seed: int, spreading: bool) -> None:
+    """Simulate the traces of SCENE (a built-in name or a scene .toml file).
+
+    Writes native traces (.h5, with the stationary-only and moving-only truth as extra
+    datasets "stationary" and "moving") or, if OUT is not a .h5 path, GOTCHA-format .mat
+    files into the directory OUT.
+    """
+    from .io import save_traces, write_gotcha
+    from .scene import load_scene
+    from .simulate import simulate as run
+
+    sim = run(load_scene(scene), snr_db=snr_db, rng=seed, spreading=spreading)
+    if out.suffix.lower() in (".h5", ".hdf5"):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        save_traces(out, sim.traces, extra={"stationary": sim.stationary, "moving": sim.moving})
+        click.echo(f"wrote {out} ({sim.traces.n_pulses} pulses x {sim.traces.n_samples} samples)")
+    else:
+        with staged_directory(out) as stage:
+            files = write_gotcha(sim.traces, stage)
+        click.echo(f"wrote {len(files)} GOTCHA file(s) to {out}")
+
+
+@main.command()
+@click.argument("inputs", nargs=-1, required=True)
+@click.option("--out", "out", required=True, type=click.Path(path_type=Path),
+              help="Output directory (image.png, image.h5).")
+@click.option("--velocity", nargs=2, type=float, default=None, metavar="UX UY",
+              help="Motion-compensate for this ground velocity (m/s), eq:imagecompu.")
+@click.option("--size", "size_m", type=float, default=100.0, show_default=True,
+              help="Side of the square image (m).")
+@click.option("--spacing", "spacing_m", type=float, default=0.25, show_default=True,
+              help="Pixel spacing (m).")
+@click.option("--centre", nargs=2, type=float, default=(0.0, 0.0), show_default=True,
+              metavar="X Y", help="Image centre (m).")
+@click.option("--speed", "speed_mps", type=float, default=70.0, show_default=True,
+              help="Platform speed for GOTCHA slow time (m/s).")
+@click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
+@click.option("--dynamic-range", "dynamic_range_db", type=float, default=40.0, show_default=True,
+              help="Displayed dynamic range (dB).")
+@click.pass_context
+def image(
+    ctx: click.Context,
+    inputs: tuple[str, ...],
+    out: Path,
+    velocity: tuple[float, float] | None,
+    size_m: float,
+    spacing_m: float,
+    centre: tuple[float, float],
+    speed_mps: float,
+    autofocus: bool,
+    dynamic_range_db: float,
+) -> None:
+    """Backprojection image (eq:image) of INPUTS: a scene, native traces or GOTCHA .mat files.
+
+    Writes OUT/image.png (dB, peak-normalised), OUT/image.h5 (complex image with its axes)
+    and OUT/peaks.json (the brightest points).
+    """
+    from .imaging import backproject
+    from .io import save_image
+    from .plotting import image_figure, save_figure
+
+    traces, _ = load_input(inputs, speed_mps=speed_mps, autofocus=autofocus)
+    grid = _grid(size_m, spacing_m, centre)
+    if velocity is not None and not np.all(np.isfinite(velocity)):
+        raise InputError(f"--velocity must be finite, got {velocity}")
+    t0 = time.perf_counter()
+    with Progress("backprojection", enabled=ctx.obj["progress"]) as bar:
+        img = backproject(traces, grid, velocity_mps=velocity, progress=bar)
+    elapsed = time.perf_counter() - t0
+    peaks = img.peaks(5, min_separation_m=3.0)
+    with staged_directory(out) as stage:
+        title = "image" if velocity is None else f"image, u = ({velocity[0]:g}, {velocity[1]:g}) m/s"
+        fig = image_figure([(title, img.values)], x_m=grid.x_m, y_m=grid.y_m,
+                           dynamic_range_db=dynamic_range_db)
+        save_figure(fig, stage / "image.png")
+        save_image(stage / "image.h5", img.values, x_m=grid.x_m, y_m=grid.y_m,
+                   velocity_mps=velocity, metadata={"inputs": list(inputs), **traces.metadata})
+        _write_json(stage / "peaks.json", {
+            "schema": "sarmotion.peaks/1",
+            "peaks": [{"position_m": [x, y], "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2]))}
+                      for x, y, v in peaks],
+            "seconds": elapsed,
+            "pixel_pulses_per_second": grid.shape[0] * grid.shape[1] * traces.n_pulses / elapsed,
+        })
+    x, y, _ = peaks[0]
+    click.echo(f"wrote {out}/image.png, image.h5, peaks.json; brightest point at "
+               f"({x:.2f}, {y:.2f}) m; {elapsed:.2f} s")
+
+
+@main.command()
+@click.argument("inputs", nargs=-1, required=True)
+@click.option("--target", "targets", multiple=True, required=True, metavar="X,Y[,UX,UY[,AMP]]",
+              help="Point target to add: position at s = 0 (m), ground velocity (m/s), "
+                   "amplitude in data units (default: the median over pulses of max|D|). "
+                   "Repeat for several targets.")
+@click.option("--out", "out", required=True, type=click.Path(path_type=Path),
+              help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
+@click.option("--speed", "speed_mps", type=float, default=70.0, show_default=True,
+              help="Platform speed for GOTCHA slow time (m/s).")
+def inject(inputs: tuple[str, ...], targets: tuple[str, ...], out: Path, speed_mps: float) -> None:
+    """Add simulated point targets (stationary or moving) to real or simulated traces."""
+    from .io import save_traces, write_gotcha
+    from .scene import PointTarget
+    from .simulate import inject as run
+
+    traces, _ = load_input(inputs, speed_mps=speed_mps)
+    default_amp = float(np.median(np.abs(traces.data).max(axis=1)))
+    parsed = []
+    for text in targets:
+        t, amp = _parse_target(text)
+        parsed.append(PointTarget(position_m=t.position_m, velocity_mps=t.velocity_mps,
+                                  reflectivity=default_amp if amp is None else amp))
+    result = run(traces, parsed)
+    if out.suffix.lower() in (".h5", ".hdf5"):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        save_traces(out, result)
+        click.echo(f"wrote {out} with {len(parsed)} injected target(s)")
+    else:
+        with staged_directory(out) as stage:
+            files = write_gotcha(result, stage)
+        click.echo(f"wrote {len(files)} GOTCHA file(s) to {out} with {len(parsed)} target(s)")
+
+
+@main.command()
+@click.option("--out", "out", type=click.Path(path_type=Path), default=Path("sarmotion-demo"),
+              show_default=True, help="Output directory.")
+@click.pass_context
+def demo(ctx: click.Context, out: Path) -> None:
+    """Simulate Scene 1 (20 stationary targets, 2 movers) and write its images and traces."""
+    from .imaging import ImageGrid, backproject
+    from .plotting import image_figure, save_figure, traces_figure
+    from .scene import load_scene
+    from .simulate import simulate as run
+
+    sim = run(load_scene("scene1"))
+    tr = sim.traces
+    grid = ImageGrid.square(size_m=60.0, spacing_m=0.25)
+    with Progress("images", enabled=ctx.obj["progress"]) as bar:
+        full = backproject(tr, grid)
+        bar(1, 4)
+        stat = backproject(tr.with_data(sim.stationary), grid)
+        bar(2, 4)
+        movers = []
+        for k, m in enumerate(sim.scene.moving):
+            movers.append(backproject(tr, grid, velocity_mps=m.velocity_mps))
+            bar(3 + k, 4)
+    truth = [tuple(t.position_m[:2]) for t in sim.scene.stationary]
+    with staged_directory(out) as stage:
+        fig = traces_figure(
+            [("traces |M|", tr.data, False), ("stationary |L|", sim.stationary, False),
+             ("moving |S| (dB)", sim.moving, True)],
+            slow_times_s=tr.slow_times_s, fast_times_s=tr.fast_times_s,
+            normalise_by=float(np.abs(tr.data).max()))
+        save_figure(fig, stage / "traces.png")
+        fig = image_figure([("Scene 1", full.values), ("stationary targets only", stat.values)],
+                           x_m=grid.x_m, y_m=grid.y_m, markers=[truth, truth])
+        save_figure(fig, stage / "images.png")
+        fig = image_figure(
+            [(f"compensated for mover {k + 1}", im.values) for k, im in enumerate(movers)],
+            x_m=grid.x_m, y_m=grid.y_m,
+            markers=[[tuple(m.position_m[:2])] for m in sim.scene.moving])
+        save_figure(fig, stage / "movers.png")
+    click.echo(f"wrote {out}/traces.png, images.png, movers.png")
+
+
+# --------------------------------------------------------------------------- entry
+def _known_errors() -> tuple[type[BaseException], ...]:
+    from .io import DataError
+    from .scene import SceneError
+
+    return (InputError, DataError, SceneError, ValueError, FileNotFoundError, OSError)
+
+
+def run(args: Sequence[str] | None = None) -> int:
+    """Run the CLI with ``args``; return the exit status (never raises for bad input)."""
+    try:
+        main.main(args=list(args) if args is not None else None, prog_name="sarmotion",
+                  standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("sarmotion: aborted", err=True)
+        return 130
+    except click.ClickException as exc:
+        exc.show()
+        return exc.exit_code
+    except _known_errors() as exc:
+        log.debug("bad input", exc_info=True)
+        click.echo(f"sarmotion: error: {exc}", err=True)
+        return EXIT_BAD_INPUT
+    return 0
+
+
+def entry_point() -> None:
+    """Console-script entry point."""
+    sys.exit(run())
+
