@@ -14,9 +14,10 @@ __all__ = ["Radar", "PulseShape"]
 
 PulseShape = Literal["rect", "gaussian"]
 
-#: GOTCHA X-band: 424 frequencies from 9.288 GHz in steps of 1.471488 MHz.
-GOTCHA_START_HZ = 9.28808e9
-GOTCHA_STEP_HZ = 1.471488e6
+#: GOTCHA X-band: 424 frequencies from 9.288 GHz in steps of 1.4713 MHz (least-squares fit
+#: of the float32 grid stored in the pass-1 files).
+GOTCHA_START_HZ = 9.28808072e9
+GOTCHA_STEP_HZ = 1.47130106e6
 GOTCHA_N_FREQUENCIES = 424
 
 
