@@ -67,6 +67,7 @@ class Progress:
         self._bar: Any = None
 
     def __call__(self, done: int, total: int) -> None:
+        """Advance the bar to ``done`` of ``total``."""
         if not self.enabled:
             return
         if self._bar is None:
@@ -77,6 +78,7 @@ class Progress:
         self._bar.refresh()
 
     def close(self) -> None:
+        """Remove the bar."""
         if self._bar is not None:
             self._bar.close()
             self._bar = None
@@ -171,7 +173,9 @@ def _grid(size_m: float, spacing_m: float, centre: tuple[float, float]) -> Any:
     if not (size_m > 0 and spacing_m > 0):
         raise InputError(f"--size and --spacing must be positive, got {size_m}, {spacing_m}")
     if size_m / spacing_m > 4096:
-        raise InputError(f"--size/--spacing gives {size_m / spacing_m:.0f} pixels a side (max 4096)")
+        raise InputError(
+            f"--size/--spacing gives {size_m / spacing_m:.0f} pixels a side (max 4096)"
+        )
     return ImageGrid.square(centre_m=centre, size_m=size_m, spacing_m=spacing_m)
 
 
@@ -198,12 +202,21 @@ def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
 
 @main.command()
 @click.argument("scene")
-@click.option("--out", "out", required=True, type=click.Path(path_type=Path),
-              help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(path_type=Path),
+    help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).",
+)
 @click.option("--snr-db", type=float, default=None, help="Add white noise at this SNR (dB).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Noise seed.")
-@click.option("--spreading/--no-spreading", default=False, show_default=True,
-              help="Include the 1/R^2 amplitude decay.")
+@click.option(
+    "--spreading/--no-spreading",
+    default=False,
+    show_default=True,
+    help="Include the 1/R^2 amplitude decay.",
+)
 def simulate(scene: str, out: Path, snr_db: float | None, seed: int, spreading: bool) -> None:
     """Simulate the traces of SCENE (a built-in name or a scene .toml file).
 
@@ -228,21 +241,58 @@ def simulate(scene: str, out: Path, snr_db: float | None, seed: int, spreading: 
 
 @main.command()
 @click.argument("inputs", nargs=-1, required=True)
-@click.option("--out", "out", required=True, type=click.Path(path_type=Path),
-              help="Output directory (image.png, image.h5).")
-@click.option("--velocity", nargs=2, type=float, default=None, metavar="UX UY",
-              help="Motion-compensate for this ground velocity (m/s), eq:imagecompu.")
-@click.option("--size", "size_m", type=float, default=100.0, show_default=True,
-              help="Side of the square image (m).")
-@click.option("--spacing", "spacing_m", type=float, default=0.25, show_default=True,
-              help="Pixel spacing (m).")
-@click.option("--centre", nargs=2, type=float, default=(0.0, 0.0), show_default=True,
-              metavar="X Y", help="Image centre (m).")
-@click.option("--speed", "speed_mps", type=float, default=70.0, show_default=True,
-              help="Platform speed for GOTCHA slow time (m/s).")
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(path_type=Path),
+    help="Output directory (image.png, image.h5).",
+)
+@click.option(
+    "--velocity",
+    nargs=2,
+    type=float,
+    default=None,
+    metavar="UX UY",
+    help="Motion-compensate for this ground velocity (m/s), eq:imagecompu.",
+)
+@click.option(
+    "--size",
+    "size_m",
+    type=float,
+    default=100.0,
+    show_default=True,
+    help="Side of the square image (m).",
+)
+@click.option(
+    "--spacing", "spacing_m", type=float, default=0.25, show_default=True, help="Pixel spacing (m)."
+)
+@click.option(
+    "--centre",
+    nargs=2,
+    type=float,
+    default=(0.0, 0.0),
+    show_default=True,
+    metavar="X Y",
+    help="Image centre (m).",
+)
+@click.option(
+    "--speed",
+    "speed_mps",
+    type=float,
+    default=70.0,
+    show_default=True,
+    help="Platform speed for GOTCHA slow time (m/s).",
+)
 @click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
-@click.option("--dynamic-range", "dynamic_range_db", type=float, default=40.0, show_default=True,
-              help="Displayed dynamic range (dB).")
+@click.option(
+    "--dynamic-range",
+    "dynamic_range_db",
+    type=float,
+    default=40.0,
+    show_default=True,
+    help="Displayed dynamic range (dB).",
+)
 @click.pass_context
 def image(
     ctx: click.Context,
@@ -275,34 +325,70 @@ def image(
     elapsed = time.perf_counter() - t0
     peaks = img.peaks(5, min_separation_m=3.0)
     with staged_directory(out) as stage:
-        title = "image" if velocity is None else f"image, u = ({velocity[0]:g}, {velocity[1]:g}) m/s"
-        fig = image_figure([(title, img.values)], x_m=grid.x_m, y_m=grid.y_m,
-                           dynamic_range_db=dynamic_range_db)
+        title = (
+            "image" if velocity is None else f"image, u = ({velocity[0]:g}, {velocity[1]:g}) m/s"
+        )
+        fig = image_figure(
+            [(title, img.values)], x_m=grid.x_m, y_m=grid.y_m, dynamic_range_db=dynamic_range_db
+        )
         save_figure(fig, stage / "image.png")
-        save_image(stage / "image.h5", img.values, x_m=grid.x_m, y_m=grid.y_m,
-                   velocity_mps=velocity, metadata={"inputs": list(inputs), **traces.metadata})
-        _write_json(stage / "peaks.json", {
-            "schema": "sarmotion.peaks/1",
-            "peaks": [{"position_m": [x, y], "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2]))}
-                      for x, y, v in peaks],
-            "seconds": elapsed,
-            "pixel_pulses_per_second": grid.shape[0] * grid.shape[1] * traces.n_pulses / elapsed,
-        })
+        save_image(
+            stage / "image.h5",
+            img.values,
+            x_m=grid.x_m,
+            y_m=grid.y_m,
+            velocity_mps=velocity,
+            metadata={"inputs": list(inputs), **traces.metadata},
+        )
+        _write_json(
+            stage / "peaks.json",
+            {
+                "schema": "sarmotion.peaks/1",
+                "peaks": [
+                    {"position_m": [x, y], "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2]))}
+                    for x, y, v in peaks
+                ],
+                "seconds": elapsed,
+                "pixel_pulses_per_second": grid.shape[0]
+                * grid.shape[1]
+                * traces.n_pulses
+                / elapsed,
+            },
+        )
     x, y, _ = peaks[0]
-    click.echo(f"wrote {out}/image.png, image.h5, peaks.json; brightest point at "
-               f"({x:.2f}, {y:.2f}) m; {elapsed:.2f} s")
+    click.echo(
+        f"wrote {out}/image.png, image.h5, peaks.json; brightest point at "
+        f"({x:.2f}, {y:.2f}) m; {elapsed:.2f} s"
+    )
 
 
 @main.command()
 @click.argument("inputs", nargs=-1, required=True)
-@click.option("--target", "targets", multiple=True, required=True, metavar="X,Y[,UX,UY[,AMP]]",
-              help="Point target to add: position at s = 0 (m), ground velocity (m/s), "
-                   "amplitude in data units (default: the median over pulses of max|D|). "
-                   "Repeat for several targets.")
-@click.option("--out", "out", required=True, type=click.Path(path_type=Path),
-              help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
-@click.option("--speed", "speed_mps", type=float, default=70.0, show_default=True,
-              help="Platform speed for GOTCHA slow time (m/s).")
+@click.option(
+    "--target",
+    "targets",
+    multiple=True,
+    required=True,
+    metavar="X,Y[,UX,UY[,AMP]]",
+    help="Point target to add: position at s = 0 (m), ground velocity (m/s), "
+    "amplitude in data units (default: the median over pulses of max|D|). "
+    "Repeat for several targets.",
+)
+@click.option(
+    "--out",
+    "out",
+    required=True,
+    type=click.Path(path_type=Path),
+    help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).",
+)
+@click.option(
+    "--speed",
+    "speed_mps",
+    type=float,
+    default=70.0,
+    show_default=True,
+    help="Platform speed for GOTCHA slow time (m/s).",
+)
 def inject(inputs: tuple[str, ...], targets: tuple[str, ...], out: Path, speed_mps: float) -> None:
     """Add simulated point targets (stationary or moving) to real or simulated traces."""
     from .io import save_traces, write_gotcha
@@ -314,8 +400,13 @@ def inject(inputs: tuple[str, ...], targets: tuple[str, ...], out: Path, speed_m
     parsed = []
     for text in targets:
         t, amp = _parse_target(text)
-        parsed.append(PointTarget(position_m=t.position_m, velocity_mps=t.velocity_mps,
-                                  reflectivity=default_amp if amp is None else amp))
+        parsed.append(
+            PointTarget(
+                position_m=t.position_m,
+                velocity_mps=t.velocity_mps,
+                reflectivity=default_amp if amp is None else amp,
+            )
+        )
     result = run(traces, parsed)
     if out.suffix.lower() in (".h5", ".hdf5"):
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -328,8 +419,198 @@ def inject(inputs: tuple[str, ...], targets: tuple[str, ...], out: Path, speed_m
 
 
 @main.command()
-@click.option("--out", "out", type=click.Path(path_type=Path), default=Path("sarmotion-demo"),
-              show_default=True, help="Output directory.")
+@click.argument("inputs", nargs=-1, required=True)
+@click.option(
+    "--method",
+    type=click.Choice(["combined", "rpca", "annihilation"]),
+    default="combined",
+    show_default=True,
+    help="combined: image-guided extraction in travel-time-aligned frames "
+    "(sect:sepdisc); rpca: windowed robust PCA (sect:RPCA); annihilation: "
+    "composed filters Q (eq:OP2) at stationary points of the image.",
+)
+@click.option(
+    "--out", "out", required=True, type=click.Path(path_type=Path), help="Output directory."
+)
+@click.option(
+    "--window",
+    type=int,
+    default=None,
+    help="RPCA fast-time window (samples); default chosen from the data.",
+)
+@click.option(
+    "--threshold-db",
+    type=float,
+    default=-25.0,
+    show_default=True,
+    help="Stationary detection threshold in the preliminary image (dB re peak).",
+)
+@click.option(
+    "--size",
+    "size_m",
+    type=float,
+    default=None,
+    help="Side of the preliminary image (m); default 60 m for scenes, 100 m for data.",
+)
+@click.option(
+    "--spacing",
+    "spacing_m",
+    type=float,
+    default=0.25,
+    show_default=True,
+    help="Pixel spacing of the preliminary image (m).",
+)
+@click.option(
+    "--speed",
+    "speed_mps",
+    type=float,
+    default=70.0,
+    show_default=True,
+    help="Platform speed for GOTCHA slow time (m/s).",
+)
+@click.option(
+    "--snr-db", type=float, default=None, help="For scene inputs: add white noise at this SNR (dB)."
+)
+@click.option("--seed", type=int, default=0, show_default=True, help="Noise seed.")
+@click.pass_context
+def separate(
+    ctx: click.Context,
+    inputs: tuple[str, ...],
+    method: str,
+    out: Path,
+    window: int | None,
+    threshold_db: float,
+    size_m: float | None,
+    spacing_m: float,
+    speed_mps: float,
+    snr_db: float | None,
+    seed: int,
+) -> None:
+    """Separate the traces of stationary and moving targets in INPUTS.
+
+    Writes OUT/separated.h5 (the traces M with extra datasets "stationary" (L, absent for
+    the annihilation filter) and "moving" (S or Q M)), OUT/separation.png (|M|, |L|, |S|
+    normalised by max|M|, S also in dB: the paper's style), OUT/image.png (the preliminary
+    image with the stationary points used) and OUT/separation.json (method details and, for
+    simulated scenes, quality against the truth).
+    """
+    from .imaging import backproject
+    from .io import save_traces
+    from .plotting import image_figure, save_figure, traces_figure
+    from .separation import (
+        mover_trace_coverage,
+        separate_annihilation,
+        separate_combined,
+        separate_rpca,
+        separation_quality,
+        stationary_candidates,
+    )
+
+    traces, sim = load_input(inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed)
+    size = size_m if size_m is not None else (60.0 if sim is not None else 100.0)
+    centre = tuple(traces.reference_point_m[:2])
+    grid = _grid(size, spacing_m, centre)
+    progress = ctx.obj["progress"]
+    t0 = time.perf_counter()
+    with Progress("preliminary image", enabled=progress) as bar:
+        prelim = backproject(traces, grid, progress=bar)
+    if method == "combined":
+        with Progress("combined separation", enabled=progress) as bar:
+            sep = separate_combined(
+                traces,
+                image_values=prelim.values,
+                x_m=grid.x_m,
+                y_m=grid.y_m,
+                threshold_db=threshold_db,
+                callback=bar,
+            )
+    elif method == "rpca":
+        with Progress("windowed RPCA", enabled=progress) as bar:
+            sep = separate_rpca(traces, window=window, callback=bar)
+    else:
+        pts = stationary_candidates(
+            prelim.values, x_m=grid.x_m, y_m=grid.y_m, traces=traces, threshold_db=threshold_db
+        )
+        sep = separate_annihilation(traces, pts)
+    elapsed = time.perf_counter() - t0
+    summary: dict[str, Any] = {
+        "schema": "sarmotion.separation/1",
+        "method": method,
+        "inputs": list(inputs),
+        "n_pulses": traces.n_pulses,
+        "n_samples": traces.n_samples,
+        "seconds": elapsed,
+        "stationary_points_m": sep.stationary_points_m,
+        "info": {k: v for k, v in sep.info.items() if k != "candidates"},
+    }
+    if sim is not None:
+        if sep.stationary is None:
+            from .transforms import annihilate
+
+            pts = sep.stationary_points_m
+
+            def op(d: np.ndarray) -> np.ndarray:
+                return annihilate(traces.with_data(d), pts).data
+
+            quality = separation_quality(
+                sep, true_stationary=sim.stationary, true_moving=sim.moving, operator=op
+            )
+        else:
+            quality = separation_quality(
+                sep, true_stationary=sim.stationary, true_moving=sim.moving
+            )
+        quality["mover_trace_coverage"] = mover_trace_coverage(sep.moving, traces, sim.scene.moving)
+        summary["quality"] = quality
+    m_max = float(np.abs(traces.data).max())
+    panels = [("|M|", traces.data, False)]
+    if sep.stationary is not None:
+        panels.append(("|L|", sep.stationary, False))
+        panels += [("|S|", sep.moving, False), ("|S| (dB)", sep.moving, True)]
+        norm = m_max
+    else:
+        panels += [("|Q M| (dB re max)", sep.moving, True)]
+        norm = None
+    with staged_directory(out) as stage:
+        extra = {"moving": sep.moving}
+        if sep.stationary is not None:
+            extra["stationary"] = sep.stationary
+        save_traces(stage / "separated.h5", traces, extra=extra)
+        fig = traces_figure(
+            panels,
+            slow_times_s=traces.slow_times_s,
+            fast_times_s=traces.fast_times_s,
+            normalise_by=norm,
+            ncols=len(panels),
+        )
+        save_figure(fig, stage / "separation.png")
+        pts2 = [tuple(p[:2]) for p in sep.stationary_points_m]
+        fig = image_figure(
+            [("preliminary image, stationary points used", prelim.values)],
+            x_m=grid.x_m,
+            y_m=grid.y_m,
+            markers=[pts2],
+        )
+        save_figure(fig, stage / "image.png")
+        _write_json(stage / "separation.json", summary)
+    line = f"wrote {out}/separated.h5, separation.png, image.png, separation.json ({elapsed:.1f} s)"
+    if "quality" in summary and "relative_error_moving" in summary["quality"]:
+        q = summary["quality"]
+        line += (
+            f"; ||S-S_true||/||S_true|| = {q['relative_error_moving']:.3f}, "
+            f"mover retained {q['mover_retained']:.3f}"
+        )
+    click.echo(line)
+
+
+@main.command()
+@click.option(
+    "--out",
+    "out",
+    type=click.Path(path_type=Path),
+    default=Path("sarmotion-demo"),
+    show_default=True,
+    help="Output directory.",
+)
 @click.pass_context
 def demo(ctx: click.Context, out: Path) -> None:
     """Simulate Scene 1 (20 stationary targets, 2 movers) and write its images and traces."""
@@ -353,18 +634,29 @@ def demo(ctx: click.Context, out: Path) -> None:
     truth = [tuple(t.position_m[:2]) for t in sim.scene.stationary]
     with staged_directory(out) as stage:
         fig = traces_figure(
-            [("traces |M|", tr.data, False), ("stationary |L|", sim.stationary, False),
-             ("moving |S| (dB)", sim.moving, True)],
-            slow_times_s=tr.slow_times_s, fast_times_s=tr.fast_times_s,
-            normalise_by=float(np.abs(tr.data).max()))
+            [
+                ("traces |M|", tr.data, False),
+                ("stationary |L|", sim.stationary, False),
+                ("moving |S| (dB)", sim.moving, True),
+            ],
+            slow_times_s=tr.slow_times_s,
+            fast_times_s=tr.fast_times_s,
+            normalise_by=float(np.abs(tr.data).max()),
+        )
         save_figure(fig, stage / "traces.png")
-        fig = image_figure([("Scene 1", full.values), ("stationary targets only", stat.values)],
-                           x_m=grid.x_m, y_m=grid.y_m, markers=[truth, truth])
+        fig = image_figure(
+            [("Scene 1", full.values), ("stationary targets only", stat.values)],
+            x_m=grid.x_m,
+            y_m=grid.y_m,
+            markers=[truth, truth],
+        )
         save_figure(fig, stage / "images.png")
         fig = image_figure(
             [(f"compensated for mover {k + 1}", im.values) for k, im in enumerate(movers)],
-            x_m=grid.x_m, y_m=grid.y_m,
-            markers=[[tuple(m.position_m[:2])] for m in sim.scene.moving])
+            x_m=grid.x_m,
+            y_m=grid.y_m,
+            markers=[[tuple(m.position_m[:2])] for m in sim.scene.moving],
+        )
         save_figure(fig, stage / "movers.png")
     click.echo(f"wrote {out}/traces.png, images.png, movers.png")
 
@@ -380,8 +672,11 @@ def _known_errors() -> tuple[type[BaseException], ...]:
 def run(args: Sequence[str] | None = None) -> int:
     """Run the CLI with ``args``; return the exit status (never raises for bad input)."""
     try:
-        main.main(args=list(args) if args is not None else None, prog_name="sarmotion",
-                  standalone_mode=False)
+        main.main(
+            args=list(args) if args is not None else None,
+            prog_name="sarmotion",
+            standalone_mode=False,
+        )
     except click.exceptions.Abort:
         click.echo("sarmotion: aborted", err=True)
         return 130
@@ -398,4 +693,3 @@ def run(args: Sequence[str] | None = None) -> int:
 def entry_point() -> None:
     """Console-script entry point."""
     sys.exit(run())
-

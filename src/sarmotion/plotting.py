@@ -31,7 +31,9 @@ __all__ = [
 ]
 
 
-def to_db(values: ArrayLike, *, reference: float | None = None, floor_db: float = -120.0) -> NDArray:
+def to_db(
+    values: ArrayLike, *, reference: float | None = None, floor_db: float = -120.0
+) -> NDArray:
     """``20 log10(|values| / reference)`` with a floor (dB); reference defaults to the max."""
     a = np.abs(np.asarray(values))
     ref = float(a.max()) if reference is None else float(reference)
@@ -76,13 +78,27 @@ def plot_traces(
     extent = (t[0], t[-1], s[-1], s[0])
     if db:
         img = to_db(d, reference=ref, floor_db=-dynamic_range_db)
-        im = ax.imshow(img, aspect="auto", extent=extent, cmap="viridis", vmin=-dynamic_range_db,
-                       vmax=0.0, interpolation="nearest")
+        im = ax.imshow(
+            img,
+            aspect="auto",
+            extent=extent,
+            cmap="viridis",
+            vmin=-dynamic_range_db,
+            vmax=0.0,
+            interpolation="nearest",
+        )
         label = "dB re max|M|"
     else:
         img = d / ref if ref > 0 else d
-        im = ax.imshow(img, aspect="auto", extent=extent, cmap="viridis", vmin=0.0, vmax=1.0,
-                       interpolation="nearest")
+        im = ax.imshow(
+            img,
+            aspect="auto",
+            extent=extent,
+            cmap="viridis",
+            vmin=0.0,
+            vmax=1.0,
+            interpolation="nearest",
+        )
         label = "|.| / max|M|"
     ax.set_xlabel("fast time t (ns)")
     ax.set_ylabel("slow time s (s)")
@@ -112,8 +128,15 @@ def plot_image(
     x = np.asarray(x_m)
     y = np.asarray(y_m)
     img = to_db(values, reference=reference, floor_db=-dynamic_range_db)
-    im = ax.imshow(img, origin="lower", extent=(x[0], x[-1], y[0], y[-1]), cmap="gray",
-                   vmin=-dynamic_range_db, vmax=0.0, interpolation="nearest")
+    im = ax.imshow(
+        img,
+        origin="lower",
+        extent=(x[0], x[-1], y[0], y[-1]),
+        cmap="gray",
+        vmin=-dynamic_range_db,
+        vmax=0.0,
+        interpolation="nearest",
+    )
     if markers:
         mx, my = np.asarray(markers, dtype=float).T
         ax.plot(mx, my, "o", mfc="none", mec="tab:red", ms=8, mew=1.0, label=marker_label or None)
@@ -146,8 +169,16 @@ def traces_figure(
     if ref is None:
         ref = max(float(np.abs(np.asarray(d)).max()) for _, d, _ in panels)
     for ax, (title, data, db) in zip(axes.ravel(), panels, strict=False):
-        plot_traces(ax, data, slow_times_s=slow_times_s, fast_times_s=fast_times_s,
-                    normalise_by=ref, db=db, title=title, dynamic_range_db=dynamic_range_db)
+        plot_traces(
+            ax,
+            data,
+            slow_times_s=slow_times_s,
+            fast_times_s=fast_times_s,
+            normalise_by=ref,
+            db=db,
+            title=title,
+            dynamic_range_db=dynamic_range_db,
+        )
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
     fig.tight_layout()
@@ -171,8 +202,16 @@ def image_figure(
         ref = max(float(np.abs(np.asarray(v)).max()) for _, v in panels)
     for k, (ax, (title, values)) in enumerate(zip(axes[0], panels, strict=True)):
         mk = markers[k] if markers is not None else ()
-        plot_image(ax, values, x_m=x_m, y_m=y_m, dynamic_range_db=dynamic_range_db,
-                   reference=ref, title=title, markers=mk)
+        plot_image(
+            ax,
+            values,
+            x_m=x_m,
+            y_m=y_m,
+            dynamic_range_db=dynamic_range_db,
+            reference=ref,
+            title=title,
+            markers=mk,
+        )
     fig.tight_layout()
     return fig
 

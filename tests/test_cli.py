@@ -1,0 +1,160 @@
+"""Command line: outputs of each command and one clear line for every kind of bad input."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+
+from sarmotion.cli import EXIT_BAD_INPUT, run
+from sarmotion.io import load_image, load_traces, read_gotcha
+
+
+def _fails(args, capsys, pattern, out=None):
+    code = run(args)
+    err = capsys.readouterr().err.strip()
+    assert code == EXIT_BAD_INPUT
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith("sarmotion: error:")
+    assert pattern in err, err
+    assert "Traceback" not in err
+    if out is not None:
+        assert not Path(out).exists(), "a failed command must not leave its output"
+        assert not list(Path(out).parent.glob(f".{Path(out).name}.partial-*"))
+
+
+def test_help_explains_every_command(capsys):
+    for cmd in ([], ["simulate"], ["image"], ["inject"], ["separate"], ["demo"]):
+        assert run([*cmd, "--help"]) == 0
+        text = capsys.readouterr().out
+        assert "Usage:" in text and len(text) > 200
+
+
+def test_simulate_native_and_gotcha(tmp_path, capsys):
+    out = tmp_path / "s.h5"
+    assert run(["simulate", "rotscatt", "--out", str(out)]) == 0
+    tr = load_traces(out)
+    assert tr.shape == (117, 424)
+    gdir = tmp_path / "g"
+    assert run(["simulate", "rotscatt", "--out", str(gdir)]) == 0
+    back = read_gotcha(sorted(gdir.glob("*.mat")))
+    # complex64 storage in the GOTCHA format: ~1e-7 relative.
+    np.testing.assert_allclose(back.data, tr.data, atol=1e-6 * np.abs(tr.data).max())
+
+
+def test_image_of_a_scene_focuses_the_target(tmp_path, capsys):
+    out = tmp_path / "img"
+    code = run(["image", "hyperbola", "--out", str(out), "--size", "20", "--spacing", "0.1"])
+    assert code == 0, capsys.readouterr().err
+    img = load_image(out / "image.h5")
+    iy, ix = np.unravel_index(np.argmax(np.abs(img["values"])), img["values"].shape)
+    # The hyperbola scene's target is at (0, 5) m: within one pixel.
+    assert abs(img["x_m"][ix] - 0.0) <= 0.1 and abs(img["y_m"][iy] - 5.0) <= 0.1
+    assert (out / "image.png").stat().st_size > 1000
+
+
+def test_inject_and_image_compensated(tmp_path, capsys):
+    base = tmp_path / "base.h5"
+    assert run(["simulate", "hyperbola", "--out", str(base)]) == 0
+    out = tmp_path / "inj.h5"
+    assert run(["inject", str(base), "--target", "3,-4,5,2,1", "--out", str(out)]) == 0
+    img = tmp_path / "img"
+    args = [
+        "image",
+        str(out),
+        "--out",
+        str(img),
+        "--size",
+        "20",
+        "--spacing",
+        "0.1",
+        "--velocity",
+        "5",
+        "2",
+    ]
+    assert run(args) == 0
+    v = load_image(img / "image.h5")
+    iy, ix = np.unravel_index(np.argmax(np.abs(v["values"])), v["values"].shape)
+    assert abs(v["x_m"][ix] - 3.0) <= 0.1 and abs(v["y_m"][iy] + 4.0) <= 0.1
+
+
+def test_missing_file(tmp_path, capsys):
+    out = tmp_path / "o"
+    _fails(["image", str(tmp_path / "nope.mat"), "--out", str(out)], capsys, "not found", out)
+
+
+def test_not_a_gotcha_file(tmp_path, capsys):
+    bad = tmp_path / "x.mat"
+    bad.write_text("hello")
+    out = tmp_path / "o"
+    _fails(["image", str(bad), "--out", str(out)], capsys, str(bad), out)
+
+
+def _gotcha_like(path, **fields):
+    n = 5
+    data = {
+        "fp": np.ones((8, n), np.complex64),
+        "freq": np.linspace(9.6e9, 9.61e9, 8)[:, None],
+        "x": np.full((1, n), 7000.0),
+        "y": np.linspace(0, 4, n)[None],
+        "z": np.full((1, n), 7000.0),
+        "r0": np.full((1, n), 9899.5),
+        "th": np.zeros((1, n)),
+        "phi": np.full((1, n), 45.0),
+    }
+    data.update(fields)
+    data = {k: v for k, v in data.items() if v is not None}
+    scipy.io.savemat(path, {"data": data})
+    return path
+
+
+def test_missing_field(tmp_path, capsys):
+    bad = _gotcha_like(tmp_path / "a.mat", fp=None)
+    _fails(["image", str(bad), "--out", str(tmp_path / "o")], capsys, "fp", tmp_path / "o")
+
+
+def test_wrong_shape(tmp_path, capsys):
+    bad = _gotcha_like(tmp_path / "a.mat", fp=np.ones((7, 5), np.complex64))
+    _fails(["image", str(bad), "--out", str(tmp_path / "o")], capsys, "shape", tmp_path / "o")
+
+
+def test_nan_data(tmp_path, capsys):
+    fp = np.ones((8, 5), np.complex64)
+    fp[3, 2] = np.nan
+    bad = _gotcha_like(tmp_path / "a.mat", fp=fp)
+    _fails(["image", str(bad), "--out", str(tmp_path / "o")], capsys, "NaN", tmp_path / "o")
+
+
+def test_unknown_scene_key(tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text("[[targets]]\nposition_m = [0, 0]\nspeed = 3\n")
+    out = tmp_path / "o.h5"
+    _fails(
+        ["simulate", str(scene), "--out", str(out)], capsys, "unknown key 'targets[0].speed'", out
+    )
+
+
+def test_unknown_scene_name_and_bad_target(tmp_path, capsys):
+    _fails(["simulate", "scene42", "--out", str(tmp_path / "o.h5")], capsys, "unknown scene")
+    base = tmp_path / "b.h5"
+    assert run(["simulate", "rotscatt", "--out", str(base)]) == 0
+    capsys.readouterr()
+    _fails(
+        ["inject", str(base), "--target", "1,x", "--out", str(tmp_path / "i.h5")],
+        capsys,
+        "--target",
+        tmp_path / "i.h5",
+    )
+
+
+@pytest.mark.gotcha
+def test_image_real_gotcha(gotcha_files, tmp_path, capsys):
+    out = tmp_path / "g"
+    assert run(["image", *map(str, gotcha_files), "--out", str(out)]) == 0
+    import json
+
+    peaks = json.loads((out / "peaks.json").read_text())["peaks"]
+    got = np.array([p["position_m"] for p in peaks[:2]])
+    # The two calibration reflectors, within a pixel (0.25 m) and the README's rounding.
+    want = np.array([[-15.5, 21.5], [-27.7, 38.7]])
+    assert np.max(np.abs(got - want)) <= 0.4
