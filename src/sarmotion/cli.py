@@ -479,6 +479,7 @@ def separate(
     method: str,
     out: Path,
     window: int | None,
+    eta_scale: float,
     threshold_db: float,
     size_m: float | None,
     spacing_m: float,
@@ -526,7 +527,7 @@ def separate(
             )
     elif method == "rpca":
         with Progress("windowed RPCA", enabled=progress) as bar:
-            sep = separate_rpca(traces, window=window, callback=bar)
+            sep = separate_rpca(traces, window=window, eta_scale=eta_scale, callback=bar)
     else:
         pts = stationary_candidates(
             prelim.values, x_m=grid.x_m, y_m=grid.y_m, traces=traces, threshold_db=threshold_db
