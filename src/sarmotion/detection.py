@@ -21,6 +21,7 @@ from scipy.ndimage import maximum_filter
 from scipy.optimize import minimize
 
 from .geometry import as_point, delta_tau, target_positions
+from .spectral import delay_phase
 from .traces import Traces
 
 __all__ = ["detect_peaks", "point_response", "refine_location"]
@@ -81,12 +82,6 @@ def detect_peaks(
     return np.stack([x[ix[order]], y[iy[order]], np.zeros(order.size)], axis=1)
 
 
-def _cycles(delays: NDArray[np.float64], f: NDArray[np.float64]) -> NDArray[np.float64]:
-    c = np.multiply.outer(delays, f)
-    c -= np.round(c)
-    return c
-
-
 def point_response(
     traces: Traces,
     points_m: ArrayLike,
@@ -124,7 +119,7 @@ def point_response(
             else target_positions(rho, velocity_mps, traces.slow_times_s)
         )
         d = delta_tau(traces.positions_m, where, traces.reference_point_m)
-        out[i] = np.sum(P * np.exp(2j * np.pi * _cycles(d, f))) / traces.n_samples
+        out[i] = np.sum(P * delay_phase(d, f)) / traces.n_samples
     return out
 
 

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .detection import detect_peaks, refine_location
 from .scene import PointTarget
-from .spectral import to_fast_time, to_frequency
+from .spectral import delay_phase, to_fast_time, to_frequency
 from .traces import Traces
 from .transforms import Annihilator, annihilate, travel_time_delays
 
@@ -122,9 +122,8 @@ def doppler_contrast_db(
     """
     P = traces.phase_history() if phase_history is None else np.asarray(phase_history)
     f = traces.frequencies_hz
-    cycles = np.multiply.outer(travel_time_delays(traces, point_m), f)
-    cycles -= np.round(cycles)
-    column = np.sum(P * np.exp(2j * np.pi * cycles), axis=1) / traces.n_samples
+    column = np.sum(P * delay_phase(travel_time_delays(traces, point_m), f), axis=1)
+    column /= traces.n_samples
     doppler = np.abs(np.fft.fft(column)) ** 2
     floor = float(np.median(doppler))
     if floor <= 0:
@@ -358,9 +357,7 @@ def separate_combined(
     done = 0
 
     def align(p: NDArray[np.float64]) -> tuple[NDArray, NDArray, float]:
-        cycles = np.multiply.outer(travel_time_delays(traces, p), f)
-        cycles -= np.round(cycles)
-        phase = np.exp(2j * np.pi * cycles)
+        phase = delay_phase(travel_time_delays(traces, p), f)
         aligned = to_fast_time(spectrum * phase)
         doppler = np.abs(np.fft.fft(aligned[:, centre])) ** 2
         floor = float(np.median(doppler))

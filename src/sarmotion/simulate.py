@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from .geometry import Trajectory, as_point, delta_tau, target_positions
 from .radar import Radar
 from .scene import PointTarget, Scene
-from .spectral import to_fast_time
+from .spectral import delay_phase, to_fast_time
 from .traces import Traces
 
 __all__ = ["Simulation", "simulate", "simulate_phase_history", "add_noise"]
@@ -68,9 +68,7 @@ def simulate_phase_history(
         amp = np.full(trajectory.n_pulses, tgt.reflectivity, dtype=np.complex128)
         if spreading:
             amp *= (L / np.linalg.norm(pos - rho_s, axis=1)) ** 2
-        cycles = np.multiply.outer(dtau, f)
-        cycles -= np.round(cycles)
-        out += amp[:, None] * np.exp(-2j * np.pi * cycles)
+        out += amp[:, None] * delay_phase(-dtau, f)
     out *= w[None, :]
     return out
 

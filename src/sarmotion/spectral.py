@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["to_frequency", "to_fast_time", "shift_fast_time"]
+__all__ = ["to_frequency", "to_fast_time", "delay_phase", "shift_fast_time"]
 
 
 def to_frequency(traces: ArrayLike, *, axis: int = -1) -> NDArray[np.complexfloating]:
@@ -47,6 +47,32 @@ def to_fast_time(spectrum: ArrayLike, *, axis: int = -1) -> NDArray[np.complexfl
     """
     x = np.asarray(spectrum)
     return np.fft.fftshift(np.fft.ifft(np.fft.ifftshift(x, axes=axis), axis=axis), axes=axis)
+
+
+def delay_phase(delays_s: ArrayLike, frequencies_hz: ArrayLike) -> NDArray[np.complex128]:
+    """``exp(2i pi f_k delta_j)`` for every pulse ``j`` and frequency ``k``.
+
+    The phase reaches ~1e4 cycles (``f ~ 1e10`` Hz, ``delta ~ 1e-6`` s): it is formed in
+    float64 and reduced to whole cycles exactly before the exponential.
+
+    Parameters
+    ----------
+    delays_s : (n_pulses,) array_like
+        Delays ``delta(s)`` (s).
+    frequencies_hz : (n_freq,) array_like
+        Absolute frequencies (Hz).
+
+    Returns
+    -------
+    (n_pulses, n_freq) ndarray
+        Unit phasors; multiplying a phase history by them shifts its traces by
+        ``+delta`` (``D(s, t) -> D(s, t + delta(s))``), carrier included.
+    """
+    cycles = np.multiply.outer(
+        np.asarray(delays_s, dtype=np.float64), np.asarray(frequencies_hz, dtype=np.float64)
+    )
+    cycles -= np.round(cycles)
+    return np.exp(2j * np.pi * cycles)
 
 
 def shift_fast_time(
@@ -83,7 +109,4 @@ def shift_fast_time(
         raise ValueError(f"delays_s must have shape ({d.shape[0]},), got {delta.shape}")
     if f.shape != (d.shape[1],):
         raise ValueError(f"frequencies_hz must have shape ({d.shape[1]},), got {f.shape}")
-    # Phase in float64: f * delta reaches ~1e4 cycles; reduce exactly before exp.
-    cycles = np.multiply.outer(delta, f)
-    cycles -= np.round(cycles)
-    return to_fast_time(to_frequency(d) * np.exp(2j * np.pi * cycles))
+    return to_fast_time(to_frequency(d) * delay_phase(delta, f))

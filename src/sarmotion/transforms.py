@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.signal import savgol_filter
 
 from .geometry import as_point, delta_tau, target_positions
-from .spectral import shift_fast_time, to_fast_time, to_frequency
+from .spectral import delay_phase, shift_fast_time, to_fast_time, to_frequency
 from .traces import Traces
 
 __all__ = [
@@ -152,13 +152,6 @@ def slow_time_difference(
     raise ValueError(f"kind must be 'difference', 'difference2', 'savgol' or 'mean', got {kind!r}")
 
 
-def _alignment_phase(delays_s: NDArray[np.float64], f: NDArray[np.float64]) -> NDArray:
-    """``exp(2i pi f delta(s))``, shape (n_pulses, n_freq), with exact cycle reduction."""
-    cycles = np.multiply.outer(delays_s, f)
-    cycles -= np.round(cycles)
-    return np.exp(2j * np.pi * cycles)
-
-
 def annihilate(
     traces: Traces,
     points_m: ArrayLike,
@@ -216,7 +209,7 @@ def annihilate(
     f = traces.frequencies_hz
     spectrum = to_frequency(traces.data)
     for p, v in zip(pts, vels, strict=True):
-        phase = _alignment_phase(travel_time_delays(traces, p, velocity_mps=v), f)
+        phase = delay_phase(travel_time_delays(traces, p, velocity_mps=v), f)
         spectrum = slow_time_difference(
             spectrum * phase, pulse_interval_s=1.0, kind=kind, window=window
         ) * np.conj(phase)
