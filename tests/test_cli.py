@@ -158,3 +158,19 @@ def test_image_real_gotcha(gotcha_files, tmp_path, capsys):
     # The two calibration reflectors, within a pixel (0.25 m) and the README's rounding.
     want = np.array([[-15.5, 21.5], [-27.7, 38.7]])
     assert np.max(np.abs(got - want)) <= 0.4
+
+
+@pytest.mark.parametrize("method", ["combined", "rpca", "annihilation"])
+def test_separate_writes_traces_figures_and_quality(tmp_path, capsys, method):
+    import json
+
+    out = tmp_path / method
+    args = ["separate", "rotscatt", "--method", method, "--out", str(out)]
+    if method == "rpca":
+        args += ["--window", "64", "--eta-scale", "1.5"]
+    assert run(args) == 0, capsys.readouterr().err
+    summary = json.loads((out / "separation.json").read_text())
+    assert summary["schema"] == "sarmotion.separation/1" and summary["method"] == method
+    assert 0.0 <= summary["quality"]["mover_trace_coverage"] <= 1.0
+    assert (out / "separation.png").stat().st_size > 1000
+    assert load_traces(out / "separated.h5").shape == (117, 424)

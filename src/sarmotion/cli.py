@@ -439,6 +439,14 @@ def inject(inputs: tuple[str, ...], targets: tuple[str, ...], out: Path, speed_m
     help="RPCA fast-time window (samples); default chosen from the data.",
 )
 @click.option(
+    "--eta-scale",
+    type=float,
+    default=1.0,
+    show_default=True,
+    help="RPCA: factor on the default sparsity weight 1/sqrt(max(n, window)); about 2 "
+    "suits real, distributed clutter.",
+)
+@click.option(
     "--threshold-db",
     type=float,
     default=-25.0,
