@@ -174,3 +174,17 @@ def test_separate_writes_traces_figures_and_quality(tmp_path, capsys, method):
     assert 0.0 <= summary["quality"]["mover_trace_coverage"] <= 1.0
     assert (out / "separation.png").stat().st_size > 1000
     assert load_traces(out / "separated.h5").shape == (117, 424)
+
+
+def test_paper_builds_a_figure_and_rejects_unknown_labels(tmp_path, capsys):
+    out = tmp_path / "paper"
+    assert run(["paper", "--only", "fig:rpcaEx1", "--quick", "--out", str(out)]) == 0
+    assert (out / "fig_rpcaEx1.png").stat().st_size > 1000
+    assert "fig_rpcaEx1.png" in (out / "index.html").read_text()
+    capsys.readouterr()
+    _fails(
+        ["paper", "--only", "fig:nope", "--out", str(tmp_path / "p2")],
+        capsys,
+        "fig:nope",
+        tmp_path / "p2",
+    )

@@ -1,4 +1,4 @@
-"""Command-line interface: ``sarmotion simulate | image | inject | separate | demo``.
+"""Command-line interface: ``sarmotion simulate | image | inject | separate | analyze | demo``.
 
 The only module that parses arguments and configures logging. Bad input never shows
 a traceback: one line on stderr (``sarmotion: error: ...``) and exit status 2; outputs
@@ -611,6 +611,160 @@ def separate(
     click.echo(line)
 
 
+class _StageProgress:
+    """One :class:`Progress` bar per stage, driven by ``progress(stage, done, total)``."""
+
+    def __init__(self, *, enabled: bool) -> None:
+        self.enabled = enabled
+        self._stage = ""
+        self._bar: Progress | None = None
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        if stage != self._stage:
+            self.close()
+            self._stage = stage
+            self._bar = Progress(stage, enabled=self.enabled)
+        assert self._bar is not None
+        self._bar(done, total)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def __enter__(self) -> _StageProgress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _analyze(
+    inputs: Sequence[str],
+    out: Path,
+    *,
+    method: str | None,
+    max_movers: int,
+    speed_mps: float,
+    size_m: float | None,
+    trajectory: bool,
+    snr_db: float | None,
+    seed: int,
+    progress: bool,
+) -> None:
+    """Run :func:`sarmotion.analysis.analyze` on ``inputs`` and write ``out``."""
+    from .analysis import analyze as run_analysis
+    from .report import write_report
+
+    if max_movers < 0:
+        raise InputError(f"--max-movers must be >= 0, got {max_movers}")
+    if size_m is not None and not size_m > 0:
+        raise InputError(f"--size must be positive (m), got {size_m}")
+    traces, sim = load_input(inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed)
+    with _StageProgress(enabled=progress) as bar:
+        result = run_analysis(
+            traces,
+            method=method,
+            max_movers=max_movers,
+            image_size_m=size_m,
+            trajectory=trajectory,
+            progress=bar,
+        )
+    doc = result.to_json_dict(truth=sim.scene if sim is not None else None)
+    doc["inputs"] = list(inputs)
+    with staged_directory(out) as stage:
+        _write_json(stage / "results.json", doc)
+        write_report(
+            result,
+            stage,
+            document=doc,
+            title=f"sarmotion analysis: {', '.join(Path(i).name for i in inputs)}",
+            inputs=inputs,
+        )
+    click.echo(
+        f"wrote {out}/results.json, report.html and figures: {len(result.movers)} mover(s), "
+        f"{len(result.stationary)} stationary target(s), {result.timings_s['total']:.1f} s"
+    )
+    for k, m in enumerate(doc["movers"]):
+        x, y = m["position_m"]
+        ux, uy = m["velocity_mps"]
+        click.echo(
+            f"  mover {k + 1}: position ({x:.2f}, {y:.2f}) m, velocity ({ux:.2f}, {uy:.2f}) "
+            f"m/s, range speed {m['range_speed_mps']:.2f} m/s"
+        )
+
+
+@main.command()
+@click.argument("inputs", nargs=-1, required=True)
+@click.option(
+    "--out", "out", required=True, type=click.Path(path_type=Path), help="Output directory."
+)
+@click.option(
+    "--method",
+    type=click.Choice(["auto", "combined", "rpca", "annihilation"]),
+    default="auto",
+    show_default=True,
+    help="Stationary/moving separation. auto: combined for simulated scenes, rpca "
+    "(eta x 2) for measured data.",
+)
+@click.option("--max-movers", type=int, default=5, show_default=True, help="Most movers sought.")
+@click.option(
+    "--speed",
+    "speed_mps",
+    type=float,
+    default=70.0,
+    show_default=True,
+    help="Platform speed for GOTCHA slow time (m/s).",
+)
+@click.option(
+    "--size",
+    "size_m",
+    type=float,
+    default=None,
+    help="Side of the square image around the reference point (m); default from the "
+    "data's range window, at most 100 m.",
+)
+@click.option(
+    "--trajectory/--no-trajectory",
+    default=True,
+    show_default=True,
+    help="Estimate each mover's trajectory (phase-space algorithm).",
+)
+@click.option("--snr-db", type=float, default=None, help="Simulated inputs: add noise (dB).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Noise seed.")
+@click.pass_context
+def analyze(
+    ctx: click.Context,
+    inputs: tuple[str, ...],
+    out: Path,
+    method: str,
+    max_movers: int,
+    speed_mps: float,
+    size_m: float | None,
+    trajectory: bool,
+    snr_db: float | None,
+    seed: int,
+) -> None:
+    """Separate, estimate and image the stationary and moving targets of INPUTS.
+
+    INPUTS: a built-in scene name or scene .toml (simulated), a native traces .h5 file,
+    or GOTCHA .mat files. Writes OUT/results.json (schema sarmotion.results/1),
+    OUT/report.html (self-contained) and the report's figures as PNG.
+    """
+    _analyze(
+        inputs,
+        out,
+        method=None if method == "auto" else method,
+        max_movers=max_movers,
+        speed_mps=speed_mps,
+        size_m=size_m,
+        trajectory=trajectory,
+        snr_db=snr_db,
+        seed=seed,
+        progress=ctx.obj["progress"],
+    )
+
+
 @main.command()
 @click.option(
     "--out",
@@ -622,52 +776,68 @@ def separate(
 )
 @click.pass_context
 def demo(ctx: click.Context, out: Path) -> None:
-    """Simulate Scene 1 (20 stationary targets, 2 movers) and write its images and traces."""
-    from .imaging import ImageGrid, backproject
-    from .plotting import image_figure, save_figure, traces_figure
-    from .scene import load_scene
-    from .simulate import simulate as run
+    """Analyse Scene 1 (20 stationary targets, 2 movers): ``analyze scene1 --out OUT``."""
+    _analyze(
+        ["scene1"],
+        out,
+        method=None,
+        max_movers=5,
+        speed_mps=70.0,
+        size_m=None,
+        trajectory=True,
+        snr_db=None,
+        seed=0,
+        progress=ctx.obj["progress"],
+    )
 
-    sim = run(load_scene("scene1"))
-    tr = sim.traces
-    grid = ImageGrid.square(size_m=60.0, spacing_m=0.25)
-    with Progress("images", enabled=ctx.obj["progress"]) as bar:
-        full = backproject(tr, grid)
-        bar(1, 4)
-        stat = backproject(tr.with_data(sim.stationary), grid)
-        bar(2, 4)
-        movers = []
-        for k, m in enumerate(sim.scene.moving):
-            movers.append(backproject(tr, grid, velocity_mps=m.velocity_mps))
-            bar(3 + k, 4)
-    truth = [tuple(t.position_m[:2]) for t in sim.scene.stationary]
-    with staged_directory(out) as stage:
-        fig = traces_figure(
-            [
-                ("traces |M|", tr.data, False),
-                ("stationary |L|", sim.stationary, False),
-                ("moving |S| (dB)", sim.moving, True),
-            ],
-            slow_times_s=tr.slow_times_s,
-            fast_times_s=tr.fast_times_s,
-            normalise_by=float(np.abs(tr.data).max()),
-        )
-        save_figure(fig, stage / "traces.png")
-        fig = image_figure(
-            [("Scene 1", full.values), ("stationary targets only", stat.values)],
-            x_m=grid.x_m,
-            y_m=grid.y_m,
-            markers=[truth, truth],
-        )
-        save_figure(fig, stage / "images.png")
-        fig = image_figure(
-            [(f"compensated for mover {k + 1}", im.values) for k, im in enumerate(movers)],
-            x_m=grid.x_m,
-            y_m=grid.y_m,
-            markers=[[tuple(m.position_m[:2])] for m in sim.scene.moving],
-        )
-        save_figure(fig, stage / "movers.png")
-    click.echo(f"wrote {out}/traces.png, images.png, movers.png")
+
+@main.command()
+@click.option(
+    "--out",
+    "out",
+    type=click.Path(path_type=Path),
+    default=Path("sarmotion-paper"),
+    show_default=True,
+    help="Output directory: fig_NAME.png and fig_NAME.npz per figure, and index.html.",
+)
+@click.option(
+    "--only",
+    "only",
+    multiple=True,
+    metavar="LABEL",
+    help="Build only this figure (e.g. fig:rpcaEx2b or rpcaEx2b); repeatable.",
+)
+@click.option("--quick", is_flag=True, help="Reduced sizes (coarser grids, fewer sweep values).")
+@click.option("--list", "list_only", is_flag=True, help="List the figure labels and exit.")
+@click.pass_context
+def paper(
+    ctx: click.Context, out: Path, only: tuple[str, ...], quick: bool, list_only: bool
+) -> None:
+    """Regenerate every figure of the paper, with the numbers behind it.
+
+    Each figure is named after its LaTeX label (fig:rpcaEx2b -> fig_rpcaEx2b.png) and
+    index.html shows it beside the paper's caption and a line of what it shows
+    numerically (e.g. windowed vs whole-matrix RPCA error).
+    """
+    from .paper import FIGURE_LABELS, build_figures
+
+    if list_only:
+        click.echo("\n".join(FIGURE_LABELS))
+        return
+    selected = list(only) if only else None
+    total = len(selected) if selected else len(FIGURE_LABELS)
+    with Progress("figures", enabled=ctx.obj["progress"]) as bar:
+        with staged_directory(out) as stage:
+            records = build_figures(
+                stage,
+                only=selected,
+                quick=quick,
+                progress=lambda label, done, n: bar(done, n),
+            )
+    seconds = sum(r.seconds for r in records)
+    click.echo(
+        f"wrote {len(records)} of {total} figure(s) and index.html to {out} ({seconds:.0f} s)"
+    )
 
 
 # --------------------------------------------------------------------------- entry

@@ -1,0 +1,45 @@
+"""Benchmark of the whole analysis (sarmotion.analysis.analyze) on Scene 1.
+
+Run with::
+
+    pytest benchmarks/bench_analyze.py --benchmark-only -p no:cacheprovider
+
+Scene 1: GOTCHA, one degree (117 pulses x 424 samples), 20 stationary targets and two
+movers, noise-free, default options (combined separation, 88 m preliminary image at
+0.25 m, trajectories on). ``extra_info`` holds the seconds of each stage of the fastest
+round (``AnalysisResult.timings_s``), the number of movers found and the image size.
+Target: the whole analysis under 30 s on a 2-core machine.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from sarmotion.analysis import analyze
+from sarmotion.scene import load_scene
+from sarmotion.simulate import simulate
+
+
+@pytest.fixture(scope="module")
+def scene1_traces():
+    traces = simulate(load_scene("scene1")).traces
+    analyze(traces, max_movers=1, trajectory=False)  # compile the numba kernels once
+    return traces
+
+
+def test_analyze_scene1(benchmark, scene1_traces):
+    results = []
+
+    def run():
+        result = analyze(scene1_traces)
+        results.append(result)
+        return result
+
+    result = benchmark.pedantic(run, rounds=3, iterations=1)
+    fastest = min(results, key=lambda r: r.timings_s["total"])
+    for stage, seconds in fastest.timings_s.items():
+        benchmark.extra_info[f"{stage}_s"] = round(seconds, 3)
+    benchmark.extra_info["n_movers"] = len(result.movers)
+    benchmark.extra_info["image_shape"] = list(result.preliminary_image.grid.shape)
+    assert len(result.movers) == 2
+    assert fastest.timings_s["total"] < 30.0
