@@ -33,10 +33,9 @@ in s.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -48,6 +47,7 @@ from .imaging import Image, ImageGrid, backproject, resolution
 from .phase_space import TrajectoryEstimate, estimate_trajectory, trajectory_error
 from .separation import (
     Separation,
+    aligned_constant_part,
     resolution_cell_m,
     separate_annihilation,
     separate_combined,
@@ -56,7 +56,6 @@ from .separation import (
 )
 from .spectral import to_fast_time, to_frequency
 from .traces import Traces
-from .transforms import travel_time_delays
 from .velocity import MoverEstimate, RangeSpeeds, estimate_range_speeds, estimate_velocity
 
 __all__ = [
@@ -368,46 +367,13 @@ def extract_mover(
     d = np.asarray(data)
     if d.shape != traces.shape:
         raise ValueError(f"data must have the traces' shape {traces.shape}, got {d.shape}")
-    m = traces.n_samples
-    if half_window is None:
-        pulse_samples = 1.0 / (traces.radar.bandwidth_hz * traces.radar.sample_interval_s)
-        half_window = max(1, int(np.ceil(3.0 * pulse_samples)))
-    if not 0 < half_window < m // 2:
-        raise ValueError(f"half_window must be in [1, {m // 2 - 1}] samples, got {half_window}")
-    delays = travel_time_delays(traces, position_m, velocity_mps=velocity_mps)
-    cycles = np.multiply.outer(delays, traces.frequencies_hz)
-    cycles -= np.round(cycles)
-    phase = np.exp(2j * np.pi * cycles)
-    aligned = to_fast_time(to_frequency(d) * phase)
-    c = m // 2
-    low = np.zeros_like(aligned)
-    low[:, c - half_window : c + half_window + 1] = aligned[
-        :, c - half_window : c + half_window + 1
-    ].mean(axis=0, keepdims=True)
-    return to_fast_time(to_frequency(low) * np.conj(phase))
+    part = aligned_constant_part(
+        traces, to_frequency(d), position_m, velocity_mps=velocity_mps, half_window=half_window
+    )
+    return to_fast_time(part)
 
 
 # ======================================================================= analysis
-@contextlib.contextmanager
-def _blas_threads(n: int | None) -> Iterator[None]:
-    """Limit BLAS/LAPACK to ``n`` threads (``threadpoolctl``, if installed) for the block.
-
-    The RPCA iterations are small SVDs (117 x 64 for a GOTCHA degree): OpenBLAS threads
-    only add synchronisation, and on a loaded 2-core machine their spinning made one
-    RPCA separation of a GOTCHA file take 20-70 s instead of 0.3 s single-threaded.
-    """
-    if n is None:
-        yield
-        return
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # optional: without it, BLAS keeps its own thread count
-        yield
-        return
-    with threadpool_limits(limits=n, user_api="blas"):
-        yield
-
-
 def _stationary_targets(
     image: Image, sep: Separation, traces: Traces, *, threshold_db: float, max_targets: int
 ) -> tuple[StationaryTarget, ...]:
@@ -477,7 +443,6 @@ def analyze(
     eta_scale: float | None = None,
     rpca_window: int | None = None,
     rpca_tol: float = 1e-4,
-    blas_threads: int | None = 1,
     mover_half_window: int | None = None,
     trajectory: bool = True,
     stationary_threshold_db: float = -20.0,
@@ -520,8 +485,6 @@ def analyze(
     rpca_tol : float
         RPCA stopping rule ``||M - L - S||_F <= tol ||M||_F`` (per window); 1e-4 gives
         the same movers as 1e-6 on GOTCHA (g peaks 23.6/21.9 dB against 23.7/21.9 dB).
-    blas_threads : int, optional
-        BLAS threads during RPCA (needs ``threadpoolctl``); None leaves BLAS alone.
     mover_half_window : int, optional
         Half-width of a mover's extraction window, see :func:`extract_mover`.
     trajectory : bool
@@ -597,14 +560,14 @@ def analyze(
             callback=report("separation"),
         )
     elif method == "rpca":
-        with _blas_threads(blas_threads):
-            sep = separate_rpca(
-                traces,
-                window=rpca_window,
-                eta_scale=eta_scale,
-                tol=rpca_tol,
-                callback=report("separation"),
-            )
+        # rpca runs its SVDs on one BLAS thread (see sarmotion.rpca).
+        sep = separate_rpca(
+            traces,
+            window=rpca_window,
+            eta_scale=eta_scale,
+            tol=rpca_tol,
+            callback=report("separation"),
+        )
     else:
         pts = stationary_candidates(
             prelim.values,

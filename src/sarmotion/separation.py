@@ -44,6 +44,8 @@ __all__ = [
     "stationary_candidates",
     "mover_trace_coverage",
     "doppler_contrast_db",
+    "aligned_constant_part",
+    "default_half_window",
 ]
 
 log = logging.getLogger(__name__)
@@ -250,6 +252,64 @@ def separate_rpca(
     return Separation(moving=res.sparse, stationary=res.low_rank, method="rpca", info=info)
 
 
+def default_half_window(traces: Traces) -> int:
+    """Three compressed-pulse lengths ``3 / (B dt)`` in fast-time samples (at least 1)."""
+    pulse_samples = 1.0 / (traces.radar.bandwidth_hz * traces.radar.sample_interval_s)
+    return max(1, int(np.ceil(3.0 * pulse_samples)))
+
+
+def aligned_constant_part(
+    traces: Traces,
+    spectrum: ArrayLike,
+    point_m: ArrayLike,
+    *,
+    velocity_mps: ArrayLike | None = None,
+    half_window: int | None = None,
+) -> NDArray[np.complex128]:
+    """The part of the traces that ``T_+^{u,rho}`` makes constant in slow time near ``t = 0``.
+
+    After ``T_+^{u,rho}`` (``eq:TT+``, ``eq:TTu+``) the trace of a target on
+    ``rho + s u`` sits at ``t = 0`` with a phase independent of ``s``: in that frame it is
+    rank one and constant in slow time, while other targets' traces cross the window
+    obliquely or rotate in phase. Its estimate is the slow-time mean of the aligned
+    traces in the fast-time window ``|t| <= half_window`` (the orthogonal projection on
+    ``s``-independent traces there), mapped back by ``T_-^{u,rho}``.
+
+    Parameters
+    ----------
+    traces : Traces
+        The acquisition (geometry, frequencies, reference point).
+    spectrum : (n_pulses, n_samples) array_like
+        Phase history of the data the part is taken from (``to_frequency(data)``).
+    point_m : (2,) or (3,) array_like
+        ``rho`` at ``s = 0`` (m).
+    velocity_mps : (2,) array_like, optional
+        ``u`` (m/s); ``None`` for a stationary point.
+    half_window : int, optional
+        Half-width of the window (samples); default :func:`default_half_window`.
+
+    Returns
+    -------
+    (n_pulses, n_samples) ndarray
+        Phase history of the part (subtract it from ``spectrum`` to remove the target).
+    """
+    P = np.asarray(spectrum)
+    if P.shape != traces.shape:
+        raise ValueError(f"spectrum must have the traces' shape {traces.shape}, got {P.shape}")
+    m = traces.n_samples
+    h = default_half_window(traces) if half_window is None else int(half_window)
+    if not 0 < h < m // 2:
+        raise ValueError(f"half_window must be in [1, {m // 2 - 1}] samples, got {h}")
+    phase = delay_phase(
+        travel_time_delays(traces, point_m, velocity_mps=velocity_mps), traces.frequencies_hz
+    )
+    aligned = to_fast_time(P * phase)
+    c = m // 2
+    low = np.zeros_like(aligned)
+    low[:, c - h : c + h + 1] = aligned[:, c - h : c + h + 1].mean(axis=0, keepdims=True)
+    return to_frequency(low) * np.conj(phase)
+
+
 # ------------------------------------------------------------------- combined
 def separate_combined(
     traces: Traces,
@@ -338,16 +398,12 @@ def separate_combined(
             cand = np.column_stack([cand, np.zeros(len(cand))])
     if passes < 1:
         raise ValueError(f"passes must be >= 1, got {passes}")
-    contrast_min = 10.0 ** (contrast_db / 10.0)
-    n, m = traces.shape
     if half_window is None:
-        pulse_samples = 1.0 / (traces.radar.bandwidth_hz * traces.radar.sample_interval_s)
-        half_window = max(1, int(np.ceil(3.0 * pulse_samples)))
-    if not 0 < half_window < m // 2:
-        raise ValueError(f"half_window must be in [1, {m // 2 - 1}] samples, got {half_window}")
-    centre = m // 2
-    lo, hi = centre - half_window, centre + half_window + 1
-    f = traces.frequencies_hz
+        half_window = default_half_window(traces)
+    if not 0 < half_window < traces.n_samples // 2:
+        raise ValueError(
+            f"half_window must be in [1, {traces.n_samples // 2 - 1}] samples, got {half_window}"
+        )
 
     spectrum = to_frequency(traces.data)  # residual, kept in the frequency domain
     used: list[NDArray[np.float64]] = []
@@ -355,30 +411,21 @@ def separate_combined(
     locations = [c.copy() for c in cand]
     total = passes * len(cand)
     done = 0
-
-    def align(p: NDArray[np.float64]) -> tuple[NDArray, NDArray, float]:
-        phase = delay_phase(travel_time_delays(traces, p), f)
-        aligned = to_fast_time(spectrum * phase)
-        doppler = np.abs(np.fft.fft(aligned[:, centre])) ** 2
-        floor = float(np.median(doppler))
-        contrast = float(doppler[0] / floor) if floor > 0 else np.inf
-        return phase, aligned, contrast
-
     for sweep in range(passes):
         for i, p0 in enumerate(locations):
             # The contrast barely depends on a sub-pixel offset (the whole column shifts
             # alike), so movers' streaks are rejected before the costlier refinement.
-            phase, aligned, contrast = align(p0)
+            contrast = doppler_contrast_db(traces, p0, phase_history=spectrum)
             p = p0
-            accepted = contrast >= contrast_min
+            accepted = contrast >= contrast_db
             if accepted and refine and sweep == 0:
                 p, _ = refine_location(traces, p0, phase_history=spectrum)
-                phase, aligned, contrast = align(p)
-                accepted = contrast >= contrast_min
+                contrast = doppler_contrast_db(traces, p, phase_history=spectrum)
+                accepted = contrast >= contrast_db
             if accepted:
-                low = np.zeros_like(aligned)
-                low[:, lo:hi] = aligned[:, lo:hi].mean(axis=0, keepdims=True)
-                spectrum = spectrum - to_frequency(low) * np.conj(phase)
+                spectrum = spectrum - aligned_constant_part(
+                    traces, spectrum, p, half_window=half_window
+                )
                 locations[i] = p
                 if sweep == 0:
                     used.append(p)
@@ -386,7 +433,7 @@ def separate_combined(
                 {
                     "sweep": sweep,
                     "position_m": p.tolist(),
-                    "doppler_contrast_db": 10 * np.log10(contrast) if contrast > 0 else -np.inf,
+                    "doppler_contrast_db": contrast,
                     "accepted": accepted,
                 }
             )
