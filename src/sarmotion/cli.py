@@ -777,18 +777,7 @@ def analyze(
 @click.pass_context
 def demo(ctx: click.Context, out: Path) -> None:
     """Analyse Scene 1 (20 stationary targets, 2 movers): ``analyze scene1 --out OUT``."""
-    _analyze(
-        ["scene1"],
-        out,
-        method=None,
-        max_movers=5,
-        speed_mps=70.0,
-        size_m=None,
-        trajectory=True,
-        snr_db=None,
-        seed=0,
-        progress=ctx.obj["progress"],
-    )
+    ctx.invoke(analyze, inputs=("scene1",), out=out)
 
 
 @main.command()
