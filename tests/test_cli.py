@@ -188,3 +188,33 @@ def test_paper_builds_a_figure_and_rejects_unknown_labels(tmp_path, capsys):
         "fig:nope",
         tmp_path / "p2",
     )
+
+
+def test_image_on_an_explicit_grid(tmp_path, capsys):
+    out = tmp_path / "img"
+    args = [
+        "image",
+        "hyperbola",
+        "--out",
+        str(out),
+        "--grid",
+        "-3",
+        "2",
+        "3",
+        "9",
+        "--spacing",
+        "0.1",
+    ]
+    assert run(args) == 0, capsys.readouterr().err
+    img = load_image(out / "image.h5")
+    assert img["x_m"][0] == pytest.approx(-3.0, abs=0.1) and img["y_m"][-1] == pytest.approx(
+        9.0, abs=0.1
+    )
+    iy, ix = np.unravel_index(np.argmax(np.abs(img["values"])), img["values"].shape)
+    assert abs(img["x_m"][ix]) <= 0.1 and abs(img["y_m"][iy] - 5.0) <= 0.1
+    _fails(
+        ["image", "hyperbola", "--out", str(tmp_path / "b"), "--grid", "2", "1", "0", "1"],
+        capsys,
+        "--grid",
+        tmp_path / "b",
+    )

@@ -179,6 +179,20 @@ def _grid(size_m: float, spacing_m: float, centre: tuple[float, float]) -> Any:
     return ImageGrid.square(centre_m=centre, size_m=size_m, spacing_m=spacing_m)
 
 
+def _extent_grid(extent: tuple[float, float, float, float], spacing_m: float) -> Any:
+    from .imaging import ImageGrid
+
+    x0, x1, y0, y1 = extent
+    if not (np.all(np.isfinite(extent)) and x1 > x0 and y1 > y0 and spacing_m > 0):
+        raise InputError(
+            f"--grid must be XMIN < XMAX, YMIN < YMAX (m) and --spacing > 0, got {extent}, "
+            f"{spacing_m}"
+        )
+    if max(x1 - x0, y1 - y0) / spacing_m > 4096:
+        raise InputError("--grid/--spacing gives more than 4096 pixels a side")
+    return ImageGrid.from_extent(x_range_m=(x0, x1), y_range_m=(y0, y1), spacing_m=spacing_m)
+
+
 # --------------------------------------------------------------------------- commands
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.version_option(__version__, prog_name="sarmotion")
@@ -277,6 +291,15 @@ def simulate(scene: str, out: Path, snr_db: float | None, seed: int, spreading: 
     help="Image centre (m).",
 )
 @click.option(
+    "--grid",
+    "grid_extent",
+    nargs=4,
+    type=float,
+    default=None,
+    metavar="XMIN XMAX YMIN YMAX",
+    help="Rectangular image extent (m), instead of --size/--centre; pixels of --spacing.",
+)
+@click.option(
     "--speed",
     "speed_mps",
     type=float,
@@ -302,6 +325,7 @@ def image(
     size_m: float,
     spacing_m: float,
     centre: tuple[float, float],
+    grid_extent: tuple[float, float, float, float] | None,
     speed_mps: float,
     autofocus: bool,
     dynamic_range_db: float,
@@ -316,7 +340,10 @@ def image(
     from .plotting import image_figure, save_figure
 
     traces, _ = load_input(inputs, speed_mps=speed_mps, autofocus=autofocus)
-    grid = _grid(size_m, spacing_m, centre)
+    if grid_extent is None:
+        grid = _grid(size_m, spacing_m, centre)
+    else:
+        grid = _extent_grid(grid_extent, spacing_m)
     if velocity is not None and not np.all(np.isfinite(velocity)):
         raise InputError(f"--velocity must be finite, got {velocity}")
     t0 = time.perf_counter()
