@@ -249,3 +249,15 @@ def test_cli_analyze_bad_input_is_one_line(tmp_path, capsys):
     assert err.startswith("sarmotion: error:") and len(err.strip().splitlines()) == 1
     assert run(["analyze", "scene1", "--out", str(tmp_path / "o"), "--max-movers", "-1"]) == 2
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.gotcha
+@pytest.mark.slow
+def test_real_stationary_scene_has_no_mover(gotcha_files):
+    # The GOTCHA pass is a parked-car scene with no truthed mover: over all 4 degrees
+    # the clutter left in S once made g(u) peaks of 12-14 dB at 0.2-1.1 m/s (the apparent
+    # range speed of stationary targets off the reference cross range); with the 15 dB
+    # threshold, the V R / L speed floor and the edge test on g_perp, none is reported.
+    result = analyze(read_gotcha(gotcha_files), trajectory=False)
+    assert len(result.movers) == 0
+    assert len(result.stationary) > 10
