@@ -164,7 +164,7 @@ def test_main_lobe_widths_match_theory(aperture: str, request) -> None:
         img, (x, y), res.cross_range_direction, traces=tr, half_length_m=3 * res.cross_range_m
     )
     # The "rect" spectrum and the uniform aperture give sinc main lobes, -3 dB width
-    # 0.886 x the resolution c/(2B)/cos(el) and lambda L/(2a); the brief allows 25 %.
+    # 0.886 x the resolution c/(2B)/cos(el) and lambda L/(2a); the acceptance bound is 25 %.
     assert w_range == pytest.approx(res.ground_range_m, rel=0.25)
     assert w_cross == pytest.approx(res.cross_range_m, rel=0.25)
     # ... and the sinc factor itself is found to 3 % (pixel-free exact profiles).

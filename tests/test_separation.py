@@ -32,7 +32,7 @@ def _quality(sep, sim, **kw):
 
 
 def test_combined_separates_scene1(scene1):
-    # Issue target: ||S - S_true|| / ||S_true|| <= 0.3 keeping >= 85 % of the movers
+    # Target: ||S - S_true|| / ||S_true|| <= 0.3 keeping >= 85 % of the movers
     # (measured: 0.13 and 99.8 %).
     img, grid = _prelim(scene1.traces)
     sep = separate_combined(scene1.traces, image_values=img.values, x_m=grid.x_m, y_m=grid.y_m)

@@ -165,7 +165,7 @@ def test_g_perp_is_exact_for_one_mover_in_the_papers_form(scene1):
 @pytest.mark.parametrize("index", [0, 1])
 def test_g_perp_minimum_at_true_cross_range_speed(scene1, moving, index):
     # fig:objfxns: on the two-mover traces, at the true u and rho, g_perp is least at the
-    # true u_perp. 0.25 m/s asked (a third of the 0.74 m/s resolution; the brief's goal
+    # true u_perp. 0.25 m/s asked (a third of the 0.74 m/s resolution; the acceptance bound
     # was 1.5 m/s); < 0.01 m/s measured. The fast-time window and the trimming of the
     # pulses crossed by the other mover matter here: the literal eq:OBJ2 misses by 0.3 and
     # 1.8 m/s.

@@ -1,4 +1,4 @@
-"""Every figure of the paper, regenerated from data (issue "The paper, reproduced").
+"""Every figure of the paper, regenerated from data, with the numbers behind it.
 
 :func:`build_figures` writes into an output directory, for each figure ``fig:NAME`` of
 Borcea, Callaghan & Papanicolaou, "Motion estimation and imaging of complex scenes with
