@@ -77,6 +77,13 @@ class Progress:
         self._bar.n = done
         self._bar.refresh()
 
+    def stage(self, name: str, done: int, total: int) -> None:
+        """Advance the bar of stage ``name``; a new bar starts when the stage changes."""
+        if name != self.description:
+            self.close()
+            self.description = name
+        self(done, total)
+
     def close(self) -> None:
         """Remove the bar."""
         if self._bar is not None:
@@ -638,34 +645,6 @@ def separate(
     click.echo(line)
 
 
-class _StageProgress:
-    """One :class:`Progress` bar per stage, driven by ``progress(stage, done, total)``."""
-
-    def __init__(self, *, enabled: bool) -> None:
-        self.enabled = enabled
-        self._stage = ""
-        self._bar: Progress | None = None
-
-    def __call__(self, stage: str, done: int, total: int) -> None:
-        if stage != self._stage:
-            self.close()
-            self._stage = stage
-            self._bar = Progress(stage, enabled=self.enabled)
-        assert self._bar is not None
-        self._bar(done, total)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
-            self._bar = None
-
-    def __enter__(self) -> _StageProgress:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
 def _analyze(
     inputs: Sequence[str],
     out: Path,
@@ -688,14 +667,14 @@ def _analyze(
     if size_m is not None and not size_m > 0:
         raise InputError(f"--size must be positive (m), got {size_m}")
     traces, sim = load_input(inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed)
-    with _StageProgress(enabled=progress) as bar:
+    with Progress("", enabled=progress) as bar:
         result = run_analysis(
             traces,
             method=method,
             max_movers=max_movers,
             image_size_m=size_m,
             trajectory=trajectory,
-            progress=bar,
+            progress=bar.stage,
         )
     doc = result.to_json_dict(truth=sim.scene if sim is not None else None)
     doc["inputs"] = list(inputs)
