@@ -48,7 +48,6 @@ from .phase_space import TrajectoryEstimate, estimate_trajectory, trajectory_err
 from .separation import (
     Separation,
     aligned_constant_part,
-    resolution_cell_m,
     separate_annihilation,
     separate_combined,
     separate_rpca,
@@ -400,7 +399,8 @@ def _stationary_targets(
     if sep.method == "combined" and len(sep.stationary_points_m):
         points = [tuple(p[:2]) for p in sep.stationary_points_m]
     else:
-        cell = max(resolution_cell_m(traces))
+        cells = resolution(traces)
+        cell = max(cells.ground_range_m, cells.cross_range_m)
         points = [(x, y) for x, y, _ in image.peaks(max_targets, min_separation_m=cell)]
     left, right, bottom, top = image.grid.extent
     found = []

@@ -1101,12 +1101,13 @@ def _match(ctx: _Context, mover_result: Any) -> int:
 
 
 def _fig_sep_imgs(ctx: _Context) -> _Result:
-    from .separation import resolution_cell_m
-
     sim = ctx.sim("scene1")
     tr = sim.traces
     res = ctx.scene1_analysis
-    rng_cell, cross_cell = resolution_cell_m(tr)
+    from .imaging import resolution
+
+    cells = resolution(tr)
+    rng_cell, cross_cell = cells.ground_range_m, cells.cross_range_m
     geom = tr.geometry
     e_r = geom.ground_m_o / np.linalg.norm(geom.ground_m_o)
     e_c = np.array([-e_r[1], e_r[0]])

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .detection import detect_peaks, refine_location
+from .imaging import resolution
 from .scene import PointTarget
 from .spectral import delay_phase, to_fast_time, to_frequency
 from .traces import Traces
@@ -93,9 +94,11 @@ def stationary_candidates(
     """Bright points of a preliminary image, resolution-aware (brightest first), m.
 
     The non-maximum-suppression radius is ``separation_cells`` times the larger of the
-    ground-range and cross-range resolutions of ``traces`` (see :func:`resolution_cell_m`).
+    ground-range and cross-range resolutions of ``traces`` (see
+    :func:`sarmotion.imaging.resolution`).
     """
-    radius = separation_cells * max(resolution_cell_m(traces))
+    res = resolution(traces)
+    radius = separation_cells * max(res.ground_range_m, res.cross_range_m)
     return detect_peaks(
         image_values,
         x_m=x_m,
@@ -104,14 +107,6 @@ def stationary_candidates(
         min_separation_m=radius,
         max_peaks=max_targets,
     )
-
-
-def resolution_cell_m(traces: Traces) -> tuple[float, float]:
-    """``(ground range, cross range)`` resolution (m): ``c/(2B cos e)`` and ``lambda L/(2a)``."""
-    g = traces.geometry
-    ground_range = traces.radar.range_resolution_m / np.cos(g.elevation_rad)
-    cross = traces.radar.wavelength_m * g.range_m / (2.0 * traces.trajectory.aperture_length_m)
-    return float(ground_range), float(cross)
 
 
 def doppler_contrast_db(

@@ -58,7 +58,7 @@ from scipy.optimize import minimize_scalar
 from .constants import C
 from .detection import point_response, refine_location
 from .geometry import LookGeometry, as_point, ground_velocity, range_direction_velocity
-from .imaging import Image, ImageGrid, backproject, backproject_points
+from .imaging import Image, ImageGrid, backproject, backproject_points, resolution
 from .traces import Traces
 
 __all__ = [
@@ -654,7 +654,7 @@ def locate_mover(
         raise ValueError(f"centre_m must lie on the ground z = 0, got {centre}")
     half = _positive(search_half_size_m, "search_half_size_m")
     if spacing_m is None:
-        step = 0.5 * tr.radar.range_resolution_m / np.cos(geom.elevation_rad)
+        step = 0.5 * resolution(tr).ground_range_m
     else:
         step = _positive(spacing_m, "spacing_m")
     max_up = _finite(max_cross_range_speed_mps, "max_cross_range_speed_mps")
@@ -685,7 +685,7 @@ def locate_mover(
             cut_values=np.zeros(0, dtype=np.complex128),
             cross_axis=e_c,
         )
-    cross_res = tr.radar.wavelength_m * geom.range_m / (2.0 * tr.trajectory.aperture_length_m)
+    cross_res = resolution(tr).cross_range_m
     reach = half + _defocus_half_width_m(tr, max_up)
     offsets = np.arange(-reach, reach + 0.125 * cross_res, 0.25 * cross_res)
     cut = backproject_points(
