@@ -33,6 +33,7 @@ in s.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Callable
@@ -55,6 +56,12 @@ from .separation import (
 )
 from .spectral import to_fast_time, to_frequency
 from .traces import Traces
+from .tracking import (
+    azimuth_span_deg,
+    central_sub_aperture,
+    family_direction,
+    refine_on_aperture,
+)
 from .velocity import (
     MoverEstimate,
     RangeSpeeds,
@@ -103,6 +110,11 @@ class MoverResult:
         Sub-pixel position of the brightest pixel of :attr:`image` (m).
     peak_db : float
         Image peak relative to the brightest pixel of the stationary image (dB).
+    family_position_per_m, family_velocity_per_m : (2,) ndarray
+        Tangent of the family of motions with the same traces
+        (:func:`sarmotion.tracking.family_direction`): ``position + t a``, ``velocity +
+        t b`` fit the data as well for ``t`` metres of cross-range offset (m/m and
+        (m/s)/m). The data of a few degrees do not fix ``t`` (:mod:`sarmotion.tracking`).
     trajectory : TrajectoryEstimate or None
         Phase-space trajectory, if requested.
     """
@@ -112,6 +124,8 @@ class MoverResult:
     image: Image
     image_peak_m: NDArray[np.float64]
     peak_db: float
+    family_position_per_m: NDArray[np.float64]
+    family_velocity_per_m: NDArray[np.float64]
     trajectory: TrajectoryEstimate | None = None
 
     @property
@@ -210,6 +224,10 @@ class AnalysisResult:
                 "peak_db": float(m.peak_db),
                 "g_peak_db": float(e.peak_db),
                 "image_peak_m": [float(v) for v in m.image_peak_m],
+                "cross_range_family": {
+                    "position_per_m": [float(v) for v in m.family_position_per_m],
+                    "velocity_mps_per_m": [float(v) for v in m.family_velocity_per_m],
+                },
             }
             if m.trajectory is not None:
                 entry["trajectory"] = {
@@ -259,7 +277,9 @@ def compare_with_truth(result: AnalysisResult, scene: Any) -> dict[str, Any]:
     Each estimate is matched to the unused true mover of nearest range speed (within
     four range-speed resolutions, else it is a false mover). Errors are estimate minus
     truth, with the position error also split along the ground range and cross-range
-    directions at the reference point.
+    directions at the reference point. ``family_*`` compare the truth with the point of
+    the estimate's family (:attr:`MoverResult.family_position_per_m`) at the truth's
+    cross-range offset: the part of the error the data can resolve.
 
     Parameters
     ----------
@@ -320,6 +340,12 @@ def compare_with_truth(result: AnalysisResult, scene: Any) -> dict[str, Any]:
             "range_speed_mps": float(e.range_speed_mps - t["range_speed_mps"]),
             "cross_range_speed_mps": float(e.cross_range_speed_mps - t["cross_range_speed_mps"]),
         }
+        offset = -float(dp @ e_c) / float(m.family_position_per_m @ e_c)
+        fp = dp + offset * m.family_position_per_m
+        fv = e.velocity_mps + offset * m.family_velocity_per_m - np.asarray(t["velocity_mps"])
+        err["family_offset_m"] = offset
+        err["family_position_m"] = float(np.hypot(*fp))
+        err["family_velocity_mps"] = float(np.hypot(*fv))
         if m.trajectory is not None:
             te = trajectory_error(m.trajectory, t["position_m"], t["velocity_mps"])
             err["trajectory_max_m"] = float(te.max())
@@ -380,6 +406,39 @@ def extract_mover(
 
 
 # ======================================================================= analysis
+def _on_whole_aperture(
+    traces: Traces, residual: NDArray[np.complex128], est: MoverEstimate, central: slice
+) -> MoverEstimate:
+    """A central sub-aperture's estimate moved to ``s = 0`` and focused on all pulses."""
+    fit = refine_on_aperture(
+        traces.with_data(residual), est.position_m, est.velocity_mps, central=central
+    )
+    geom = traces.geometry
+    log.info(
+        "whole-aperture focus %.4g -> %.4g (x n_pulses)",
+        fit.start_focus / traces.n_pulses,
+        fit.focus / traces.n_pulses,
+    )
+    return dataclasses.replace(
+        est,
+        position_m=fit.position_m,
+        velocity_mps=fit.velocity_mps,
+        range_speed_mps=range_speed(fit.velocity_mps, geom),
+        cross_range_speed_mps=cross_range_speed(fit.velocity_mps, geom),
+        image_value=complex(fit.focus),
+        history=(
+            *est.history,
+            {
+                "stage": "whole aperture",
+                "position_m": fit.position_m.tolist(),
+                "velocity_mps": fit.velocity_mps.tolist(),
+                "focus": fit.focus,
+                "start_focus": fit.start_focus,
+            },
+        ),
+    )
+
+
 def _stationary_targets(
     image: Image, sep: Separation, traces: Traces, *, threshold_db: float, max_targets: int
 ) -> tuple[StationaryTarget, ...]:
@@ -454,6 +513,7 @@ def analyze(
     trajectory: bool = True,
     stationary_threshold_db: float = -20.0,
     max_stationary: int = 100,
+    sub_aperture_deg: float = 1.0,
 ) -> AnalysisResult:
     """Separate, estimate and image the stationary and moving targets of ``traces``.
 
@@ -503,6 +563,10 @@ def analyze(
     stationary_threshold_db, max_stationary
         Stationary target list (:func:`_stationary_targets`): points above this level re
         the brightest pixel of the stationary image (dB), at most this many.
+    sub_aperture_deg : float
+        Azimuth span of the sub-aperture the movers are estimated on (degrees). A wider
+        aperture is analysed on its central sub-aperture and each mover then focused on
+        all pulses (:mod:`sarmotion.tracking`).
 
     Returns
     -------
@@ -538,6 +602,7 @@ def analyze(
         "eta_scale": float(eta_scale),
         "rpca_tol": float(rpca_tol),
         "trajectory": bool(trajectory),
+        "sub_aperture_deg": float(sub_aperture_deg),
     }
 
     def report(stage: str) -> Callable[[int, int], None] | None:
@@ -554,16 +619,16 @@ def analyze(
         timings[stage] = timings.get(stage, 0.0) + now - clock
         clock = now
 
-    # The movers' motion is modelled as uniform over the aperture and estimated as in the
-    # paper over ~1-degree sub-apertures; on 4 degrees of Scene 1 the estimates are far off.
-    ends = traces.positions_m[[0, -1], :2] - traces.reference_point_m[:2]
-    cos_span = np.dot(ends[0], ends[1]) / np.prod(np.linalg.norm(ends, axis=1))
-    look_change_deg = float(np.degrees(np.arccos(np.clip(cos_span, -1.0, 1.0))))
-    if look_change_deg > 1.5:
-        log.warning(
-            "the aperture spans %.1f degrees of azimuth: motion estimation is designed for "
-            "sub-apertures of about 1 degree; consider analysing consecutive sub-apertures",
-            look_change_deg,
+    # Velocities are estimated on a sub-aperture of about a degree (sarmotion.velocity),
+    # the central one of a wider aperture, and focused on the whole aperture after.
+    central = central_sub_aperture(traces, sub_aperture_deg)
+    wide = central != slice(0, traces.n_pulses)
+    if wide:
+        log.info(
+            "aperture of %.1f degrees: movers estimated on pulses %d-%d, refined on all",
+            azimuth_span_deg(traces),
+            central.start,
+            central.stop - 1,
         )
 
     # 1. preliminary image
@@ -602,8 +667,9 @@ def analyze(
         sep = separate_annihilation(traces, pts)
     lap("separation")
 
-    # 3. number of movers and their range speeds
-    moving = traces.with_data(sep.moving)
+    # 3. number of movers and their range speeds (central sub-aperture)
+    sub = traces.select_pulses(central.start, central.stop)
+    moving = sub.with_data(sep.moving[central])
     # A stationary target at cross-range offset y has an apparent range speed V y / L
     # (eq:Dtau): movers must be well above it over the imaged scene (eq:AnnihCond,
     # "u >> V R / L"), here twice its value at the image's half-diagonal.
@@ -621,10 +687,11 @@ def analyze(
 
     # 4. movers one at a time
     residual = np.array(sep.moving, dtype=np.complex128)
-    estimates: list[tuple[MoverEstimate, NDArray[np.complex128]]] = []
+    Family = tuple[NDArray[np.float64], NDArray[np.float64]]
+    estimates: list[tuple[MoverEstimate, NDArray[np.complex128], Family]] = []
     n_movers = speeds.n_movers
     for k, u_hint in enumerate(speeds.speeds_mps):
-        current = traces.with_data(residual)
+        current = sub.with_data(residual[central])
         est = estimate_velocity(
             current,
             range_speed_mps=float(u_hint),
@@ -642,6 +709,9 @@ def analyze(
                 est.cross_range_speed_mps,
             )
             continue
+        family = family_direction(sub, est.position_m, est.velocity_mps)
+        if wide:
+            est = _on_whole_aperture(traces, residual, est, central)
         own = extract_mover(
             traces,
             residual,
@@ -650,7 +720,7 @@ def analyze(
             half_window=mover_half_window,
         )
         residual = residual - own
-        estimates.append((est, own))
+        estimates.append((est, own, family))
         log.info(
             "mover %d: position (%.2f, %.2f) m, velocity (%.2f, %.2f) m/s",
             k + 1,
@@ -663,7 +733,7 @@ def analyze(
 
     # 5. trajectories
     trajs: list[TrajectoryEstimate | None] = []
-    for k, (est, own) in enumerate(estimates):
+    for k, (est, own, _) in enumerate(estimates):
         tj = None
         if trajectory:
             try:
@@ -681,11 +751,11 @@ def analyze(
     if sep.stationary is not None:
         stat_data = sep.stationary
     else:
-        stat_data = traces.data - sum((own for _, own in estimates), np.zeros(traces.shape))
+        stat_data = traces.data - sum((e[1] for e in estimates), np.zeros(traces.shape))
     stat_img = backproject(traces.with_data(stat_data), grid, progress=report("stationary image"))
     stat_peak = float(stat_img.magnitude.max()) or 1.0
     movers: list[MoverResult] = []
-    for (est, own), tj in zip(estimates, trajs, strict=True):
+    for (est, own, family), tj in zip(estimates, trajs, strict=True):
         mgrid = ImageGrid.square(
             centre_m=tuple(est.position_m[:2]), size_m=mover_image_size_m, spacing_m=spacing_m
         )
@@ -698,6 +768,8 @@ def analyze(
                 image=img,
                 image_peak_m=np.array([x, y]),
                 peak_db=float(20.0 * np.log10(max(abs(v), 1e-300) / stat_peak)),
+                family_position_per_m=family[0],
+                family_velocity_per_m=family[1],
                 trajectory=tj,
             )
         )
