@@ -295,6 +295,10 @@ def test_cli_analyze_bad_input_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("sarmotion: error:") and len(err.strip().splitlines()) == 1
     assert run(["analyze", "scene1", "--out", str(tmp_path / "o"), "--max-movers", "-1"]) == 2
+    capsys.readouterr()
+    assert run(["analyze", "scene1", "--out", str(tmp_path / "o"), "--sub-aperture", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--sub-aperture must be positive" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
 
 

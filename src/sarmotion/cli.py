@@ -657,6 +657,7 @@ def _analyze(
     snr_db: float | None,
     seed: int,
     progress: bool,
+    sub_aperture_deg: float = 1.0,
 ) -> None:
     """Run :func:`sarmotion.analysis.analyze` on ``inputs`` and write ``out``."""
     from .analysis import analyze as run_analysis
@@ -666,6 +667,8 @@ def _analyze(
         raise InputError(f"--max-movers must be >= 0, got {max_movers}")
     if size_m is not None and not size_m > 0:
         raise InputError(f"--size must be positive (m), got {size_m}")
+    if not (np.isfinite(sub_aperture_deg) and sub_aperture_deg > 0):
+        raise InputError(f"--sub-aperture must be positive (degrees), got {sub_aperture_deg}")
     traces, sim = load_input(inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed)
     with Progress("", enabled=progress) as bar:
         result = run_analysis(
@@ -674,6 +677,7 @@ def _analyze(
             max_movers=max_movers,
             image_size_m=size_m,
             trajectory=trajectory,
+            sub_aperture_deg=sub_aperture_deg,
             progress=bar.stage,
         )
     doc = result.to_json_dict(truth=sim.scene if sim is not None else None)
@@ -736,6 +740,15 @@ def _analyze(
     show_default=True,
     help="Estimate each mover's trajectory (phase-space algorithm).",
 )
+@click.option(
+    "--sub-aperture",
+    "sub_aperture_deg",
+    type=float,
+    default=1.0,
+    show_default=True,
+    help="Azimuth span (degrees) the movers are estimated on; a wider aperture is "
+    "analysed on its central sub-aperture and each mover then focused on all pulses.",
+)
 @click.option("--snr-db", type=float, default=None, help="Simulated inputs: add noise (dB).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Noise seed.")
 @click.pass_context
@@ -748,6 +761,7 @@ def analyze(
     speed_mps: float,
     size_m: float | None,
     trajectory: bool,
+    sub_aperture_deg: float,
     snr_db: float | None,
     seed: int,
 ) -> None:
@@ -768,6 +782,7 @@ def analyze(
         snr_db=snr_db,
         seed=seed,
         progress=ctx.obj["progress"],
+        sub_aperture_deg=sub_aperture_deg,
     )
 
 

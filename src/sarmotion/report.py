@@ -329,6 +329,9 @@ def write_report(
                 _fmt(m["cross_range_speed_mps"], 3),
                 _fmt(m["g_peak_db"], 1),
                 _fmt(m["peak_db"], 1),
+                _fmt(m["cross_range_family"]["position_per_m"], 3)
+                + " / "
+                + _fmt(m["cross_range_family"]["velocity_mps_per_m"], 4),
             ]
         )
     movers_html = _html_table(
@@ -340,9 +343,17 @@ def write_report(
             "cross-range speed (m/s)",
             "g peak/floor (dB)",
             "image peak (dB re stationary)",
+            "family per m: position / velocity",
         ],
         rows,
     )
+    if rows:
+        movers_html += (
+            '<p class="note">The data of a few degrees do not fix a mover\'s cross-range '
+            "position: position + t a and velocity + t b fit them as well for any t metres "
+            "of cross-range offset (a, b in the last column; sarmotion.tracking). The "
+            "estimate is the member near the reference cross range.</p>"
+        )
     if not rows:
         movers_html = "<p>No mover found above the g(u) threshold.</p>"
     truth_html = ""
@@ -361,7 +372,7 @@ def write_report(
         for k, m in enumerate(doc["movers"]):
             e = m.get("errors")
             if e is None:
-                erows.append([str(k + 1), '<span class="bad">false mover</span>'] + [""] * 6)
+                erows.append([str(k + 1), '<span class="bad">false mover</span>'] + [""] * 7)
                 continue
             erows.append(
                 [
@@ -371,6 +382,7 @@ def write_report(
                     _fmt(e["cross_range_speed_mps"], 3),
                     _fmt(e["position_range_m"], 2),
                     _fmt(e["position_cross_range_m"], 2),
+                    _fmt(e["family_position_m"], 3) + " / " + _fmt(e["family_velocity_mps"], 3),
                     _fmt(e.get("trajectory_max_m"), 2),
                     _fmt(e["image_peak_m"], 2),
                 ]
@@ -396,6 +408,7 @@ def write_report(
                     "cross-range speed (m/s)",
                     "position, range (m)",
                     "position, cross range (m)",
+                    "truth to family: position (m) / velocity (m/s)",
                     "max trajectory error (m)",
                     "image peak to truth (m)",
                 ],
@@ -403,10 +416,12 @@ def write_report(
             )
             + f"<p>False movers: {doc['false_movers']}; missed movers: "
             f"{doc['missed_movers']}.</p>"
-            + '<p class="note">Within one sub-aperture the cross-range position and the range '
-            "speed of a mover are tied (sarmotion.velocity, module notes): a mover away from "
+            + '<p class="note">The cross-range position and the range speed of a mover are '
+            "tied over a few degrees (sarmotion.tracking, module notes): a mover away from "
             "the reference cross range is placed on the data-consistent family near it, "
-            "shifted in cross range by about L &delta;u / (V &minus; u_t).</p>"
+            "shifted in cross range by about L &delta;u / (V &minus; u_t). &ldquo;Truth to "
+            "family&rdquo; is the error of the family member at the truth's cross-range "
+            "offset: what the data can resolve.</p>"
         )
     stat_rows = [
         [str(i + 1), _fmt(list(s["position_m"])), _fmt(s["peak_db"], 1)]
