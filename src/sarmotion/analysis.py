@@ -16,6 +16,12 @@
    around ``t = 0`` (the orthogonal projection on ``s``-independent traces, i.e. the
    rank-one part of the window); mapped back by ``T_-^{u, rho}`` it is the mover's own
    trace ``D_q``, and ``R <- R - D_q`` before the next mover is estimated;
+   Steps 3 and 4 run on a sub-aperture of about a degree (``sub_aperture_deg``), as the
+   velocity estimation assumes: for a wider aperture, on its central degree, and each
+   estimate is then moved to the aperture's ``s = 0`` and focused on all pulses
+   (:func:`sarmotion.tracking.refine_on_aperture`) before its extraction. Each mover
+   also gets its cross-range *family* (:func:`sarmotion.tracking.family_direction`):
+   the data do not fix where along it the mover is;
 5. **trajectory** of each mover by the phase-space algorithm
    (:func:`sarmotion.phase_space.estimate_trajectory`) from its own traces;
 6. **images**: the stationary image from ``L`` (``M - S``), and each mover's image

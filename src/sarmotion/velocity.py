@@ -33,7 +33,8 @@ position and two velocity components). The cross-range position ``y`` and the ra
 speed trade along ``delta u = -(V - u_t) delta y / L`` (0.005-0.007 m/s per metre for
 Scene 1; ``u_t`` the along-track speed), with a small change of ``u_perp``: the envelope
 slope that ``g`` measures and the Doppler that focuses the image are the same range
-rate. Circular flight breaks the tie only at the ~1e-4 rad level over one degree. When
+rate. Circular flight breaks the tie only over tens of degrees (:mod:`sarmotion.tracking`,
+which also computes the family). When
 ``rho^e`` is unknown the estimate therefore sits near the cross range of the reference
 used in ``g`` (``rho_o``): Scene 1's mover 2, 5 m off it, comes out 4.7 m off in cross
 range with a range speed 0.027 m/s off, a triple that reproduces its trace. With a known
