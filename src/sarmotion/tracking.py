@@ -29,7 +29,9 @@ the central sub-aperture (:func:`central_sub_aperture`), moves the estimate to t
 aperture's ``s = 0`` and refines it on the whole aperture by maximising the coherent
 compensated point response (``eq:imagecompu``) over the ground-range coordinate and the
 velocity, the cross-range coordinate held (:func:`refine_on_aperture`): that focuses the
-mover over the whole aperture without pretending to move it along the family.
+mover over the whole aperture without pretending to move it along the family. On a
+single degree the same refinement is the maximum-likelihood polish of ``g_perp``'s
+cross-range speed for a point target in white noise.
 
 The model is the paper's: uniform straight motion over the aperture (``eq:MOD9``).
 Positions in m (data frame), velocities ground ``(ux, uy)`` in m/s, times in s.
@@ -222,13 +224,17 @@ def refine_on_aperture(
     moved to the whole aperture's ``s = 0`` along its velocity; then the ground-range
     coordinate and the velocity's ground-range and cross-range components maximise the
     coherent compensated point response ``|sum_s c(s)|`` (:func:`pulse_responses`) over
-    a window of pulses that doubles from ``central`` to the whole aperture (Nelder-Mead
-    at each width, initial steps of about a quarter cycle of phase over the width).
+    a window of pulses that doubles from ``central`` itself to the whole aperture
+    (at each width: the cross-range speed on a grid of a quarter of the width's
+    resolution ``lambda L / (8 V T^2)`` over +-2 resolutions of ``central``, then
+    Nelder-Mead with initial steps of about a quarter cycle of phase over the width).
     Each width's estimate is within the next one's capture range: a cross-range speed
     error of 0.2 m/s is most of a cycle of quadratic phase over 4 degrees, and a single
     4-degree search from a 1-degree estimate was measured to stop at 0.36 of the focus
-    on such a local maximum. The cross-range coordinate is held: the data do not fix it
-    (module notes) and a free search would only wander along the family.
+    on such a local maximum. The grid matters on real clutter: GOTCHA's 4 degrees with an
+    injected mover, whose central-degree ``g_perp`` was 1.8 m/s off, ended 1.66 m/s off
+    without it and 0.33 m/s off with it. The cross-range coordinate is held: the data
+    do not fix it (module notes) and a free search would only wander along the family.
 
     Parameters
     ----------
@@ -274,11 +280,20 @@ def refine_on_aperture(
     # window half-length, s; measured on Scene 1: 0.005 m/s over 2 degrees already costs
     # 3/4 of the focus), and 1 cm of range.
     dt = float(np.median(np.diff(traces.slow_times_s)))
+    geom = traces.geometry
+    wavelength = traces.radar.wavelength_m
+    res_c = wavelength * geom.range_m / (8.0 * geom.speed_mps * (0.5 * (stop - start) * dt) ** 2)
     while True:
-        half = min(2.0 * half, 0.5 * n)
         window = slice(max(0, int(round(middle - half))), min(n, int(round(middle + half))))
         t_half = 0.5 * (window.stop - window.start) * dt
         steps = np.array([0.01, 0.002 / t_half, 0.2 / t_half**2])
+        # Cross-range speed first on a grid (a quarter of this width's resolution, over
+        # two resolutions of the central sub-aperture): its focus curve has side maxima.
+        res_w = wavelength * geom.range_m / (8.0 * geom.speed_mps * t_half**2)
+        grid = q[2] + np.arange(-2.0 * res_c, 2.0 * res_c + 1e-9, 0.25 * res_w)
+        values = [cost(np.r_[q[:2], g], window) for g in grid]
+        if min(values) < cost(q, window):
+            q = np.r_[q[:2], grid[int(np.argmin(values))]]
         before = cost(q, window)
         res = minimize(
             cost,
@@ -296,5 +311,6 @@ def refine_on_aperture(
             q = res.x
         if window == slice(0, n) or half >= 0.5 * n:
             break
+        half = min(2.0 * half, 0.5 * n)
     p, v = unpack(q)
     return ApertureFit(position_m=p, velocity_mps=v, focus=-cost(q), start_focus=start_focus)
