@@ -225,7 +225,7 @@ def refine_on_aperture(
     coordinate and the velocity's ground-range and cross-range components maximise the
     coherent compensated point response ``|sum_s c(s)|`` (:func:`pulse_responses`) over
     a window of pulses that doubles from ``central`` itself to the whole aperture
-    (at each width: the cross-range speed on a grid of a quarter of the width's
+    (at each width: the cross-range speed on a grid of half the width's
     resolution ``lambda L / (8 V T^2)`` over +-2 resolutions of ``central``, then
     Nelder-Mead with initial steps of about a quarter cycle of phase over the width).
     Each width's estimate is within the next one's capture range: a cross-range speed
@@ -287,10 +287,10 @@ def refine_on_aperture(
         window = slice(max(0, int(round(middle - half))), min(n, int(round(middle + half))))
         t_half = 0.5 * (window.stop - window.start) * dt
         steps = np.array([0.01, 0.002 / t_half, 0.2 / t_half**2])
-        # Cross-range speed first on a grid (a quarter of this width's resolution, over
+        # Cross-range speed first on a grid (half this width's resolution, over
         # two resolutions of the central sub-aperture): its focus curve has side maxima.
         res_w = wavelength * geom.range_m / (8.0 * geom.speed_mps * t_half**2)
-        grid = q[2] + np.arange(-2.0 * res_c, 2.0 * res_c + 1e-9, 0.25 * res_w)
+        grid = q[2] + np.arange(-2.0 * res_c, 2.0 * res_c + 1e-9, 0.5 * res_w)
         values = [cost(np.r_[q[:2], g], window) for g in grid]
         if min(values) < cost(q, window):
             q = np.r_[q[:2], grid[int(np.argmin(values))]]
