@@ -33,20 +33,27 @@ def scene1_traces():
     return traces
 
 
-def test_analyze_scene1(benchmark, scene1_traces):
+def _bench(benchmark, traces, rounds):
+    """Time ``analyze(traces)``; stage seconds of the fastest round into extra_info."""
     results = []
 
     def run():
-        result = analyze(scene1_traces)
+        result = analyze(traces)
         results.append(result)
         return result
 
-    result = benchmark.pedantic(run, rounds=3, iterations=1)
+    result = benchmark.pedantic(run, rounds=rounds, iterations=1)
     fastest = min(results, key=lambda r: r.timings_s["total"])
     for stage, seconds in fastest.timings_s.items():
         benchmark.extra_info[f"{stage}_s"] = round(seconds, 3)
+    benchmark.extra_info["n_pulses"] = traces.n_pulses
     benchmark.extra_info["n_movers"] = len(result.movers)
     benchmark.extra_info["image_shape"] = list(result.preliminary_image.grid.shape)
+    return result, fastest
+
+
+def test_analyze_scene1(benchmark, scene1_traces):
+    result, fastest = _bench(benchmark, scene1_traces, rounds=3)
     assert len(result.movers) == 2
     assert fastest.timings_s["total"] < 30.0
 
@@ -59,17 +66,5 @@ def scene1_4deg_traces(scene1_traces):
 
 
 def test_analyze_scene1_four_degrees(benchmark, scene1_4deg_traces):
-    results = []
-
-    def run():
-        result = analyze(scene1_4deg_traces)
-        results.append(result)
-        return result
-
-    result = benchmark.pedantic(run, rounds=2, iterations=1)
-    fastest = min(results, key=lambda r: r.timings_s["total"])
-    for stage, seconds in fastest.timings_s.items():
-        benchmark.extra_info[f"{stage}_s"] = round(seconds, 3)
-    benchmark.extra_info["n_pulses"] = scene1_4deg_traces.n_pulses
-    benchmark.extra_info["n_movers"] = len(result.movers)
+    result, _ = _bench(benchmark, scene1_4deg_traces, rounds=2)
     assert len(result.movers) == 2

@@ -89,9 +89,9 @@ def test_family_direction_is_the_range_speed_trade():
     mover, tr = _mover_alone("mover 1", 1.0)
     a, b = family_direction(tr, mover.position_m, mover.velocity_mps)
     geom = tr.geometry
-    cells = resolution(tr)
-    assert abs(a @ cells.cross_range_direction - 1.0) < 1e-6
-    assert abs(a @ cells.range_direction) < 0.01
+    # The member is placed 1 m over in cross range by construction; its fitted range
+    # coordinate barely moves (the range at s = 0 is data).
+    assert abs(a @ resolution(tr).range_direction) < 0.01
     du = range_speed(b, geom)
     u_t = float(np.r_[mover.velocity_mps, 0.0] @ geom.tangent)
     # per metre of cross-range offset (sign set by the cross-range axis orientation)

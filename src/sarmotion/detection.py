@@ -24,7 +24,7 @@ from .geometry import as_point, delta_tau, target_positions
 from .spectral import delay_phase
 from .traces import Traces
 
-__all__ = ["detect_peaks", "point_response", "refine_location"]
+__all__ = ["detect_peaks", "point_response", "pulse_responses", "refine_location"]
 
 
 def detect_peaks(
@@ -109,18 +109,50 @@ def point_response(
     """
     P = traces.phase_history() if phase_history is None else np.asarray(phase_history)
     pts = np.atleast_2d(np.asarray(points_m, dtype=np.float64))
-    f = traces.frequencies_hz
     out = np.empty(len(pts), dtype=np.complex128)
     for i, p in enumerate(pts):
         rho = as_point(p, name="points_m")
-        where = (
-            rho
-            if velocity_mps is None
-            else target_positions(rho, velocity_mps, traces.slow_times_s)
-        )
-        d = delta_tau(traces.positions_m, where, traces.reference_point_m)
-        out[i] = np.sum(P * delay_phase(d, f)) / traces.n_samples
+        out[i] = pulse_responses(traces, rho, velocity_mps, phase_history=P).sum()
     return out
+
+
+def pulse_responses(
+    traces: Traces,
+    position_m: ArrayLike,
+    velocity_mps: ArrayLike | None = None,
+    *,
+    phase_history: ArrayLike | None = None,
+    pulses: slice = slice(None),
+) -> NDArray[np.complex128]:
+    """Each pulse's term of :func:`point_response` at one point.
+
+    Sums over blocks of pulses are the responses of sub-apertures.
+
+    Parameters
+    ----------
+    traces : Traces
+        Data and acquisition.
+    position_m : (2,) or (3,) array_like
+        Point (m) at ``s = 0``.
+    velocity_mps : (2,) array_like, optional
+        Compensated ground velocity (m/s).
+    phase_history : (n_pulses, n_samples) array_like, optional
+        ``traces.phase_history()`` if already computed.
+    pulses : slice
+        Only these pulses (slow time, and so ``position_m``, still the whole aperture's).
+
+    Returns
+    -------
+    (k,) ndarray
+        ``(1 / n_samples) sum_f P(s, f) exp(2i pi f delta_tau(s, rho(s)))`` for the
+        ``k`` selected pulses (:func:`sarmotion.spectral.delay_phase`), data units.
+    """
+    P = traces.phase_history() if phase_history is None else np.asarray(phase_history)
+    rho = as_point(position_m, name="position_m")
+    s = traces.slow_times_s[pulses]
+    where = rho if velocity_mps is None else target_positions(rho, velocity_mps, s)
+    d = delta_tau(traces.positions_m[pulses], where, traces.reference_point_m)
+    return np.sum(P[pulses] * delay_phase(d, traces.frequencies_hz), axis=1) / traces.n_samples
 
 
 def refine_location(

@@ -186,9 +186,8 @@ class ImageGrid:
         for name, rng in (("x_range_m", x_range_m), ("y_range_m", y_range_m)):
             r = np.asarray(rng, dtype=np.float64)
             if r.shape != (2,) or not np.all(np.isfinite(r)) or not r[1] > r[0]:
-                raise ValueError(
-                    f"{name} must be a finite (start, stop) with start < stop, got {rng!r}"
-                )
+                raise ValueError(f"{name} must be a finite (start, stop) with start < stop, "
+                                 f"got {rng!r}")
             n = int(np.floor((r[1] - r[0]) / step + 1e-9)) + 1
             if n < 2:
                 raise ValueError(
@@ -332,7 +331,7 @@ class Image:
         """
         mag = self.magnitude
         iy, ix = np.unravel_index(int(np.argmax(mag)), mag.shape)
-        fy, fx = _parabolic(mag, iy, ix) if refine else (float(iy), float(ix))
+        fy, fx = (_parabolic(mag, iy, ix) if refine else (float(iy), float(ix)))
         x, y = self.grid.position(fy, fx)
         return x, y, complex(self.values[iy, ix])
 
@@ -370,7 +369,7 @@ class Image:
         order = np.argsort(-mag[iy, ix], kind="stable")
         kept: list[tuple[float, float, complex]] = []
         for k in order:
-            fy, fx = _parabolic(mag, iy[k], ix[k]) if refine else (float(iy[k]), float(ix[k]))
+            fy, fx = (_parabolic(mag, iy[k], ix[k]) if refine else (float(iy[k]), float(ix[k])))
             x, y = self.grid.position(fy, fx)
             if all(math.hypot(x - a, y - b) >= min_separation_m for a, b, _ in kept):
                 kept.append((x, y, complex(self.values[iy[k], ix[k]])))
@@ -537,19 +536,7 @@ def _sincos_quarter(r: float) -> tuple[float, float]:
 
 @numba.njit(fastmath=_FASTMATH, cache=True)
 def _row_geometry(
-    xs,
-    n,
-    ax,
-    c2,
-    ref,
-    idx_scale,
-    idx_offset,
-    idx_max,
-    quarter_scale,
-    base,
-    obuf,
-    wbuf,
-    cbuf,
+    xs, n, ax, c2, ref, idx_scale, idx_offset, idx_max, quarter_scale, base, obuf, wbuf, cbuf,
     sbuf,
 ):  # pragma: no cover - compiled
     """Loop A: table offsets, interpolation weights and exp(i phi) along one tile row."""
@@ -599,24 +586,8 @@ def _row_accumulate(n, vre, vim, cbuf, sbuf, are, aim):  # pragma: no cover - co
 
 @numba.njit(parallel=True, fastmath=_FASTMATH, cache=True)
 def _accumulate_numba(
-    table,
-    pulse_stride,
-    ant_x,
-    ant_y,
-    ant_z2,
-    ref,
-    x,
-    y,
-    idx_scale,
-    idx_offset,
-    idx_max,
-    quarter_scale,
-    out_re,
-    out_im,
-    ty0,
-    ty1,
-    tile_rows,
-    tile_cols,
+    table, pulse_stride, ant_x, ant_y, ant_z2, ref, x, y, idx_scale, idx_offset, idx_max,
+    quarter_scale, out_re, out_im, ty0, ty1, tile_rows, tile_cols,
 ):  # pragma: no cover - compiled
     """Add the pulses of one block to tile rows ``ty0:ty1`` of ``out_re + 1j out_im``.
 
@@ -655,22 +626,8 @@ def _accumulate_numba(
             for iy in range(y0, y1):
                 dy = ant_y[j] - y[iy]
                 c2 = dy * dy + ant_z2[j]
-                _row_geometry(
-                    xs,
-                    n,
-                    ant_x[j],
-                    c2,
-                    ref[j],
-                    idx_scale,
-                    idx_offset,
-                    idx_max,
-                    quarter_scale,
-                    base,
-                    obuf,
-                    wbuf,
-                    cbuf,
-                    sbuf,
-                )
+                _row_geometry(xs, n, ant_x[j], c2, ref[j], idx_scale, idx_offset, idx_max,
+                              quarter_scale, base, obuf, wbuf, cbuf, sbuf)
                 _row_gather(table, n, obuf, wbuf, vre, vim)
                 off = (iy - y0) * stride
                 _row_accumulate(n, vre, vim, cbuf, sbuf, are[off : off + n], aim[off : off + n])

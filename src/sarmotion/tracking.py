@@ -45,10 +45,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares, minimize
 
-from .geometry import as_point, delta_tau, target_positions
+from .constants import C
+from .detection import pulse_responses
+from .geometry import as_point, target_positions, travel_time
 from .imaging import resolution
-from .spectral import delay_phase
 from .traces import Traces
+from .velocity import cross_range_speed_resolution
 
 __all__ = [
     "ApertureFit",
@@ -56,7 +58,6 @@ __all__ = [
     "central_sub_aperture",
     "family_direction",
     "family_member",
-    "pulse_responses",
     "refine_on_aperture",
 ]
 
@@ -85,36 +86,10 @@ def azimuth_span_deg(traces: Traces) -> float:
     return float(np.degrees(np.arccos(np.clip(cos_span, -1.0, 1.0))))
 
 
-def pulse_responses(
-    traces: Traces,
-    position_m: ArrayLike,
-    velocity_mps: ArrayLike,
-    *,
-    phase_history: ArrayLike | None = None,
-    pulses: slice = slice(None),
-) -> NDArray[np.complex128]:
-    """Each pulse's term of the compensated point response ``I_u(rho)`` (``eq:imagecompu``).
-
-    Their sum is :func:`sarmotion.detection.point_response`; sums over blocks of pulses
-    are the responses of sub-apertures. ``pulses`` restricts the computation to some
-    pulses (slow time, and so ``position_m``, still that of the whole aperture).
-
-    Returns
-    -------
-    (n_pulses,) ndarray
-        ``(1 / n_samples) sum_f P(s, f) exp(2i pi f delta_tau(s, rho + s u))``
-        (:func:`sarmotion.spectral.delay_phase`), data units.
-    """
-    P = traces.phase_history() if phase_history is None else np.asarray(phase_history)
-    where = target_positions(position_m, velocity_mps, traces.slow_times_s[pulses])
-    d = delta_tau(traces.positions_m[pulses], where, traces.reference_point_m)
-    return np.sum(P[pulses] * delay_phase(d, traces.frequencies_hz), axis=1) / traces.n_samples
-
-
 def ranges_m(traces: Traces, position_m: ArrayLike, velocity_mps: ArrayLike) -> NDArray[np.float64]:
     """Range ``|r(s) - rho - s u|`` of a uniform mover at every pulse (m), shape (n_pulses,)."""
     where = target_positions(position_m, velocity_mps, traces.slow_times_s)
-    return np.linalg.norm(traces.positions_m - where, axis=1)
+    return 0.5 * C * travel_time(traces.positions_m, where)
 
 
 def family_member(
@@ -223,7 +198,8 @@ def refine_on_aperture(
     The estimate, made on the pulses ``central`` (its position at their ``s = 0``), is
     moved to the whole aperture's ``s = 0`` along its velocity; then the ground-range
     coordinate and the velocity's ground-range and cross-range components maximise the
-    coherent compensated point response ``|sum_s c(s)|`` (:func:`pulse_responses`) over
+    coherent compensated point response ``|sum_s c(s)|``
+    (:func:`sarmotion.detection.pulse_responses`) over
     a window of pulses that doubles from ``central`` itself to the whole aperture
     (at each width: the cross-range speed on a grid of half the width's
     resolution ``lambda L / (8 V T^2)`` over +-2 resolutions of ``central``, then
@@ -280,21 +256,20 @@ def refine_on_aperture(
     # window half-length, s; measured on Scene 1: 0.005 m/s over 2 degrees already costs
     # 3/4 of the focus), and 1 cm of range.
     dt = float(np.median(np.diff(traces.slow_times_s)))
-    geom = traces.geometry
-    wavelength = traces.radar.wavelength_m
-    res_c = wavelength * geom.range_m / (8.0 * geom.speed_mps * (0.5 * (stop - start) * dt) ** 2)
+    res_c = cross_range_speed_resolution(sub)  # scales as 1 / T^2
     while True:
         window = slice(max(0, int(round(middle - half))), min(n, int(round(middle + half))))
         t_half = 0.5 * (window.stop - window.start) * dt
         steps = np.array([0.01, 0.002 / t_half, 0.2 / t_half**2])
         # Cross-range speed first on a grid (half this width's resolution, over
         # two resolutions of the central sub-aperture): its focus curve has side maxima.
-        res_w = wavelength * geom.range_m / (8.0 * geom.speed_mps * t_half**2)
+        res_w = res_c * ((stop - start) / (window.stop - window.start)) ** 2
         grid = q[2] + np.arange(-2.0 * res_c, 2.0 * res_c + 1e-9, 0.5 * res_w)
         values = [cost(np.r_[q[:2], g], window) for g in grid]
-        if min(values) < cost(q, window):
-            q = np.r_[q[:2], grid[int(np.argmin(values))]]
         before = cost(q, window)
+        if min(values) < before:
+            q = np.r_[q[:2], grid[int(np.argmin(values))]]
+            before = min(values)
         res = minimize(
             cost,
             q,
