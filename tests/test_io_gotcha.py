@@ -75,7 +75,7 @@ def small_struct(n_pulses=5, n_freq=16, *, az0_deg=0.0, seed=0):
         "z": row(z),
         "r0": row(np.sqrt(x**2 + y**2 + z**2)),
         "th": row(np.rad2deg(az)),
-        "phi": row(np.full(n_pulses, 45.7)),
+        "phi": row(np.rad2deg(np.arctan2(z, np.hypot(x, y)))),
         "af": {"r_correct": row(np.zeros(n_pulses)), "ph_correct": row(np.zeros(n_pulses))},
     }
 
@@ -350,7 +350,7 @@ def _bad(tmp_path, name, mutate):
         (lambda s: s["fp"].__setitem__((3, 2), np.nan), r"data\.fp contains 1 NaN"),
         (
             lambda s: s["z"].__setitem__((0, 1), np.inf),
-            r"data\.x/y/z \(positions\) contains 1 NaN/inf",
+            r"data\.z contains 1 NaN/inf value\(s\) \(first at pulse 1\)",
         ),
         (lambda s: s["freq"].__setitem__((7, 0), s["freq"][7, 0] + 2e5), r"not a uniform grid"),
         (lambda s: s.update(fp=s["fp"].real.copy()), r"data\.fp must be complex"),
@@ -426,7 +426,8 @@ def test_non_consecutive_and_repeated_files(tmp_path):
         read_gotcha([a, b, a])
     copy = tmp_path / "copy_of_a.mat"
     copy.write_bytes(a.read_bytes())
-    with pytest.raises(DataError, match=r"does not follow"):
+    # The same file under two names is called a duplicate, not a gap.
+    with pytest.raises(DataError, match=r"copy_of_a\.mat: duplicate of a\.mat: .* same 5 pulses"):
         read_gotcha([a, copy])
 
 
@@ -451,3 +452,78 @@ def test_gotcha_dir_fixture_files_are_gotcha(gotcha_files):
     assert len(gotcha_files) == 4
     assert all(is_gotcha_file(p) for p in gotcha_files)
     assert not is_gotcha_file(Path(gotcha_files[0]).parent / "README.md")
+
+
+# ------------------------------------------------------------------- plausibility rules
+def _set(field, pulse, value):
+    def mutate(s):
+        s[field][0, pulse] = value
+
+    return mutate
+
+
+def _scale_sample(factor):
+    def mutate(s):
+        s["fp"][3, 2] *= factor
+
+    return mutate
+
+
+@pytest.mark.parametrize(
+    ("mutate", "message"),
+    [
+        # The findings: an antenna height of ~0, an r0 of 23645 m instead of ~10158 m,
+        # a sample 1e6 x the peak.
+        (_set("z", 2, 1e-3), r"data\.x/y/z, pulse 2: .* off the midpoint .*rule: at most 0\.01"),
+        (_set("r0", 2, 23645.0), r"data\.r0, pulse 2: 23645 m but the antenna is 10\d\d\d\.\d+ m"),
+        (_scale_sample(1e6), r"data\.fp, pulse 2, frequency index 3: magnitude .*rule: at most 1000 x"),
+        (_set("z", 1, -7275.0), r"data\.x/y/z, pulse 1: .* outside the plausible envelope"),
+        (_set("x", 4, 9000.0), r"data\.x/y/z, pulse 4: a step of .*rule: the track moves"),
+        (_set("y", 2, 1.0), r"data\.x/y/z, pulse 2: the antenna is .* off the midpoint"),
+        (_set("th", 0, 12.0), r"data\.th, pulse 0: 12 deg but the antenna position gives"),
+        (_set("phi", 3, 30.0), r"data\.phi, pulse 3: 30 deg .*agree to 0\.01 deg"),
+    ],
+)
+def test_implausible_geometry_and_samples_are_refused(tmp_path, mutate, message, caplog):
+    path = _bad(tmp_path, "odd.mat", mutate)
+    with pytest.raises(DataError, match=message) as info:
+        read_gotcha(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: ") and "\n" not in text
+    assert text.endswith("(--lenient accepts it)")
+    # Leniently the same file reads, with the rule logged as a warning.
+    with caplog.at_level("WARNING", logger="sarmotion.io"):
+        tr = read_gotcha(path, lenient=True)
+    assert tr.n_pulses == 5
+    assert any("accepted: --lenient" in r.getMessage() for r in caplog.records)
+
+
+def test_r0_beyond_float32_rounding_is_refused_then_re_referenced_leniently(tmp_path):
+    """r0 3 mm off |r| (beyond 2 eps_32 |r| = 2.4 mm at 10.2 km) is refused by default."""
+    s = small_struct()
+    s["r0"] = (s["r0"].astype(np.float64) + 3e-3).astype(np.float32)
+    path = save_struct(tmp_path / "shifted.mat", s)
+    with pytest.raises(DataError, match=r"data\.r0, pulse \d: .*rule: agree to 2\.4e-07 x range"):
+        read_gotcha(path)
+    tr = read_gotcha(path, lenient=True)
+    assert tr.metadata["phase_reference"].startswith("re-referenced from data.r0")
+    # The re-referenced phase history is the stored one times exp(-i 4 pi f / c dr).
+    plain = read_gotcha(save_struct(tmp_path / "plain.mat", small_struct()))
+    dr = s["r0"].ravel().astype(np.float64) - np.linalg.norm(plain.positions_m, axis=1)
+    ratio = tr.phase_history() / plain.phase_history()
+    expected = np.exp(-4j * np.pi * np.outer(dr, tr.frequencies_hz) / C)
+    np.testing.assert_allclose(ratio, expected, atol=1e-5)
+
+
+def test_corrupt_mat_structure_gets_a_short_reason(tmp_path):
+    """scipy's internal messages (reshape sizes, codecs) are not shown as the reason."""
+    good = save_struct(tmp_path / "good.mat", small_struct())
+    raw = bytearray(good.read_bytes())
+    raw[200:204] = b"\xff\xff\xff\x7f"  # an array dimension in a header
+    bad = tmp_path / "bad.mat"
+    bad.write_bytes(bytes(raw))
+    with pytest.raises(DataError) as info:
+        read_gotcha(bad)
+    text = str(info.value)
+    assert "reshape" not in text and "codec" not in text and "local variable" not in text
+    assert text.startswith(f"{bad}: ")

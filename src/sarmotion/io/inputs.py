@@ -31,6 +31,7 @@ def read_inputs(
     autofocus: bool = False,
     snr_db: float | None = None,
     seed: int = 0,
+    lenient: bool = False,
 ) -> tuple[Traces, Simulation | None]:
     """Read ``inputs`` as one acquisition.
 
@@ -46,6 +47,8 @@ def read_inputs(
         Scenes: add white noise at this SNR (dB).
     seed : int
         Scenes: noise seed.
+    lenient : bool
+        Files: log a broken plausibility rule as a warning instead of refusing the file.
 
     Returns
     -------
@@ -70,9 +73,12 @@ def read_inputs(
     if suffixes == {".h5"} or suffixes == {".hdf5"}:
         if len(inputs) != 1:
             raise DataError("give one native traces file (.h5) at a time")
-        return load_traces(first), None
+        return load_traces(first, lenient=lenient), None
     if suffixes == {".mat"}:
-        return read_gotcha(list(inputs), speed_mps=speed_mps, autofocus=autofocus), None
+        traces = read_gotcha(
+            list(inputs), speed_mps=speed_mps, autofocus=autofocus, lenient=lenient
+        )
+        return traces, None
     raise DataError(
         f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
         "a native traces .h5 file, or GOTCHA .mat files"

@@ -49,6 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from ..core import Radar, Traces, Trajectory
 from .errors import DataError, staged_paths
+from .plausibility import check_dynamic_range, check_envelope, check_track
 
 __all__ = [
     "TRACES_SCHEMA",
@@ -90,10 +91,12 @@ def _to_json(metadata: Mapping[str, Any] | None, what: str) -> str:
 
 
 def _from_json(text: Any, path: Path, where: str) -> dict[str, Any]:
-    if isinstance(text, bytes):
-        text = text.decode("utf-8")
     try:
+        if isinstance(text, bytes):
+            text = text.decode("utf-8")
         value = json.loads(text)
+    except UnicodeDecodeError:
+        raise DataError(f"{path}: attribute {where} is not UTF-8 text (corrupt)") from None
     except (TypeError, ValueError) as exc:
         raise DataError(f"{path}: attribute {where} is not valid JSON ({exc})") from None
     if not isinstance(value, dict):
@@ -255,13 +258,15 @@ def save_traces(
     return target
 
 
-def load_traces(path: PathLike) -> Traces:
+def load_traces(path: PathLike, *, lenient: bool = False) -> Traces:
     """Read the traces of a native HDF5 file (schema ``sarmotion.traces/1``).
 
     Parameters
     ----------
     path : path
         File written by :func:`save_traces`.
+    lenient : bool
+        Log a broken plausibility rule as a warning instead of refusing the file.
 
     Returns
     -------
@@ -272,7 +277,9 @@ def load_traces(path: PathLike) -> Traces:
     ------
     DataError
         Missing file, not HDF5, another schema or a newer version, a missing dataset or
-        attribute, wrong shapes, NaN/inf values, or inconsistent parameters.
+        attribute, wrong shapes, NaN/inf values, inconsistent parameters, or a broken
+        plausibility rule of :mod:`sarmotion.io.plausibility` (antenna envelope relative
+        to the reference point, a smooth track, the phase history's dynamic range).
     """
     fh, p = _open(path, TRACES_SCHEMA)
     with fh:
@@ -305,11 +312,17 @@ def load_traces(path: PathLike) -> Traces:
             pulse=str(attrs["pulse"]),  # type: ignore[arg-type]
         )
         trajectory = Trajectory(positions_m=pos, slow_times_s=s)
-        return Traces(
+        traces = Traces(
             data=data, trajectory=trajectory, radar=radar, reference_point_m=ref, metadata=meta
         )
     except (TypeError, ValueError) as exc:
         raise DataError(f"{p}: inconsistent traces: {exc}") from None
+    check_envelope(p, "/traces/positions_m", pos - ref, lenient=lenient)
+    check_track(p, "/traces/positions_m", pos, lenient=lenient)
+    check_dynamic_range(
+        p, "/traces/data (as phase history)", np.abs(traces.phase_history()), lenient=lenient
+    )
+    return traces
 
 
 def load_extra(path: PathLike) -> dict[str, NDArray[Any]]:

@@ -1,0 +1,113 @@
+"""Plausibility rules shared by the readers: what a file may hold before it is refused.
+
+Each rule raises a one-line :class:`~sarmotion.io.errors.DataError` naming the file, the
+field, the pulse and the rule, or, with ``lenient=True`` (``--lenient`` on the command
+line), logs the same line as a warning for unusual but genuine data. The thresholds and
+what they were measured on are documented in :mod:`sarmotion.io.gotcha` (notes).
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import DataError
+
+__all__ = [
+    "MAX_BEND",
+    "MAX_DYNAMIC_RANGE",
+    "MAX_STEP",
+    "RANGE_ENVELOPE_M",
+    "check_dynamic_range",
+    "check_envelope",
+    "check_track",
+    "violation",
+]
+
+logger = logging.getLogger("sarmotion.io")
+
+#: Largest step between consecutive pulses, in median spacings (one missing pulse allowed).
+MAX_STEP = 2.5
+#: Largest second difference of the positions, as a fraction of the median spacing.
+MAX_BEND = 0.01
+#: Largest ``max |P| / median |P|`` of a phase history (60 dB).
+MAX_DYNAMIC_RANGE = 1e3
+#: Antenna distance from the scene centre (m) inside which positions are plausible.
+RANGE_ENVELOPE_M = (10.0, 1e6)
+
+
+def violation(message: str, *, lenient: bool) -> None:
+    """Raise ``message`` as a DataError, or (``lenient``) log it as a warning."""
+    if lenient:
+        logger.warning("%s (accepted: --lenient)", message)
+        return
+    raise DataError(f"{message} (--lenient accepts it)")
+
+
+def check_envelope(
+    path: Path | str, field: str, positions_m: NDArray[np.float64], *, lenient: bool
+) -> None:
+    """Antenna above the ground plane and 10 m to 1000 km from the scene centre."""
+    rng = np.linalg.norm(positions_m, axis=1)
+    lo, hi = RANGE_ENVELOPE_M
+    bad = np.flatnonzero((rng < lo) | (rng > hi) | (positions_m[:, 2] <= 0.0))
+    if bad.size:
+        j = int(bad[0])
+        x, y, z = positions_m[j]
+        violation(
+            f"{path}: {field}, pulse {j}: antenna at ({x:.6g}, {y:.6g}, {z:.6g}) m is outside "
+            f"the plausible envelope (above the ground plane, {lo:g} m to {hi:g} m from the "
+            "scene centre)",
+            lenient=lenient,
+        )
+
+
+def check_track(
+    path: Path | str, field: str, positions_m: NDArray[np.float64], *, lenient: bool
+) -> None:
+    """Steps between pulses in ``(0, MAX_STEP]`` spacings; second differences ``<= MAX_BEND``."""
+    if positions_m.shape[0] < 2:
+        return
+    steps = np.linalg.norm(np.diff(positions_m, axis=0), axis=1)
+    spacing = float(np.median(steps))
+    bad = np.flatnonzero((steps == 0.0) | (steps > MAX_STEP * spacing))
+    if spacing == 0.0 or bad.size:
+        j = int(bad[0]) + 1 if bad.size else 1
+        violation(
+            f"{path}: {field}, pulse {j}: a step of {steps[j - 1]:.4g} m from pulse {j - 1} "
+            f"against a median spacing of {spacing:.4g} m (rule: the track moves by more "
+            f"than 0 and at most {MAX_STEP:g} spacings per pulse)",
+            lenient=lenient,
+        )
+        return
+    if positions_m.shape[0] < 3:
+        return
+    bend = np.linalg.norm(np.diff(positions_m, 2, axis=0), axis=1)
+    if float(bend.max()) > MAX_BEND * spacing:
+        j = int(np.argmax(bend)) + 1
+        violation(
+            f"{path}: {field}, pulse {j}: the antenna is {bend[j - 1]:.3g} m off the midpoint "
+            f"of its neighbours (rule: at most {MAX_BEND:g} x the median spacing of "
+            f"{spacing:.4g} m, a smooth track)",
+            lenient=lenient,
+        )
+
+
+def check_dynamic_range(
+    path: Path | str, field: str, magnitudes: NDArray[np.floating], *, lenient: bool
+) -> None:
+    """``max <= MAX_DYNAMIC_RANGE x median`` of a ``(n_pulses, n_freq)`` phase-history modulus."""
+    median = float(np.median(magnitudes))
+    peak = float(magnitudes.max())
+    if peak > MAX_DYNAMIC_RANGE * median:
+        j, k = np.unravel_index(int(np.argmax(magnitudes)), magnitudes.shape)
+        ratio = "more than half the samples are zero" if median == 0 else f"{peak / median:.3g} x"
+        violation(
+            f"{path}: {field}, pulse {j}, frequency index {k}: magnitude {peak:.4g} against a "
+            f"median of {median:.4g} ({ratio}; rule: at most {MAX_DYNAMIC_RANGE:g} x the "
+            "median magnitude)",
+            lenient=lenient,
+        )
