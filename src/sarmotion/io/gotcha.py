@@ -110,6 +110,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import positive
 from ..core import C, Radar, Traces, Trajectory, as_point
 from .errors import DataError, staged_paths
+from .matv5 import MatStructureError, check_mat_v5
 from .plausibility import MAX_STEP, check_dynamic_range, check_envelope, check_track, violation
 
 __all__ = ["read_gotcha", "write_gotcha", "is_gotcha_file", "DEFAULT_NAME_PATTERN"]
@@ -187,6 +188,10 @@ def _load_record(path: Path) -> Any:
         raise DataError(
             f"{path}: MATLAB v7.3 (HDF5) file; GOTCHA files are MATLAB v5 (save -v7 or older)"
         )
+    try:
+        check_mat_v5(path.read_bytes())
+    except MatStructureError as exc:
+        raise DataError(f"{path}: not a readable MATLAB .mat file: {exc}") from None
     try:
         mat = scipy.io.loadmat(path, appendmat=False)
     except Exception as exc:  # scipy raises ValueError, MatReadError, zlib.error, ...
@@ -584,6 +589,7 @@ def is_gotcha_file(path: PathLike) -> bool:
     if not p.is_file():
         return False
     try:
+        check_mat_v5(p.read_bytes())
         variables = scipy.io.whosmat(p, appendmat=False)
     except Exception:  # not a MATLAB v5 file: scipy raises ValueError, MatReadError, ...
         return False
