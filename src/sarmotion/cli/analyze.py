@@ -12,7 +12,26 @@ from ..pipeline import AnalysisOptions, compare_with_truth
 from ..pipeline import analyze as run_analysis
 from ..report.html import write_report
 from ..separation import SeparationOptions
-from .common import InputError, Progress, noise_options, out_option, speed_option
+from .common import (
+    Progress,
+    as_flags,
+    check_out,
+    force_option,
+    lenient_option,
+    noise_options,
+    out_option,
+    speed_option,
+)
+
+OUTPUTS = (
+    "results.json",
+    "report.html",
+    "traces.png",
+    "objectives.png",
+    "images.png",
+    "movers.png",
+    "trajectories.png",
+)
 
 __all__ = ["analyze", "demo"]
 
@@ -21,12 +40,9 @@ def _options(
     method: str, max_movers: int, size_m: float | None, trajectory: bool, sub_aperture_deg: float
 ) -> AnalysisOptions:
     """AnalysisOptions from the flags; a bad value is reported under its flag's name."""
-    flags = {
-        "max_movers": "--max-movers",
-        "image_size_m": "--size",
-        "sub_aperture_deg": "--sub-aperture",
-    }
-    try:
+    with as_flags(
+        max_movers="--max-movers", image_size_m="--size", sub_aperture_deg="--sub-aperture"
+    ):
         return AnalysisOptions(
             separation=SeparationOptions(method=None if method == "auto" else method),
             max_movers=max_movers,
@@ -34,12 +50,6 @@ def _options(
             trajectory=trajectory,
             sub_aperture_deg=sub_aperture_deg,
         )
-    except (TypeError, ValueError) as exc:
-        text = str(exc)
-        for name, flag in flags.items():
-            if text.startswith(name + " "):
-                raise InputError(flag + text[len(name) :]) from None
-        raise InputError(text) from None
 
 
 def run_analyze(
@@ -51,9 +61,21 @@ def run_analyze(
     snr_db: float | None = None,
     seed: int = 0,
     progress: bool = False,
+    autofocus: bool = False,
+    lenient: bool = False,
+    force: bool = False,
 ) -> None:
     """Analyse ``inputs`` and write ``out``/results.json, report.html and its figures."""
-    traces, sim = read_inputs(inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed)
+    check_out(out, force=force, names=OUTPUTS)
+    with as_flags(speed_mps="--speed", snr_db="--snr-db"):
+        traces, sim = read_inputs(
+            inputs,
+            speed_mps=speed_mps,
+            snr_db=snr_db,
+            seed=seed,
+            autofocus=autofocus,
+            lenient=lenient,
+        )
     with Progress(enabled=progress) as bar:
         result = run_analysis(traces, options, progress=bar)
     truth = compare_with_truth(result, sim.scene) if sim is not None else None
@@ -84,6 +106,7 @@ def run_analyze(
 @click.command()
 @click.argument("inputs", nargs=-1, required=True)
 @out_option("Output directory: results.json, report.html and its figures.")
+@force_option
 @click.option(
     "--method",
     type=click.Choice(["auto", "combined", "rpca", "annihilation"]),
@@ -94,6 +117,8 @@ def run_analyze(
 )
 @click.option("--max-movers", type=int, default=5, show_default=True, help="Most movers sought.")
 @speed_option
+@lenient_option
+@click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
 @click.option(
     "--size",
     "size_m",
@@ -114,7 +139,7 @@ def run_analyze(
     type=float,
     default=1.0,
     show_default=True,
-    help="Azimuth span (degrees) the movers are estimated on; a wider aperture is "
+    help="Azimuth span (degrees, > 0) the movers are estimated on; a wider aperture is "
     "analysed on its central sub-aperture and each mover then focused on all pulses.",
 )
 @noise_options
@@ -131,6 +156,9 @@ def analyze(
     sub_aperture_deg: float,
     snr_db: float | None,
     seed: int,
+    force: bool,
+    lenient: bool,
+    autofocus: bool,
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
@@ -147,12 +175,16 @@ def analyze(
         snr_db=snr_db,
         seed=seed,
         progress=ctx.obj["progress"],
+        autofocus=autofocus,
+        lenient=lenient,
+        force=force,
     )
 
 
 @click.command()
 @out_option("Output directory.", required=False, default=Path("sarmotion-demo"), show_default=True)
+@force_option
 @click.pass_context
-def demo(ctx: click.Context, out: Path) -> None:
+def demo(ctx: click.Context, out: Path, force: bool) -> None:
     """Analyse the built-in Scene 1 (20 stationary targets, 2 movers) into OUT."""
-    run_analyze(("scene1",), out, AnalysisOptions(), progress=ctx.obj["progress"])
+    run_analyze(("scene1",), out, AnalysisOptions(), progress=ctx.obj["progress"], force=force)

@@ -2,19 +2,29 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
+
+import contextlib
+import os
+import re
+from collections.abc import Iterator
 
 import click
 import numpy as np
 
+from .._validation import positive
 from ..imaging import ImageGrid
 
 __all__ = [
     "InputError",
     "Progress",
+    "as_flags",
+    "check_out",
     "extent_grid",
+    "force_option",
+    "lenient_option",
     "noise_options",
     "out_option",
     "speed_option",
@@ -24,6 +34,28 @@ __all__ = [
 
 class InputError(Exception):
     """Bad user input: reported as one line, exit status 2."""
+
+
+@contextlib.contextmanager
+def as_flags(**flags: str) -> Iterator[None]:
+    """Report a library's argument error under the flags the user typed.
+
+    ``with as_flags(speed_mps="--speed"): ...`` turns ``ValueError("speed_mps must be >
+    0 ...")`` into ``InputError("--speed must be > 0 ...")``. Errors about files
+    (:class:`~sarmotion.io.DataError`, scene errors) name their file and pass unchanged.
+    """
+    from ..io import DataError
+    from ..simulation import SceneError
+
+    try:
+        yield
+    except (DataError, SceneError):
+        raise
+    except (TypeError, ValueError) as exc:
+        text = str(exc)
+        for name, flag in flags.items():
+            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w])", flag, text)
+        raise InputError(text) from None
 
 
 class Progress:
@@ -71,6 +103,57 @@ def out_option(help_text: str, **kwargs: Any) -> Callable[[Callable[..., Any]], 
     return click.option("--out", "out", type=click.Path(path_type=Path), help=help_text, **kwargs)
 
 
+force_option = click.option(
+    "--force", is_flag=True, help="Replace outputs that already exist in --out."
+)
+
+lenient_option = click.option(
+    "--lenient",
+    is_flag=True,
+    help="Accept input files that break a plausibility rule (antenna track, r0, dynamic "
+    "range), with a warning: for unusual but genuine data.",
+)
+
+
+def _writable_ancestor(path: Path) -> Path:
+    """The nearest existing directory at or above ``path``."""
+    p = path.resolve()
+    while not p.exists():
+        p = p.parent
+    return p
+
+
+def check_out(
+    out: Path, *, force: bool, names: Sequence[str] = (), patterns: Sequence[str] = ()
+) -> None:
+    """Check ``--out`` before any work is done.
+
+    A file output (``names`` empty, ``patterns`` empty) may not be an existing directory
+    and is replaced only with ``--force``; a directory output may not be an existing file,
+    and may already hold none of ``names`` (or entries matching ``patterns``) unless
+    ``--force``. The directory that will receive the output must be writable.
+    """
+    is_file = not names and not patterns
+    if is_file:
+        if out.is_dir():
+            raise InputError(f"--out {out} is a directory; expected a file name")
+        if out.exists() and not force:
+            raise InputError(f"--out {out} already exists; --force replaces it")
+        where = _writable_ancestor(out.parent)
+    else:
+        if out.exists() and not out.is_dir():
+            raise InputError(f"--out {out} exists and is not a directory")
+        clash = [n for n in names if (out / n).exists() or (out / n).is_symlink()]
+        for pattern in patterns:
+            clash += sorted(p.name for p in out.glob(pattern)) if out.is_dir() else []
+        if clash and not force:
+            shown = ", ".join(clash[:4]) + (", ..." if len(clash) > 4 else "")
+            raise InputError(f"--out {out} already holds {shown}; --force replaces them")
+        where = out if out.is_dir() else _writable_ancestor(out.parent)
+    if not os.access(where, os.W_OK | os.X_OK):
+        raise InputError(f"--out {out}: cannot write in {where} (permission denied)")
+
+
 def _positive_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
     if value is not None and not (np.isfinite(value) and value > 0):
         raise click.BadParameter(f"must be > 0, got {value}")
@@ -103,8 +186,8 @@ def noise_options(func: Callable[..., Any]) -> Any:
 
 def square_grid(size_m: float, spacing_m: float, centre: tuple[float, float]) -> ImageGrid:
     """Square image grid from ``--size``, ``--spacing`` and ``--centre``."""
-    if not (size_m > 0 and spacing_m > 0):
-        raise InputError(f"--size and --spacing must be positive, got {size_m}, {spacing_m}")
+    size_m = positive(size_m, "--size", unit="m")
+    spacing_m = positive(spacing_m, "--spacing", unit="m")
     if size_m / spacing_m > 4096:
         raise InputError(
             f"--size/--spacing gives {size_m / spacing_m:.0f} pixels a side (max 4096)"

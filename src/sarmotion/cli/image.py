@@ -11,27 +11,35 @@ import numpy as np
 from ..imaging import backproject
 from ..io import read_inputs, save_image, staged_directory, write_json
 from ..report.plotting import image_figure, save_figure
-from .common import InputError, Progress, extent_grid, square_grid
+from .common import (
+    InputError,
+    Progress,
+    check_out,
+    extent_grid,
+    force_option,
+    lenient_option,
+    out_option,
+    speed_option,
+    square_grid,
+)
+
+OUTPUTS = ("image.png", "image.h5", "peaks.json")
 
 __all__ = ["image"]
 
 
 @click.command()
 @click.argument("inputs", nargs=-1, required=True)
-@click.option(
-    "--out",
-    "out",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Output directory (image.png, image.h5).",
-)
+@out_option("Output directory: image.png, image.h5, peaks.json.")
+@force_option
 @click.option(
     "--velocity",
     nargs=2,
     type=float,
     default=None,
     metavar="UX UY",
-    help="Motion-compensate for this ground velocity (m/s), eq:imagecompu.",
+    help="Motion-compensate for this ground velocity (m/s): each pixel is imaged at the "
+    "position it has moved to at every pulse [eq:imagecompu].",
 )
 @click.option(
     "--size",
@@ -60,16 +68,11 @@ __all__ = ["image"]
     type=float,
     default=None,
     metavar="XMIN XMAX YMIN YMAX",
-    help="Rectangular image extent (m), instead of --size/--centre; pixels of --spacing.",
+    help="Rectangular image extent (m), instead of --size/--centre (not with them); "
+    "pixels of --spacing.",
 )
-@click.option(
-    "--speed",
-    "speed_mps",
-    type=float,
-    default=70.0,
-    show_default=True,
-    help="Platform speed for GOTCHA slow time (m/s).",
-)
+@speed_option
+@lenient_option
 @click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
 @click.option(
     "--dynamic-range",
@@ -77,7 +80,7 @@ __all__ = ["image"]
     type=float,
     default=40.0,
     show_default=True,
-    help="Displayed dynamic range (dB).",
+    help="Displayed dynamic range below the peak (dB, > 0).",
 )
 @click.pass_context
 def image(
@@ -90,30 +93,48 @@ def image(
     centre: tuple[float, float],
     grid_extent: tuple[float, float, float, float] | None,
     speed_mps: float,
+    lenient: bool,
     autofocus: bool,
     dynamic_range_db: float,
+    force: bool,
 ) -> None:
-    """Backprojection image (eq:image) of INPUTS: a scene, native traces or GOTCHA .mat files.
+    """Backprojection image of INPUTS: a scene, native traces or GOTCHA .mat files.
 
+    Each pixel sums the traces at its round-trip travel time over the aperture [eq:image].
     Writes OUT/image.png (dB, peak-normalised), OUT/image.h5 (complex image with its axes)
     and OUT/peaks.json (the brightest points).
     """
-    traces, _ = read_inputs(inputs, speed_mps=speed_mps, autofocus=autofocus)
+    check_out(out, force=force, names=OUTPUTS)
+    given = {
+        flag
+        for name, flag in (("size_m", "--size"), ("centre", "--centre"))
+        if ctx.get_parameter_source(name) is not click.core.ParameterSource.DEFAULT
+    }
+    if grid_extent is not None and given:
+        raise InputError(f"--grid sets the image extent; do not combine it with {', '.join(sorted(given))}")
+    if not (np.isfinite(dynamic_range_db) and dynamic_range_db > 0):
+        raise InputError(f"--dynamic-range must be > 0 (dB), got {dynamic_range_db}")
+    if velocity is not None and not np.all(np.isfinite(velocity)):
+        raise InputError(f"--velocity must be finite, got {velocity}")
+    if not np.all(np.isfinite(centre)):
+        raise InputError(f"--centre must be finite, got {centre}")
     if grid_extent is None:
         grid = square_grid(size_m, spacing_m, centre)
     else:
         grid = extent_grid(grid_extent, spacing_m)
-    if velocity is not None and not np.all(np.isfinite(velocity)):
-        raise InputError(f"--velocity must be finite, got {velocity}")
+    traces, _ = read_inputs(inputs, speed_mps=speed_mps, autofocus=autofocus, lenient=lenient)
     t0 = time.perf_counter()
     with Progress(enabled=ctx.obj["progress"]) as bar:
         img = backproject(traces, grid, velocity_mps=velocity, progress=bar)
     elapsed = time.perf_counter() - t0
     peaks = img.peaks(5, min_separation_m=3.0)
     with staged_directory(out) as stage:
-        title = (
-            "image" if velocity is None else f"image, u = ({velocity[0]:g}, {velocity[1]:g}) m/s"
-        )
+        names = ", ".join(Path(i).name for i in inputs)
+        title = f"backprojection image of {names}"
+        if len(title) > 60:
+            title = f"backprojection image of {len(inputs)} inputs"
+        if velocity is not None:
+            title += f"\ncompensated for u = ({velocity[0]:g}, {velocity[1]:g}) m/s"
         fig = image_figure(
             [(title, img.values)], x_m=grid.x_m, y_m=grid.y_m, dynamic_range_db=dynamic_range_db
         )

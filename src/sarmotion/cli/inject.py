@@ -11,7 +11,15 @@ import numpy as np
 from ..io import read_inputs, save_traces, staged_directory, write_gotcha
 from ..simulation import PointTarget
 from ..simulation import inject as run
-from .common import InputError
+from .common import (
+    InputError,
+    as_flags,
+    check_out,
+    force_option,
+    lenient_option,
+    out_option,
+    speed_option,
+)
 
 __all__ = ["inject"]
 
@@ -26,6 +34,8 @@ def _parse_target(text: str) -> Any:
     x, y = values[:2]
     u = values[2:4] if len(values) >= 4 else [0.0, 0.0]
     amp = values[4] if len(values) == 5 else None
+    if amp is not None and amp <= 0:
+        raise InputError(f"--target {text!r}: AMP must be > 0 (data units), got {amp:g}")
     return PointTarget(position_m=[x, y], velocity_mps=u), amp
 
 
@@ -41,24 +51,25 @@ def _parse_target(text: str) -> Any:
     "amplitude in data units (default: the median over pulses of max|D|). "
     "Repeat for several targets.",
 )
-@click.option(
-    "--out",
-    "out",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).",
-)
-@click.option(
-    "--speed",
-    "speed_mps",
-    type=float,
-    default=70.0,
-    show_default=True,
-    help="Platform speed for GOTCHA slow time (m/s).",
-)
-def inject(inputs: tuple[str, ...], targets: tuple[str, ...], out: Path, speed_mps: float) -> None:
+@out_option("Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
+@force_option
+@speed_option
+@lenient_option
+def inject(
+    inputs: tuple[str, ...],
+    targets: tuple[str, ...],
+    out: Path,
+    force: bool,
+    speed_mps: float,
+    lenient: bool,
+) -> None:
     """Add simulated point targets (stationary or moving) to real or simulated traces."""
-    traces, _ = read_inputs(inputs, speed_mps=speed_mps)
+    native = out.suffix.lower() in (".h5", ".hdf5")
+    check_out(out, force=force, patterns=() if native else ("*.mat",))
+    for text in targets:
+        _parse_target(text)
+    with as_flags(speed_mps="--speed"):
+        traces, _ = read_inputs(inputs, speed_mps=speed_mps, lenient=lenient)
     default_amp = float(np.median(np.abs(traces.data).max(axis=1)))
     parsed = []
     for text in targets:
@@ -71,9 +82,9 @@ def inject(inputs: tuple[str, ...], targets: tuple[str, ...], out: Path, speed_m
             )
         )
     result = run(traces, parsed)
-    if out.suffix.lower() in (".h5", ".hdf5"):
-        out.parent.mkdir(parents=True, exist_ok=True)
-        save_traces(out, result)
+    if native:
+        with staged_directory(out.parent) as stage:
+            save_traces(stage / out.name, result)
         click.echo(f"wrote {out} with {len(parsed)} injected target(s)")
     else:
         with staged_directory(out) as stage:

@@ -8,9 +8,12 @@ failed run leaves nothing half-written.
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 
 import click
 
@@ -30,6 +33,28 @@ log = logging.getLogger("sarmotion")
 
 
 EXIT_BAD_INPUT = 2
+EXIT_TERMINATED = 128 + signal.SIGTERM
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that staged outputs are removed."""
+
+
+def _on_sigterm(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_raises() -> Iterator[None]:
+    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 # --------------------------------------------------------------------------- commands
@@ -53,7 +78,28 @@ def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
     ctx.obj["progress"] = not quiet and sys.stderr.isatty()
 
 
+def _quiet(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    if value:
+        ctx.ensure_object(dict)["progress"] = False
+
+
+def _verbose(ctx: click.Context, param: click.Parameter, value: int) -> None:
+    if value:
+        logging.getLogger().setLevel(logging.WARNING - 10 * min(value, 2))
+
+
 for _command in (simulate, image, inject, separate, analyze, demo, paper):
+    # -q and -v work after the command name too (``sarmotion analyze -q ...``).
+    _command.params += [
+        click.Option(
+            ["-q", "--quiet"], is_flag=True, expose_value=False, callback=_quiet,
+            help="No progress bars.",
+        ),
+        click.Option(
+            ["-v", "--verbose"], count=True, expose_value=False, callback=_verbose,
+            help="More log output (-v info, -vv debug).",
+        ),
+    ]
     main.add_command(_command)
 
 
@@ -67,11 +113,15 @@ def _known_errors() -> tuple[type[BaseException], ...]:
 def run(args: Sequence[str] | None = None) -> int:
     """Run the CLI with ``args``; return the exit status (never raises for bad input)."""
     try:
-        main.main(
-            args=list(args) if args is not None else None,
-            prog_name="sarmotion",
-            standalone_mode=False,
-        )
+        with _sigterm_raises():
+            main.main(
+                args=list(args) if args is not None else None,
+                prog_name="sarmotion",
+                standalone_mode=False,
+            )
+    except Terminated:
+        click.echo("sarmotion: terminated; no output written", err=True)
+        return EXIT_TERMINATED
     except click.exceptions.Abort:
         click.echo("sarmotion: aborted", err=True)
         return 130

@@ -8,20 +8,19 @@ import click
 
 from ..io import staged_directory
 from ..report.paper import FIGURE_LABELS, build_figures
-from .common import Progress
+from .common import Progress, as_flags, check_out, force_option, out_option
 
 __all__ = ["paper"]
 
 
 @click.command()
-@click.option(
-    "--out",
-    "out",
-    type=click.Path(path_type=Path),
+@out_option(
+    "Output directory: fig_NAME.png and fig_NAME.npz per figure, and index.html.",
+    required=False,
     default=Path("sarmotion-paper"),
     show_default=True,
-    help="Output directory: fig_NAME.png and fig_NAME.npz per figure, and index.html.",
 )
+@force_option
 @click.option(
     "--only",
     "only",
@@ -33,7 +32,12 @@ __all__ = ["paper"]
 @click.option("--list", "list_only", is_flag=True, help="List the figure labels and exit.")
 @click.pass_context
 def paper(
-    ctx: click.Context, out: Path, only: tuple[str, ...], quick: bool, list_only: bool
+    ctx: click.Context,
+    out: Path,
+    force: bool,
+    only: tuple[str, ...],
+    quick: bool,
+    list_only: bool,
 ) -> None:
     """Regenerate every figure of the paper, with the numbers behind it.
 
@@ -45,9 +49,10 @@ def paper(
         click.echo("\n".join(FIGURE_LABELS))
         return
     selected = list(only) if only else None
+    check_out(out, force=force, names=("index.html",), patterns=("fig_*",))
     total = len(selected) if selected else len(FIGURE_LABELS)
     with Progress(enabled=ctx.obj["progress"]) as bar:
-        with staged_directory(out) as stage:
+        with staged_directory(out) as stage, as_flags(only="--only"):
             records = build_figures(
                 stage,
                 only=selected,

@@ -15,7 +15,18 @@ from ..io import read_inputs, save_traces, staged_directory, write_json
 from ..report.plotting import image_figure, save_figure, traces_figure
 from ..separation import Separation, SeparationOptions, quality_against_truth
 from ..separation import separate as run
-from .common import InputError, Progress, noise_options, out_option, speed_option
+from .common import (
+    Progress,
+    as_flags,
+    check_out,
+    force_option,
+    lenient_option,
+    noise_options,
+    out_option,
+    speed_option,
+)
+
+OUTPUTS = ("separated.h5", "separation.png", "image.png", "separation.json")
 
 __all__ = ["separate"]
 
@@ -28,11 +39,13 @@ __all__ = ["separate"]
     default="auto",
     show_default=True,
     help="combined: each stationary point of the preliminary image is aligned in its own "
-    "frame and its slow-time-constant part removed (sect:sepdisc); rpca: windowed robust "
-    "PCA (sect:RPCA); annihilation: composed travel-time filters at the stationary points "
-    "of the image (eq:OP2). auto: combined for simulated scenes, rpca for measured data.",
+    "frame and its slow-time-constant part removed [sect:sepdisc]; rpca: windowed robust "
+    "PCA, traces split into a low-rank and a sparse part [sect:RPCA]; annihilation: "
+    "composed travel-time filters that cancel the echoes of the stationary points of the "
+    "image [eq:OP2]. auto: combined for simulated scenes, rpca for measured data.",
 )
 @out_option("Output directory: separated.h5, separation.png, image.png, separation.json.")
+@force_option
 @click.option(
     "--window",
     type=int,
@@ -70,6 +83,7 @@ __all__ = ["separate"]
     help="Pixel spacing of the preliminary image (m).",
 )
 @speed_option
+@lenient_option
 @noise_options
 @click.pass_context
 def separate(
@@ -83,8 +97,10 @@ def separate(
     size_m: float | None,
     spacing_m: float,
     speed_mps: float,
+    lenient: bool,
     snr_db: float | None,
     seed: int,
+    force: bool,
 ) -> None:
     """Separate the traces of stationary and moving targets in INPUTS.
 
@@ -94,14 +110,13 @@ def separate(
     image with the stationary points used) and OUT/separation.json (method details and, for
     simulated scenes, quality against the truth).
     """
+    check_out(out, force=force, names=OUTPUTS)
     options = _options(method, window, eta_scale, threshold_db)
-    traces, sim = read_inputs(inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed)
-    try:
+    with as_flags(speed_mps="--speed", snr_db="--snr-db", size_m="--size", spacing_m="--spacing"):
+        traces, sim = read_inputs(
+            inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed, lenient=lenient
+        )
         grid = scene_grid(traces, size_m=size_m, spacing_m=spacing_m)
-    except ValueError as exc:
-        raise InputError(
-            str(exc).replace("size_m", "--size").replace("spacing_m", "--spacing")
-        ) from None
     t0 = time.perf_counter()
     with Progress(enabled=ctx.obj["progress"]) as bar:
         prelim = backproject(traces, grid, progress=bar)
@@ -140,24 +155,16 @@ def separate(
 def _options(
     method: str, window: int | None, eta_scale: float | None, threshold_db: float
 ) -> SeparationOptions:
-    flags = {
-        "rpca_window": "--window",
-        "eta_scale": "--eta-scale",
-        "candidate_threshold_db": "--threshold-db",
-    }
-    try:
+    """SeparationOptions from the flags; a bad value is reported under its flag's name."""
+    with as_flags(
+        rpca_window="--window", eta_scale="--eta-scale", candidate_threshold_db="--threshold-db"
+    ):
         return SeparationOptions(
             method=None if method == "auto" else method,
             rpca_window=window,
             eta_scale=eta_scale,
             candidate_threshold_db=threshold_db,
         )
-    except (TypeError, ValueError) as exc:
-        text = str(exc)
-        for name, flag in flags.items():
-            if text.startswith(name + " "):
-                raise InputError(flag + text[len(name) :]) from None
-        raise InputError(text) from None
 
 
 def _write(

@@ -10,18 +10,15 @@ from ..io import save_traces, staged_directory, write_gotcha
 from ..simulation import load_scene
 from ..simulation import simulate as run
 
+from .common import as_flags, check_out, force_option, out_option
+
 __all__ = ["simulate"]
 
 
 @click.command()
 @click.argument("scene")
-@click.option(
-    "--out",
-    "out",
-    required=True,
-    type=click.Path(path_type=Path),
-    help="Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).",
-)
+@out_option("Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
+@force_option
 @click.option("--snr-db", type=float, default=None, help="Add white noise at this SNR (dB).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Noise seed.")
 @click.option(
@@ -30,17 +27,24 @@ __all__ = ["simulate"]
     show_default=True,
     help="Include the 1/R^2 amplitude decay.",
 )
-def simulate(scene: str, out: Path, snr_db: float | None, seed: int, spreading: bool) -> None:
+def simulate(
+    scene: str, out: Path, snr_db: float | None, seed: int, spreading: bool, force: bool
+) -> None:
     """Simulate the traces of SCENE (a built-in name or a scene .toml file).
 
     Writes native traces (.h5, with the stationary-only and moving-only truth as extra
     datasets "stationary" and "moving") or, if OUT is not a .h5 path, GOTCHA-format .mat
     files into the directory OUT.
     """
-    sim = run(load_scene(scene), snr_db=snr_db, rng=seed, spreading=spreading)
-    if out.suffix.lower() in (".h5", ".hdf5"):
-        out.parent.mkdir(parents=True, exist_ok=True)
-        save_traces(out, sim.traces, extra={"stationary": sim.stationary, "moving": sim.moving})
+    native = out.suffix.lower() in (".h5", ".hdf5")
+    check_out(out, force=force, patterns=() if native else ("*.mat",))
+    with as_flags(snr_db="--snr-db", rng="--seed"):
+        sim = run(load_scene(scene), snr_db=snr_db, rng=seed, spreading=spreading)
+    if native:
+        with staged_directory(out.parent) as stage:
+            save_traces(
+                stage / out.name, sim.traces, extra={"stationary": sim.stationary, "moving": sim.moving}
+            )
         click.echo(f"wrote {out} ({sim.traces.n_pulses} pulses x {sim.traces.n_samples} samples)")
     else:
         with staged_directory(out) as stage:

@@ -62,22 +62,61 @@ def staged_paths(targets: Sequence[Path], *, overwrite: bool = True) -> Iterator
 
 @contextmanager
 def staged_directory(out: Path) -> Iterator[Path]:
-    """Yield a hidden staging directory; move its files into ``out`` only on success."""
+    """A hidden staging directory whose files replace those of ``out`` only on success.
+
+    The stage is created beside ``out`` (in ``out`` itself when ``out`` exists, so that
+    a read-only parent does not matter). When the ``with`` block raises anything,
+    including ``KeyboardInterrupt`` or a termination signal turned into an exception,
+    the stage is removed and ``out`` is left as it was. On success each staged entry
+    replaces the entry of the same name in ``out`` (a file or a directory; the command
+    line asks for ``--force`` before that); if a replacement fails half-way (permissions,
+    a full disk), the entries already moved are put back, and ``out`` is again as it was.
+
+    Raises
+    ------
+    DataError
+        ``out`` exists and is not a directory.
+    """
     out = Path(out)
-    parent = out.resolve().parent
-    parent.mkdir(parents=True, exist_ok=True)
     if out.exists() and not out.is_dir():
         raise DataError(f"--out {out} exists and is not a directory")
+    created = not out.exists()
+    parent = out.resolve().parent if created else out
+    parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=parent))
     try:
         yield stage
+        if created:
+            out.mkdir()
+        _commit(stage, out)
     except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
+        if created and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
         raise
-    out.mkdir(parents=True, exist_ok=True)
-    for item in sorted(stage.iterdir()):
-        target = out / item.name
-        if target.is_dir() and item.is_dir():
-            shutil.rmtree(target)
-        os.replace(item, target)
-    shutil.rmtree(stage, ignore_errors=True)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+def _commit(stage: Path, out: Path) -> None:
+    """Move the entries of ``stage`` into ``out``; on failure undo every move."""
+    backup = stage / ".previous"
+    backup.mkdir()
+    done: list[tuple[Path, Path | None]] = []  # (target, its previous entry in backup)
+    try:
+        for item in sorted(p for p in stage.iterdir() if p != backup):
+            target = out / item.name
+            old = None
+            if target.exists() or target.is_symlink():
+                old = backup / item.name
+                os.replace(target, old)
+            done.append((target, old))
+            os.replace(item, target)
+    except BaseException:
+        for target, old in reversed(done):
+            if target.is_dir() and not target.is_symlink():
+                shutil.rmtree(target, ignore_errors=True)
+            else:
+                target.unlink(missing_ok=True)
+            if old is not None:
+                os.replace(old, target)
+        raise

@@ -19,7 +19,7 @@ Scene file schema (``schema = "sarmotion.scene/1"``), all SI units::
     [[targets]]                          # one table per point target
     position_m = [x, y]                  # position at s = 0 (aperture centre), m
     velocity_mps = [ux, uy]              # ground velocity, m/s; default [0, 0]
-    amplitude = 1.0                      # |sigma|; default 1
+    amplitude = 1.0                      # |sigma| > 0; default 1
     phase_deg = 0.0                      # arg(sigma) in degrees; default 0
     label = "mover A"                    # optional
 
@@ -225,6 +225,11 @@ class Scene:
             pos = _vector(t["position_m"], source, f"{where}.position_m", 3)
             vel = _vector(t.get("velocity_mps", [0.0, 0.0]), source, f"{where}.velocity_mps", 2)
             amp = _number(t.get("amplitude", 1.0), source, f"{where}.amplitude")
+            if amp <= 0:
+                raise SceneError(
+                    f"{source}: {where}.amplitude must be > 0 (the modulus |sigma|; a sign "
+                    f"or phase goes in phase_deg), got {amp:g}"
+                )
             phase = _number(t.get("phase_deg", 0.0), source, f"{where}.phase_deg")
             targets.append(
                 PointTarget(
