@@ -155,8 +155,10 @@ def check_out(
 
 
 def _positive_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
-    if value is not None and not (np.isfinite(value) and value > 0):
-        raise click.BadParameter(f"must be > 0, got {value}")
+    if value is not None:
+        flag = max(param.opts, key=len)
+        with as_flags(value=flag):
+            positive(value, flag)
     return value
 
 
