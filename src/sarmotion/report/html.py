@@ -37,6 +37,9 @@ __all__ = [
     "write_report",
 ]
 
+#: Stationary detections closer than this (m) to a brighter one are merged in the report.
+_MERGE_M = 0.5
+
 _COLOURS = ("tab:red", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
 
 
@@ -54,13 +57,19 @@ def traces_panels_figure(result: AnalysisResult) -> Figure:
     for k, m in enumerate(result.movers):
         panels.append((f"mover {k + 1} |D_{k + 1}| (dB)", m.traces, True))
     panels.append(("residual (dB)", result.residual, True))
-    return traces_figure(
+    fig = traces_figure(
         panels,
         slow_times_s=tr.slow_times_s,
         fast_times_s=tr.fast_times_s,
         normalise_by=float(np.abs(tr.data).max()),
         ncols=min(4, len(panels)),
     )
+    for ax in fig.axes:  # legible at the report's 110 dpi (default 8 px)
+        ax.tick_params(labelsize=10)
+        ax.xaxis.label.set_size(11)
+        ax.yaxis.label.set_size(11)
+    fig.tight_layout()
+    return fig
 
 
 def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
@@ -166,7 +175,7 @@ def trajectories_figure(result: AnalysisResult, *, truth: dict[str, Any] | None 
             t = next((x for x in truth["truth"] if x["label"] == name), None)
         if t is not None:
             err = trajectory_error(tj, t["position_m"], t["velocity_mps"])
-            ax.plot(tj.slow_times_s, err, color=colour, label=f"estimate {k + 1} = {name}")
+            ax.plot(tj.slow_times_s, err, color=colour, label=f"estimate {k + 1} vs truth '{name}'")
             ax.set_ylabel("|rho_e(s) - rho(s)| (m)")
         else:
             ax.plot(tj.positions_m[:, 0], tj.positions_m[:, 1], color=colour)
@@ -177,7 +186,7 @@ def trajectories_figure(result: AnalysisResult, *, truth: dict[str, Any] | None 
     if truth:
         ax.set_xlabel("slow time s (s)")
         ax.set_title("trajectory error (phase-space estimate)")
-        ax.set_yscale("symlog", linthresh=0.1)
+        ax.set_ylim(bottom=0.0)
     else:
         ax.set_title("estimated trajectories over the aperture")
         ax.set_aspect("equal", adjustable="datalim")
@@ -205,7 +214,8 @@ def _fmt(v: Any, digits: int = 2) -> str:
     if isinstance(v, (list, tuple)):
         return "(" + ", ".join(_fmt(x, digits) for x in v) + ")"
     if isinstance(v, float):
-        return f"{v:.{digits}f}"
+        text = f"{v:.{digits}f}"
+        return text[1:] if text.startswith("-") and float(text) == 0.0 else text
     return html.escape(str(v))
 
 
@@ -268,53 +278,93 @@ def write_report(
     truth = None
     if "truth" in doc:
         truth = {"truth": doc["truth"], "errors": [m.get("errors") for m in doc["movers"]]}
-    figures: list[tuple[str, str, str]] = []  # (section, caption, file)
-
-    def add(section: str, caption: str, fig: Figure, name: str) -> None:
-        data = _png(fig, out / name)
-        figures.append((section, caption, base64.b64encode(data).decode("ascii")))
-
-    add(
-        "Traces",
-        "Range-compressed traces: slow time s (vertical) against fast time t. Data M, "
-        f"its separation ({result.method}) into L and S, each mover's own traces "
-        "(its s-independent part in its frame T_+^{u,rho}, mapped back) and what is left.",
-        traces_panels_figure(result),
-        "traces.png",
-    )
-    add(
-        "Motion estimation",
-        "g(u): peaks are the movers' range speeds (triangles: truth). g_perp: its minimum "
-        "is the cross-range speed (dotted: truth).",
-        objectives_figure(result, truth=truth),
-        "objectives.png",
-    )
-    add(
-        "Images",
-        "Preliminary image of M (circles: movers' estimated positions at s = 0) and the "
-        "stationary image (circles: listed stationary targets). dB re each image's peak.",
-        images_figure(result),
-        "images.png",
-    )
-    add(
-        "Images",
-        "Each mover imaged from its own traces, compensated at its estimated velocity "
-        "(eq:imagecompu). Circle: estimated position at s = 0; cross: truth.",
-        movers_figure(result, truth=truth),
-        "movers.png",
-    )
-    if any(m.trajectory is not None for m in result.movers):
-        add(
-            "Trajectories",
-            "Phase-space trajectory estimate (sub-apertures, Wigner ridge), anchored at the "
-            "estimated position at s = 0.",
-            trajectories_figure(result, truth=truth),
-            "trajectories.png",
+    sections: dict[str, list[str]] = {}
+    for section, caption, fig, name in _figures(result, truth):
+        b64 = base64.b64encode(_png(fig, out / name)).decode("ascii")
+        sections.setdefault(section, []).append(
+            f'<img alt="{html.escape(caption)}" src="data:image/png;base64,{b64}">'
+            f'<p class="note">{html.escape(caption)}</p>'
         )
+    movers = _movers_html(doc) + (_truth_html(doc) if truth is not None else "")
+    parts = [
+        f"<section><h2>Acquisition</h2>{_acquisition_html(doc, inputs)}</section>",
+        f"<section><h2>Moving targets</h2>{movers}</section>",
+    ]
+    for name in ("Traces", "Motion estimation", "Images", "Trajectories"):
+        if name in sections:
+            parts.append(f"<section><h2>{name}</h2>{''.join(sections[name])}</section>")
+    parts.append(f"<section><h2>Stationary targets</h2>{_stationary_html(doc)}</section>")
+    timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in doc["timings_s"].items()]
+    parts.append(
+        "<section><h2>Timings</h2>"
+        + _html_table(["stage", "wall-clock (s)"], timing_rows)
+        + "</section>"
+    )
+    path = out / "report.html"
+    path.write_text(_page(title, doc, parts), encoding="utf-8")
+    return path
 
-    # ---- tables
+
+def _figures(
+    result: AnalysisResult, truth: dict[str, Any] | None
+) -> list[tuple[str, str, Figure, str]]:
+    """The report's figures: (section, caption, figure, file name)."""
+    marks = truth is not None
+    figures = [
+        (
+            "Traces",
+            "Range-compressed traces: slow time s (vertical) against fast time t. Data M, "
+            f"its separation ({result.method}) into L and S, each mover's own traces "
+            "(its s-independent part in its frame T_+^{u,rho}, mapped back) and what is left.",
+            traces_panels_figure(result),
+            "traces.png",
+        ),
+        (
+            "Motion estimation",
+            "g(u): peaks are the movers' range speeds"
+            + (" (triangles: truth)" if marks else "")
+            + ". g_perp: its minimum is the cross-range speed"
+            + (" (dotted: truth)." if marks else "."),
+            objectives_figure(result, truth=truth),
+            "objectives.png",
+        ),
+        (
+            "Images",
+            "Preliminary image of M (circles: movers' estimated positions at s = 0) and the "
+            "stationary image (circles: listed stationary targets). dB re each image's peak.",
+            images_figure(result),
+            "images.png",
+        ),
+    ]
+    if result.movers:
+        figures.append(
+            (
+                "Images",
+                "Each mover imaged from its own traces, compensated at its estimated velocity. "
+                "Circle: estimated position at s = 0" + ("; cross: truth." if marks else "."),
+                movers_figure(result, truth=truth),
+                "movers.png",
+            )
+        )
+    if any(m.trajectory is not None for m in result.movers):
+        figures.append(
+            (
+                "Trajectories",
+                "Phase-space trajectory estimate (sub-apertures, Wigner ridge), anchored at "
+                "the estimated position at s = 0"
+                + (": distance to the true trajectory (m)." if marks else "."),
+                trajectories_figure(result, truth=truth),
+                "trajectories.png",
+            )
+        )
+    return figures
+
+
+def _movers_html(doc: dict[str, Any]) -> str:
+    """The table of estimated movers (estimates only; truth has its own tables)."""
     rows = []
     for k, m in enumerate(doc["movers"]):
+        fam = m["cross_range_family"]
         rows.append(
             [
                 str(k + 1),
@@ -324,151 +374,151 @@ def write_report(
                 _fmt(m["cross_range_speed_mps"], 3),
                 _fmt(m["g_peak_db"], 1),
                 _fmt(m["peak_db"], 1),
-                _fmt(m["cross_range_family"]["position_per_m"], 3)
-                + " / "
-                + _fmt(m["cross_range_family"]["velocity_mps_per_m"], 4),
+                _fmt(fam["position_per_m"], 3) + " / " + _fmt(fam["velocity_mps_per_m"], 4),
             ]
-        )
-    movers_html = _html_table(
-        [
-            "mover",
-            "position at s=0 (m)",
-            "velocity (m/s)",
-            "range speed (m/s)",
-            "cross-range speed (m/s)",
-            "g peak/floor (dB)",
-            "image peak (dB re stationary)",
-            "family per m: position / velocity",
-        ],
-        rows,
-    )
-    if rows:
-        movers_html += (
-            '<p class="note">The data of a few degrees do not fix a mover\'s cross-range '
-            "position: position + t a and velocity + t b fit them as well for any t metres "
-            "of cross-range offset (a, b in the last column; sarmotion.motion.aperture). The "
-            "estimate is the member near the reference cross range.</p>"
         )
     if not rows:
-        movers_html = "<p>No mover found above the g(u) threshold.</p>"
-    truth_html = ""
-    if truth is not None:
-        trows = [
-            [
-                html.escape(t["label"] or "-"),
-                _fmt(t["position_m"]),
-                _fmt(t["velocity_mps"]),
-                _fmt(t["range_speed_mps"], 3),
-                _fmt(t["cross_range_speed_mps"], 3),
-            ]
-            for t in doc["truth"]
-        ]
-        erows = []
-        for k, m in enumerate(doc["movers"]):
-            e = m.get("errors")
-            if e is None:
-                erows.append([str(k + 1), '<span class="bad">false mover</span>'] + [""] * 7)
-                continue
-            erows.append(
-                [
-                    str(k + 1),
-                    html.escape(e["matched"]),
-                    _fmt(e["range_speed_mps"], 3),
-                    _fmt(e["cross_range_speed_mps"], 3),
-                    _fmt(e["position_range_m"], 2),
-                    _fmt(e["position_cross_range_m"], 2),
-                    _fmt(e["family_position_m"], 3) + " / " + _fmt(e["family_velocity_mps"], 3),
-                    _fmt(e.get("trajectory_max_m"), 2),
-                    _fmt(e["image_peak_m"], 2),
-                ]
-            )
-        truth_html = (
-            "<h3>Truth</h3>"
-            + _html_table(
-                [
-                    "label",
-                    "position at s=0 (m)",
-                    "velocity (m/s)",
-                    "range speed (m/s)",
-                    "cross-range speed (m/s)",
-                ],
-                trows,
-            )
-            + "<h3>Errors (estimate &minus; truth)</h3>"
-            + _html_table(
-                [
-                    "mover",
-                    "matched",
-                    "range speed (m/s)",
-                    "cross-range speed (m/s)",
-                    "position, range (m)",
-                    "position, cross range (m)",
-                    "truth to family: position (m) / velocity (m/s)",
-                    "max trajectory error (m)",
-                    "image peak to truth (m)",
-                ],
-                erows,
-            )
-            + f"<p>False movers: {doc['false_movers']}; missed movers: "
-            f"{doc['missed_movers']}.</p>"
-            + '<p class="note">The cross-range position and the range speed of a mover are '
-            "tied over a few degrees (sarmotion.motion.aperture, module notes): a mover away from "
-            "the reference cross range is placed on the data-consistent family near it, "
-            "shifted in cross range by about L &delta;u / (V &minus; u_t). &ldquo;Truth to "
-            "family&rdquo; is the error of the family member at the truth's cross-range "
-            "offset: what the data can resolve.</p>"
-        )
-    stat_rows = [
-        [str(i + 1), _fmt(list(s["position_m"])), _fmt(s["peak_db"], 1)]
-        for i, s in enumerate(doc["stationary"][:40])
+        return "<p>No mover found above the g(u) threshold.</p>"
+    head = [
+        "estimate",
+        "position at s=0 (m)",
+        "velocity (m/s)",
+        "range speed (m/s)",
+        "cross-range speed (m/s)",
+        "g peak/floor (dB)",
+        "image peak (dB re stationary)",
+        "family, per m of cross-range offset: position (m/m) / velocity (m/s per m)",
     ]
-    more = len(doc["stationary"]) - len(stat_rows)
-    stat_html = _html_table(["#", "position (m)", "level (dB re peak)"], stat_rows)
-    if more > 0:
-        stat_html += f'<p class="note">... and {more} more in results.json.</p>'
-    timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in doc["timings_s"].items()]
+    return _html_table(head, rows) + (
+        '<p class="note">The data of a few degrees do not fix a mover\'s cross-range '
+        "position: position + t a and velocity + t b fit them as well for any t metres "
+        "of cross-range offset (a, b in the last column; sarmotion.motion.aperture). The "
+        "estimate is the member near the reference cross range.</p>"
+    )
+
+
+def _truth_html(doc: dict[str, Any]) -> str:
+    """Truth table (each row beside the estimate it was matched to) and the errors."""
+    matched = {m["errors"]["matched"]: k + 1 for k, m in enumerate(doc["movers"]) if m.get("errors")}
+    truth_rows = sorted(doc["truth"], key=lambda t: matched.get(t["label"], len(matched) + 1))
+    trows = [
+        [
+            html.escape(t["label"] or "-"),
+            str(matched.get(t["label"], "missed")),
+            _fmt(t["position_m"]),
+            _fmt(t["velocity_mps"]),
+            _fmt(t["range_speed_mps"], 3),
+            _fmt(t["cross_range_speed_mps"], 3),
+        ]
+        for t in truth_rows
+    ]
+    head = ["true target", "matched estimate", "position at s=0 (m)", "velocity (m/s)"]
+    head += ["range speed (m/s)", "cross-range speed (m/s)"]
+    return (
+        "<h3>Truth</h3>"
+        + _html_table(head, trows)
+        + "<h3>Errors (estimate &minus; truth)</h3>"
+        + _errors_table(doc)
+        + f"<p>False movers: {doc['false_movers']}; missed movers: "
+        f"{doc['missed_movers']}.</p>"
+        + '<p class="note">The cross-range position and the range speed of a mover are '
+        "tied over a few degrees (sarmotion.motion.aperture, module notes): a mover away from "
+        "the reference cross range is placed on the data-consistent family near it, "
+        "shifted in cross range by about L &delta;u / (V &minus; u_t). &ldquo;Truth to "
+        "family&rdquo; is the error of the family member at the truth's cross-range "
+        "offset: what the data can resolve.</p>"
+    )
+
+
+def _errors_table(doc: dict[str, Any]) -> str:
+    erows = []
+    for k, m in enumerate(doc["movers"]):
+        e = m.get("errors")
+        if e is None:
+            erows.append([str(k + 1), '<span class="bad">false mover</span>'] + [""] * 7)
+            continue
+        erows.append(
+            [
+                str(k + 1),
+                html.escape(e["matched"]),
+                _fmt(e["range_speed_mps"], 3),
+                _fmt(e["cross_range_speed_mps"], 3),
+                _fmt(e["position_range_m"], 2),
+                _fmt(e["position_cross_range_m"], 2),
+                _fmt(e["family_position_m"], 3) + " / " + _fmt(e["family_velocity_mps"], 3),
+                _fmt(e.get("trajectory_max_m"), 2),
+                _fmt(e["image_peak_m"], 2),
+            ]
+        )
+    head = ["estimate", "true target", "range speed (m/s)", "cross-range speed (m/s)"]
+    head += ["position, range (m)", "position, cross range (m)"]
+    head += ["truth to family: position (m) / velocity (m/s)", "max trajectory error (m)"]
+    return _html_table(head + ["image peak to truth (m)"], erows)
+
+
+def _merged_stationary(stationary: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Detections brightest first, each dropped within 0.5 m of a brighter one kept."""
+    kept: list[dict[str, Any]] = []
+    for s in sorted(stationary, key=lambda s: -s["peak_db"]):
+        p = np.asarray(s["position_m"][:2], dtype=float)
+        if all(np.hypot(*(p - np.asarray(k["position_m"][:2]))) > _MERGE_M for k in kept):
+            kept.append(s)
+    return kept
+
+
+def _stationary_html(doc: dict[str, Any]) -> str:
+    listed = _merged_stationary(doc["stationary"])
+    rows = [
+        [str(i + 1), _fmt(list(s["position_m"])), _fmt(s["peak_db"], 1)]
+        for i, s in enumerate(listed[:40])
+    ]
+    text = _html_table(["#", "position (m)", "level (dB re peak)"], rows)
+    merged = len(doc["stationary"]) - len(listed)
+    if merged:
+        text += (
+            f'<p class="note">{merged} detection(s) within {_MERGE_M} m of a brighter one '
+            "are merged into it here (all are in results.json).</p>"
+        )
+    if len(listed) > len(rows):
+        text += f'<p class="note">... and {len(listed) - len(rows)} more in results.json.</p>'
+    return text
+
+
+def _acquisition_html(doc: dict[str, Any], inputs: Sequence[str]) -> str:
+    sub = float(doc["options"].get("sub_aperture_deg", doc["aperture_deg"]))
+    searched = (
+        f"movers sought on the central {sub:g} deg, then focused on all pulses"
+        if doc["aperture_deg"] > 1.5 * sub
+        else "movers sought on the whole aperture"
+    )
     acq = [
         ["inputs", html.escape(", ".join(inputs) or "-")],
         ["source", html.escape(str(doc["source"].get("source", "-")))],
         ["pulses &times; samples", f"{doc['n_pulses']} &times; {doc['n_samples']}"],
-        ["aperture (s)", _fmt(doc["aperture_s"], 3)],
+        [
+            "aperture",
+            f"{_fmt(doc['aperture_s'], 3)} s, {_fmt(doc['aperture_deg'], 2)} deg of azimuth; "
+            + searched,
+        ],
         ["platform speed (m/s)", _fmt(doc["platform_speed_mps"], 1)],
         ["reference point (m)", _fmt(doc["reference_point_m"])],
         ["separation method", html.escape(doc["method"])],
         ["range-speed resolution (m/s)", _fmt(doc["range_speed_resolution_mps"], 3)],
     ]
-    acq_html = (
+    return (
         '<table class="kv">'
         + "".join(f"<tr><td>{a}</td><td>{b}</td></tr>" for a, b in acq)
         + "</table>"
     )
 
-    sections: dict[str, list[str]] = {}
-    for section, caption, b64 in figures:
-        sections.setdefault(section, []).append(
-            f'<img alt="{html.escape(caption)}" src="data:image/png;base64,{b64}">'
-            f'<p class="note">{html.escape(caption)}</p>'
-        )
+
+def _page(title: str, doc: dict[str, Any], parts: list[str]) -> str:
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    parts = [
+    head = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
         f"<header><h1>{html.escape(title)}</h1><p>sarmotion {__version__} &middot; {now} "
         f"&middot; {len(doc['movers'])} mover(s), {len(doc['stationary'])} stationary "
         "target(s)</p></header><main>",
-        f"<section><h2>Acquisition</h2>{acq_html}</section>",
-        f"<section><h2>Moving targets</h2>{movers_html}{truth_html}</section>",
     ]
-    for name in ("Traces", "Motion estimation", "Images", "Trajectories"):
-        if name in sections:
-            parts.append(f"<section><h2>{name}</h2>{''.join(sections[name])}</section>")
-    parts.append(f"<section><h2>Stationary targets</h2>{stat_html}</section>")
-    parts.append(
-        "<section><h2>Timings</h2>"
-        + _html_table(["stage", "wall-clock (s)"], timing_rows)
-        + "</section>"
-    )
-    parts.append("</main></body></html>")
-    path = out / "report.html"
-    path.write_text("\n".join(parts), encoding="utf-8")
-    return path
+    return "\n".join([*head, *parts, "</main></body></html>"])

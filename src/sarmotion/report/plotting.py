@@ -237,5 +237,5 @@ def subplots(
 def save_figure(fig: Figure, path: str | Path, *, dpi: int = 120) -> Path:
     """Save ``fig`` as PNG at ``path``."""
     p = Path(path)
-    fig.savefig(p, dpi=dpi)
+    fig.savefig(p, dpi=dpi, bbox_inches="tight", pad_inches=0.1)  # no clipped axis labels
     return p
