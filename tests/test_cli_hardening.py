@@ -137,7 +137,9 @@ def test_negative_scene_amplitude(work, capsys):
     for cmd in (["image", str(scene)], ["analyze", str(scene)], ["separate", str(scene)]):
         _refused([*cmd, "--out", str(out)], capsys, "targets[0].amplitude must be > 0", out)
     sim_out = work / "s.h5"
-    _refused(["simulate", str(scene), "--out", str(sim_out)], capsys, "amplitude must be > 0", sim_out)
+    _refused(
+        ["simulate", str(scene), "--out", str(sim_out)], capsys, "amplitude must be > 0", sim_out
+    )
 
 
 @pytest.mark.parametrize(

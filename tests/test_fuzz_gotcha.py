@@ -118,9 +118,7 @@ def _mutate_struct(s: dict, field: str, pulse: int, kind: str, size: float) -> d
 mutants = st.one_of(
     st.tuples(
         st.just("flip"),
-        st.lists(
-            st.tuples(st.integers(0, 10**6), st.integers(1, 255)), min_size=1, max_size=4
-        ),
+        st.lists(st.tuples(st.integers(0, 10**6), st.integers(1, 255)), min_size=1, max_size=4),
         st.booleans(),
     ),
     st.tuples(st.just("truncate"), st.floats(0.0, 0.999), st.just(None)),

@@ -476,7 +476,10 @@ def _scale_sample(factor):
         # a sample 1e6 x the peak.
         (_set("z", 2, 1e-3), r"data\.x/y/z, pulse 2: .* off the midpoint .*rule: at most 0\.01"),
         (_set("r0", 2, 23645.0), r"data\.r0, pulse 2: 23645 m but the antenna is 10\d\d\d\.\d+ m"),
-        (_scale_sample(1e6), r"data\.fp, pulse 2, frequency index 3: magnitude .*rule: at most 1000 x"),
+        (
+            _scale_sample(1e6),
+            r"data\.fp, pulse 2, frequency index 3: magnitude .*rule: at most 1000 x",
+        ),
         (_set("z", 1, -7275.0), r"data\.x/y/z, pulse 1: .* outside the plausible envelope"),
         (_set("x", 4, 9000.0), r"data\.x/y/z, pulse 4: a step of .*rule: the track moves"),
         (_set("y", 2, 1.0), r"data\.x/y/z, pulse 2: the antenna is .* off the midpoint"),

@@ -111,7 +111,9 @@ def image(
         if ctx.get_parameter_source(name) is not click.core.ParameterSource.DEFAULT
     }
     if grid_extent is not None and given:
-        raise InputError(f"--grid sets the image extent; do not combine it with {', '.join(sorted(given))}")
+        raise InputError(
+            f"--grid sets the image extent; do not combine it with {', '.join(sorted(given))}"
+        )
     if not (np.isfinite(dynamic_range_db) and dynamic_range_db > 0):
         raise InputError(f"--dynamic-range must be > 0 (dB), got {dynamic_range_db}")
     if velocity is not None and not np.all(np.isfinite(velocity)):

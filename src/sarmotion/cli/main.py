@@ -92,11 +92,17 @@ for _command in (simulate, image, inject, separate, analyze, demo, paper):
     # -q and -v work after the command name too (``sarmotion analyze -q ...``).
     _command.params += [
         click.Option(
-            ["-q", "--quiet"], is_flag=True, expose_value=False, callback=_quiet,
+            ["-q", "--quiet"],
+            is_flag=True,
+            expose_value=False,
+            callback=_quiet,
             help="No progress bars.",
         ),
         click.Option(
-            ["-v", "--verbose"], count=True, expose_value=False, callback=_verbose,
+            ["-v", "--verbose"],
+            count=True,
+            expose_value=False,
+            callback=_verbose,
             help="More log output (-v info, -vv debug).",
         ),
     ]

@@ -9,7 +9,6 @@ import click
 from ..io import save_traces, staged_directory, write_gotcha
 from ..simulation import load_scene
 from ..simulation import simulate as run
-
 from .common import as_flags, check_out, force_option, out_option
 
 __all__ = ["simulate"]
@@ -43,7 +42,9 @@ def simulate(
     if native:
         with staged_directory(out.parent) as stage:
             save_traces(
-                stage / out.name, sim.traces, extra={"stationary": sim.stationary, "moving": sim.moving}
+                stage / out.name,
+                sim.traces,
+                extra={"stationary": sim.stationary, "moving": sim.moving},
             )
         click.echo(f"wrote {out} ({sim.traces.n_pulses} pulses x {sim.traces.n_samples} samples)")
     else:

@@ -335,8 +335,7 @@ def _frequency_grid(freq_hz: NDArray[np.float64], path: Path) -> tuple[float, fl
     f0 = float(freq_hz.mean() - df * k.mean())
     if not df > 0 or not f0 > 0:
         raise DataError(
-            f"{path}: data.freq must be positive and increase, got f0 {f0:.6g} Hz, step "
-            f"{df:.6g} Hz"
+            f"{path}: data.freq must be positive and increase, got f0 {f0:.6g} Hz, step {df:.6g} Hz"
         )
     dev = float(np.max(np.abs(freq_hz - (f0 + k * df))))
     if dev > _GRID_TOL * df:

@@ -399,7 +399,9 @@ def _movers_html(doc: dict[str, Any]) -> str:
 
 def _truth_html(doc: dict[str, Any]) -> str:
     """Truth table (each row beside the estimate it was matched to) and the errors."""
-    matched = {m["errors"]["matched"]: k + 1 for k, m in enumerate(doc["movers"]) if m.get("errors")}
+    matched = {
+        m["errors"]["matched"]: k + 1 for k, m in enumerate(doc["movers"]) if m.get("errors")
+    }
     truth_rows = sorted(doc["truth"], key=lambda t: matched.get(t["label"], len(matched) + 1))
     trows = [
         [
