@@ -155,6 +155,10 @@ def test_negative_scene_amplitude(work, capsys):
         (["analyze", "hyperbola", "--max-movers", "-1"], "--max-movers must be >= 0"),
         (["image", "hyperbola", "--grid", "-5", "5", "-5", "5", "--size", "10"], "--grid sets"),
         (["inject", "hyperbola", "--target", "1,2,0,0,-3"], "AMP must be > 0"),
+        (["separate", "hyperbola", "--seed", "-1"], "--seed must be >= 0"),
+        (["separate", "hyperbola", "--snr-db", "nan"], "--snr-db must be finite"),
+        (["image", "hyperbola", "--spacing", "inf"], "--spacing must be finite"),
+        (["image", "hyperbola", "--velocity", "nan", "1"], "--velocity must be finite"),
     ],
 )
 def test_options_are_checked_and_named_by_flag(work, capsys, args, pattern):
@@ -193,6 +197,21 @@ def test_simulate_does_not_overwrite_a_file(work, capsys):
     _refused(["simulate", "hyperbola", "--out", str(target)], capsys, "already exists", target)
     assert run(["simulate", "hyperbola", "--out", str(target), "--force"]) == 0
     assert target.read_bytes()[:4] == b"\x89HDF"
+
+
+def test_read_only_out_directory_is_refused_before_work(work, capsys, monkeypatch):
+    """As a read-only directory appears to a user (root may write anywhere)."""
+    from sarmotion.cli import common
+
+    out = work / "out"
+    real_access = os.access
+    def access(path, mode):
+        if Path(path) == out and mode & os.W_OK:
+            return False
+        return real_access(path, mode)
+
+    monkeypatch.setattr(common.os, "access", access)
+    _refused(["image", "hyperbola", "--out", str(out)], capsys, "permission denied", out)
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root ignores directory permissions")
@@ -261,6 +280,12 @@ def test_help_texts_have_no_markup_and_no_bare_labels(capsys):
         for word in text.replace("\n", " ").split():
             if word.startswith(("eq:", "sect:", "(eq:", "(sect:")):
                 pytest.fail(f"bare label {word} in {cmd} --help")
+
+
+def test_analyze_has_autofocus_and_lenient(capsys):
+    assert run(["analyze", "--help"]) == 0
+    text = capsys.readouterr().out
+    assert "--autofocus" in text and "--lenient" in text and "--force" in text
 
 
 def test_quiet_after_the_command(work, capsys):

@@ -272,3 +272,37 @@ def test_overwrite_false(tmp_path, sim):
     with pytest.raises(FileExistsError):
         save_image(path, np.ones((2, 2)), x_m=[0, 1], y_m=[0, 1], overwrite=False)
     assert_same_traces(sim.traces, load_traces(path))
+
+
+# ------------------------------------------------------------------- plausibility rules
+def _saved_scene(tmp_path, edit):
+    from sarmotion.io import save_traces
+    from sarmotion.simulation import load_scene, simulate
+
+    tr = simulate(load_scene("rotscatt")).traces
+    data, pos = tr.data.copy(), tr.positions_m.copy()
+    edit(data, pos)
+    bad = Traces(
+        data=data,
+        trajectory=Trajectory(positions_m=pos, slow_times_s=tr.slow_times_s),
+        radar=tr.radar,
+        reference_point_m=tr.reference_point_m,
+        metadata=tr.metadata,
+    )
+    return save_traces(tmp_path / "t.h5", bad)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d, p: d.__setitem__((40, 200), 1e9), r"/traces/data \(as phase history\), pulse 40"),
+        (lambda d, p: p.__setitem__((30, 2), 0.0), r"/traces/positions_m, pulse 30"),
+        (lambda d, p: p.__setitem__((30, 1), p[30, 1] + 0.5), r"pulse 30: the antenna is 1 m off the midpoint"),
+    ],
+)
+def test_implausible_native_traces_are_refused(tmp_path, edit, message):
+    path = _saved_scene(tmp_path, edit)
+    with pytest.raises(DataError, match=message) as info:
+        load_traces(path)
+    assert str(info.value).startswith(str(path)) and "rule" in str(info.value)
+    assert load_traces(path, lenient=True).n_pulses == 117

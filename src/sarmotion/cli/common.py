@@ -171,10 +171,21 @@ speed_option = click.option(
 )
 
 
+def _seed_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
+    if value is not None and value < 0:
+        raise InputError(f"--seed must be >= 0, got {value}")
+    return value
+
+
 def noise_options(func: Callable[..., Any]) -> Any:
     """``--snr-db`` and ``--seed``: white noise added to simulated (scene) inputs."""
     func = click.option(
-        "--seed", type=int, default=0, show_default=True, help="Seed of the noise generator."
+        "--seed",
+        type=int,
+        default=0,
+        show_default=True,
+        callback=_seed_callback,
+        help="Seed of the noise generator (>= 0).",
     )(func)
     return click.option(
         "--snr-db",

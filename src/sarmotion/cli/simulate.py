@@ -9,7 +9,7 @@ import click
 from ..io import save_traces, staged_directory, write_gotcha
 from ..simulation import load_scene
 from ..simulation import simulate as run
-from .common import as_flags, check_out, force_option, out_option
+from .common import as_flags, check_out, force_option, noise_options, out_option
 
 __all__ = ["simulate"]
 
@@ -18,8 +18,7 @@ __all__ = ["simulate"]
 @click.argument("scene")
 @out_option("Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
 @force_option
-@click.option("--snr-db", type=float, default=None, help="Add white noise at this SNR (dB).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Noise seed.")
+@noise_options
 @click.option(
     "--spreading/--no-spreading",
     default=False,

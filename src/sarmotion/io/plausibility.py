@@ -59,8 +59,8 @@ def check_envelope(
         x, y, z = positions_m[j]
         violation(
             f"{path}: {field}, pulse {j}: antenna at ({x:.6g}, {y:.6g}, {z:.6g}) m is outside "
-            f"the plausible envelope (above the ground plane, {lo:g} m to {hi:g} m from the "
-            "scene centre)",
+            f"the plausible envelope (rule: above the ground plane, {lo:g} m to {hi:g} m from "
+            "the scene centre)",
             lenient=lenient,
         )
 
