@@ -205,6 +205,7 @@ def test_read_only_out_directory_is_refused_before_work(work, capsys, monkeypatc
 
     out = work / "out"
     real_access = os.access
+
     def access(path, mode):
         if Path(path) == out and mode & os.W_OK:
             return False
@@ -296,3 +297,58 @@ def test_quiet_after_the_command(work, capsys):
 def test_gitignore_covers_the_default_outputs():
     lines = (ROOT / ".gitignore").read_text().split()
     assert "sarmotion-demo/" in lines and "sarmotion-paper/" in lines
+
+
+# ------------------------------------------------------------- further error texts
+def test_scene_file_that_is_not_utf8(work, capsys):
+    scene = work / "bad.toml"
+    scene.write_bytes(b'schema = "sarmotion.scene/1"\n\xab\xcd = 1\n')
+    out = work / "out"
+    err = _refused(
+        ["image", str(scene), "--out", str(out)], capsys, "not UTF-8 text (byte 29)", out
+    )
+    assert "codec" not in err
+
+
+def test_truncated_native_file(work, capsys):
+    full = work / "t.h5"
+    assert run(["simulate", "rotscatt", "--out", str(full)]) == 0
+    raw = full.read_bytes()
+    (work / "cut.h5").write_bytes(raw[: len(raw) // 2])
+    out = work / "out"
+    err = _refused(
+        ["image", str(work / "cut.h5"), "--out", str(out)], capsys, "not a readable HDF5", out
+    )
+    assert "synchronously" not in err and "sblock" not in err
+
+
+def test_hdf5_reading_that_does_not_finish_is_refused(work, monkeypatch):
+    """The child-process guard against HDF5 library loops (its timeout path)."""
+    from sarmotion.io import DataError, native
+
+    assert run(["simulate", "rotscatt", "--out", str(work / "t.h5")]) == 0
+    native.check_hdf5_terminates(work / "t.h5")  # a good file passes
+    monkeypatch.setattr(native, "_WALK", "import time; time.sleep(30)")
+    with pytest.raises(DataError, match=r"t\.h5: not a readable HDF5 file: reading it did not"):
+        native.check_hdf5_terminates(work / "t.h5", timeout_s=1.0)
+
+
+def test_separate_a_scene_without_movers(work, capsys):
+    out = work / "sep"
+    assert run(["separate", "hyperbola", "--out", str(out)]) == 0
+    assert (out / "separation.json").is_file()
+
+
+def test_a_defect_is_one_line_and_exit_1(work, capsys, monkeypatch):
+    from sarmotion.cli import image as image_module
+    from sarmotion.cli.main import EXIT_INTERNAL
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(image_module, "backproject", broken)
+    out = work / "img"
+    assert run(["image", "hyperbola", "--out", str(out)]) == EXIT_INTERNAL
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("sarmotion: internal error: ZeroDivisionError") and "\n" not in err
+    assert not out.exists()

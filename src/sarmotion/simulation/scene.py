@@ -261,7 +261,11 @@ class Scene:
             raise SceneError(f"scene file not found: {p}")
         try:
             raw = tomllib.loads(p.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        except UnicodeDecodeError as exc:
+            raise SceneError(
+                f"{p}: not a TOML scene file: not UTF-8 text (byte {exc.start})"
+            ) from None
+        except tomllib.TOMLDecodeError as exc:
             raise SceneError(f"{p}: not a valid TOML scene file ({exc})") from None
         return cls.from_dict(raw, source=str(p))
 
