@@ -160,14 +160,26 @@ def _positive_callback(ctx: click.Context, param: click.Parameter, value: Any) -
     return value
 
 
+#: Platform speeds (m/s) accepted by --speed: from a ground-based rail SAR (mm/s to cm/s)
+#: to a satellite in low orbit (7.6 km/s).
+SPEED_RANGE_MPS = (1e-3, 1e4)
+
+
+def _speed_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
+    lo, hi = SPEED_RANGE_MPS
+    if not (np.isfinite(value) and lo <= value <= hi):
+        raise InputError(f"--speed must be within [{lo:g}, {hi:g}] m/s, got {value!r}")
+    return value
+
+
 speed_option = click.option(
     "--speed",
     "speed_mps",
     type=float,
     default=70.0,
     show_default=True,
-    callback=_positive_callback,
-    help="GOTCHA inputs: platform speed that sets the slow time of the pulses (m/s).",
+    callback=_speed_callback,
+    help="GOTCHA inputs: platform speed that sets the slow time of the pulses (m/s, 1e-3 to 1e4).",
 )
 
 

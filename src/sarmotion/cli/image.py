@@ -25,6 +25,10 @@ from .common import (
 
 OUTPUTS = ("image.png", "image.h5", "peaks.json")
 
+#: Largest ground speed (m/s) accepted by --velocity: beyond any ground vehicle or aircraft
+#: on a runway, and far beyond the speeds a few degrees of aperture can resolve.
+MAX_GROUND_SPEED_MPS = 1000.0
+
 __all__ = ["image"]
 
 
@@ -118,6 +122,11 @@ def image(
         raise InputError(f"--dynamic-range must be > 0 (dB), got {dynamic_range_db}")
     if velocity is not None and not np.all(np.isfinite(velocity)):
         raise InputError(f"--velocity must be finite, got {velocity}")
+    if velocity is not None and np.hypot(*velocity) > MAX_GROUND_SPEED_MPS:
+        raise InputError(
+            f"--velocity must be a ground speed of at most {MAX_GROUND_SPEED_MPS:g} m/s, got "
+            f"{np.hypot(*velocity):.4g} m/s"
+        )
     if not np.all(np.isfinite(centre)):
         raise InputError(f"--centre must be finite, got {centre}")
     if grid_extent is None:
@@ -156,6 +165,7 @@ def image(
                 "peaks": [
                     {"position_m": [x, y], "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2]))}
                     for x, y, v in peaks
+                    if abs(v) > 0
                 ],
                 "seconds": elapsed,
                 "pixel_pulses_per_second": grid.shape[0]
@@ -164,8 +174,9 @@ def image(
                 / elapsed,
             },
         )
-    x, y, _ = peaks[0]
-    click.echo(
-        f"wrote {out}/image.png, image.h5, peaks.json; brightest point at "
-        f"({x:.2f}, {y:.2f}) m; {elapsed:.2f} s"
-    )
+    if peaks and abs(peaks[0][2]) > 0:
+        x, y, _ = peaks[0]
+        where = f"brightest point at ({x:.2f}, {y:.2f}) m"
+    else:
+        where = "the image is zero: no echo falls on this grid"
+    click.echo(f"wrote {out}/image.png, image.h5, peaks.json; {where}; {elapsed:.2f} s")

@@ -20,8 +20,13 @@ from .common import (
     out_option,
     speed_option,
 )
+from .image import MAX_GROUND_SPEED_MPS
 
 __all__ = ["inject"]
+
+#: Largest target offset from the reference point (m) --target accepts: the fast-time
+#: window of GOTCHA spans +-51 m of differential range; 10 km is far beyond any scene.
+MAX_OFFSET_M = 1e4
 
 
 def _parse_target(text: str) -> Any:
@@ -36,6 +41,11 @@ def _parse_target(text: str) -> Any:
     amp = values[4] if len(values) == 5 else None
     if amp is not None and amp <= 0:
         raise InputError(f"--target {text!r}: AMP must be > 0 (data units), got {amp:g}")
+    if max(abs(x), abs(y)) > MAX_OFFSET_M or np.hypot(*u) > MAX_GROUND_SPEED_MPS:
+        raise InputError(
+            f"--target {text!r}: X, Y must be within {MAX_OFFSET_M:g} m of the reference point "
+            f"and the speed at most {MAX_GROUND_SPEED_MPS:g} m/s"
+        )
     return PointTarget(position_m=[x, y], velocity_mps=u), amp
 
 

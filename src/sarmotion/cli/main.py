@@ -142,8 +142,7 @@ def run(args: Sequence[str] | None = None) -> int:
     except Exception as exc:  # a defect of sarmotion, not of the input
         log.debug("internal error", exc_info=True)
         click.echo(
-            f"sarmotion: internal error: {type(exc).__name__}: {exc} (no output written; "
-            "-vv shows the traceback)",
+            f"sarmotion: internal error: {type(exc).__name__}: {exc} (-vv shows the traceback)",
             err=True,
         )
         return EXIT_INTERNAL

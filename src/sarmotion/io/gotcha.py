@@ -559,9 +559,13 @@ def read_gotcha(
     positions = np.concatenate([f.positions_m for f in files])
     try:
         trajectory = Trajectory.from_positions(positions, speed_mps=speed)
-    except ValueError as exc:
+    except (ValueError, np.linalg.LinAlgError) as exc:
         names = ", ".join(f.path.name for f in files)
-        raise DataError(f"{names}: unusable antenna positions: {exc}") from None
+        logger.debug("Trajectory.from_positions failed: %r", exc)
+        raise DataError(
+            f"{names}: unusable antenna positions: no smooth track fits them at "
+            f"--speed {speed:g} m/s"
+        ) from None
     freqs = radar.frequencies_hz
     ph, phase_reference = _phase_history(files, freqs, positions)
     if autofocus:
