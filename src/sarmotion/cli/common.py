@@ -152,14 +152,6 @@ def check_out(
         raise InputError(f"--out {out}: cannot write in {where} (permission denied)")
 
 
-def _positive_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
-    if value is not None:
-        flag = max(param.opts, key=len)
-        with as_flags(value=flag):
-            positive(value, flag)
-    return value
-
-
 #: Platform speeds (m/s) accepted by --speed: from a ground-based rail SAR (mm/s to cm/s)
 #: to a satellite in low orbit (7.6 km/s).
 SPEED_RANGE_MPS = (1e-3, 1e4)
