@@ -1,9 +1,10 @@
-"""Input and output: GOTCHA phase-history files and sarmotion's native HDF5 files.
+"""Input and output: GOTCHA and CPHD phase-history files and sarmotion's native HDF5 files.
 
 This is the only layer of sarmotion that opens files. Every bad input raises
 :class:`DataError` (a ``ValueError``) with one line naming the file and the problem.
 """
 
+from .cphd import is_cphd_file, read_cphd, write_cphd
 from .errors import DataError
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
 from .native import (
@@ -22,6 +23,9 @@ __all__ = [
     "read_gotcha",
     "write_gotcha",
     "is_gotcha_file",
+    "read_cphd",
+    "write_cphd",
+    "is_cphd_file",
     "save_traces",
     "load_traces",
     "load_extra",
