@@ -1,4 +1,4 @@
-"""Benchmark of the whole analysis (sarmotion.analysis.analyze) on Scene 1.
+"""Benchmark of the whole analysis (sarmotion.pipeline.analyze) on Scene 1.
 
 Run with::
 
@@ -11,7 +11,7 @@ round (``AnalysisResult.timings_s``), the number of movers found and the image s
 Target: the whole analysis under 30 s on a 2-core machine.
 
 Scene 1's targets over 4 degrees (468 pulses, a whole GOTCHA file's span): movers are
-estimated on the central degree and focused on all pulses (sarmotion.tracking); the
+estimated on the central degree and focused on all pulses (sarmotion.motion.aperture); the
 ``movers_s`` stage includes that refinement.
 """
 
@@ -21,15 +21,16 @@ import dataclasses
 
 import pytest
 
-from sarmotion.analysis import analyze
-from sarmotion.scene import load_scene
-from sarmotion.simulate import simulate
+from sarmotion.pipeline import AnalysisOptions, analyze
+from sarmotion.simulation import load_scene, simulate
 
 
 @pytest.fixture(scope="module")
 def scene1_traces():
     traces = simulate(load_scene("scene1")).traces
-    analyze(traces, max_movers=1, trajectory=False)  # compile the numba kernels once
+    analyze(
+        traces, AnalysisOptions(max_movers=1, trajectory=False)
+    )  # compile the numba kernels once
     return traces
 
 

@@ -22,10 +22,9 @@ import numba
 import numpy as np
 import pytest
 
-from sarmotion.geometry import Trajectory
+from sarmotion.core import Trajectory
 from sarmotion.imaging import ImageGrid, backproject
-from sarmotion.scene import PointTarget, Scene
-from sarmotion.simulate import simulate
+from sarmotion.simulation import PointTarget, Scene, simulate
 
 SPACING_M = 0.25
 

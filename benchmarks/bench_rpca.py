@@ -1,4 +1,4 @@
-"""Benchmarks of sarmotion.rpca against a textbook full-SVD IALM.
+"""Benchmarks of sarmotion.separation.rpca against a textbook full-SVD IALM.
 
 Run with::
 
@@ -17,7 +17,7 @@ import time
 import numpy as np
 import pytest
 
-from sarmotion.rpca import rpca, windowed_rpca
+from sarmotion.separation import rpca, windowed_rpca
 
 TOL = 1e-7
 SIZES = {"scene1_117x424": (117, 424), "4deg_468x424": (468, 424)}

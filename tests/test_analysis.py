@@ -1,4 +1,4 @@
-"""The whole analysis (sarmotion.analysis.analyze) on simulated scenes and real clutter.
+"""The whole analysis (sarmotion.pipeline.analyze) on simulated scenes and real clutter.
 
 Scene 1 (sect:numeric): GOTCHA, one degree (117 pulses), L = 10.18 km, V = 70 m/s;
 resolution cells 0.34 m (ground range, x) by 1.29 m (cross range, y). Mover 1 at (0, 0)
@@ -6,7 +6,7 @@ resolution cells 0.34 m (ground range, x) by 1.29 m (cross range, y). Mover 1 at
 m/s).
 
 The cross-range position of a mover away from the reference cross range is not
-determined by the data (sarmotion.tracking, module notes): the estimate lands on the
+determined by the data (sarmotion.motion.aperture, module notes): the estimate lands on the
 data-consistent family ``delta u ~ -(V - u_t) delta y / L`` near ``y = 0``. Over one
 degree the exact compensated image of mover 2's clean trace is 117.000000 (= n_pulses,
 unit reflectivity) from y = 0.2 m to 6.8 m along the family, and over four degrees of
@@ -23,13 +23,12 @@ import json
 import numpy as np
 import pytest
 
-from sarmotion.analysis import SCHEMA, analyze, compare_with_truth, extract_mover
 from sarmotion.cli import run
-from sarmotion.detection import point_response
-from sarmotion.imaging import resolution
-from sarmotion.io import read_gotcha, write_gotcha
-from sarmotion.scene import PointTarget, Scene, load_scene, random_scene
-from sarmotion.simulate import inject, simulate
+from sarmotion.imaging import point_response, resolution
+from sarmotion.io import RESULTS_SCHEMA, read_gotcha, results_document, write_gotcha
+from sarmotion.pipeline import AnalysisOptions, analyze, compare_with_truth, extract_mover
+from sarmotion.separation import SeparationOptions
+from sarmotion.simulation import PointTarget, Scene, inject, load_scene, random_scene, simulate
 
 RANGE_SPEED_TOL = 0.2  # m/s, under one range-speed resolution (0.27 m/s)
 CROSS_SPEED_TOL = 1.5  # m/s, two cross-range-speed resolutions (0.74 m/s)
@@ -54,20 +53,20 @@ def _alone(scene, target):
 def _check_movers(result, scene, *, focus=0.9, clean=True):
     """Per-mover physics; returns the comparison (measured numbers in the test notes)."""
     cmp = compare_with_truth(result, scene)
-    assert cmp["false_movers"] == 0 and cmp["missed_movers"] == 0, cmp
+    assert cmp.false_movers == 0 and cmp.missed_movers == 0, cmp
     tr = result.traces
     res = resolution(tr)
-    for m, err in zip(result.movers, cmp["errors"], strict=True):
-        truth = next(t for t in scene.moving if t.label == err["matched"])
-        assert abs(err["range_speed_mps"]) <= RANGE_SPEED_TOL, err
-        assert abs(err["cross_range_speed_mps"]) <= CROSS_SPEED_TOL, err
-        assert abs(err["position_range_m"]) <= RANGE_POS_TOL, err
+    for m, err in zip(result.movers, cmp.errors, strict=True):
+        truth = next(t for t in scene.moving if t.label == err.matched)
+        assert abs(err.range_speed_mps) <= RANGE_SPEED_TOL, err
+        assert abs(err.cross_range_speed_mps) <= CROSS_SPEED_TOL, err
+        assert abs(err.position_range_m) <= RANGE_POS_TOL, err
         y_true = float(truth.position_m[:2] @ res.cross_range_direction)
         if abs(y_true) < 1.0:  # at the reference cross range: position determined
-            assert abs(err["position_cross_range_m"]) <= CROSS_POS_TOL, err
+            assert abs(err.position_cross_range_m) <= CROSS_POS_TOL, err
         # The truth is on the estimate's family (module docstring).
-        assert err["family_position_m"] <= FAMILY_POS_TOL, err
-        assert err["family_velocity_mps"] <= FAMILY_SPEED_TOL, err
+        assert err.family_position_m <= FAMILY_POS_TOL, err
+        assert err.family_velocity_mps <= FAMILY_SPEED_TOL, err
         if clean:
             # The estimate reproduces the mover's trace: the compensated image of its
             # clean trace at the estimate is >= 0.98 of n_pulses (the value at the truth).
@@ -113,8 +112,8 @@ def test_scene1_end_to_end(scene1):
     # mover 2 du 0.029, du_perp 0.013 m/s, range 0.005 m, cross range -4.98 m; the truth
     # is 5 mm and 0.019 m/s from the estimate's family member at +4.98 m. Mover images
     # 0.993 / 0.995 of n_pulses.
-    by_label = {e["matched"]: e for e in cmp["errors"]}
-    assert abs(by_label["mover 1"]["image_peak_m"]) <= resolution(sim.traces).cross_range_m
+    by_label = {e.matched: e for e in cmp.errors}
+    assert abs(by_label["mover 1"].image_peak_m) <= resolution(sim.traces).cross_range_m
     _check_stationary(result, sim.scene)
     # Stationary image focused: brightest pixel at a true stationary target.
     x, y, _ = result.stationary_image.peak(refine=True)
@@ -147,8 +146,10 @@ def test_extract_mover_separates_two_crossing_movers(scene1):
 
 def test_results_json_document(scene1):
     sim, result = scene1
-    doc = json.loads(json.dumps(result.to_json_dict(truth=sim.scene)))
-    assert doc["schema"] == SCHEMA
+    doc = json.loads(
+        json.dumps(results_document(result, truth=compare_with_truth(result, sim.scene)))
+    )
+    assert doc["schema"] == RESULTS_SCHEMA
     assert doc["n_pulses"] == 117 and abs(doc["platform_speed_mps"] - 70.0) < 0.01
     assert len(doc["movers"]) == 2 and len(doc["truth"]) == 2
     for m in doc["movers"]:
@@ -161,13 +162,13 @@ def test_results_json_document(scene1):
 @pytest.mark.slow
 def test_scene1_over_four_degrees():
     """Scene 1's targets over 4 degrees (468 pulses): movers estimated on the central
-    degree and focused on all pulses (sarmotion.tracking)."""
+    degree and focused on all pulses (sarmotion.motion.aperture)."""
     scene = load_scene("scene1")
     scene = dataclasses.replace(
         scene, trajectory_spec={**scene.trajectory_spec, "aperture_deg": 4.0}
     )
     sim = simulate(scene)
-    result = analyze(sim.traces, trajectory=False)
+    result = analyze(sim.traces, AnalysisOptions(trajectory=False))
     assert result.traces.n_pulses == 468
     # Measured: du 0.0006 / 0.026 m/s, du_perp 0.0007 / -0.005 m/s, range within 2 mm,
     # cross range -0.12 / -4.60 m with the truth 1 mm and 5e-5 m/s from the family;
@@ -188,7 +189,10 @@ def test_scene1_through_gotcha_files(tmp_path):
     files = write_gotcha(sim.traces, tmp_path)
     traces = read_gotcha(files)
     # Read back as measured data; a point scene: the combined separation.
-    result = analyze(traces, method="combined", trajectory=False)
+    result = analyze(
+        traces,
+        AnalysisOptions(separation=SeparationOptions(method="combined"), trajectory=False),
+    )
     _check_movers(result, sim.scene)
     _check_stationary(result, sim.scene)
 
@@ -204,7 +208,7 @@ def test_random_scene_three_movers_20db():
     sim = simulate(scene, snr_db=20, rng=7)
     result = analyze(sim.traces)
     cmp = compare_with_truth(result, scene)
-    assert cmp["false_movers"] == 0 and cmp["missed_movers"] == 0
+    assert cmp.false_movers == 0 and cmp.missed_movers == 0
     # Measured range-speed errors 0.057 (mover 2), 0.091 (mover 3), -0.022 (mover 1) m/s,
     # cross-range-speed errors 0.001, -0.008, 0.0001 m/s after the focus polish (0.016,
     # 0.81, 0.08 from g_perp alone); range positions within 1.1 cm; cross-range positions
@@ -245,14 +249,14 @@ def test_gotcha_clutter_with_two_injected_movers(gotcha_files):
     result = analyze(data)  # measured data: RPCA with eta x 2
     assert result.method == "rpca"
     cmp = compare_with_truth(result, Scene(name="injected", targets=movers))
-    assert cmp["false_movers"] == 0 and cmp["missed_movers"] == 0
+    assert cmp.false_movers == 0 and cmp.missed_movers == 0
     # Measured range-speed errors -0.071 (A) and 0.042 (B) m/s, cross-range speed errors
     # -0.017 and -0.009 m/s; range positions within 1.1 cm; cross range on the family (A
     # 10.8 m, B -6.5 m off; the truth within 1.1 cm of the family members).
-    for err in cmp["errors"]:
-        assert abs(err["range_speed_mps"]) <= 0.5, err
-        assert abs(err["position_range_m"]) <= RANGE_POS_TOL, err
-        assert err["family_position_m"] <= FAMILY_POS_TOL, err
+    for err in cmp.errors:
+        assert abs(err.range_speed_mps) <= 0.5, err
+        assert abs(err.position_range_m) <= RANGE_POS_TOL, err
+        assert err.family_position_m <= FAMILY_POS_TOL, err
 
 
 @pytest.mark.gotcha
@@ -265,16 +269,16 @@ def test_gotcha_four_degrees_with_two_injected_movers(gotcha_files):
         PointTarget(position_m=[5.0, -10.0], velocity_mps=[8.0, 3.0], reflectivity=amp, label="A"),
         PointTarget(position_m=[-12.0, 6.0], velocity_mps=[-6.0, 4.0], reflectivity=amp, label="B"),
     )
-    result = analyze(inject(clutter, movers), trajectory=False)
+    result = analyze(inject(clutter, movers), AnalysisOptions(trajectory=False))
     cmp = compare_with_truth(result, Scene(name="injected", targets=movers))
-    assert cmp["false_movers"] == 0 and cmp["missed_movers"] == 0
+    assert cmp.false_movers == 0 and cmp.missed_movers == 0
     # Measured range-speed errors -0.064 (A) and 0.053 (B) m/s, range positions within
     # 1.7 cm, truth within 1.8 cm of the estimates' family members; cross-range speed
     # errors -0.33 (A, clutter left in S) and -0.006 (B) m/s.
-    for err in cmp["errors"]:
-        assert abs(err["range_speed_mps"]) <= 0.5, err
-        assert abs(err["position_range_m"]) <= RANGE_POS_TOL, err
-        assert err["family_position_m"] <= FAMILY_POS_TOL, err
+    for err in cmp.errors:
+        assert abs(err.range_speed_mps) <= 0.5, err
+        assert abs(err.position_range_m) <= RANGE_POS_TOL, err
+        assert err.family_position_m <= FAMILY_POS_TOL, err
 
 
 @pytest.mark.slow
@@ -301,7 +305,7 @@ def test_cli_analyze_bad_input_is_one_line(tmp_path, capsys):
     capsys.readouterr()
     assert run(["analyze", "scene1", "--out", str(tmp_path / "o"), "--sub-aperture", "0"]) == 2
     err = capsys.readouterr().err
-    assert "--sub-aperture must be positive" in err and len(err.strip().splitlines()) == 1
+    assert "--sub-aperture must be > 0" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
 
 
@@ -312,6 +316,6 @@ def test_real_stationary_scene_has_no_mover(gotcha_files):
     # the clutter left in S once made g(u) peaks of 12-14 dB at 0.2-1.1 m/s (the apparent
     # range speed of stationary targets off the reference cross range); with the 15 dB
     # threshold, the V R / L speed floor and the edge test on g_perp, none is reported.
-    result = analyze(read_gotcha(gotcha_files), trajectory=False)
+    result = analyze(read_gotcha(gotcha_files), AnalysisOptions(trajectory=False))
     assert len(result.movers) == 0
     assert len(result.stationary) > 10

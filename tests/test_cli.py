@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.io
 
-from sarmotion.cli import EXIT_BAD_INPUT, run
+from sarmotion.cli.main import EXIT_BAD_INPUT, run
 from sarmotion.io import load_image, load_traces, read_gotcha
 
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from sarmotion.constants import C
-from sarmotion.geometry import (
+from sarmotion.core import (
+    C,
     Trajectory,
     cross_range_speed,
     delta_tau,

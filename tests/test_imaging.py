@@ -12,23 +12,18 @@ import math
 import numpy as np
 import pytest
 
-from sarmotion.constants import C
-from sarmotion.geometry import Trajectory
+from sarmotion.core import C, Radar, Traces, Trajectory
 from sarmotion.imaging import (
     Image,
     ImageGrid,
-    _upsample_fast_time,
-    _upsample_padded,
     backproject,
     backproject_phase_history,
     backproject_points,
     resolution,
     width_3db,
 )
-from sarmotion.radar import Radar
-from sarmotion.scene import PointTarget, Scene
-from sarmotion.simulate import add_noise, simulate, simulate_phase_history
-from sarmotion.traces import Traces
+from sarmotion.imaging.backprojection import _upsample_fast_time, _upsample_padded
+from sarmotion.simulation import PointTarget, Scene, add_noise, simulate, simulate_phase_history
 
 TARGET = (7.3, -4.1)  # off the reference point (origin) and off the pixel lattice
 MOVER_VELOCITY = 28.0 / math.sqrt(2.0) * np.array([1.0, 1.0])  # |u| = 28 m/s (sect:scales)
@@ -249,7 +244,7 @@ def test_backproject_points_matches_the_image(point_1deg: Traces) -> None:
 def test_progress_is_reported_per_step(point_4deg: Traces, kernel: str) -> None:
     calls: list[tuple[int, int]] = []
     grid = ImageGrid.square(size_m=40.0, spacing_m=0.25)  # 160 x 160: 3 bands of tiles
-    backproject(point_4deg, grid, kernel=kernel, progress=lambda d, t: calls.append((d, t)))
+    backproject(point_4deg, grid, kernel=kernel, progress=lambda stage, d, t: calls.append((d, t)))
     total = calls[0][1]
     done = [d for d, _ in calls]
     assert all(t == total for _, t in calls) and done[-1] == total

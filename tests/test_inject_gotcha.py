@@ -5,8 +5,7 @@ import pytest
 
 from sarmotion.imaging import ImageGrid, backproject
 from sarmotion.io import read_gotcha
-from sarmotion.scene import PointTarget
-from sarmotion.simulate import inject
+from sarmotion.simulation import PointTarget, inject
 
 
 @pytest.mark.gotcha

@@ -15,6 +15,8 @@ import pytest
 import sarkit.cphd as skcphd
 import sarkit.verification as skver
 
+from sarmotion.core import Radar, Traces
+from sarmotion.imaging import ImageGrid, backproject
 from sarmotion.io import (
     DataError,
     is_cphd_file,
@@ -25,10 +27,7 @@ from sarmotion.io import (
     save_traces,
     write_cphd,
 )
-from sarmotion.radar import Radar
-from sarmotion.scene import PointTarget, Scene
-from sarmotion.simulate import simulate
-from sarmotion.traces import Traces
+from sarmotion.simulation import PointTarget, Scene, simulate
 
 #: Dayton, Ohio: a scene frame origin whose east/north/up axes are not ECF axes.
 DAYTON = (39.78, -84.05, 250.0)
@@ -293,8 +292,6 @@ def gotcha_round_trip(gotcha_files, tmp_path_factory):
 
 @pytest.mark.gotcha
 def test_gotcha_round_trip_same_traces_and_image(gotcha_round_trip):
-    from sarmotion.imaging import ImageGrid, backproject
-
     mat, path = gotcha_round_trip
     assert_consistent(path)
     back = read_cphd(path)

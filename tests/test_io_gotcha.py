@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 import scipy.io
 
-from sarmotion.constants import C
+from sarmotion.core import C
 from sarmotion.io import DataError, is_gotcha_file, read_gotcha, write_gotcha
-from sarmotion.scene import PointTarget, Scene
-from sarmotion.simulate import simulate
+from sarmotion.simulation import PointTarget, Scene, simulate
 
 # The two calibration reflectors of pass 1 (README of the data set, 4-degree image).
 REFLECTORS = [(-15.5, 21.5), (-27.7, 38.7)]
@@ -180,7 +179,7 @@ def test_kept_r0_reference_focuses_better_than_re_referenced(four_degrees, gotch
 
 def _times_phase(traces, ranges_m):
     """Fast-time data of the phase history times exp(-i 4 pi f / c * ranges)."""
-    from sarmotion.spectral import to_fast_time
+    from sarmotion.core import to_fast_time
 
     cycles = np.multiply.outer(2.0 * ranges_m / C, traces.frequencies_hz)
     cycles -= np.round(cycles)

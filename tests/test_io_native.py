@@ -6,7 +6,7 @@ import h5py
 import numpy as np
 import pytest
 
-from sarmotion.geometry import Trajectory
+from sarmotion.core import Radar, Traces, Trajectory
 from sarmotion.io import (
     IMAGE_SCHEMA,
     TRACES_SCHEMA,
@@ -18,10 +18,7 @@ from sarmotion.io import (
     save_image,
     save_traces,
 )
-from sarmotion.radar import Radar
-from sarmotion.scene import PointTarget, Scene
-from sarmotion.simulate import simulate
-from sarmotion.traces import Traces
+from sarmotion.simulation import PointTarget, Scene, simulate
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ import re
 
 import pytest
 
-from sarmotion.paper import CAPTIONS, FIGURE_LABELS, build_figures, figure_filename
+from sarmotion.report.paper import CAPTIONS, FIGURE_LABELS, build_figures, figure_filename
 
 pytestmark = pytest.mark.slow  # ~45 s for the whole quick build
 
@@ -186,6 +186,6 @@ def test_separated_images_focus_at_the_true_positions(built):
     # Mover 2: in range within a cell, but displaced in cross range (measured 6.05 m,
     # ~5 cells; the paper: "slightly displaced in cross-range due to the error in its
     # velocity estimation"). The displacement is the range-speed/cross-range degeneracy
-    # documented in sarmotion.velocity; asserted as it is, so a fix shows up here.
+    # documented in sarmotion.motion; asserted as it is, so a fix shows up here.
     assert abs(h["mover2_peak_range_error_m"]) < h["range_cell_m"]
     assert abs(h["mover2_peak_cross_range_error_m"]) > h["cross_range_cell_m"]

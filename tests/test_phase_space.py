@@ -3,17 +3,15 @@
 import numpy as np
 import pytest
 
-from sarmotion.constants import C
-from sarmotion.geometry import look_geometry, range_direction_velocity
-from sarmotion.phase_space import (
+from sarmotion.core import C, look_geometry, range_direction_velocity
+from sarmotion.motion import (
     estimate_trajectory,
     trajectory_error,
     wigner_ridge,
     wigner_slow_time,
 )
-from sarmotion.scene import load_scene
-from sarmotion.simulate import add_noise, simulate
-from sarmotion.transforms import annihilate
+from sarmotion.separation import annihilate
+from sarmotion.simulation import add_noise, load_scene, simulate
 
 DS = 0.015  # pulse interval of the GOTCHA scenes (s)
 

@@ -9,17 +9,17 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from sarmotion.constants import C
-from sarmotion.geometry import (
+from sarmotion.core import (
+    C,
     LookGeometry,
+    Radar,
     Trajectory,
     delta_tau,
     look_geometry,
     range_direction_velocity,
     target_positions,
 )
-from sarmotion.radar import Radar
-from sarmotion.rank import (
+from sarmotion.separation.rank import (
     alpha,
     alpha_j,
     baseband_rank_fraction,
@@ -40,8 +40,7 @@ from sarmotion.rank import (
     two_target_gram,
     two_target_sequence,
 )
-from sarmotion.scene import PointTarget, Scene, random_scene
-from sarmotion.simulate import simulate
+from sarmotion.simulation import PointTarget, Scene, random_scene, simulate
 
 NU = 9.6e9
 B = 622e6

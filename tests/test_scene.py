@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sarmotion.scene import Scene, SceneError, builtin_scene_names, load_scene
+from sarmotion.simulation import Scene, SceneError, builtin_scene_names, load_scene
 
 COUNTS = {
     "example1": (7, 1),

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from sarmotion.imaging import ImageGrid, backproject
-from sarmotion.scene import load_scene
 from sarmotion.separation import (
+    annihilate,
     mover_trace_coverage,
     separate_annihilation,
     separate_combined,
@@ -13,8 +13,7 @@ from sarmotion.separation import (
     separation_quality,
     stationary_candidates,
 )
-from sarmotion.simulate import simulate
-from sarmotion.transforms import annihilate
+from sarmotion.simulation import load_scene, simulate
 
 
 @pytest.fixture(scope="module")

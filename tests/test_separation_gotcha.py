@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 
-from sarmotion.geometry import range_speed
+from sarmotion.core import range_speed
 from sarmotion.io import read_gotcha
-from sarmotion.scene import PointTarget
 from sarmotion.separation import mover_trace_coverage, separate_rpca
-from sarmotion.simulate import inject
+from sarmotion.simulation import PointTarget, inject
 
 
 @pytest.mark.gotcha

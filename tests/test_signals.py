@@ -3,18 +3,15 @@
 import numpy as np
 import pytest
 
-from sarmotion.constants import C
-from sarmotion.geometry import travel_time
-from sarmotion.radar import Radar
-from sarmotion.scene import load_scene
-from sarmotion.signals import (
+from sarmotion.core import C, Radar, travel_time
+from sarmotion.simulation import load_scene, simulate
+from sarmotion.simulation.signals import (
     baseband_gaussian_pulse,
     lfm_chirp,
     matched_filter,
     passband_gaussian_pulse,
     range_compress,
 )
-from sarmotion.simulate import simulate
 
 
 def _half_power_width(profile, dt):

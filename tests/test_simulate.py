@@ -3,12 +3,9 @@
 import numpy as np
 import pytest
 
-from sarmotion.geometry import Trajectory, delta_tau, target_positions
-from sarmotion.radar import Radar
-from sarmotion.scene import PointTarget, Scene, load_scene
-from sarmotion.signals import baseband_gaussian_pulse
-from sarmotion.simulate import add_noise, inject, simulate
-from sarmotion.spectral import shift_fast_time
+from sarmotion.core import Radar, Trajectory, delta_tau, shift_fast_time, target_positions
+from sarmotion.simulation import PointTarget, Scene, add_noise, inject, load_scene, simulate
+from sarmotion.simulation.signals import baseband_gaussian_pulse
 
 
 def _scene(targets, **kw):

@@ -1,4 +1,4 @@
-"""The cross-range family of a mover and the whole-aperture refinement (sarmotion.tracking).
+"""The cross-range family of a mover and the whole-aperture refinement (sarmotion.motion.aperture).
 
 Scene 1's geometry (GOTCHA, L = 10.18 km, V = 70 m/s, wavelength 3.1 cm) with its two
 movers alone, noise-free, over apertures of 1 to 30 degrees.
@@ -7,11 +7,10 @@ movers alone, noise-free, over apertures of 1 to 30 degrees.
 import numpy as np
 import pytest
 
-from sarmotion.geometry import range_speed
+from sarmotion.core import range_speed
 from sarmotion.imaging import resolution
-from sarmotion.scene import Scene, load_scene
-from sarmotion.simulate import simulate
-from sarmotion.tracking import (
+from sarmotion.motion import estimate_velocity
+from sarmotion.motion.aperture import (
     azimuth_span_deg,
     central_sub_aperture,
     family_direction,
@@ -19,7 +18,7 @@ from sarmotion.tracking import (
     ranges_m,
     refine_on_aperture,
 )
-from sarmotion.velocity import estimate_velocity
+from sarmotion.simulation import Scene, load_scene, simulate
 
 WAVELENGTH_M = 299_792_458.0 / 9.6e9
 

@@ -3,14 +3,13 @@
 import numpy as np
 import pytest
 
-from sarmotion.scene import PointTarget, Scene, load_scene
-from sarmotion.simulate import simulate
-from sarmotion.transforms import (
+from sarmotion.separation import (
     annihilate,
     slow_time_difference,
     transform_minus,
     transform_plus,
 )
+from sarmotion.simulation import PointTarget, Scene, load_scene, simulate
 
 
 def _db(x):

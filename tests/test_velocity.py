@@ -9,17 +9,15 @@ cross-range-speed resolution 0.74 m/s (see the module). Noise-free unless stated
 import numpy as np
 import pytest
 
-from sarmotion.geometry import (
+from sarmotion.core import (
     cross_range_speed,
     ground_velocity,
     range_direction_velocity,
     range_speed,
+    to_fast_time,
+    to_frequency,
 )
-from sarmotion.scene import Scene, load_scene
-from sarmotion.simulate import simulate
-from sarmotion.spectral import to_fast_time, to_frequency
-from sarmotion.transforms import transform_plus
-from sarmotion.velocity import (
+from sarmotion.motion import (
     cross_range_objective,
     cross_range_speed_resolution,
     estimate_cross_range_speed,
@@ -29,6 +27,8 @@ from sarmotion.velocity import (
     range_speed_objective,
     range_speed_resolution,
 )
+from sarmotion.separation import transform_plus
+from sarmotion.simulation import Scene, load_scene, simulate
 
 
 @pytest.fixture(scope="module")

@@ -1,12 +1,13 @@
-"""Input and output: GOTCHA and CPHD phase-history files and sarmotion's native HDF5 files.
+"""Input and output: GOTCHA and CPHD phase history, native HDF5 files, the results document.
 
 This is the only layer of sarmotion that opens files. Every bad input raises
 :class:`DataError` (a ``ValueError``) with one line naming the file and the problem.
 """
 
 from .cphd import is_cphd_file, read_cphd, write_cphd
-from .errors import DataError
+from .errors import DataError, staged_directory, staged_paths
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
+from .inputs import is_scene_reference, read_inputs
 from .native import (
     IMAGE_SCHEMA,
     TRACES_SCHEMA,
@@ -34,4 +35,16 @@ __all__ = [
     "native_schema",
     "TRACES_SCHEMA",
     "IMAGE_SCHEMA",
+]
+
+from .results import RESULTS_SCHEMA, results_document, write_json  # noqa: E402
+
+__all__ += [
+    "RESULTS_SCHEMA",
+    "is_scene_reference",
+    "read_inputs",
+    "results_document",
+    "staged_directory",
+    "staged_paths",
+    "write_json",
 ]

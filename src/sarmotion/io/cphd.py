@@ -67,11 +67,7 @@ import sarkit.wgs84 as skwgs84
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
-from ..constants import C
-from ..geometry import Trajectory, as_point
-from ..radar import Radar
-from ..spectral import delay_phase
-from ..traces import Traces
+from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
 from .errors import DataError, staged_paths
 from .native import _to_json
 

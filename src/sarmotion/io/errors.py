@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import os
 import secrets
+import shutil
+import tempfile
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["DataError"]
+__all__ = ["DataError", "staged_paths", "staged_directory"]
 
 
 class DataError(ValueError):
@@ -56,3 +58,26 @@ def staged_paths(targets: Sequence[Path], *, overwrite: bool = True) -> Iterator
     finally:
         for tmp in temps:
             tmp.unlink(missing_ok=True)
+
+
+@contextmanager
+def staged_directory(out: Path) -> Iterator[Path]:
+    """Yield a hidden staging directory; move its files into ``out`` only on success."""
+    out = Path(out)
+    parent = out.resolve().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise DataError(f"--out {out} exists and is not a directory")
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=parent))
+    try:
+        yield stage
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    out.mkdir(parents=True, exist_ok=True)
+    for item in sorted(stage.iterdir()):
+        target = out / item.name
+        if target.is_dir() and item.is_dir():
+            shutil.rmtree(target)
+        os.replace(item, target)
+    shutil.rmtree(stage, ignore_errors=True)

@@ -23,10 +23,10 @@ of azimuth in the AFRL release). Fields, read by name:
 
 The AFRL files store every real field as float32 (ranges of ~10 km to ~0.5 mm). The
 files carry no pulse times: slow time is derived from the along-track distance and the
-platform speed (:meth:`sarmotion.geometry.Trajectory.from_positions`).
+platform speed (:meth:`sarmotion.core.geometry.Trajectory.from_positions`).
 
-In sarmotion the phase history becomes :class:`~sarmotion.traces.Traces` (pulses along
-the first axis) with the conventions of :mod:`sarmotion.spectral`; see
+In sarmotion the phase history becomes :class:`~sarmotion.core.traces.Traces` (pulses along
+the first axis) with the conventions of :mod:`sarmotion.core.spectral`; see
 :func:`read_gotcha` for the measured choices (phase reference, autofocus sign) and
 :func:`write_gotcha` for the reverse direction.
 """
@@ -44,10 +44,7 @@ import numpy as np
 import scipy.io
 from numpy.typing import ArrayLike, NDArray
 
-from ..constants import C
-from ..geometry import Trajectory, as_point
-from ..radar import Radar
-from ..traces import Traces
+from ..core import C, Radar, Traces, Trajectory, as_point
 from .errors import DataError, staged_paths
 
 __all__ = ["read_gotcha", "write_gotcha", "is_gotcha_file", "DEFAULT_NAME_PATTERN"]

@@ -18,7 +18,7 @@ Traces, ``schema = "sarmotion.traces/1"``::
                             the same axes (e.g. separated "L" and "S", simulated truth)
 
 The conventions of ``data`` (fast time relative to the reference travel time, ``t = 0``
-at sample ``n_samples // 2``) are those of :class:`sarmotion.traces.Traces`.
+at sample ``n_samples // 2``) are those of :class:`sarmotion.core.traces.Traces`.
 
 Images, ``schema = "sarmotion.image/1"``::
 
@@ -47,9 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
-from ..geometry import Trajectory
-from ..radar import Radar
-from ..traces import Traces
+from ..core import Radar, Traces, Trajectory
 from .errors import DataError, staged_paths
 
 __all__ = [

@@ -1,0 +1,52 @@
+"""The core vocabulary: radar, acquisition geometry, traces and their spectral conventions.
+
+- :mod:`~sarmotion.core.constants` — physical constants (``C``);
+- :mod:`~sarmotion.core.radar` — :class:`Radar` (carrier, bandwidth, sampling);
+- :mod:`~sarmotion.core.geometry` — :class:`Trajectory`, look geometry, travel times and
+  velocity components;
+- :mod:`~sarmotion.core.spectral` — fast time and frequency, exact delays;
+- :mod:`~sarmotion.core.traces` — :class:`Traces`, the data ``(n_pulses, n_samples)``;
+- :mod:`~sarmotion.core.progress` — the progress-callback convention.
+"""
+
+from .constants import C
+from .geometry import (
+    LookGeometry,
+    Trajectory,
+    as_point,
+    cross_range_speed,
+    delta_tau,
+    ground_velocity,
+    look_geometry,
+    range_direction_velocity,
+    range_speed,
+    target_positions,
+    travel_time,
+)
+from .progress import ProgressCallback
+from .radar import PulseShape, Radar
+from .spectral import delay_phase, shift_fast_time, to_fast_time, to_frequency
+from .traces import Traces
+
+__all__ = [
+    "C",
+    "LookGeometry",
+    "ProgressCallback",
+    "PulseShape",
+    "Radar",
+    "Trajectory",
+    "Traces",
+    "as_point",
+    "cross_range_speed",
+    "delay_phase",
+    "delta_tau",
+    "ground_velocity",
+    "look_geometry",
+    "range_direction_velocity",
+    "range_speed",
+    "shift_fast_time",
+    "target_positions",
+    "to_fast_time",
+    "to_frequency",
+    "travel_time",
+]

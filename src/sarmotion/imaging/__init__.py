@@ -1,0 +1,34 @@
+"""Imaging: pixel grids and complex images, backprojection, resolution, peaks, point responses.
+
+- :mod:`~sarmotion.imaging.grid` — :class:`ImageGrid` (pixel axes in m) and :class:`Image`;
+- :mod:`~sarmotion.imaging.backprojection` — :func:`backproject` (``eq:image``, with motion
+  compensation ``eq:imagecompu``), at pixels or at arbitrary points;
+- :mod:`~sarmotion.imaging.resolution` — the theoretical resolution cell and 3 dB widths;
+- :mod:`~sarmotion.imaging.peaks` — the one peak finder (non-maximum suppression);
+- :mod:`~sarmotion.imaging.point_response` — the exact point response from the phase
+  history, per pulse or summed, and locations refined on it.
+"""
+
+from .backprojection import backproject, backproject_phase_history, backproject_points
+from .grid import Image, ImageGrid, default_scene_size_m, scene_grid
+from .peaks import find_peaks, parabolic_peak
+from .point_response import point_response, pulse_responses, refine_location
+from .resolution import Resolution, resolution, width_3db
+
+__all__ = [
+    "Image",
+    "ImageGrid",
+    "Resolution",
+    "backproject",
+    "default_scene_size_m",
+    "scene_grid",
+    "backproject_phase_history",
+    "backproject_points",
+    "find_peaks",
+    "parabolic_peak",
+    "point_response",
+    "pulse_responses",
+    "refine_location",
+    "resolution",
+    "width_3db",
+]

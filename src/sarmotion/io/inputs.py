@@ -1,0 +1,79 @@
+"""Reading a command's inputs as traces: a scene, native traces or GOTCHA files.
+
+One entry point, :func:`read_inputs`, dispatches on what it is given: a built-in scene
+name or a scene ``.toml`` is simulated (its ground truth kept), a ``.h5`` file is read as
+native traces, ``.mat`` files as GOTCHA phase history (several files form one aperture).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..core.traces import Traces
+from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
+from .errors import DataError
+from .gotcha import read_gotcha
+from .native import load_traces
+
+__all__ = ["is_scene_reference", "read_inputs"]
+
+
+def is_scene_reference(text: str) -> bool:
+    """True for a built-in scene name or a path ending in ``.toml``."""
+    return text in builtin_scene_names() or text.lower().endswith(".toml")
+
+
+def read_inputs(
+    inputs: Sequence[str],
+    *,
+    speed_mps: float = 70.0,
+    autofocus: bool = False,
+    snr_db: float | None = None,
+    seed: int = 0,
+) -> tuple[Traces, Simulation | None]:
+    """Read ``inputs`` as one acquisition.
+
+    Parameters
+    ----------
+    inputs : sequence of str
+        One scene name or ``.toml``; or one native ``.h5``; or one or more GOTCHA ``.mat``.
+    speed_mps : float
+        GOTCHA: platform speed that sets slow time (m/s).
+    autofocus : bool
+        GOTCHA: apply the files' autofocus corrections.
+    snr_db : float, optional
+        Scenes: add white noise at this SNR (dB).
+    seed : int
+        Scenes: noise seed.
+
+    Returns
+    -------
+    (Traces, Simulation or None)
+        The traces, and the simulation (with its truth) for a scene.
+
+    Raises
+    ------
+    DataError
+        Missing or unreadable inputs, or a mix of kinds.
+    """
+    if not inputs:
+        raise DataError("no INPUT given")
+    first = inputs[0]
+    if len(inputs) == 1 and is_scene_reference(first):
+        sim = simulate(load_scene(first), snr_db=snr_db, rng=seed)
+        return sim.traces, sim
+    for p in inputs:
+        if not Path(p).exists():
+            raise DataError(f"input not found: {p}")
+    suffixes = {Path(p).suffix.lower() for p in inputs}
+    if suffixes == {".h5"} or suffixes == {".hdf5"}:
+        if len(inputs) != 1:
+            raise DataError("give one native traces file (.h5) at a time")
+        return load_traces(first), None
+    if suffixes == {".mat"}:
+        return read_gotcha(list(inputs), speed_mps=speed_mps, autofocus=autofocus), None
+    raise DataError(
+        f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
+        "a native traces .h5 file, or GOTCHA .mat files"
+    )

@@ -1,0 +1,168 @@
+"""Shared machinery of the speed objectives: checks, trial velocities, travel-time alignment."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import scipy.fft as sfft
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import minimize_scalar
+
+from ..core import C, LookGeometry, Traces, ground_velocity, range_direction_velocity
+
+__all__ = []
+
+
+#: Complex samples per chunk of trial velocities (one chunk array is 8 MB in complex64).
+_CHUNK_ELEMENTS = 1 << 20
+
+
+#: Fast-time refinement of the transformed traces (band-limited, by zero padding).
+_OVERSAMPLE = 2
+
+
+# =============================================================== validation
+def _check_traces(traces: object) -> Traces:
+    if not isinstance(traces, Traces):
+        raise TypeError(f"traces must be a sarmotion Traces, got {type(traces).__name__}")
+    if traces.n_pulses < 3:
+        raise ValueError(f"traces must hold at least 3 pulses, got {traces.n_pulses}")
+    return traces
+
+
+def _speeds(values: ArrayLike, name: str) -> NDArray[np.float64]:
+    try:
+        u = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be an array of real speeds (m/s), got {values!r}") from None
+    u = np.atleast_1d(u)
+    if u.ndim != 1 or u.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D array (m/s), got shape {u.shape}")
+    if not np.all(np.isfinite(u)):
+        raise ValueError(f"{name} must be finite, got {u[~np.isfinite(u)][:3]} among them")
+    return u
+
+
+# =============================================================== resolutions
+def _aperture_time_s(traces: Traces) -> float:
+    s = traces.slow_times_s
+    return float(s[-1] - s[0])
+
+
+# =============================================================== the kernel
+class _Aligner:
+    """``T_+^{u, rho}`` of one data set for many trial velocities, in the frequency domain.
+
+    The phase history ``P(s_j, f_k)`` is computed once. For a chunk of trial velocities
+    the delays ``dtau(s_j, rho + s_j u)`` and the cycles ``f_k dtau`` (up to ~1e4) are
+    float64 and reduced exactly to ``[-1/2, 1/2]``; only then is the unit phasor formed in
+    single precision (phase error < 1e-6 rad) and multiplied with the complex64 spectrum.
+    Single precision after the reduction is 3-4x faster and far below every other error
+    (the data themselves are often complex64); float32 *before* the reduction would lose
+    the image. The spectra are zero-padded to ``M = 2 n_samples`` and inverse-transformed,
+    one FFT per trial: the transformed traces at twice the fast-time sampling of the
+    traces (band-limited interpolation; the original samples are every other one), scaled
+    as :attr:`Traces.data`.
+    """
+
+    def __init__(self, traces: Traces, point_m: NDArray[np.float64]) -> None:
+        self.traces = traces
+        self.point = point_m
+        k = traces.n_samples
+        m = _OVERSAMPLE * k
+        self.spectrum = (np.fft.ifftshift(traces.phase_history(), axes=-1) * (m / k)).astype(
+            np.complex64
+        )
+        self.freq = np.fft.ifftshift(traces.frequencies_hz)
+        # FFT order: non-negative baseband offsets first, the k // 2 negative ones last.
+        n_pos = k - k // 2
+        self.slots = np.concatenate([np.arange(n_pos), np.arange(m - k // 2, m)])
+        self.n_fft = m
+        dt = 1.0 / (m * traces.radar.frequency_step_hz)
+        idx = np.arange(m)
+        self.times_s = np.where(idx < m - m // 2, idx, idx - m) * dt
+        self.positions = traces.positions_m
+        self.slow = traces.slow_times_s
+        self.tau_ref = 2.0 * np.linalg.norm(self.positions - traces.reference_point_m, axis=1) / C
+        self.chunk = max(1, _CHUNK_ELEMENTS // (traces.n_pulses * m))
+
+    def delays(self, velocities: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``dtau(s_j, rho + s_j u_i)`` (s) for ground velocities (n_vel, 2), shape (n_vel, n)."""
+        v3 = np.zeros((velocities.shape[0], 3))
+        v3[:, :2] = velocities
+        diff = self.positions[None, :, :] - self.point[None, None, :]
+        diff = diff - self.slow[None, :, None] * v3[:, None, :]
+        rng = np.sqrt(np.einsum("vnk,vnk->vn", diff, diff))
+        return 2.0 * rng / C - self.tau_ref[None, :]
+
+    def spectra(self, velocities: NDArray[np.float64]) -> NDArray[np.complex64]:
+        """Phase-modulated spectra ``P(s, f) exp(2i pi f dtau)``, shape (n_vel, n, n_samples)."""
+        cycles = self.delays(velocities)[:, :, None] * self.freq[None, None, :]
+        cycles -= np.rint(cycles)
+        phase = (2.0 * np.pi * cycles).astype(np.float32)
+        out = np.empty(phase.shape, dtype=np.complex64)
+        np.cos(phase, out=out.real)
+        np.sin(phase, out=out.imag)
+        out *= self.spectrum[None]
+        return out
+
+    def map_chunks(
+        self,
+        velocities: NDArray[np.float64],
+        reduce: Callable[[NDArray[np.complex64]], NDArray[np.float64]],
+        *,
+        lag: int = 0,
+    ) -> NDArray[np.float64]:
+        """Apply ``reduce`` to the transformed traces of each velocity, chunk by chunk.
+
+        ``reduce`` receives the fast-time traces of a chunk, shape (n_chunk, n', M). With
+        ``lag = h > 0`` they are the second differences ``D_s^2`` at step ``h Delta s``,
+        ``(x_{j+h} - 2 x_j + x_{j-h}) / (h Delta s)^2`` (per s^2), on the ``n' = n - 2h``
+        interior pulses.
+        """
+        out = np.empty(velocities.shape[0])
+        inv_ds2 = np.float32(1.0 / self.traces.trajectory.pulse_interval_s**2)
+        for i0 in range(0, velocities.shape[0], self.chunk):
+            x = self.spectra(velocities[i0 : i0 + self.chunk])
+            if lag > 0:
+                # D_s^2 acts on slow time only: take it on the spectra, before the FFT.
+                h = lag
+                x = (x[:, 2 * h :] - 2.0 * x[:, h:-h] + x[:, : -2 * h]) * (inv_ds2 / h**2)
+            padded = np.zeros(x.shape[:2] + (self.n_fft,), dtype=np.complex64)
+            padded[..., self.slots] = x
+            out[i0 : i0 + self.chunk] = reduce(sfft.ifft(padded, axis=-1, workers=-1))
+        return out
+
+
+def _basis(geometry: LookGeometry) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Ground velocities of unit range speed and of unit cross-range speed (m/s per m/s)."""
+    return ground_velocity(1.0, 0.0, geometry), ground_velocity(0.0, 1.0, geometry)
+
+
+def _range_trials(
+    speeds: NDArray[np.float64], geometry: LookGeometry, cross_range_speed: float | None
+) -> NDArray[np.float64]:
+    if cross_range_speed is None:
+        return speeds[:, None] * range_direction_velocity(1.0, geometry)[None, :]
+    e_r, e_p = _basis(geometry)
+    return speeds[:, None] * e_r[None, :] + cross_range_speed * e_p[None, :]
+
+
+def _g_reduce(x: NDArray[np.complex64]) -> NDArray[np.float64]:
+    return np.abs(x).sum(axis=1, dtype=np.float64).max(axis=-1)
+
+
+def _refine_max(
+    func: Callable[[float], float], centre: float, half_width: float, tol: float
+) -> tuple[float, float]:
+    """Bounded Brent/golden search for the maximum of ``func`` on ``centre +- half_width``."""
+    res = minimize_scalar(
+        lambda x: -func(x),
+        bounds=(centre - half_width, centre + half_width),
+        method="bounded",
+        options={"xatol": tol},
+    )
+    x, val = float(res.x), float(-res.fun)
+    c_val = func(centre)
+    return (x, val) if val >= c_val else (centre, c_val)

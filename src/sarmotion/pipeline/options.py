@@ -1,0 +1,131 @@
+"""The options of the analysis: one frozen, validated object.
+
+Every default is stated with its unit and the principle it comes from. Data-dependent
+defaults (the separation method, the RPCA sparsity factor, the scene size) stay ``None``
+here and are filled from the traces by :meth:`AnalysisOptions.resolved`, so that the
+options written to ``results.json`` are the ones the analysis ran with.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+from .._validation import finite, integer, interval, positive
+from ..core.traces import Traces
+from ..imaging import default_scene_size_m
+from ..separation import SeparationOptions
+
+__all__ = ["AnalysisOptions"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class AnalysisOptions:
+    """Choices of :func:`~sarmotion.analyze`; every field is keyword-only with a default.
+
+    Attributes
+    ----------
+    separation : SeparationOptions
+        Stationary/moving separation (method, candidate threshold, RPCA parameters);
+        see :class:`~sarmotion.separation.SeparationOptions`.
+    max_movers : int
+        Most movers sought (>= 0). Default 5.
+    image_size_m : float or None
+        Side of the square preliminary and stationary images around the reference point
+        (m); ``None``: :func:`~sarmotion.imaging.default_scene_size_m` (the unambiguous
+        ground-range window of the data, at most 100 m).
+    spacing_m : float
+        Pixel spacing of every image (m). Default 0.25 m, about a fifth of a GOTCHA
+        resolution cell.
+    mover_image_size_m : float
+        Side of each mover's image around its estimated location (m). Default 20 m.
+    speed_range_mps : (float, float)
+        Range and cross-range speeds searched (m/s). Default (-30, 30), road traffic.
+    threshold_db : float
+        Peak of ``g(u)`` over its median needed for a mover (dB, amplitude).
+    stationary_threshold_db : float
+        Stationary targets listed down to this level re the brightest pixel of the
+        stationary image (dB, <= 0). Default -20 dB.
+    max_stationary : int
+        Most stationary targets listed (>= 0). Default 100.
+    mover_half_window : int or None
+        Half-width of a mover's extraction window (fast-time samples); ``None``: three
+        compressed-pulse lengths.
+    trajectory : bool
+        Estimate each mover's trajectory by the phase-space algorithm. Default True.
+    sub_aperture_deg : float
+        Azimuth span of the sub-aperture the movers are estimated on (degrees, > 0). A
+        wider aperture is analysed on its central sub-aperture and each mover is then
+        focused on all pulses. Default 1 degree, over which the motion estimates assume
+        uniform motion and a straight look.
+
+    Notes
+    -----
+    ``threshold_db`` = 15 dB: true movers stood 17.6-28 dB above the floor (Scene 1
+    21.3/21.4; 40 targets + 3 movers at 20 dB SNR 17.6-20.3; a GOTCHA degree with two
+    injected movers 21.9/23.6) while the clutter left in ``S`` of the real 4-degree
+    GOTCHA scene made peaks of 11.7-14.4 dB at 0.2-1.1 m/s.
+    """
+
+    separation: SeparationOptions = dataclasses.field(default_factory=SeparationOptions)
+    max_movers: int = 5
+    image_size_m: float | None = None
+    spacing_m: float = 0.25
+    mover_image_size_m: float = 20.0
+    speed_range_mps: tuple[float, float] = (-30.0, 30.0)
+    threshold_db: float = 15.0
+    stationary_threshold_db: float = -20.0
+    max_stationary: int = 100
+    mover_half_window: int | None = None
+    trajectory: bool = True
+    sub_aperture_deg: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.separation, SeparationOptions):
+            raise TypeError(
+                f"separation must be a SeparationOptions, got {type(self.separation).__name__}"
+            )
+        integer(self.max_movers, "max_movers", minimum=0)
+        if self.image_size_m is not None:
+            positive(self.image_size_m, "image_size_m", unit="m")
+        positive(self.spacing_m, "spacing_m", unit="m")
+        positive(self.mover_image_size_m, "mover_image_size_m", unit="m")
+        object.__setattr__(
+            self, "speed_range_mps", interval(self.speed_range_mps, "speed_range_mps", unit="m/s")
+        )
+        finite(self.threshold_db, "threshold_db", unit="dB")
+        if finite(self.stationary_threshold_db, "stationary_threshold_db", unit="dB") > 0:
+            raise ValueError(
+                f"stationary_threshold_db must be <= 0 (dB), got {self.stationary_threshold_db!r}"
+            )
+        integer(self.max_stationary, "max_stationary", minimum=0)
+        if self.mover_half_window is not None:
+            integer(self.mover_half_window, "mover_half_window", minimum=1)
+        if not isinstance(self.trajectory, bool):
+            raise TypeError(f"trajectory must be a bool, got {self.trajectory!r}")
+        positive(self.sub_aperture_deg, "sub_aperture_deg", unit="degrees")
+
+    @property
+    def method(self) -> str | None:
+        """The separation method (``None`` until :meth:`resolved`)."""
+        return self.separation.method
+
+    def resolved(self, traces: Traces) -> AnalysisOptions:
+        """These options with every data-dependent default filled from ``traces``."""
+        size = self.image_size_m or default_scene_size_m(traces)
+        if size / self.spacing_m > 4096:
+            raise ValueError(
+                f"image_size_m / spacing_m must give <= 4096 pixels a side, "
+                f"got {size} m / {self.spacing_m} m"
+            )
+        return dataclasses.replace(
+            self, separation=self.separation.resolved(traces), image_size_m=size
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict of every option (the separation's flattened in)."""
+        d = dataclasses.asdict(self)
+        sep = d.pop("separation")
+        d["speed_range_mps"] = list(self.speed_range_mps)
+        return {**sep, **d}

@@ -1,0 +1,474 @@
+"""Figures and a self-contained HTML report of an analysis (:mod:`sarmotion.pipeline`).
+
+Plotting layer: with :mod:`sarmotion.report.plotting` the only module that imports matplotlib.
+The trace and image panels are drawn by :mod:`sarmotion.report.plotting`; the objective-function
+and trajectory plots (not in the paper's figure set of that module) are drawn here.
+
+:func:`write_report` saves each figure as a PNG in ``directory`` and writes
+``report.html`` with the same PNGs embedded as base64 data URIs, so the HTML file can be
+mailed or archived alone.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import io
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from .. import __version__
+from ..io import results_document
+from ..motion import trajectory_error
+from ..pipeline import AnalysisResult
+from .plotting import image_figure, plot_image, subplots, traces_figure
+
+__all__ = [
+    "traces_panels_figure",
+    "objectives_figure",
+    "images_figure",
+    "movers_figure",
+    "trajectories_figure",
+    "write_report",
+]
+
+_COLOURS = ("tab:red", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
+
+
+# ======================================================================== figures
+def traces_panels_figure(result: AnalysisResult) -> Figure:
+    """``|M|``, ``|L|``, ``|S|`` (dB), each mover's separated traces and the residual."""
+    tr = result.traces
+    panels: list[tuple[str, Any, bool]] = [("data |M|", tr.data, False)]
+    stat = result.separation.stationary
+    if stat is not None:
+        panels.append(("stationary |L|", stat, False))
+        panels.append(("moving |S| (dB)", result.separation.moving, True))
+    else:
+        panels.append(("filtered |Q M| (dB)", result.separation.moving, True))
+    for k, m in enumerate(result.movers):
+        panels.append((f"mover {k + 1} |D_{k + 1}| (dB)", m.traces, True))
+    panels.append(("residual (dB)", result.residual, True))
+    return traces_figure(
+        panels,
+        slow_times_s=tr.slow_times_s,
+        fast_times_s=tr.fast_times_s,
+        normalise_by=float(np.abs(tr.data).max()),
+        ncols=min(4, len(panels)),
+    )
+
+
+def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
+    """``g(u)`` on ``S`` with the detected range speeds, and each mover's ``g_perp``."""
+    rs = result.range_speeds
+    n = len(result.movers)
+    fig, axes = subplots(1, 1 + n, figsize=(4.6 * (1 + n), 3.6), squeeze=False)
+    ax = axes[0, 0]
+    ax.plot(rs.grid_mps, rs.objective / rs.objective.max(), color="k", lw=1.0)
+    ax.axhline(rs.floor / rs.objective.max(), color="0.6", ls=":", lw=1, label="median (floor)")
+    for k, u in enumerate(rs.speeds_mps):
+        ax.axvline(u, color=_COLOURS[k % 6], ls="--", lw=1, label=f"peak {k + 1}: {u:.2f} m/s")
+    if truth:
+        for t in truth["truth"]:
+            ax.plot(t["range_speed_mps"], 1.02, "v", color="k", ms=6)
+    ax.set_xlabel("range speed u (m/s)")
+    ax.set_ylabel("g(u) / max")
+    ax.set_title("g(u) on S (eq:OBJg)")
+    ax.legend(fontsize=7, loc="upper left")
+    for k, m in enumerate(result.movers):
+        cc = m.estimate.cross_curve
+        ax = axes[0, 1 + k]
+        ax.plot(cc.grid_mps, cc.objective / cc.objective.max(), color="k", lw=1.0)
+        ax.axvline(
+            cc.speed_mps,
+            color=_COLOURS[k % 6],
+            ls="--",
+            lw=1,
+            label=f"estimate {cc.speed_mps:.2f} m/s",
+        )
+        if truth and truth["errors"][k] is not None:
+            err = truth["errors"][k]["cross_range_speed_mps"]
+            ax.axvline(cc.speed_mps - err, color="k", ls=":", lw=1, label="truth")
+        ax.set_xlabel("cross-range speed u_perp (m/s)")
+        ax.set_ylabel("g_perp / max")
+        ax.set_title(f"mover {k + 1}: g_perp (eq:OBJ2)")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def images_figure(result: AnalysisResult) -> Figure:
+    """Preliminary image and stationary image, with movers and stationary targets marked.
+
+    Circles: the movers' estimated positions at ``s = 0`` (preliminary image) and the
+    listed stationary targets (stationary image).
+    """
+    g = result.preliminary_image.grid
+    found = [s.position_m for s in result.stationary]
+    movers = [tuple(m.position_m) for m in result.movers]
+    return image_figure(
+        [
+            ("preliminary image |I| (eq:image)", result.preliminary_image.values),
+            ("stationary image (from L)", result.stationary_image.values),
+        ],
+        x_m=g.x_m,
+        y_m=g.y_m,
+        markers=[movers, found],
+    )
+
+
+def movers_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
+    """Each mover's image from its own traces, compensated at its estimated velocity."""
+    n = max(1, len(result.movers))
+    fig, axes = subplots(1, n, figsize=(4.6 * n, 4.0), squeeze=False)
+    for k, m in enumerate(result.movers):
+        ax = axes[0, k]
+        g = m.image.grid
+        u = m.velocity_mps
+        plot_image(
+            ax,
+            m.image.values,
+            x_m=g.x_m,
+            y_m=g.y_m,
+            title=f"mover {k + 1}, u = ({u[0]:.2f}, {u[1]:.2f}) m/s",
+            markers=[tuple(m.position_m)],
+        )
+        if truth and truth["errors"][k] is not None:
+            name = truth["errors"][k]["matched"]
+            t = next((t for t in truth["truth"] if t["label"] == name), None)
+            if t is not None:
+                ax.plot(*t["position_m"], "x", color="w", ms=9, mew=2, label="truth")
+                ax.legend(fontsize=7, loc="lower right")
+    if not result.movers:
+        axes[0, 0].text(0.5, 0.5, "no mover found", ha="center", va="center")
+        axes[0, 0].set_axis_off()
+    fig.tight_layout()
+    return fig
+
+
+def trajectories_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
+    """Trajectory error ``|rho^e(s) - rho(s)|`` (simulations), else the trajectories."""
+    fig, ax = subplots(figsize=(6.0, 3.8))
+    drawn = False
+    for k, m in enumerate(result.movers):
+        tj = m.trajectory
+        if tj is None:
+            continue
+        colour = _COLOURS[k % 6]
+        t = None
+        if truth and truth["errors"][k] is not None:
+            name = truth["errors"][k]["matched"]
+            t = next((x for x in truth["truth"] if x["label"] == name), None)
+        if t is not None:
+            err = trajectory_error(tj, t["position_m"], t["velocity_mps"])
+            ax.plot(tj.slow_times_s, err, color=colour, label=f"estimate {k + 1} = {name}")
+            ax.set_ylabel("|rho_e(s) - rho(s)| (m)")
+        else:
+            ax.plot(tj.positions_m[:, 0], tj.positions_m[:, 1], color=colour)
+            ax.plot(*tj.position_at_zero_m[:2], "o", color=colour, label=f"mover {k + 1}, s = 0")
+            ax.set_xlabel("x (m)")
+            ax.set_ylabel("y (m)")
+        drawn = True
+    if truth:
+        ax.set_xlabel("slow time s (s)")
+        ax.set_title("trajectory error (phase-space estimate)")
+        ax.set_yscale("symlog", linthresh=0.1)
+    else:
+        ax.set_title("estimated trajectories over the aperture")
+        ax.set_aspect("equal", adjustable="datalim")
+    if drawn:
+        ax.legend(fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no trajectory estimated", ha="center", va="center")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+# ========================================================================= report
+def _png(fig: Figure, path: Path, dpi: int = 110) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    data = buf.getvalue()
+    path.write_bytes(data)
+    return data
+
+
+def _fmt(v: Any, digits: int = 2) -> str:
+    if v is None:
+        return "&ndash;"
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(_fmt(x, digits) for x in v) + ")"
+    if isinstance(v, float):
+        return f"{v:.{digits}f}"
+    return html.escape(str(v))
+
+
+_CSS = """
+body{font-family:-apple-system,'Segoe UI',Helvetica,Arial,sans-serif;margin:0;color:#222;
+background:#f5f6f8}
+header{background:#1f3a5f;color:#fff;padding:18px 32px}
+header h1{margin:0;font-size:22px} header p{margin:4px 0 0;opacity:.85;font-size:13px}
+main{max-width:1400px;margin:0 auto;padding:16px 32px}
+section{background:#fff;border:1px solid #dde1e6;border-radius:6px;margin:16px 0;
+padding:12px 20px}
+h2{font-size:17px;border-bottom:1px solid #e5e7eb;padding-bottom:6px;color:#1f3a5f}
+table{border-collapse:collapse;font-size:13px;margin:8px 0}
+th,td{border:1px solid #d0d5dc;padding:4px 8px;text-align:right}
+th{background:#eef1f5} td.l,th.l{text-align:left}
+.kv td:first-child{text-align:left;color:#555}
+img{max-width:100%;height:auto;display:block;margin:6px 0}
+.note{font-size:12px;color:#555}
+.bad{color:#b42318;font-weight:600} .ok{color:#067647}
+"""
+
+
+def _html_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    h = "".join(f"<th>{html.escape(c)}</th>" for c in head)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><tr>{h}</tr>{body}</table>"
+
+
+def write_report(
+    result: AnalysisResult,
+    directory: str | Path,
+    *,
+    document: dict[str, Any] | None = None,
+    title: str = "sarmotion analysis",
+    inputs: Sequence[str] = (),
+) -> Path:
+    """Save the figures as PNG in ``directory`` and write ``directory/report.html``.
+
+    Parameters
+    ----------
+    result : AnalysisResult
+        The analysis.
+    directory : path
+        Existing output directory.
+    document : dict, optional
+        ``results_document(result, ...)`` (with ``truth`` for simulated inputs); computed
+        without truth if not given.
+    title : str
+        Report title.
+    inputs : sequence of str
+        The input names, for the header.
+
+    Returns
+    -------
+    Path
+        The HTML file.
+    """
+    out = Path(directory)
+    doc = document if document is not None else results_document(result)
+    truth = None
+    if "truth" in doc:
+        truth = {"truth": doc["truth"], "errors": [m.get("errors") for m in doc["movers"]]}
+    figures: list[tuple[str, str, str]] = []  # (section, caption, file)
+
+    def add(section: str, caption: str, fig: Figure, name: str) -> None:
+        data = _png(fig, out / name)
+        figures.append((section, caption, base64.b64encode(data).decode("ascii")))
+
+    add(
+        "Traces",
+        "Range-compressed traces: slow time s (vertical) against fast time t. Data M, "
+        f"its separation ({result.method}) into L and S, each mover's own traces "
+        "(its s-independent part in its frame T_+^{u,rho}, mapped back) and what is left.",
+        traces_panels_figure(result),
+        "traces.png",
+    )
+    add(
+        "Motion estimation",
+        "g(u): peaks are the movers' range speeds (triangles: truth). g_perp: its minimum "
+        "is the cross-range speed (dotted: truth).",
+        objectives_figure(result, truth=truth),
+        "objectives.png",
+    )
+    add(
+        "Images",
+        "Preliminary image of M (circles: movers' estimated positions at s = 0) and the "
+        "stationary image (circles: listed stationary targets). dB re each image's peak.",
+        images_figure(result),
+        "images.png",
+    )
+    add(
+        "Images",
+        "Each mover imaged from its own traces, compensated at its estimated velocity "
+        "(eq:imagecompu). Circle: estimated position at s = 0; cross: truth.",
+        movers_figure(result, truth=truth),
+        "movers.png",
+    )
+    if any(m.trajectory is not None for m in result.movers):
+        add(
+            "Trajectories",
+            "Phase-space trajectory estimate (sub-apertures, Wigner ridge), anchored at the "
+            "estimated position at s = 0.",
+            trajectories_figure(result, truth=truth),
+            "trajectories.png",
+        )
+
+    # ---- tables
+    rows = []
+    for k, m in enumerate(doc["movers"]):
+        rows.append(
+            [
+                str(k + 1),
+                _fmt(m["position_m"]),
+                _fmt(m["velocity_mps"]),
+                _fmt(m["range_speed_mps"], 3),
+                _fmt(m["cross_range_speed_mps"], 3),
+                _fmt(m["g_peak_db"], 1),
+                _fmt(m["peak_db"], 1),
+                _fmt(m["cross_range_family"]["position_per_m"], 3)
+                + " / "
+                + _fmt(m["cross_range_family"]["velocity_mps_per_m"], 4),
+            ]
+        )
+    movers_html = _html_table(
+        [
+            "mover",
+            "position at s=0 (m)",
+            "velocity (m/s)",
+            "range speed (m/s)",
+            "cross-range speed (m/s)",
+            "g peak/floor (dB)",
+            "image peak (dB re stationary)",
+            "family per m: position / velocity",
+        ],
+        rows,
+    )
+    if rows:
+        movers_html += (
+            '<p class="note">The data of a few degrees do not fix a mover\'s cross-range '
+            "position: position + t a and velocity + t b fit them as well for any t metres "
+            "of cross-range offset (a, b in the last column; sarmotion.motion.aperture). The "
+            "estimate is the member near the reference cross range.</p>"
+        )
+    if not rows:
+        movers_html = "<p>No mover found above the g(u) threshold.</p>"
+    truth_html = ""
+    if truth is not None:
+        trows = [
+            [
+                html.escape(t["label"] or "-"),
+                _fmt(t["position_m"]),
+                _fmt(t["velocity_mps"]),
+                _fmt(t["range_speed_mps"], 3),
+                _fmt(t["cross_range_speed_mps"], 3),
+            ]
+            for t in doc["truth"]
+        ]
+        erows = []
+        for k, m in enumerate(doc["movers"]):
+            e = m.get("errors")
+            if e is None:
+                erows.append([str(k + 1), '<span class="bad">false mover</span>'] + [""] * 7)
+                continue
+            erows.append(
+                [
+                    str(k + 1),
+                    html.escape(e["matched"]),
+                    _fmt(e["range_speed_mps"], 3),
+                    _fmt(e["cross_range_speed_mps"], 3),
+                    _fmt(e["position_range_m"], 2),
+                    _fmt(e["position_cross_range_m"], 2),
+                    _fmt(e["family_position_m"], 3) + " / " + _fmt(e["family_velocity_mps"], 3),
+                    _fmt(e.get("trajectory_max_m"), 2),
+                    _fmt(e["image_peak_m"], 2),
+                ]
+            )
+        truth_html = (
+            "<h3>Truth</h3>"
+            + _html_table(
+                [
+                    "label",
+                    "position at s=0 (m)",
+                    "velocity (m/s)",
+                    "range speed (m/s)",
+                    "cross-range speed (m/s)",
+                ],
+                trows,
+            )
+            + "<h3>Errors (estimate &minus; truth)</h3>"
+            + _html_table(
+                [
+                    "mover",
+                    "matched",
+                    "range speed (m/s)",
+                    "cross-range speed (m/s)",
+                    "position, range (m)",
+                    "position, cross range (m)",
+                    "truth to family: position (m) / velocity (m/s)",
+                    "max trajectory error (m)",
+                    "image peak to truth (m)",
+                ],
+                erows,
+            )
+            + f"<p>False movers: {doc['false_movers']}; missed movers: "
+            f"{doc['missed_movers']}.</p>"
+            + '<p class="note">The cross-range position and the range speed of a mover are '
+            "tied over a few degrees (sarmotion.motion.aperture, module notes): a mover away from "
+            "the reference cross range is placed on the data-consistent family near it, "
+            "shifted in cross range by about L &delta;u / (V &minus; u_t). &ldquo;Truth to "
+            "family&rdquo; is the error of the family member at the truth's cross-range "
+            "offset: what the data can resolve.</p>"
+        )
+    stat_rows = [
+        [str(i + 1), _fmt(list(s["position_m"])), _fmt(s["peak_db"], 1)]
+        for i, s in enumerate(doc["stationary"][:40])
+    ]
+    more = len(doc["stationary"]) - len(stat_rows)
+    stat_html = _html_table(["#", "position (m)", "level (dB re peak)"], stat_rows)
+    if more > 0:
+        stat_html += f'<p class="note">... and {more} more in results.json.</p>'
+    timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in doc["timings_s"].items()]
+    acq = [
+        ["inputs", html.escape(", ".join(inputs) or "-")],
+        ["source", html.escape(str(doc["source"].get("source", "-")))],
+        ["pulses &times; samples", f"{doc['n_pulses']} &times; {doc['n_samples']}"],
+        ["aperture (s)", _fmt(doc["aperture_s"], 3)],
+        ["platform speed (m/s)", _fmt(doc["platform_speed_mps"], 1)],
+        ["reference point (m)", _fmt(doc["reference_point_m"])],
+        ["separation method", html.escape(doc["method"])],
+        ["range-speed resolution (m/s)", _fmt(doc["range_speed_resolution_mps"], 3)],
+    ]
+    acq_html = (
+        '<table class="kv">'
+        + "".join(f"<tr><td>{a}</td><td>{b}</td></tr>" for a, b in acq)
+        + "</table>"
+    )
+
+    sections: dict[str, list[str]] = {}
+    for section, caption, b64 in figures:
+        sections.setdefault(section, []).append(
+            f'<img alt="{html.escape(caption)}" src="data:image/png;base64,{b64}">'
+            f'<p class="note">{html.escape(caption)}</p>'
+        )
+    now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+    parts = [
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+        f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
+        f"<header><h1>{html.escape(title)}</h1><p>sarmotion {__version__} &middot; {now} "
+        f"&middot; {len(doc['movers'])} mover(s), {len(doc['stationary'])} stationary "
+        "target(s)</p></header><main>",
+        f"<section><h2>Acquisition</h2>{acq_html}</section>",
+        f"<section><h2>Moving targets</h2>{movers_html}{truth_html}</section>",
+    ]
+    for name in ("Traces", "Motion estimation", "Images", "Trajectories"):
+        if name in sections:
+            parts.append(f"<section><h2>{name}</h2>{''.join(sections[name])}</section>")
+    parts.append(f"<section><h2>Stationary targets</h2>{stat_html}</section>")
+    parts.append(
+        "<section><h2>Timings</h2>"
+        + _html_table(["stage", "wall-clock (s)"], timing_rows)
+        + "</section>"
+    )
+    parts.append("</main></body></html>")
+    path = out / "report.html"
+    path.write_text("\n".join(parts), encoding="utf-8")
+    return path

@@ -1,0 +1,236 @@
+"""Figures of motion estimation: objective functions, filters, trajectories, final images."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..plotting import plot_image, subplots, traces_figure
+from ._context import _Context, _fmt, _rel, _Result
+from .fig_separation import _own_trace, _scr_db
+
+__all__ = []
+
+
+def _fig_objfxns(ctx: _Context) -> _Result:
+    from ...core import cross_range_speed
+    from ...motion import cross_range_objective
+
+    sim = ctx.sim("scene1")
+    tr = ctx.scene1_moving_traces
+    geom = tr.geometry
+    gg = ctx.scene1_g
+    step = 0.5 if ctx.quick else 0.1
+    up = np.arange(-30.0, 30.0 + 1e-9, step)
+    fig, axes = subplots(1, 3, figsize=(12.6, 3.6))
+    axes[0].plot(gg["u_mps"], gg["g_moving"] / gg["g_moving"].max())
+    axes[0].set_xlabel("range speed u (m/s)")
+    axes[0].set_ylabel("g(u) / max g")
+    axes[0].set_title("g on the moving traces", fontsize=9)
+    arrays: dict[str, Any] = {"u": gg["u_mps"], "g": gg["g_moving"], "u_perp": up}
+    h: dict[str, float] = {}
+    parts = []
+    for k, (mover, est) in enumerate(
+        zip(sim.scene.moving, ctx.scene1_estimates, strict=True), start=1
+    ):
+        gp = cross_range_objective(
+            tr, up, range_speed_mps=est.range_speed_mps, position_m=mover.position_m
+        )
+        arrays[f"g_perp_{k}"] = gp
+        true_up = cross_range_speed(mover.velocity_mps, geom)
+        argmin = float(up[np.argmin(gp)])
+        h[f"g_perp_min_{k}_mps"] = argmin
+        h[f"estimate_{k}_mps"] = float(est.cross_range_speed_mps)
+        h[f"true_u_perp_{k}_mps"] = float(true_up)
+        ax = axes[k]
+        ax.plot(up, gp / gp.max())
+        ax.axvline(true_up, color="tab:red", ls=":", lw=1, label="true u_perp")
+        ax.set_xlabel("cross-range speed u_perp (m/s)")
+        ax.set_ylabel("g_perp / max")
+        ax.set_title(f"g_perp at u^e = {est.range_speed_mps:.2f} m/s (mover {k})", fontsize=9)
+        ax.legend(fontsize=7)
+        parts.append(f"{_fmt(argmin, 1)} vs {_fmt(true_up, 1)}")
+    fig.tight_layout()
+    summary = "g_perp minima vs true u_perp (m/s): " + "; ".join(parts)
+    return _Result(fig, arrays, h, summary)
+
+
+# -------------------------------------------------------------- annihilation, motion
+def _annihilated(ctx: _Context, name: str) -> tuple[Any, Any]:
+    from ...separation import annihilate
+
+    key = f"_annih_{name}"
+    if not hasattr(ctx, key):
+        sim = ctx.sim(name)
+        pts = [t.position_m for t in sim.scene.stationary]
+        setattr(ctx, key, (sim, annihilate(sim.traces, pts)))
+    return getattr(ctx, key)
+
+
+def _fig_filter(ctx: _Context, name: str) -> _Result:
+    from ...separation import annihilate, mover_trace_coverage
+
+    sim, filt = _annihilated(ctx, name)
+    tr = sim.traces
+    pts = [t.position_m for t in sim.scene.stationary]
+    q_l = annihilate(tr.with_data(sim.stationary), pts).data
+    q_s = annihilate(tr.with_data(sim.moving), pts).data
+    cov = mover_trace_coverage(filt.data, tr, sim.scene.moving)
+    scr = _scr_db(q_s, q_l)
+    s, t = tr.slow_times_s, tr.fast_times_s
+    ref = float(np.abs(tr.data).max())
+    refq = float(np.abs(filt.data).max())
+    fig = traces_figure(
+        [
+            ("M", tr.data, False, ref),
+            ("M, dB", tr.data, True, ref),
+            ("Q M (re its max)", filt.data, False, refq),
+            ("Q M, dB (re its max)", filt.data, True, refq),
+        ],
+        slow_times_s=s,
+        fast_times_s=t,
+        ncols=2,
+    )
+    h = {"mover_trace_coverage": cov, "signal_to_clutter_db": scr, "n_filters": float(len(pts))}
+    summary = (
+        f"{len(pts)} exact filters: signal-to-clutter {_fmt(scr, 1)} dB, "
+        f"{100 * cov:.0f} % of the mover's trace kept"
+    )
+    return _Result(fig, {"M": tr.data, "QM": filt.data, "s": s, "t": t}, h, summary)
+
+
+def _fig_filter10(ctx: _Context) -> _Result:
+    return _fig_filter(ctx, "filter10")
+
+
+def _fig_filter30(ctx: _Context) -> _Result:
+    return _fig_filter(ctx, "filter30")
+
+
+def _fig_mot_est(ctx: _Context) -> _Result:
+    from ...motion import estimate_trajectory, trajectory_error
+
+    fig, axes = subplots(1, 2, figsize=(9.6, 3.6))
+    arrays: dict[str, Any] = {}
+    h: dict[str, float] = {}
+    for ax, name in zip(axes, ("filter10", "filter30"), strict=True):
+        sim, filt = _annihilated(ctx, name)
+        mover = sim.scene.moving[0]
+        est = estimate_trajectory(filt, mover.position_m)
+        err = trajectory_error(est, mover.position_m, mover.velocity_mps)
+        arrays[f"s_{name}"] = est.slow_times_s
+        arrays[f"error_{name}"] = err
+        h[f"max_error_{name}_m"] = float(err.max())
+        h[f"rms_error_{name}_m"] = float(np.sqrt(np.mean(err**2)))
+        ax.plot(est.slow_times_s, err)
+        ax.set_xlabel("slow time s (s)")
+        ax.set_ylabel("|ρ^e(s) - ρ(s)| (m)")
+        ax.set_title(f"{name[6:]} stationary targets", fontsize=9)
+    fig.tight_layout()
+    summary = (
+        f"max trajectory error {h['max_error_filter10_m']:.3f} m (ten stationary) vs "
+        f"{h['max_error_filter30_m']:.3f} m (thirty)"
+    )
+    return _Result(fig, arrays, h, summary)
+
+
+# ----------------------------------------------------------- mover-by-mover (Scene 1)
+def _fig_final_sep(ctx: _Context) -> _Result:
+    sim = ctx.sim("scene1")
+    tr = sim.traces
+    res = ctx.scene1_analysis
+    s, t = tr.slow_times_s, tr.fast_times_s
+    ref = float(np.abs(tr.data).max())
+    panels = [("stationary (L)", res.separation.stationary, False, ref)]
+    arrays: dict[str, Any] = {"L": res.separation.stationary, "s": s, "t": t}
+    h: dict[str, float] = {}
+    for k, m in enumerate(res.movers[:2], start=1):
+        panels.append((f"mover {k}, dB", m.traces, True, ref))
+        arrays[f"mover_{k}"] = m.traces
+        own = _own_trace(ctx, _match(ctx, m))
+        h[f"mover{k}_rel_error"] = _rel(m.traces, own)
+    fig = traces_figure(panels, slow_times_s=s, fast_times_s=t, ncols=3)
+    h["n_movers"] = float(len(res.movers))
+    summary = f"{len(res.movers)} movers separated; ||D_q - D_q,true||/||D_q,true|| = " + ", ".join(
+        _fmt(h[f"mover{k}_rel_error"]) for k in range(1, min(len(res.movers), 2) + 1)
+    )
+    return _Result(fig, arrays, h, summary)
+
+
+def _match(ctx: _Context, mover_result: Any) -> int:
+    """1-based index of the true Scene 1 mover nearest in velocity."""
+    truth = ctx.sim("scene1").scene.moving
+    d = [np.linalg.norm(mover_result.velocity_mps - t.velocity_mps) for t in truth]
+    return int(np.argmin(d)) + 1
+
+
+def _fig_sep_imgs(ctx: _Context) -> _Result:
+    sim = ctx.sim("scene1")
+    tr = sim.traces
+    res = ctx.scene1_analysis
+    from ...imaging import resolution
+
+    cells = resolution(tr)
+    rng_cell, cross_cell = cells.ground_range_m, cells.cross_range_m
+    geom = tr.geometry
+    e_r = geom.ground_m_o / np.linalg.norm(geom.ground_m_o)
+    e_c = np.array([-e_r[1], e_r[0]])
+    n_mov = min(len(res.movers), 2)
+    fig, axes = subplots(1, 1 + n_mov, figsize=(4.8 * (1 + n_mov), 4.2), squeeze=False)
+    img = res.stationary_image
+    truth_still = [tuple(p.position_m[:2]) for p in sim.scene.stationary]
+    plot_image(
+        axes[0, 0],
+        img.values,
+        x_m=img.grid.x_m,
+        y_m=img.grid.y_m,
+        title="stationary traces",
+        markers=truth_still,
+    )
+    found = np.array([p.position_m for p in res.stationary]) if res.stationary else None
+    errs, inside = [], 0
+    for p in truth_still:
+        if found is None:
+            break
+        d = found - np.asarray(p)
+        i = int(np.argmin(np.linalg.norm(d, axis=1)))
+        errs.append(float(np.linalg.norm(d[i])))
+        inside += abs(d[i] @ e_r) <= rng_cell and abs(d[i] @ e_c) <= cross_cell
+    h: dict[str, float] = {
+        "stationary_within_cell": float(inside),
+        "n_stationary": float(len(truth_still)),
+        "stationary_median_peak_error_m": float(np.median(errs)) if errs else float("nan"),
+        "stationary_max_peak_error_m": float(max(errs)) if errs else float("nan"),
+        "range_cell_m": rng_cell,
+        "cross_range_cell_m": cross_cell,
+    }
+    arrays: dict[str, Any] = {"stationary_image": img.values, "x": img.grid.x_m, "y": img.grid.y_m}
+    parts = []
+    for k, m in enumerate(res.movers[:2], start=1):
+        truth = sim.scene.moving[_match(ctx, m) - 1]
+        mi = m.image
+        plot_image(
+            axes[0, k],
+            mi.values,
+            x_m=mi.grid.x_m,
+            y_m=mi.grid.y_m,
+            title=f"mover {k}, u^e = ({m.velocity_mps[0]:.1f}, {m.velocity_mps[1]:.1f}) m/s",
+            markers=[tuple(truth.position_m[:2])],
+        )
+        d = np.asarray(m.image_peak_m) - truth.position_m[:2]
+        h[f"mover{k}_peak_range_error_m"] = float(d @ e_r)
+        h[f"mover{k}_peak_cross_range_error_m"] = float(d @ e_c)
+        arrays[f"mover_{k}_image"] = mi.values
+        arrays[f"mover_{k}_x"], arrays[f"mover_{k}_y"] = mi.grid.x_m, mi.grid.y_m
+        parts.append(
+            f"mover {k} peak off by {abs(d @ e_r):.2f} m range, {abs(d @ e_c):.2f} m cross range"
+        )
+    fig.tight_layout()
+    summary = (
+        f"{inside} of {len(truth_still)} stationary targets peak within a resolution cell "
+        f"(median error {h['stationary_median_peak_error_m']:.2f} m); "
+        + "; ".join(parts)
+        + f" (cells {rng_cell:.2f} x {cross_cell:.2f} m)"
+    )
+    return _Result(fig, arrays, h, summary)

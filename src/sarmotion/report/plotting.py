@@ -1,0 +1,241 @@
+"""Figures in the paper's style. The only module that imports matplotlib.
+
+Trace matrices are shown as ``|M|`` normalised by ``max |M|`` of the data they were
+separated from (the paper's convention), optionally in dB; slow time ``s`` (s) on the
+vertical axis and fast time ``t`` (ns) on the horizontal axis. Images are shown in dB
+relative to their peak, with ground coordinates in metres.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "plot_traces",
+    "subplots",
+    "plot_image",
+    "traces_figure",
+    "image_figure",
+    "save_figure",
+    "to_db",
+]
+
+
+def to_db(
+    values: ArrayLike, *, reference: float | None = None, floor_db: float = -120.0
+) -> NDArray:
+    """``20 log10(|values| / reference)`` with a floor (dB); reference defaults to the max."""
+    a = np.abs(np.asarray(values))
+    ref = float(a.max()) if reference is None else float(reference)
+    if ref <= 0:
+        return np.full(a.shape, floor_db)
+    with np.errstate(divide="ignore"):
+        out = 20.0 * np.log10(a / ref)
+    return np.maximum(out, floor_db)
+
+
+def plot_traces(
+    ax: Axes,
+    data: ArrayLike,
+    *,
+    slow_times_s: ArrayLike,
+    fast_times_s: ArrayLike,
+    normalise_by: float | None = None,
+    db: bool = False,
+    dynamic_range_db: float = 60.0,
+    title: str = "",
+    colorbar: bool = True,
+) -> None:
+    """Draw ``|data|`` (n_pulses, n_samples) normalised by ``normalise_by`` (default its max).
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+        Target axes.
+    data : (n_pulses, n_samples) array_like
+        Traces.
+    slow_times_s, fast_times_s : array_like
+        Axes (s).
+    normalise_by : float, optional
+        Normalisation, usually ``max |M|`` of the unseparated data.
+    db : bool
+        Plot ``20 log10`` of the normalised modulus, clipped at ``-dynamic_range_db``.
+    """
+    d = np.abs(np.asarray(data))
+    ref = float(d.max()) if normalise_by is None else float(normalise_by)
+    s = np.asarray(slow_times_s)
+    t = np.asarray(fast_times_s) * 1e9
+    extent = (t[0], t[-1], s[-1], s[0])
+    if db:
+        img = to_db(d, reference=ref, floor_db=-dynamic_range_db)
+        im = ax.imshow(
+            img,
+            aspect="auto",
+            extent=extent,
+            cmap="viridis",
+            vmin=-dynamic_range_db,
+            vmax=0.0,
+            interpolation="nearest",
+        )
+        label = "dB re max|M|"
+    else:
+        img = d / ref if ref > 0 else d
+        im = ax.imshow(
+            img,
+            aspect="auto",
+            extent=extent,
+            cmap="viridis",
+            vmin=0.0,
+            vmax=1.0,
+            interpolation="nearest",
+        )
+        label = "|.| / max|M|"
+    ax.set_xlabel("fast time t (ns)")
+    ax.set_ylabel("slow time s (s)")
+    if title:
+        ax.set_title(title, fontsize=9)
+    if colorbar:
+        ax.figure.colorbar(im, ax=ax, label=label, fraction=0.046, pad=0.04)
+
+
+def plot_image(
+    ax: Axes,
+    values: ArrayLike,
+    *,
+    x_m: ArrayLike,
+    y_m: ArrayLike,
+    dynamic_range_db: float = 40.0,
+    reference: float | None = None,
+    title: str = "",
+    markers: Sequence[tuple[float, float]] = (),
+    marker_label: str = "",
+    colorbar: bool = True,
+) -> None:
+    """Draw an image ``|I|`` (ny, nx) in dB re its peak (or ``reference``), axes in metres.
+
+    ``markers`` are ground positions (m) drawn as open circles (e.g. true positions).
+    """
+    x = np.asarray(x_m)
+    y = np.asarray(y_m)
+    img = to_db(values, reference=reference, floor_db=-dynamic_range_db)
+    im = ax.imshow(
+        img,
+        origin="lower",
+        extent=(x[0], x[-1], y[0], y[-1]),
+        cmap="gray",
+        vmin=-dynamic_range_db,
+        vmax=0.0,
+        interpolation="nearest",
+    )
+    if markers:
+        mx, my = np.asarray(markers, dtype=float).T
+        ax.plot(mx, my, "o", mfc="none", mec="tab:red", ms=8, mew=1.0, label=marker_label or None)
+        if marker_label:
+            ax.legend(loc="upper right", fontsize=7)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_aspect("equal")
+    if title:
+        ax.set_title(title, fontsize=9)
+    if colorbar:
+        ax.figure.colorbar(im, ax=ax, label="dB", fraction=0.046, pad=0.04)
+
+
+def traces_figure(
+    panels: Sequence[tuple[str, ArrayLike, bool] | tuple[str, ArrayLike, bool, float | None]],
+    *,
+    slow_times_s: ArrayLike,
+    fast_times_s: ArrayLike,
+    normalise_by: float | None = None,
+    ncols: int | None = None,
+    dynamic_range_db: float = 60.0,
+    fast_slice: slice | None = None,
+) -> Figure:
+    """A row (or grid) of trace panels ``(title, data, in_db[, normalise_by])``.
+
+    Panels share ``normalise_by`` (default: the largest ``|data|`` of all panels) unless
+    a panel gives its own as a fourth element. ``fast_slice`` selects a fast-time window
+    of every panel.
+    """
+    n = len(panels)
+    ncols = ncols or n
+    nrows = int(np.ceil(n / ncols))
+    fig, axes = subplots(nrows, ncols, figsize=(4.2 * ncols, 3.6 * nrows), squeeze=False)
+    shared = normalise_by
+    if shared is None:
+        shared = max(float(np.abs(np.asarray(p[1])).max()) for p in panels)
+    sl = fast_slice if fast_slice is not None else slice(None)
+    for ax, panel in zip(axes.ravel(), panels, strict=False):
+        title, data, db = panel[:3]
+        ref = panel[3] if len(panel) > 3 else shared
+        plot_traces(
+            ax,
+            np.asarray(data)[:, sl],
+            slow_times_s=slow_times_s,
+            fast_times_s=np.asarray(fast_times_s)[sl],
+            normalise_by=ref,
+            db=db,
+            title=title,
+            dynamic_range_db=dynamic_range_db,
+        )
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    fig.tight_layout()
+    return fig
+
+
+def image_figure(
+    panels: Sequence[tuple[str, ArrayLike]],
+    *,
+    x_m: ArrayLike,
+    y_m: ArrayLike,
+    dynamic_range_db: float = 40.0,
+    common_reference: bool = False,
+    markers: Sequence[Sequence[tuple[float, float]]] | None = None,
+) -> Figure:
+    """A row of image panels ``(title, values)`` in dB; optionally one common reference."""
+    n = len(panels)
+    fig, axes = subplots(1, n, figsize=(4.6 * n, 4.0), squeeze=False)
+    ref = None
+    if common_reference:
+        ref = max(float(np.abs(np.asarray(v)).max()) for _, v in panels)
+    for k, (ax, (title, values)) in enumerate(zip(axes[0], panels, strict=True)):
+        mk = markers[k] if markers is not None else ()
+        plot_image(
+            ax,
+            values,
+            x_m=x_m,
+            y_m=y_m,
+            dynamic_range_db=dynamic_range_db,
+            reference=ref,
+            title=title,
+            markers=mk,
+        )
+    fig.tight_layout()
+    return fig
+
+
+def subplots(
+    nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], squeeze: bool = True
+) -> tuple[Figure, Any]:
+    """A new :class:`~matplotlib.figure.Figure` and its axes, without pyplot.
+
+    The figure belongs to no GUI backend and to no global figure list: creating it
+    switches nothing for the caller, and it is freed with its last reference.
+    """
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, squeeze=squeeze)
+
+
+def save_figure(fig: Figure, path: str | Path, *, dpi: int = 120) -> Path:
+    """Save ``fig`` as PNG at ``path``."""
+    p = Path(path)
+    fig.savefig(p, dpi=dpi)
+    return p

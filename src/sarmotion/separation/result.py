@@ -1,0 +1,37 @@
+"""The result of a stationary/moving separation: ``M = L + S``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["Separation"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Separation:
+    """Result of a separation.
+
+    Attributes
+    ----------
+    moving : (n_pulses, n_samples) ndarray
+        ``S``: the traces attributed to moving targets.
+    stationary : (n_pulses, n_samples) ndarray or None
+        ``L``: the traces attributed to stationary targets (None for the annihilation
+        filter, whose output is a filtered version of the data, not a split of it).
+    method : str
+        ``"annihilation"``, ``"rpca"`` or ``"combined"``.
+    stationary_points_m : (k, 3) ndarray
+        Stationary locations used (annihilation, combined), m.
+    info : dict
+        Method details (iterations, windows, timings in s).
+    """
+
+    moving: NDArray[np.complexfloating]
+    stationary: NDArray[np.complexfloating] | None
+    method: str
+    stationary_points_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    info: dict[str, Any] = field(default_factory=dict)

@@ -1,0 +1,25 @@
+"""Simulated acquisitions: scenes and their files, the forward model, pulse signals.
+
+- :mod:`~sarmotion.simulation.scene` — :class:`Scene` and :class:`PointTarget`, the
+  ``sarmotion.scene/1`` TOML schema, the built-in scenes (``scenes/*.toml``);
+- :mod:`~sarmotion.simulation.forward` — the traces of a scene (``eq:MOD1``), noise,
+  injection of targets into measured data;
+- :mod:`~sarmotion.simulation.signals` — chirps, Gaussian pulses, range compression.
+"""
+
+from .forward import Simulation, add_noise, inject, simulate, simulate_phase_history
+from .scene import PointTarget, Scene, SceneError, builtin_scene_names, load_scene, random_scene
+
+__all__ = [
+    "PointTarget",
+    "Scene",
+    "SceneError",
+    "Simulation",
+    "add_noise",
+    "builtin_scene_names",
+    "inject",
+    "load_scene",
+    "random_scene",
+    "simulate",
+    "simulate_phase_history",
+]
