@@ -565,6 +565,74 @@ def estimate_trajectory(
     if not isinstance(traces, Traces):
         raise TypeError(f"traces must be a Traces, got {type(traces).__name__}")
     rho0 = as_point(position_m, name="position_m")
+    size, lw, hw, search = _check_trajectory_options(
+        traces,
+        sub_aperture_pulses=sub_aperture_pulses,
+        lag_window_pulses=lag_window_pulses,
+        fast_time_halfwidth=fast_time_halfwidth,
+        fast_time_search=fast_time_search,
+        max_iter=max_iter,
+        tol_mps=tol_mps,
+        max_range_speed_mps=max_range_speed_mps,
+    )
+    if velocity_guess_mps is None:
+        u_init = _coarse_range_speed(
+            traces, rho0, max_range_speed_mps=max_range_speed_mps, search=search
+        )
+    else:
+        u_init = np.asarray(velocity_guess_mps, dtype=np.float64)
+        if u_init.shape != (2,) or not np.all(np.isfinite(u_init)):
+            raise ValueError(
+                "velocity_guess_mps must be a finite (2,) ground velocity (m/s), "
+                f"got {velocity_guess_mps!r}"
+            )
+    log.debug("initial velocity %s m/s", u_init)
+    march = _March(
+        traces,
+        size=size,
+        lag_window=lw,
+        halfwidth=hw,
+        search=search,
+        window=window,
+        max_iter=max_iter,
+        tol_mps=tol_mps,
+    )
+    march.run(rho0, u_init)
+    if not march.converged.all():
+        log.warning(
+            "trajectory estimate: %d of %d sub-apertures did not converge",
+            int((~march.converged).sum()),
+            march.converged.size,
+        )
+    return TrajectoryEstimate(
+        slow_times_s=march.s.copy(),
+        positions_m=march.positions,
+        position_at_zero_m=rho0,
+        sub_aperture_pulses=np.array(march.blocks, dtype=np.int64),
+        knot_times_s=march.knots,
+        velocities_mps=march.velocities,
+        range_rate_mps=march.rate,
+        residual_doppler_hz=march.residual,
+        ridge_weight=march.weight,
+        range_offset_m=march.offset,
+        initial_velocity_mps=np.asarray(u_init, dtype=np.float64),
+        n_iter=march.n_iter,
+        converged=march.converged,
+    )
+
+
+def _check_trajectory_options(
+    traces: Traces,
+    *,
+    sub_aperture_pulses: int,
+    lag_window_pulses: int | None,
+    fast_time_halfwidth: int,
+    fast_time_search: int,
+    max_iter: int,
+    tol_mps: float,
+    max_range_speed_mps: float,
+) -> tuple[int, int, int, int]:
+    """Validate the options of :func:`estimate_trajectory`: ``(size, lag, halfwidth, search)``."""
     n = traces.n_pulses
     size = int(sub_aperture_pulses)
     if size != sub_aperture_pulses or not 5 <= size <= n:
@@ -589,135 +657,157 @@ def estimate_trajectory(
         raise ValueError(f"tol_mps must be positive (m/s), got {tol_mps!r}")
     if not max_range_speed_mps > 0:
         raise ValueError(f"max_range_speed_mps must be positive (m/s), got {max_range_speed_mps!r}")
+    return size, lw, hw, search
 
-    s = traces.slow_times_s
-    ds = traces.trajectory.pulse_interval_s
-    pos = traces.positions_m
-    vplat = np.gradient(pos, s, axis=0)
-    ref = traces.reference_point_m
-    freqs = traces.frequencies_hz
-    half_lambda = 0.5 * C / traces.radar.carrier_hz
-    c0 = traces.n_samples // 2
-    margin = (lw - 1) // 2
 
-    if velocity_guess_mps is None:
-        u_init = _coarse_range_speed(
-            traces, rho0, max_range_speed_mps=max_range_speed_mps, search=search
-        )
-    else:
-        u_init = np.asarray(velocity_guess_mps, dtype=np.float64)
-        if u_init.shape != (2,) or not np.all(np.isfinite(u_init)):
-            raise ValueError(
-                "velocity_guess_mps must be a finite (2,) ground velocity (m/s), "
-                f"got {velocity_guess_mps!r}"
-            )
-    log.debug("initial velocity %s m/s", u_init)
+class _March:
+    """The sub-aperture march of :func:`estimate_trajectory`, outwards from ``s = 0``.
 
-    blocks = _sub_apertures(s, size)
-    centre = next(k for k, (i0, i1) in enumerate(blocks) if i0 <= np.argmin(np.abs(s)) < i1)
-    knots = np.array(
-        [
+    Holds the geometry of the traces and fills, sub-aperture by sub-aperture, the
+    positions, range rates, residual Dopplers and ridge weights per pulse, and the
+    velocity, range offset, iteration count and convergence per sub-aperture.
+    """
+
+    def __init__(
+        self,
+        traces: Traces,
+        *,
+        size: int,
+        lag_window: int,
+        halfwidth: int,
+        search: int,
+        window: str,
+        max_iter: int,
+        tol_mps: float,
+    ) -> None:
+        self.traces = traces
+        self.lw, self.hw, self.search, self.window = lag_window, halfwidth, search, window
+        self.max_iter, self.tol_mps = max_iter, tol_mps
+        n = traces.n_pulses
+        self.s = s = traces.slow_times_s
+        self.pos = traces.positions_m
+        self.vplat = np.gradient(self.pos, s, axis=0)
+        self.half_lambda = 0.5 * C / traces.radar.carrier_hz
+        self.c0 = traces.n_samples // 2
+        self.margin = (lag_window - 1) // 2
+        self.blocks = _sub_apertures(s, size)
+        self.knots = np.array(
             [
-                s[0] if i0 == 0 else 0.5 * (s[i0 - 1] + s[i0]),
-                s[-1] if i1 == n else 0.5 * (s[i1 - 1] + s[i1]),
+                [
+                    s[0] if i0 == 0 else 0.5 * (s[i0 - 1] + s[i0]),
+                    s[-1] if i1 == n else 0.5 * (s[i1 - 1] + s[i1]),
+                ]
+                for i0, i1 in self.blocks
             ]
-            for i0, i1 in blocks
-        ]
-    )
+        )
+        nb = len(self.blocks)
+        self.positions = np.zeros((n, 3))
+        self.rate = np.zeros(n)
+        self.residual = np.zeros(n)
+        self.weight = np.zeros(n)
+        self.velocities = np.zeros((nb, 2))
+        self.offset = np.zeros(nb)
+        self.n_iter = np.zeros(nb, dtype=np.int64)
+        self.converged = np.zeros(nb, dtype=bool)
 
-    positions = np.zeros((n, 3))
-    rate = np.zeros(n)
-    resid = np.zeros(n)
-    weight = np.zeros(n)
-    vel = np.zeros((len(blocks), 2))
-    offset = np.zeros(len(blocks))
-    iters = np.zeros(len(blocks), dtype=np.int64)
-    conv = np.zeros(len(blocks), dtype=bool)
+    def run(self, rho0: NDArray[np.float64], u_init: NDArray[np.float64]) -> None:
+        """Solve the central sub-aperture from ``rho(0)``, then march outwards both ways."""
+        s, blocks, knots, vel = self.s, self.blocks, self.knots, self.velocities
+        centre = next(k for k, (i0, i1) in enumerate(blocks) if i0 <= np.argmin(np.abs(s)) < i1)
+        self.solve(centre, 0.0, rho0, u_init)
+        for k in range(centre + 1, len(blocks)):  # outwards, s > 0
+            a, inner = knots[k, 0], blocks[k - 1][1] - 1
+            anchor = self.positions[inner] + (a - s[inner]) * np.append(vel[k - 1], 0.0)
+            self.solve(k, a, anchor, vel[k - 1])
+        for k in range(centre - 1, -1, -1):  # outwards, s < 0
+            a, inner = knots[k, 1], blocks[k + 1][0]
+            anchor = self.positions[inner] + (a - s[inner]) * np.append(vel[k + 1], 0.0)
+            self.solve(k, a, anchor, vel[k + 1])
 
-    def solve(k: int, anchor_s: float, anchor_m: NDArray, u_start: NDArray) -> None:
-        i0, i1 = blocks[k]
-        e0, e1 = max(0, i0 - margin), min(n, i1 + margin)
-        own = slice(i0 - e0, i1 - e0)
+    def solve(
+        self, k: int, anchor_s: float, anchor_m: NDArray[np.float64], u_start: NDArray
+    ) -> None:
+        """Iterate sub-aperture ``k``'s velocity from ``u_start``; store its results."""
+        i0, i1 = self.blocks[k]
         u = np.array(u_start, dtype=np.float64)
-        it = 0
-        while it < max_iter:
+        it, done = 0, False
+        while it < self.max_iter:
             it += 1
-            u3 = np.array([u[0], u[1], 0.0])
-            path = anchor_m[None, :] + (s[e0:e1, None] - anchor_s) * u3[None, :]
-            shifted = shift_fast_time(
-                traces.data[e0:e1], delta_tau(pos[e0:e1], path, ref), frequencies_hz=freqs
-            )
-            profile = np.sum(
-                np.abs(shifted[own, c0 - search - hw : c0 + search + hw + 1]) ** 2, axis=0
-            )
-            box = np.convolve(profile, np.ones(2 * hw + 1), mode="valid")
-            tc = c0 - search + int(np.argmax(box))
-            ridge = wigner_ridge(
-                shifted[:, tc - hw : tc + hw + 1],
-                pulse_interval_s=ds,
-                lag_window_pulses=lw,
-                window=window,
-            )
-            fd = ridge.doppler_hz[own]
-            wts = np.clip(ridge.curvature[own], 0.0, None)
-            wts = wts / wts.max() if wts.max() > 0 else np.ones_like(wts)
-            guess_rate, _ = _range_rate_and_jacobian(
-                pos[i0:i1], vplat[i0:i1], path[own], u3, s[i0:i1] - anchor_s
-            )
-            measured = guess_rate - half_lambda * fd
-            sw = np.sqrt(wts)
-            u_new = u.copy()
-            for _ in range(3):  # Gauss-Newton on u for the measured range rates
-                un3 = np.array([u_new[0], u_new[1], 0.0])
-                p = anchor_m[None, :] + (s[i0:i1, None] - anchor_s) * un3[None, :]
-                model, jac = _range_rate_and_jacobian(
-                    pos[i0:i1], vplat[i0:i1], p, un3, s[i0:i1] - anchor_s
-                )
-                step, *_ = np.linalg.lstsq(jac * sw[:, None], (measured - model) * sw, rcond=None)
-                u_new = u_new + step
-            done = bool(np.linalg.norm(u_new - u) < tol_mps)
+            measured, fd, wts, tc = self._measure(k, anchor_s, anchor_m, u)
+            u_new = self._fit_velocity(k, anchor_s, anchor_m, u, measured, wts)
+            done = bool(np.linalg.norm(u_new - u) < self.tol_mps)
             u = u_new
             if done:
                 break
         u3 = np.array([u[0], u[1], 0.0])
-        positions[i0:i1] = anchor_m[None, :] + (s[i0:i1, None] - anchor_s) * u3[None, :]
-        rate[i0:i1] = measured
-        resid[i0:i1] = fd
-        weight[i0:i1] = wts
-        vel[k] = u
-        offset[k] = 0.5 * C * (tc - c0) * traces.radar.sample_interval_s
-        iters[k] = it
-        conv[k] = done
+        self.positions[i0:i1] = anchor_m[None, :] + (self.s[i0:i1, None] - anchor_s) * u3[None, :]
+        self.rate[i0:i1] = measured
+        self.residual[i0:i1] = fd
+        self.weight[i0:i1] = wts
+        self.velocities[k] = u
+        self.offset[k] = 0.5 * C * (tc - self.c0) * self.traces.radar.sample_interval_s
+        self.n_iter[k] = it
+        self.converged[k] = done
 
-    solve(centre, 0.0, rho0, u_init)
-    for k in range(centre + 1, len(blocks)):  # outwards, s > 0
-        a, inner = knots[k, 0], blocks[k - 1][1] - 1
-        solve(k, a, positions[inner] + (a - s[inner]) * np.append(vel[k - 1], 0.0), vel[k - 1])
-    for k in range(centre - 1, -1, -1):  # outwards, s < 0
-        a, inner = knots[k, 1], blocks[k + 1][0]
-        solve(k, a, positions[inner] + (a - s[inner]) * np.append(vel[k + 1], 0.0), vel[k + 1])
-    if not conv.all():
-        log.warning(
-            "trajectory estimate: %d of %d sub-apertures did not converge",
-            int((~conv).sum()),
-            conv.size,
+    def _measure(
+        self, k: int, anchor_s: float, anchor_m: NDArray[np.float64], u: NDArray[np.float64]
+    ) -> tuple[NDArray, NDArray, NDArray, int]:
+        """Range rates measured on the Wigner ridge along the hypothesised path.
+
+        Returns the measured range rates (m/s), the ridge Doppler (Hz) and weights of
+        the sub-aperture's pulses, and the fast-time sample of the trace.
+        """
+        tr, s, pos, c0, hw, search = self.traces, self.s, self.pos, self.c0, self.hw, self.search
+        n = tr.n_pulses
+        i0, i1 = self.blocks[k]
+        e0, e1 = max(0, i0 - self.margin), min(n, i1 + self.margin)
+        own = slice(i0 - e0, i1 - e0)
+        u3 = np.array([u[0], u[1], 0.0])
+        path = anchor_m[None, :] + (s[e0:e1, None] - anchor_s) * u3[None, :]
+        shifted = shift_fast_time(
+            tr.data[e0:e1],
+            delta_tau(pos[e0:e1], path, tr.reference_point_m),
+            frequencies_hz=tr.frequencies_hz,
         )
+        profile = np.sum(np.abs(shifted[own, c0 - search - hw : c0 + search + hw + 1]) ** 2, axis=0)
+        box = np.convolve(profile, np.ones(2 * hw + 1), mode="valid")
+        tc = c0 - search + int(np.argmax(box))
+        ridge = wigner_ridge(
+            shifted[:, tc - hw : tc + hw + 1],
+            pulse_interval_s=tr.trajectory.pulse_interval_s,
+            lag_window_pulses=self.lw,
+            window=self.window,
+        )
+        fd = ridge.doppler_hz[own]
+        wts = np.clip(ridge.curvature[own], 0.0, None)
+        wts = wts / wts.max() if wts.max() > 0 else np.ones_like(wts)
+        guess_rate, _ = _range_rate_and_jacobian(
+            pos[i0:i1], self.vplat[i0:i1], path[own], u3, s[i0:i1] - anchor_s
+        )
+        return guess_rate - self.half_lambda * fd, fd, wts, tc
 
-    return TrajectoryEstimate(
-        slow_times_s=s.copy(),
-        positions_m=positions,
-        position_at_zero_m=rho0,
-        sub_aperture_pulses=np.array(blocks, dtype=np.int64),
-        knot_times_s=knots,
-        velocities_mps=vel,
-        range_rate_mps=rate,
-        residual_doppler_hz=resid,
-        ridge_weight=weight,
-        range_offset_m=offset,
-        initial_velocity_mps=np.asarray(u_init, dtype=np.float64),
-        n_iter=iters,
-        converged=conv,
-    )
+    def _fit_velocity(
+        self,
+        k: int,
+        anchor_s: float,
+        anchor_m: NDArray[np.float64],
+        u: NDArray[np.float64],
+        measured: NDArray[np.float64],
+        wts: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """Three weighted Gauss-Newton steps on ``u`` for the measured range rates."""
+        i0, i1 = self.blocks[k]
+        s, sw = self.s, np.sqrt(wts)
+        u_new = u.copy()
+        for _ in range(3):
+            un3 = np.array([u_new[0], u_new[1], 0.0])
+            p = anchor_m[None, :] + (s[i0:i1, None] - anchor_s) * un3[None, :]
+            model, jac = _range_rate_and_jacobian(
+                self.pos[i0:i1], self.vplat[i0:i1], p, un3, s[i0:i1] - anchor_s
+            )
+            step, *_ = np.linalg.lstsq(jac * sw[:, None], (measured - model) * sw, rcond=None)
+            u_new = u_new + step
+        return u_new
 
 
 def trajectory_error(
