@@ -132,7 +132,7 @@ def fast_time_grid(
     return lo + dt * np.arange(n, dtype=np.float64)
 
 
-def _check_grid(fast_times_s: ArrayLike) -> NDArray[np.float64]:
+def _check_fast_times(fast_times_s: ArrayLike) -> NDArray[np.float64]:
     t = np.asarray(fast_times_s, dtype=np.float64)
     if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)):
         raise ValueError(f"fast_times_s must be a finite 1-D array of >= 2 times, got {t.shape}")
@@ -190,7 +190,7 @@ def passband_traces(
         fast_times_s = fast_time_grid(
             targets, trajectory, reference_point_m, carrier_hz=nu, bandwidth_hz=bw
         )
-    t = _check_grid(fast_times_s)
+    t = _check_fast_times(fast_times_s)
     dt = float(np.max(np.abs(np.diff(t))))
     if dt >= 0.5 / nu:
         raise ValueError(
@@ -245,7 +245,7 @@ def baseband_traces(
             bandwidth_hz=bw,
             model="baseband",
         )
-    t = _check_grid(fast_times_s)
+    t = _check_fast_times(fast_times_s)
     dtau, amp = _delays(targets, trajectory, reference_point_m)
     out = np.zeros((trajectory.n_pulses, t.size), dtype=np.complex128)
     for d, a in zip(dtau, amp, strict=True):
