@@ -277,7 +277,8 @@ def test_sigterm_leaves_nothing_behind(tmp_path):
 
 # ----------------------------------------------------------------------- first hour
 def test_help_texts_have_no_markup_and_no_bare_labels(capsys):
-    for cmd in ([], ["image"], ["separate"], ["analyze"], ["simulate"], ["inject"], ["paper"]):
+    commands = ([], ["image"], ["separate"], ["analyze"], ["simulate"], ["inject"], ["paper"])
+    for cmd in (*commands, ["convert"], ["demo"]):
         assert run([*cmd, "--help"]) == 0
         text = capsys.readouterr().out
         assert "`" not in text
