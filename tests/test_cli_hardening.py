@@ -364,3 +364,13 @@ def test_a_defect_is_one_line_and_exit_1(work, capsys, monkeypatch):
     err = capsys.readouterr().err.strip()
     assert err.startswith("sarmotion: internal error: ZeroDivisionError") and "\n" not in err
     assert not out.exists()  # the failure came before the outputs were staged
+
+
+def test_failure_leaves_no_directory_it_created(work):
+    from sarmotion.io import staged_directory
+
+    out = work / "new" / "deeper" / "img"
+    with pytest.raises(RuntimeError), staged_directory(out) as stage:
+        (stage / "x.txt").write_text("partial")
+        raise RuntimeError("fails half-way")
+    assert not (work / "new").exists()

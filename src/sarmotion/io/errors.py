@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 import shutil
@@ -82,6 +83,7 @@ def staged_directory(out: Path) -> Iterator[Path]:
         raise DataError(f"--out {out} exists and is not a directory")
     created = not out.exists()
     parent = out.resolve().parent if created else out
+    missing = [d for d in (parent, *parent.parents) if not d.exists()]
     parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=parent))
     try:
@@ -90,8 +92,10 @@ def staged_directory(out: Path) -> Iterator[Path]:
             out.mkdir()
         _commit(stage, out)
     except BaseException:
-        if created and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()
+        shutil.rmtree(stage, ignore_errors=True)
+        for d in ([out] if created else []) + missing:  # directories made here, innermost first
+            with contextlib.suppress(OSError):
+                d.rmdir()  # only if empty
         raise
     finally:
         shutil.rmtree(stage, ignore_errors=True)
