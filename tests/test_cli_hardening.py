@@ -296,6 +296,7 @@ def test_analyze_has_autofocus_and_lenient(capsys):
 def test_quiet_after_the_command(work, capsys):
     out = work / "img"
     assert run(["image", "-q", "hyperbola", "--out", str(out), "--size", "10"]) == 0
+    assert run(["analyze", "-q", "-v", "--help"]) == 0  # known to every command
 
 
 def test_gitignore_covers_the_default_outputs():

@@ -47,3 +47,36 @@ def test_report_without_truth_has_no_truth_captions_and_no_empty_mover_panel(no_
 def test_report_gives_the_aperture_in_degrees(no_mover_report):
     _, text = no_mover_report
     assert "deg of azimuth" in text and "movers sought on" in text
+
+
+@pytest.fixture(scope="module")
+def scene1_report(tmp_path_factory):
+    """Scene 1 with its truth: two movers."""
+    from sarmotion.io import results_document
+    from sarmotion.pipeline import compare_with_truth
+
+    sim = simulate(load_scene("scene1"))
+    result = analyze(sim.traces, AnalysisOptions(trajectory=False))
+    doc = results_document(result, truth=compare_with_truth(result, sim.scene))
+    out = tmp_path_factory.mktemp("scene1")
+    write_report(result, out, document=doc, inputs=["scene1"])
+    return result, doc, (out / "report.html").read_text()
+
+
+def test_estimates_and_true_targets_are_named_apart(scene1_report):
+    _, doc, text = scene1_report
+    assert "matched estimate" in text and "true target" in text
+    assert "per m of cross-range offset: position (m/m) / velocity (m/s per m)" in text
+    assert "triangles: truth" in text  # truth markers are explained when there is truth
+
+
+def test_trajectory_error_axis_is_linear_and_trace_ticks_legible(scene1_report):
+    from sarmotion.report.html import traces_panels_figure, trajectories_figure
+
+    result, doc, _ = scene1_report
+    truth = {"truth": doc["truth"], "errors": [m.get("errors") for m in doc["movers"]]}
+    ax = trajectories_figure(result, truth=truth).axes[0]
+    assert ax.get_yscale() == "linear"
+    fig = traces_panels_figure(result)
+    sizes = {t.get_fontsize() for a in fig.axes for t in a.get_xticklabels()}
+    assert min(sizes) >= 10
