@@ -1,7 +1,9 @@
 """Input and output: GOTCHA and CPHD phase history, native HDF5 files, the results document.
 
 This is the only layer of sarmotion that opens files. Every bad input raises
-:class:`DataError` (a ``ValueError``) with one line naming the file and the problem.
+:class:`DataError` (a ``ValueError``) with one line naming the file and the problem;
+implausible geometry or samples break the rules of :mod:`sarmotion.io.plausibility`
+(``lenient=True`` logs them instead).
 """
 
 from .cphd import is_cphd_file, read_cphd, write_cphd
