@@ -56,7 +56,9 @@ def separated(filter10):
         mover = scene.moving[0]
         pts = [t.position_m for t in scene.stationary]
         n, pad = sim.traces.n_pulses, (len(pts) + 1) // 2 + 1
-        wide = simulate(scene, trajectory=Trajectory.circular(aperture_deg=1.0, n_pulses=n + 2 * pad))
+        wide = simulate(
+            scene, trajectory=Trajectory.circular(aperture_deg=1.0, n_pulses=n + 2 * pad)
+        )
         filtered = annihilate(wide.traces, pts).data[pad : pad + n]
         traces = sim.traces.with_data(filtered)
         est = estimate_trajectory(traces, mover.position_m)

@@ -135,9 +135,7 @@ def test_alternated_differences_are_exact_where_the_stencil_is_complete():
     q_wide = annihilate(wide.traces, pts).data[pad : pad + n]
     h = len(pts) // 2 + 1  # pulses without a complete stencil at each end (alternated)
     inner = slice(h, n - h)
-    np.testing.assert_allclose(
-        q_short[inner], q_wide[inner], atol=1e-9 * np.abs(q_wide).max()
-    )
+    np.testing.assert_allclose(q_short[inner], q_wide[inner], atol=1e-9 * np.abs(q_wide).max())
     # and the stationary targets are annihilated there to rounding
     q_still = annihilate(wide.traces.with_data(wide.stationary), pts).data[pad : pad + n]
     q_mov = annihilate(wide.traces.with_data(wide.moving), pts).data[pad : pad + n]

@@ -152,10 +152,10 @@ def _fig_annihil_scene1(ctx: _Context) -> _Result:
     refq = float(np.abs(sep.moving).max())
     fig = traces_figure(
         [
-            ("M / max|M|", tr.data, False, ref),
-            ("M, dB re max|M|", tr.data, True, ref),
-            ("Q M / max|Q M|", sep.moving, False, refq),
-            ("Q M, dB re max|Q M|", sep.moving, True, refq),
+            ("M", tr.data, False, ref),
+            ("M, dB", tr.data, True, ref),
+            ("Q M", sep.moving, False, refq, "max|Q M|"),
+            ("Q M, dB", sep.moving, True, refq, "max|Q M|"),
         ],
         slow_times_s=s,
         fast_times_s=t,
@@ -226,13 +226,13 @@ def _fig_rotate_true_filt(ctx: _Context) -> _Result:
     tr = ctx.scene1_moving_traces
     s, t = tr.slow_times_s, tr.fast_times_s
     ref = float(np.abs(tr.data).max())
-    panels = [("moving traces", tr.data, False, ref)]
+    panels = [("moving traces S", tr.data, False, ref, "max|S|")]
     arrays: dict[str, Any] = {"moving": tr.data, "s": s, "t": t}
     h: dict[str, float] = {}
     parts = []
     for k, mover in enumerate(sim.scene.moving, start=1):
         al = transform_plus(tr, mover.position_m, velocity_mps=mover.velocity_mps).data
-        panels.append((f"T_+^(u,ρ) for mover {k}", al, False, ref))
+        panels.append((f"T_+^(u,ρ) S for mover {k}", al, False, ref, "max|S|"))
         arrays[f"aligned_{k}"] = al
         own = transform_plus(
             tr.with_data(_own_trace(ctx, k)), mover.position_m, velocity_mps=mover.velocity_mps
@@ -330,7 +330,15 @@ def _fig_rotate2stage(ctx: _Context) -> _Result:
     for row, (data, tag) in enumerate(
         ((stage1, f"u^e = {u_e:.2f} m/s"), (stage2, f"+ u_perp^e = {up_e:.2f} m/s"))
     ):
-        plot_traces(axes[row, 0], data, slow_times_s=s, fast_times_s=t, normalise_by=ref, title=tag)
+        plot_traces(
+            axes[row, 0],
+            data,
+            slow_times_s=s,
+            fast_times_s=t,
+            normalise_by=ref,
+            title=tag,
+            reference_label="max|D_1|",
+        )
         plot_traces(
             axes[row, 1],
             data.real[:, zoom],
@@ -338,6 +346,7 @@ def _fig_rotate2stage(ctx: _Context) -> _Result:
             fast_times_s=t[zoom],
             normalise_by=ref,
             title="zoom, |Re| (carrier phase)",
+            reference_label="max|D_1|",
         )
     fig.tight_layout()
     h = {
