@@ -187,9 +187,10 @@ def _fmt(x: float, nd: int = 2) -> str:
 def _annihilate_complete_stencils(name: str, points_m: Any) -> tuple[Any, Any, Any]:
     """Composed filters at ``points_m`` with a complete stencil at every shown pulse.
 
-    ``N`` alternated differences reach ``ceil(N / 2)`` pulses to each side; the scene is
-    simulated on its circular aperture extended by that many pulses at each end (same
-    pulse spacing; the radar keeps recording), filtered, and the scene's own pulses kept.
+    ``N`` alternated differences reach ``ceil(N / 2)`` pulses forward and ``floor(N / 2)``
+    back; the scene is simulated on its circular aperture extended by ``ceil(N / 2) + 1``
+    pulses at each end (same pulse spacing: the radar keeps recording), filtered, and the
+    scene's own pulses kept.
     Returns ``(Q M, Q L_true, Q S_true)`` on the scene's pulses.
     """
     from ...core import Trajectory

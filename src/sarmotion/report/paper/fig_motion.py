@@ -115,8 +115,8 @@ def _fig_filter(ctx: _Context, name: str) -> _Result:
     summary = (
         f"{n_f} exact filters: signal-to-clutter {_fmt(scr, 1)} dB, "
         f"{100 * cov:.0f} % of the mover's trace kept (on the scene's own "
-        f"{tr.n_pulses} pulses, whose last {(n_f + 1) // 2} at each end lack a complete "
-        f"stencil: {_fmt(scr_f, 1)} dB)"
+        f"{tr.n_pulses} pulses, whose first {n_f // 2} and last {(n_f + 1) // 2} lack a "
+        f"complete stencil: {_fmt(scr_f, 1)} dB)"
     )
     return _Result(fig, {"M": tr.data, "QM": qm, "QM_finite": qm_f, "s": s, "t": t}, h, summary)
 
