@@ -16,7 +16,7 @@ from conftest import gotcha_directory
 from sarmotion.report.paper import CAPTIONS, FIGURE_LABELS, build_figures, figure_filename
 from sarmotion.report.paper.build import SECTIONS
 
-pytestmark = pytest.mark.slow  # ~45 s for the whole quick build
+pytestmark = pytest.mark.slow  # ~2 min for the whole quick build (2 cores)
 
 EXPECTED = (
     "fig:setup fig:hyperbola fig:imageComp fig:straightTrace fig:rotScatt fig:dataDecomp "
