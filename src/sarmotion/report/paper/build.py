@@ -6,17 +6,22 @@ synthetic aperture radar":
 
 * ``fig_NAME.png`` -- the figure (the label with ``:`` replaced by ``_``);
 * ``fig_NAME.npz`` -- the arrays plotted in it (axes included);
-* ``index.html`` -- every figure beside the paper's caption and one line of what it
-  shows numerically.
+* ``index.html`` -- the figures in the paper's sections (:data:`SECTIONS`), with a table
+  of contents; each full width (click: natural size) above the paper's caption and,
+  beside it, the line of what it shows numerically; the conventions, and the one
+  definition of signal-to-clutter used by every figure, at the top.
 
 The headline numbers of each figure (:attr:`FigureRecord.headline`) are measured by the
 package's building blocks on the built-in scenes; nothing is typed in. Conventions are
-the paper's: traces ``|M|`` normalised by ``max |M|`` of the data they come from, sparse
-parts and filtered traces also in dB, slow time ``s`` (s) and fast time ``t`` (ns);
-images in dB re their peak with ground axes in m.
+the paper's: traces ``|.|`` normalised by the maximum named on each colour bar
+(``max|M|``, the unseparated data, unless a panel says otherwise), sparse parts and
+filtered traces also in dB, slow time ``s`` (s) and fast time ``t`` (ns); images in dB
+re their peak with ground axes in m.
 
-``quick=True`` runs the same code paths on reduced sizes (coarser image grids and speed
-grids, fewer sweep values, shorter rank apertures), for tests.
+``fig:setup`` draws the antenna positions of the GOTCHA files passed as ``gotcha_paths``
+(read by :func:`sarmotion.io.read_gotcha`). ``quick=True`` runs the same code paths on
+reduced sizes (coarser image grids and speed grids, fewer sweep values, shorter rank
+apertures), for tests. A full build takes about 6 minutes on two cores, a quick one 2.
 
 This is a report layer: it imports matplotlib (beside :mod:`sarmotion.report.plotting`, whose
 panel functions it uses) and writes files. Progress goes through a callback
@@ -326,7 +331,7 @@ def build_figures(
     for i, lab in enumerate(labels, start=1):
         t0 = time.perf_counter()
         res = _BUILDERS[lab](ctx)
-        png = save_figure(res.fig, out / figure_filename(lab))
+        png = save_figure(res.fig, out / figure_filename(lab), dpi=150)
         npz = out / figure_filename(lab, ".npz")
         np.savez_compressed(npz, **{k: _for_npz(v) for k, v in res.arrays.items()})
         dt = time.perf_counter() - t0
