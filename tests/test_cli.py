@@ -190,6 +190,16 @@ def test_paper_builds_a_figure_and_rejects_unknown_labels(tmp_path, capsys):
     )
 
 
+def test_paper_setup_reads_the_gotcha_directory(tmp_path, gotcha_dir):
+    out = tmp_path / "setup"
+    assert run(["paper", "--only", "setup", "--gotcha", str(gotcha_dir), "--out", str(out)]) == 0
+    with np.load(out / "fig_setup.npz") as z:
+        positions = z["positions_m"]
+    # the antenna positions of the files, not the nominal circle
+    assert positions.shape == read_gotcha(sorted(gotcha_dir.glob("*.mat"))).positions_m.shape
+    assert "GOTCHA pass 1 HH" in (out / "index.html").read_text(encoding="utf-8")
+
+
 def test_image_on_an_explicit_grid(tmp_path, capsys):
     out = tmp_path / "img"
     args = [

@@ -90,3 +90,53 @@ def test_bad_annihilator_input():
     tr = simulate(load_scene("rotscatt")).traces
     with pytest.raises(ValueError, match="velocities_mps must have shape"):
         annihilate(tr, [[0, 0], [1, 1]], velocities_mps=[1, 2])
+
+
+def _per_pulse_db(q_moving, q_stationary):
+    e_s = np.sum(np.abs(q_moving) ** 2, axis=1)
+    e_l = np.sum(np.abs(q_stationary) ** 2, axis=1)
+    return 10 * np.log10(np.maximum(e_s, 1e-300) / e_s.max()), 10 * np.log10(e_l / e_s.max())
+
+
+def test_many_composed_filters_keep_every_pulse_edges_included():
+    # fig:annihilScene1: the filters at the bright points of Scene 1's preliminary image
+    # (100 of them for 117 pulses). Every pulse, the first and last included, keeps the
+    # movers within 40 dB of their largest per-pulse energy, and nowhere does more than
+    # -40 dB of stationary energy (re the same) remain. Measured -36.5 dB and -57.5 dB
+    # (forward differences only: 37 pulses lost the movers, -23.0 dB).
+    from sarmotion.imaging import ImageGrid, backproject
+    from sarmotion.separation import separate_annihilation, stationary_candidates
+
+    sim = simulate(load_scene("scene1"))
+    tr = sim.traces
+    img = backproject(tr, ImageGrid.square(centre_m=(0.0, 0.0), size_m=60.0, spacing_m=0.25))
+    cand = stationary_candidates(img.values, x_m=img.grid.x_m, y_m=img.grid.y_m, traces=tr)
+    pts = separate_annihilation(tr, cand).stationary_points_m
+    assert len(pts) > tr.n_pulses / 2  # more filters than half the pulses
+    mover_db, still_db = _per_pulse_db(
+        annihilate(tr.with_data(sim.moving), pts).data,
+        annihilate(tr.with_data(sim.stationary), pts).data,
+    )
+    assert mover_db.min() >= -40.0
+    assert still_db.max() <= -40.0
+
+
+def test_alternated_differences_are_exact_where_the_stencil_is_complete():
+    # Filtering a longer aperture and keeping the middle gives every kept pulse a complete
+    # stencil; on the pulses that have one in the short aperture too, the two agree.
+    from sarmotion.core import Trajectory
+
+    scene = load_scene("filter10")
+    pts = [t.position_m for t in scene.stationary]
+    short = simulate(scene)
+    n, pad = short.traces.n_pulses, 20
+    wide = simulate(scene, trajectory=Trajectory.circular(aperture_deg=1.0, n_pulses=n + 2 * pad))
+    q_short = annihilate(short.traces, pts).data
+    q_wide = annihilate(wide.traces, pts).data[pad : pad + n]
+    h = len(pts) // 2 + 1  # pulses without a complete stencil at each end (alternated)
+    inner = slice(h, n - h)
+    np.testing.assert_allclose(q_short[inner], q_wide[inner], atol=1e-9 * np.abs(q_wide).max())
+    # and the stationary targets are annihilated there to rounding
+    q_still = annihilate(wide.traces.with_data(wide.stationary), pts).data[pad : pad + n]
+    q_mov = annihilate(wide.traces.with_data(wide.moving), pts).data[pad : pad + n]
+    assert _db(np.linalg.norm(q_still) / np.linalg.norm(q_mov)) <= -100  # -135 dB measured

@@ -28,6 +28,16 @@ __all__ = ["paper"]
     metavar="LABEL",
     help="Build only this figure (e.g. fig:rpcaEx2b or rpcaEx2b); repeatable.",
 )
+@click.option(
+    "--gotcha",
+    "gotcha",
+    type=click.Path(exists=True, path_type=Path),
+    multiple=True,
+    envvar="SARMOTION_GOTCHA_DIR",
+    help="GOTCHA .mat files, or a directory of them, for fig:setup (the acquisition "
+    "geometry); default $SARMOTION_GOTCHA_DIR. Without them fig:setup draws the nominal "
+    "GOTCHA circle.",
+)
 @click.option("--quick", is_flag=True, help="Reduced sizes (coarser grids, fewer sweep values).")
 @click.option("--list", "list_only", is_flag=True, help="List the figure labels and exit.")
 @click.pass_context
@@ -36,6 +46,7 @@ def paper(
     out: Path,
     force: bool,
     only: tuple[str, ...],
+    gotcha: tuple[Path, ...],
     quick: bool,
     list_only: bool,
 ) -> None:
@@ -48,6 +59,9 @@ def paper(
     if list_only:
         click.echo("\n".join(FIGURE_LABELS))
         return
+    gotcha_paths: list[Path] = []
+    for g in gotcha:
+        gotcha_paths += sorted(g.glob("*.mat")) if g.is_dir() else [g]
     selected = list(only) if only else None
     check_out(out, force=force, names=("index.html",), patterns=("fig_*",))
     total = len(selected) if selected else len(FIGURE_LABELS)
@@ -57,6 +71,7 @@ def paper(
                 stage,
                 only=selected,
                 quick=quick,
+                gotcha_paths=gotcha_paths or None,
                 progress=lambda label, done, n: bar("figures", done, n),
             )
     seconds = sum(r.seconds for r in records)

@@ -52,6 +52,7 @@ def plot_traces(
     dynamic_range_db: float = 60.0,
     title: str = "",
     colorbar: bool = True,
+    reference_label: str = "max|M|",
 ) -> None:
     """Draw ``|data|`` (n_pulses, n_samples) normalised by ``normalise_by`` (default its max).
 
@@ -67,6 +68,8 @@ def plot_traces(
         Normalisation, usually ``max |M|`` of the unseparated data.
     db : bool
         Plot ``20 log10`` of the normalised modulus, clipped at ``-dynamic_range_db``.
+    reference_label : str
+        What ``normalise_by`` is, for the colour bar (``"max|M|"``: the unseparated data).
     """
     d = np.abs(np.asarray(data))
     ref = float(d.max()) if normalise_by is None else float(normalise_by)
@@ -84,7 +87,7 @@ def plot_traces(
             vmax=0.0,
             interpolation="nearest",
         )
-        label = "dB re max|M|"
+        label = f"dB re {reference_label}"
     else:
         img = d / ref if ref > 0 else d
         im = ax.imshow(
@@ -96,7 +99,7 @@ def plot_traces(
             vmax=1.0,
             interpolation="nearest",
         )
-        label = "|.| / max|M|"
+        label = f"|.| / {reference_label}"
     ax.set_xlabel("fast time t (ns)")
     ax.set_ylabel("slow time s (s)")
     if title:
@@ -149,7 +152,11 @@ def plot_image(
 
 
 def traces_figure(
-    panels: Sequence[tuple[str, ArrayLike, bool] | tuple[str, ArrayLike, bool, float | None]],
+    panels: Sequence[
+        tuple[str, ArrayLike, bool]
+        | tuple[str, ArrayLike, bool, float | None]
+        | tuple[str, ArrayLike, bool, float | None, str]
+    ],
     *,
     slow_times_s: ArrayLike,
     fast_times_s: ArrayLike,
@@ -158,10 +165,11 @@ def traces_figure(
     dynamic_range_db: float = 60.0,
     fast_slice: slice | None = None,
 ) -> Figure:
-    """A row (or grid) of trace panels ``(title, data, in_db[, normalise_by])``.
+    """A row (or grid) of trace panels ``(title, data, in_db[, normalise_by[, label]])``.
 
     Panels share ``normalise_by`` (default: the largest ``|data|`` of all panels) unless
-    a panel gives its own as a fourth element. ``fast_slice`` selects a fast-time window
+    a panel gives its own as a fourth element, and a fifth names it on the colour bar
+    (default ``"max|M|"``). ``fast_slice`` selects a fast-time window
     of every panel.
     """
     n = len(panels)
@@ -175,6 +183,7 @@ def traces_figure(
     for ax, panel in zip(axes.ravel(), panels, strict=False):
         title, data, db = panel[:3]
         ref = panel[3] if len(panel) > 3 else shared
+        ref_label = panel[4] if len(panel) > 4 else "max|M|"
         plot_traces(
             ax,
             np.asarray(data)[:, sl],
@@ -184,6 +193,7 @@ def traces_figure(
             db=db,
             title=title,
             dynamic_range_db=dynamic_range_db,
+            reference_label=ref_label,
         )
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)

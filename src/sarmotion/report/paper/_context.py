@@ -34,10 +34,20 @@ class _Result:
 class _Context:
     """Simulations and separations shared by several figures, computed once."""
 
-    def __init__(self, quick: bool) -> None:
+    def __init__(self, quick: bool, gotcha_paths: Sequence[Any] | None = None) -> None:
         self.quick = quick
+        self.gotcha_paths = list(gotcha_paths) if gotcha_paths else []
         self._sims: dict[str, Any] = {}
         self._rpca: dict[tuple[str, int | None], Any] = {}
+
+    @cached_property
+    def gotcha_traces(self) -> Any:
+        """The GOTCHA files as one aperture (:func:`sarmotion.io.read_gotcha`), or None."""
+        if not self.gotcha_paths:
+            return None
+        from ...io import read_gotcha
+
+        return read_gotcha(self.gotcha_paths)
 
     # sizes ------------------------------------------------------------------------
     @property
@@ -123,10 +133,47 @@ class _Context:
 
 
 # ================================================================== plotting helpers
+def _peak_delays_s(data: NDArray, fast_times_s: NDArray) -> NDArray[np.float64]:
+    """Fast time of each pulse's peak (s), interpolated between samples.
+
+    A parabola through ``log|data|`` at the largest sample and its two neighbours: exact
+    for a Gaussian envelope (the built-in scenes' compressed pulse), whose logarithm is a
+    parabola.
+    """
+    a = np.abs(np.asarray(data))
+    t = np.asarray(fast_times_s, dtype=np.float64)
+    n, m = a.shape
+    i = np.clip(np.argmax(a, axis=1), 1, m - 2)
+    rows = np.arange(n)
+    tiny = np.finfo(float).tiny
+    y0, y1, y2 = (np.log(np.maximum(a[rows, i + k], tiny)) for k in (-1, 0, 1))
+    den = y0 - 2 * y1 + y2
+    off = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1.0), 0.0)
+    return t[i] + np.clip(off, -0.5, 0.5) * (t[1] - t[0])
+
+
 def _peak_delay_spread_ns(data: NDArray, fast_times_s: NDArray) -> float:
-    """Spread (max - min) over slow time of the fast time of each pulse's peak (ns)."""
-    t = np.asarray(fast_times_s)[np.argmax(np.abs(data), axis=1)]
+    """Spread (max - min) over slow time of each pulse's sub-sample peak time (ns)."""
+    t = _peak_delays_s(data, fast_times_s)
     return float((t.max() - t.min()) * 1e9)
+
+
+#: The one definition of signal-to-clutter used by every figure (quoted in the index).
+SCR_DEFINITION = (
+    "signal-to-clutter = 10 log10(||X_S||^2 / ||X - X_S||^2), X the moving output of a "
+    "separation and X_S what the method makes of the movers' true traces alone: Q S_true "
+    "for the (linear) annihilation filter, S_true for a split M = L + S (and a mover's own "
+    "true trace for a mover-by-mover separation). Everything else in X is clutter: "
+    "stationary energy left in it and, for a split, what it lost of the movers."
+)
+
+
+def _scr_db(output: NDArray, movers_part: NDArray) -> float:
+    """Signal-to-clutter (dB) by :data:`SCR_DEFINITION`."""
+    x = np.asarray(output)
+    xs = np.asarray(movers_part)
+    e = x - xs
+    return float(10 * np.log10(np.vdot(xs, xs).real / max(np.vdot(e, e).real, 1e-300)))
 
 
 def _rel(a: NDArray, b: NDArray) -> float:
@@ -135,3 +182,30 @@ def _rel(a: NDArray, b: NDArray) -> float:
 
 def _fmt(x: float, nd: int = 2) -> str:
     return f"{x:.{nd}f}"
+
+
+def _annihilate_complete_stencils(name: str, points_m: Any) -> tuple[Any, Any, Any]:
+    """Composed filters at ``points_m`` with a complete stencil at every shown pulse.
+
+    ``N`` alternated differences reach ``ceil(N / 2)`` pulses forward and ``floor(N / 2)``
+    back; the scene is simulated on its circular aperture extended by ``ceil(N / 2) + 1``
+    pulses at each end (same pulse spacing: the radar keeps recording), filtered, and the
+    scene's own pulses kept.
+    Returns ``(Q M, Q L_true, Q S_true)`` on the scene's pulses.
+    """
+    from ...core import Trajectory
+    from ...separation import annihilate
+    from ...simulation import load_scene, simulate
+
+    scene = load_scene(name)
+    spec = dict(scene.trajectory_spec)
+    if spec.pop("kind", "circular") != "circular":
+        raise ValueError(f"scene {name!r} must have a circular trajectory")
+    n = scene.trajectory().n_pulses
+    pad = (len(points_m) + 1) // 2 + 1
+    wide = simulate(scene, trajectory=Trajectory.circular(**spec, n_pulses=n + 2 * pad))
+    keep = slice(pad, pad + n)
+    out = []
+    for data in (wide.traces.data, wide.stationary, wide.moving):
+        out.append(annihilate(wide.traces.with_data(data), points_m).data[keep])
+    return tuple(out)

@@ -6,17 +6,22 @@ synthetic aperture radar":
 
 * ``fig_NAME.png`` -- the figure (the label with ``:`` replaced by ``_``);
 * ``fig_NAME.npz`` -- the arrays plotted in it (axes included);
-* ``index.html`` -- every figure beside the paper's caption and one line of what it
-  shows numerically.
+* ``index.html`` -- the figures in the paper's sections (:data:`SECTIONS`), with a table
+  of contents; each full width (click: natural size) above the paper's caption and,
+  beside it, the line of what it shows numerically; the conventions, and the one
+  definition of signal-to-clutter used by every figure, at the top.
 
 The headline numbers of each figure (:attr:`FigureRecord.headline`) are measured by the
 package's building blocks on the built-in scenes; nothing is typed in. Conventions are
-the paper's: traces ``|M|`` normalised by ``max |M|`` of the data they come from, sparse
-parts and filtered traces also in dB, slow time ``s`` (s) and fast time ``t`` (ns);
-images in dB re their peak with ground axes in m.
+the paper's: traces ``|.|`` normalised by the maximum named on each colour bar
+(``max|M|``, the unseparated data, unless a panel says otherwise), sparse parts and
+filtered traces also in dB, slow time ``s`` (s) and fast time ``t`` (ns); images in dB
+re their peak with ground axes in m.
 
-``quick=True`` runs the same code paths on reduced sizes (coarser image grids and speed
-grids, fewer sweep values, shorter rank apertures), for tests.
+``fig:setup`` draws the antenna positions of the GOTCHA files passed as ``gotcha_paths``
+(read by :func:`sarmotion.io.read_gotcha`). ``quick=True`` runs the same code paths on
+reduced sizes (coarser image grids and speed grids, fewer sweep values, shorter rank
+apertures), for tests. A full build takes about 6 minutes on two cores, a quick one 2.
 
 This is a report layer: it imports matplotlib (beside :mod:`sarmotion.report.plotting`, whose
 panel functions it uses) and writes files. Progress goes through a callback
@@ -61,8 +66,9 @@ from .fig_separation import (
     _fig_rpca_ex2a,
     _fig_rpca_ex2b,
 )
+from .fig_setup import _fig_setup
 
-__all__ = ["FigureRecord", "FIGURE_LABELS", "build_figures", "figure_filename"]
+__all__ = ["FigureRecord", "FIGURE_LABELS", "SECTIONS", "build_figures", "figure_filename"]
 
 
 log = logging.getLogger(__name__)
@@ -107,6 +113,7 @@ class FigureRecord:
 
 
 _BUILDERS: dict[str, Callable[[_Context], _Result]] = {
+    "fig:setup": _fig_setup,
     "fig:hyperbola": _fig_hyperbola,
     "fig:imageComp": _fig_image_comp,
     "fig:straightTrace": _fig_straight_trace,
@@ -139,28 +146,135 @@ def _for_npz(value: Any) -> NDArray:
     return a.astype(np.complex64) if a.dtype == np.complex128 else a
 
 
+#: The paper's sections and subsections, and the figures each holds (in order).
+SECTIONS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
+    ("1", "Introduction", ("fig:setup",)),
+    ("2.1", "Preliminaries: pulse and range compression", ("fig:hyperbola",)),
+    (
+        "3.1",
+        "Data separation: travel time transformations and data separation",
+        ("fig:imageComp", "fig:straightTrace", "fig:rotScatt"),
+    ),
+    (
+        "3.2",
+        "Data separation with robust PCA",
+        ("fig:dataDecomp", "fig:rpcaEx1", "fig:rpcaEx2a", "fig:rpcaEx2b"),
+    ),
+    ("3.3", "Discussion", ("fig:annihilScene1", "fig:rpca2mov")),
+    (
+        "3.4",
+        "Velocity estimation and separation of traces from moving targets",
+        ("fig:rotateTrueFilt", "fig:filtComp", "fig:rotate2stage", "fig:objfxns"),
+    ),
+    (
+        "4.4",
+        "Analysis of data separation with robust PCA (rank of Y)",
+        ("fig:rank1", "fig:convergeRank", "fig:eigenvals2"),
+    ),
+    (
+        "5.2",
+        "Numerical simulations: annihilation filters",
+        ("fig:filter10scatt1ord", "fig:filter30scatt1ord", "fig:motEstscatt"),
+    ),
+    (
+        "5.3",
+        "Numerical simulations: data separation for Scene 1",
+        ("fig:rpca2movFinalSep", "fig:sepImgs"),
+    ),
+)
+
+_STYLE = """
+body{font-family:Georgia,'Times New Roman',serif;color:#222;margin:0;line-height:1.45}
+header{background:#f4f1ea;border-bottom:1px solid #ddd;padding:1.2em 2em}
+header h1{margin:0 0 .3em 0;font-size:1.6em}
+.layout{display:flex;align-items:flex-start}
+nav{position:sticky;top:0;flex:0 0 17em;max-height:100vh;overflow-y:auto;padding:1em 1.2em;
+ border-right:1px solid #ddd;font-family:sans-serif;font-size:.85em;background:#fafafa}
+nav a{color:#05a;text-decoration:none} nav a:hover{text-decoration:underline}
+nav ol{padding-left:1.2em;margin:.2em 0 .8em 0} nav li{margin:.15em 0}
+main{flex:1;padding:1em 2.5em;max-width:1500px}
+h2{border-bottom:2px solid #ccc;padding-bottom:.2em;margin-top:2em}
+figure{margin:1.5em 0 2.5em 0;padding:0}
+figure img{width:100%;height:auto;border:1px solid #eee;cursor:zoom-in;display:block}
+figure.small img{max-width:900px}
+figcaption{display:grid;grid-template-columns:1fr 1fr;gap:1.5em;margin-top:.6em;font-size:.95em}
+.caption b,.measured b{font-family:sans-serif;font-size:.85em;text-transform:uppercase;
+ letter-spacing:.04em}
+.measured{color:#04507a;background:#eef6fb;padding:.5em .8em;border-left:3px solid #05a}
+.files{font-family:sans-serif;font-size:.8em;color:#777;grid-column:1 / span 2}
+.label{font-family:monospace;color:#888;font-size:.8em}
+.conventions{background:#fffbe8;border:1px solid #eadfa8;padding:.6em 1em;font-size:.92em}
+#zoom{display:none;position:fixed;inset:0;background:rgba(0,0,0,.85);z-index:10;
+ overflow:auto;cursor:zoom-out}
+#zoom img{display:block;margin:1em auto;max-width:none}
+"""
+
+_SCRIPT = """
+document.querySelectorAll('figure img').forEach(function(im){
+  im.addEventListener('click',function(e){e.preventDefault();
+    var z=document.getElementById('zoom');z.firstChild.src=im.src;z.style.display='block';});
+});
+document.getElementById('zoom').addEventListener('click',function(){this.style.display='none';});
+"""
+
+
 def _write_index(out: Path, records: Sequence[FigureRecord], quick: bool) -> Path:
-    rows = []
-    for r in records:
-        rows.append(
-            f'<section id="{html.escape(r.label)}"><h2>{html.escape(r.label)}</h2>\n'
-            f'<div class="row"><a href="{r.png.name}"><img src="{r.png.name}" '
-            f'alt="{html.escape(r.label)}"></a>\n<div class="text"><p class="caption">'
-            f'<b>Paper:</b> {html.escape(r.caption)}</p>\n<p class="measured"><b>Measured:</b> '
-            f'{html.escape(r.summary)}</p>\n<p class="files"><a href="{r.npz.name}">'
-            f"{r.npz.name}</a> &middot; built in {r.seconds:.1f} s</p></div></div></section>"
+    from ._context import SCR_DEFINITION
+
+    by_label = {r.label: r for r in records}
+    number = {lab: i for i, lab in enumerate(FIGURE_LABELS, start=1)}
+    toc, body = [], []
+    for sec, title, labels in SECTIONS:
+        present = [by_label[lab] for lab in labels if lab in by_label]
+        if not present:
+            continue
+        anchor = "sec-" + sec.replace(".", "-")
+        items = "".join(
+            f'<li><a href="#{html.escape(r.label)}">Figure {number[r.label]} '
+            f'<span class="label">{html.escape(r.label)}</span></a></li>'
+            for r in present
         )
+        toc.append(
+            f'<li><a href="#{anchor}">{html.escape(sec)} {html.escape(title)}</a>'
+            f"<ol>{items}</ol></li>"
+        )
+        body.append(f'<section id="{anchor}"><h2>{html.escape(sec)} {html.escape(title)}</h2>')
+        for r in present:
+            ncol_small = r.label in ("fig:rpcaEx2a", "fig:convergeRank")
+            body.append(
+                f'<figure id="{html.escape(r.label)}"'
+                f"{' class=small' if ncol_small else ''}>"
+                f'<a href="{r.png.name}"><img src="{r.png.name}" loading="lazy" '
+                f'alt="{html.escape(r.label)}"></a>\n<figcaption>'
+                f'<div class="caption"><b>Figure {number[r.label]}</b> '
+                f'<span class="label">{html.escape(r.label)}</span> &mdash; '
+                f"{html.escape(r.caption)}</div>\n"
+                f'<div class="measured"><b>Measured</b> {html.escape(r.summary)}</div>\n'
+                f'<div class="files"><a href="{r.npz.name}">{r.npz.name}</a> (the arrays '
+                f"plotted) &middot; built in {r.seconds:.1f} s</div></figcaption></figure>"
+            )
+        body.append("</section>")
+    total = sum(r.seconds for r in records)
     page = (
-        '<!DOCTYPE html>\n<html><head><meta charset="utf-8"><title>The paper, reproduced'
-        "</title>\n<style>body{font-family:sans-serif;max-width:1400px;margin:auto}"
-        ".row{display:flex;gap:1.5em;align-items:flex-start}.row img{max-width:820px}"
-        ".text{max-width:520px}.measured{color:#05a}</style></head><body>\n"
-        "<h1>Motion estimation and imaging of complex scenes with SAR: figures reproduced"
-        "</h1>\n"
-        f"<p>{len(records)} figures{' (quick, reduced sizes)' if quick else ''}, generated by "
-        "<code>sarmotion.report.paper.build_figures</code>.</p>\n"
-        + "\n".join(rows)
-        + "\n</body></html>\n"
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        '<meta name="viewport" content="width=device-width, initial-scale=1">'
+        "<title>Motion estimation and imaging of complex scenes with SAR: the figures"
+        f"</title>\n<style>{_STYLE}</style></head><body>\n"
+        "<header><h1>Motion estimation and imaging of complex scenes with synthetic "
+        "aperture radar &mdash; the figures, regenerated</h1>"
+        f"<div>{len(records)} figures{' (quick: reduced sizes)' if quick else ''}, built in "
+        f"{total:.0f} s by <code>sarmotion.report.paper.build_figures</code>, each beside the "
+        "paper's caption and what it measures. Click a figure to see it at full size.</div>"
+        "</header>\n"
+        f'<div class="layout"><nav><b>Contents</b><ol>{"".join(toc)}</ol></nav><main>\n'
+        '<div class="conventions"><b>Conventions.</b> Traces are shown as |.| normalised by '
+        "the maximum named on each colour bar (max|M|: the unseparated data), in dB where "
+        "marked; slow time s in s, fast time t in ns; images in dB re their peak, ground "
+        f"axes in m. <b>Signal-to-clutter</b>, in every figure: {html.escape(SCR_DEFINITION)}"
+        "</div>\n"
+        + "\n".join(body)
+        + '\n</main></div><div id="zoom"><img alt="zoomed figure"></div>'
+        f"<script>{_SCRIPT}</script></body></html>\n"
     )
     path = out / "index.html"
     path.write_text(page, encoding="utf-8")
@@ -172,6 +286,7 @@ def build_figures(
     *,
     only: str | Sequence[str] | None = None,
     quick: bool = False,
+    gotcha_paths: Sequence[str | Path] | None = None,
     progress: ProgressCallback | None = None,
 ) -> list[FigureRecord]:
     """Regenerate the paper's figures with data.
@@ -185,6 +300,10 @@ def build_figures(
         Build only these labels (``"fig:rpcaEx2b"``; the ``fig:`` prefix may be left out).
     quick : bool
         Reduced sizes (coarser grids, fewer sweep values), same code paths; for tests.
+    gotcha_paths : sequence of path, optional
+        GOTCHA ``.mat`` files of one pass (read by :func:`sarmotion.io.read_gotcha`):
+        ``fig:setup`` draws their antenna positions; without them, the nominal GOTCHA
+        circle.
     progress : callable, optional
         ``progress(label, done, total)`` after each figure.
 
@@ -207,12 +326,12 @@ def build_figures(
             labels.append(lab)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    ctx = _Context(quick)
+    ctx = _Context(quick, gotcha_paths)
     records = []
     for i, lab in enumerate(labels, start=1):
         t0 = time.perf_counter()
         res = _BUILDERS[lab](ctx)
-        png = save_figure(res.fig, out / figure_filename(lab))
+        png = save_figure(res.fig, out / figure_filename(lab), dpi=150)
         npz = out / figure_filename(lab, ".npz")
         np.savez_compressed(npz, **{k: _for_npz(v) for k, v in res.arrays.items()})
         dt = time.perf_counter() - t0

@@ -7,6 +7,7 @@ __all__ = ["CAPTIONS"]
 
 #: The paper's captions, LaTeX lightly cleaned (copied from the .tex).
 CAPTIONS: dict[str, str] = {
+    "fig:setup": "Setup for synthetic aperture imaging.",
     "fig:hyperbola": "Left: Pulse compressed data D_p(s,t) = f(t - τ(s,ρ)) from a target at "
     "ρ = (0,5,0) m, recorded by a SAR antenna moving at speed V = 70 m/s along a linear "
     "aperture of 400 m, at range L = 10 km from ρ. Right: Range-compressed data D_r(s,t') "

@@ -58,8 +58,8 @@ def _fig_rank1(ctx: _Context) -> _Result:
     axes[1].plot(speeds, r_u, "g.-", label="computed")
     axes[1].set_xlabel("range speed (m/s)")
     axes[1].set_title(f"moving target at ρ_o, n+1 = {traj_m.n_pulses}", fontsize=9)
-    for ax in axes:
-        ax.set_ylabel("rank of Y")
+    for ax, n1 in zip(axes, (traj_s.n_pulses, traj_m.n_pulses), strict=True):
+        ax.set_ylabel(f"rank of Y (of n+1 = {n1})")
         ax.legend(fontsize=7)
     fig.tight_layout()
     so, r2o = _linfit(offsets, r_off)
@@ -73,11 +73,15 @@ def _fig_rank1(ctx: _Context) -> _Result:
         "r2_speed": r2u,
         "rank_mover_max_speed": float(r_u[-1]),
         "rank_stationary_10m_1deg": float(r_still10),
+        "n_plus_1_offset": float(traj_s.n_pulses),
+        "n_plus_1_speed": float(traj_m.n_pulses),
     }
     summary = (
         f"rank slope {so:.2f}/m (Szegő {h['slope_offset_szego_per_m']:.2f}) with offset, "
         f"{su:.1f} per m/s (Szegő {h['slope_speed_szego_per_mps']:.1f}) with range speed; "
-        f"mover at {speeds[-1]:g} m/s rank {r_u[-1]} vs stationary (10 m) {r_still10}"
+        f"mover at {speeds[-1]:g} m/s rank {r_u[-1]} vs stationary (10 m) {r_still10} "
+        f"(left: 4° aperture, n+1 = {traj_s.n_pulses} pulses; right and the comparison: 1°, "
+        f"n+1 = {traj_m.n_pulses})"
     )
     arrays = {
         "offsets_m": offsets,
@@ -156,7 +160,7 @@ def _fig_eigenvals2(ctx: _Context) -> _Result:
     ys = np.linspace(0.01, 30.0, 4 if ctx.quick else 31)
     fig, axes = subplots(1, 2, figsize=(9.6, 3.6))
     arrays: dict[str, Any] = {"y_m": ys}
-    h: dict[str, float] = {}
+    h: dict[str, float] = {"n_plus_1": float(traj.n_pulses)}
     for k, x in enumerate((5.0, 0.15)):
         rho1 = (x, 5.0, 0.0)
         comp, est = [], []
@@ -181,9 +185,11 @@ def _fig_eigenvals2(ctx: _Context) -> _Result:
         axes[k].plot(ys, est, "b-", label="Szegő estimate (eq:seqc)")
         axes[k].plot(ys, comp, "g.-", label="computed")
         axes[k].set_xlabel("y of the second target (m)")
-        axes[k].set_ylabel("rank of Y")
+        axes[k].set_ylabel(f"rank of Y (of n+1 = {traj.n_pulses})")
         axes[k].set_title(
-            f"ρ_1 = ({x:g}, 5, 0) m; B|β| = {b_flat:.2f} (flat), {b_geo:.2f} (3-D)", fontsize=8
+            f"ρ_1 = ({x:g}, 5, 0) m, n+1 = {traj.n_pulses}; B|β| = {b_flat:.2f} (flat), "
+            f"{b_geo:.2f} (3-D)",
+            fontsize=8,
         )
         axes[k].legend(fontsize=7)
     fig.tight_layout()
@@ -191,6 +197,7 @@ def _fig_eigenvals2(ctx: _Context) -> _Result:
         f"B|β| = {h['B_beta_flat_left']:.2f} (flat convention; {h['B_beta_3d_left']:.2f} in 3-D "
         f"GOTCHA) on the left, {h['B_beta_flat_right']:.2f} on the right; max |computed - "
         f"Szegő| = {h['max_abs_computed_minus_szego_left']:.0f} and "
-        f"{h['max_abs_computed_minus_szego_right']:.0f}"
+        f"{h['max_abs_computed_minus_szego_right']:.0f} (4° aperture, n+1 = {traj.n_pulses} "
+        "pulses)"
     )
     return _Result(fig, arrays, h, summary)
