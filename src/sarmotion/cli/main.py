@@ -22,6 +22,7 @@ from .inject import inject
 from .paper import paper
 from .separate import separate
 from .simulate import simulate
+from .track import track
 
 __all__ = ["main", "run", "entry_point"]
 
@@ -53,7 +54,7 @@ def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
     ctx.obj["progress"] = not quiet and sys.stderr.isatty()
 
 
-for _command in (simulate, image, inject, separate, analyze, demo, paper):
+for _command in (simulate, image, inject, separate, analyze, track, demo, paper):
     main.add_command(_command)
 
 

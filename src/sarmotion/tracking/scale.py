@@ -113,6 +113,7 @@ def map_sub_apertures(
                     threads_per_worker=1,
                     processes=processes,
                     dashboard_address=None,
+                    silence_logs=logging.ERROR,
                     **({"host": "127.0.0.1"} if processes else {}),
                 )
             )

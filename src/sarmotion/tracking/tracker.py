@@ -25,9 +25,10 @@ same ``R`` holds). With roads (:func:`sarmotion.tracking.roads.road_fix`), the m
 on the nearest road replaces the family: ``R_p`` becomes the road fix's covariance and
 the family term goes; a road parallel to the family leaves the measurement free. Of
 the roads a family line crosses, only those along which the member's velocity runs
-count when a track starts (its speed across the road within 1.5 cross-range-speed
-resolutions, three standard deviations of the measurement); for a track, the crossing
-nearest its prediction. A vehicle on a road moves along it: the road-fixed velocity
+count (its speed across the road within three cross-range-speed resolutions: on real
+clutter the side maxima of ``g_perp`` put single-degree cross-range speeds up to 2.7
+resolutions, 2 m/s, off), and of those the crossing nearest the track's prediction (or
+the detection, for a new track). A vehicle on a road moves along it: the road-fixed velocity
 measurement is fused with the pseudo-measurement "speed across the road 0 +-
 ``road_cross_speed_std_mps``" (information form).
 
@@ -356,10 +357,9 @@ class Tracker:
                 det.position_m,
                 a,
                 self.roads,
-                # Without a prediction, the road is told by the velocity running along it.
-                velocity_mps=det.velocity_mps if predicted_m is None else None,
+                velocity_mps=det.velocity_mps,
                 family_velocity_per_m=b,
-                max_cross_speed_mps=1.5 * sub.cross_range_speed_resolution_mps,
+                max_cross_speed_mps=3.0 * sub.cross_range_speed_resolution_mps,
                 near_m=near,
                 max_offset_m=3.0 * self._family_std(sub),
                 range_std_m=0.5 * sub.range_cell_m,
