@@ -1,4 +1,4 @@
-"""Piecewise-straight movers and long range windows in the forward model (sarmotion.simulation.paths)."""
+"""Piecewise-straight movers and long range windows (sarmotion.simulation.paths)."""
 
 import numpy as np
 import pytest
@@ -40,8 +40,9 @@ def test_path_positions_turn_and_stop():
     s = np.array([-6.0, -4.0, -1.0, 0.0, 1.0, 2.0, 3.0, 8.0])
     p = path.positions_at(s)
     assert p.shape == (8, 3) and np.all(p[:, 2] == 0)
-    np.testing.assert_allclose(p[:, :2], [[-30, 0], [-20, 0], [-5, 0], [0, 0], [0, 0], [0, 0],
-                                          [0, 3], [0, 18]])
+    np.testing.assert_allclose(
+        p[:, :2], [[-30, 0], [-20, 0], [-5, 0], [0, 0], [0, 0], [0, 0], [0, 3], [0, 18]]
+    )
     v = path.velocities_at(s)
     np.testing.assert_allclose(v, [[5, 0], [5, 0], [5, 0], [0, 0], [0, 0], [0, 3], [0, 3], [0, 3]])
     np.testing.assert_allclose(path.position_m, [0, 0, 0])

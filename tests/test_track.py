@@ -56,8 +56,10 @@ def _match(trk):
 
     def cost(label):
         return np.mean(
-            [abs(s.range_speed_mps - _truth(label, s.time_s)[1] @ s.look_direction[:2])
-             for s in trk.states]
+            [
+                abs(s.range_speed_mps - _truth(label, s.time_s)[1] @ s.look_direction[:2])
+                for s in trk.states
+            ]
         )
 
     return min(MOVERS, key=cost)
@@ -80,7 +82,10 @@ def test_sub_aperture_slices():
         Scene(name="x", targets=(), trajectory_spec={"kind": "circular", "aperture_deg": 4.0})
     ).traces
     assert [(s.start, s.stop) for s in sub_aperture_slices(traces, 1.0, 0.0)] == [
-        (0, 117), (117, 234), (234, 351), (351, 468)
+        (0, 117),
+        (117, 234),
+        (234, 351),
+        (351, 468),
     ]
     half = sub_aperture_slices(traces, 1.0, 0.5)
     assert len(half) == 7 and half[0].start == 0 and half[-1].stop == 468
@@ -111,8 +116,13 @@ def test_road_fix_geometry():
     other = Road(points_m=[[-50.0, 30.0], [50.0, -20.0]])  # y = -0.5 x + 5
     b = np.array([0.0, 0.01])
     fix2 = road_fix(
-        [10.0, -8.0], a, [other, road], velocity_mps=[6.0, 3.0], family_velocity_per_m=b,
-        max_cross_speed_mps=1.0, range_std_m=0.05,
+        [10.0, -8.0],
+        a,
+        [other, road],
+        velocity_mps=[6.0, 3.0],
+        family_velocity_per_m=b,
+        max_cross_speed_mps=1.0,
+        range_std_m=0.05,
     )
     assert fix2 is not None and fix2.road == 1
     assert road_fix([200.0, 0.0], a, [road], max_offset_m=10.0, range_std_m=0.05) is None
@@ -122,10 +132,22 @@ def test_read_roads(tmp_path):
     doc = {
         "type": "FeatureCollection",
         "features": [
-            {"type": "Feature", "properties": {"name": "main"},
-             "geometry": {"type": "LineString", "coordinates": [[0, 0, 5], [10, 0, 5], [10, 10]]}},
-            {"type": "Feature", "properties": {},
-             "geometry": {"type": "MultiLineString", "coordinates": [[[0, 1], [1, 1]], [[2, 2], [3, 3]]]}},
+            {
+                "type": "Feature",
+                "properties": {"name": "main"},
+                "geometry": {
+                    "type": "LineString",
+                    "coordinates": [[0, 0, 5], [10, 0, 5], [10, 10]],
+                },
+            },
+            {
+                "type": "Feature",
+                "properties": {},
+                "geometry": {
+                    "type": "MultiLineString",
+                    "coordinates": [[[0, 1], [1, 1]], [[2, 2], [3, 3]]],
+                },
+            },
             {"type": "Feature", "geometry": {"type": "Point", "coordinates": [1, 2]}},
         ],
     }
@@ -257,8 +279,18 @@ def test_no_movers_no_track_on_a_dask_scheduler(gotcha_files, tmp_path):
         assert address.startswith("tcp://127.0.0.1:")
         out = tmp_path / "out"
         status = run(
-            ["track", *map(str, gotcha_files), "--out", str(out), "--overlap", "0",
-             "--size", "60", "--scheduler", address]
+            [
+                "track",
+                *map(str, gotcha_files),
+                "--out",
+                str(out),
+                "--overlap",
+                "0",
+                "--size",
+                "60",
+                "--scheduler",
+                address,
+            ]
         )
         assert status == 0
         with distributed.Client(address) as client:

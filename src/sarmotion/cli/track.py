@@ -61,7 +61,13 @@ __all__ = ["track"]
     show_default=True,
     help="Local Dask workers as threads of this process or as separate processes.",
 )
-@click.option("--max-movers", type=int, default=5, show_default=True, help="Most movers sought per sub-aperture.")
+@click.option(
+    "--max-movers",
+    type=int,
+    default=5,
+    show_default=True,
+    help="Most movers sought per sub-aperture.",
+)
 @click.option(
     "--size",
     "size_m",

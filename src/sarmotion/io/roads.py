@@ -80,7 +80,9 @@ def _geometries(doc: Any, p: Path) -> list[tuple[Any, str]]:
         if not isinstance(f, dict):
             raise DataError(f"{p}: a feature must be an object, got {type(f).__name__}")
         props = f.get("properties") or {}
-        out.append((f.get("geometry"), str(props.get("name", "")) if isinstance(props, dict) else ""))
+        out.append(
+            (f.get("geometry"), str(props.get("name", "")) if isinstance(props, dict) else "")
+        )
     return out
 
 

@@ -78,9 +78,7 @@ def write_tracks_report(
     for trk in document["tracks"]:
         for s in trk["states"]:
             road = s.get("road")
-            where = (
-                "on road" if road and road["fixed"] else "road parallel" if road else "family"
-            )
+            where = "on road" if road and road["fixed"] else "road parallel" if road else "family"
             rows.append(
                 "<tr>"
                 + "".join(

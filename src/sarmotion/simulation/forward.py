@@ -3,8 +3,8 @@
 Each target moves on a straight line ``rho_q(s) = rho_q(0) + s u_q`` over the aperture
 (``eq:MOD9``), or on a piecewise-straight path with turns and stops
 (:class:`~sarmotion.simulation.paths.PathTarget`): the model asks of a target only its
-positions ``rho_q(s)`` at the pulses (``positions_at``). Its pulse- and range-compressed baseband trace is synthesised exactly in
-the frequency domain::
+positions ``rho_q(s)`` at the pulses (``positions_at``). Its pulse- and range-compressed
+baseband trace is synthesised exactly in the frequency domain::
 
     P(s, f_k) = sum_q a_q(s) W(f_k) exp(-2i pi f_k dtau_q(s)),
     dtau_q(s) = tau(s, rho_q(s)) - tau(s, rho_o)          (eq:DeltaTau)

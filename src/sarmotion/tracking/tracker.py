@@ -274,7 +274,9 @@ class Tracker:
         self.options = options
         self.roads = tuple(roads)
         q = options.acceleration_psd
-        transition = CombinedLinearGaussianTransitionModel([ConstantVelocity(q), ConstantVelocity(q)])
+        transition = CombinedLinearGaussianTransitionModel(
+            [ConstantVelocity(q), ConstantVelocity(q)]
+        )
         self._predictor = KalmanPredictor(transition)
         self._updater = KalmanUpdater(measurement_model=None)
         gate = float(np.sqrt(chi2.ppf(options.gate_probability, 4)))
@@ -440,7 +442,9 @@ class Tracker:
             r[:2, :2] = road.covariance_m2
             seg = self.roads[road.road].points_m
             n_w = _road_normal(seg, position)
-            info = np.linalg.inv(r_v) + np.outer(n_w, n_w) / self.options.road_cross_speed_std_mps**2
+            info = (
+                np.linalg.inv(r_v) + np.outer(n_w, n_w) / self.options.road_cross_speed_std_mps**2
+            )
             r[2:, 2:] = np.linalg.inv(info)
             z_v = r[2:, 2:] @ (np.linalg.inv(r_v) @ velocity)
         else:
@@ -474,7 +478,9 @@ class Tracker:
         )
 
 
-def _road_normal(points_m: NDArray[np.float64], where_m: NDArray[np.float64]) -> NDArray[np.float64]:
+def _road_normal(
+    points_m: NDArray[np.float64], where_m: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Unit normal of the polyline segment nearest ``where_m``."""
     best, normal = np.inf, np.array([1.0, 0.0])
     for s0, s1 in zip(points_m[:-1], points_m[1:], strict=True):
