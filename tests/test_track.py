@@ -188,7 +188,8 @@ def test_gotcha_two_movers_two_tracks(gotcha_movers):
             assert abs(s.range_speed_mps - u_true) <= RANGE_SPEED_TOL, (label, s.time_s)
             assert s.road is None and s.detection is not None
         # without roads the cross-range position is the family's: the state says so
-        assert min(s.position_std_m for s in trk.states) > 5.0
+        # (measured 29.9-30.1 m: the family prior sigma_f, half the 60 m image)
+        assert min(s.position_std_m for s in trk.states) > 15.0
     doc = json.loads(json.dumps(tracks_document(result)))
     assert doc["schema"] == "sarmotion.tracks/1" and len(doc["tracks"]) == 2
     state = doc["tracks"][0]["states"][0]
@@ -226,9 +227,10 @@ def test_simulated_turn_is_followed():
     """A mover turns by 61 degrees halfway through 10 degrees of the GOTCHA circle.
 
     Legs (3.5, 1.0) and (2.5, -2.5) m/s; the path stays within 35 m of the scene centre
-    (the location search of the estimator). Every state whose sub-aperture lies on one
-    leg, except the first one after the turn (the filter's one-step lag), has its
-    velocity within 0.3 m/s of that leg's.
+    (the location search of the estimator). Every state (each sub-aperture lies on one
+    leg) has its velocity within 0.3 m/s of its leg's. Measured: 0.014 m/s on every
+    state but the first after the turn, 0.232 m/s there (the filter's lag); positions
+    within 1.45 m (the mover passes near the reference cross range).
     """
     sc = load_scene("scene1")
     mover = PathTarget(
@@ -250,16 +252,16 @@ def test_simulated_turn_is_followed():
     assert len(result.tracks) == 1
     (trk,) = result.tracks
     assert len(trk.states) == len(result.sub_apertures) == 10
+    # sub-apertures on one leg: their half-length is under their centre's distance to the turn
     half = 0.5 * 117 * np.median(np.diff(traces.slow_times_s))
-    after = [s for s in trk.states if s.time_s - half > 0.0]
     checked = 0
     for s in trk.states:
-        if abs(s.time_s) < half or (after and s is after[0]):
+        if abs(s.time_s) < half:
             continue
         v_true = mover.velocities_at([s.time_s])[0]
         assert np.hypot(*(s.velocity_mps - v_true)) <= TURN_VELOCITY_TOL, (s.time_s, s.velocity_mps)
         checked += 1
-    assert checked >= 7
+    assert checked == 10
 
 
 @pytest.mark.gotcha
