@@ -8,12 +8,16 @@ back: the tracker consumes sub-aperture ``k`` while later ones still run.
 
 Where the tasks run:
 
-- ``scheduler=None``: a local ``distributed.LocalCluster`` of ``n_workers`` worker
-  *processes* with one thread each (default: one per core). Processes were measured
-  faster than threads on this workload (``benchmarks/bench_tracking.py``): the analysis
-  spends much of its time in Python-level optimisation loops that hold the GIL. Inside a
-  task, numba's and the BLAS thread pools are limited to the worker's share of the cores
-  so that the workers do not oversubscribe them.
+- ``scheduler=None``: a local ``distributed.LocalCluster`` of ``n_workers`` workers
+  (default: one per core) with one thread each, as *threads* of this process by
+  default, or as processes. Measured with ``benchmarks/bench_tracking.py`` (seven
+  1-degree sub-apertures of Scene 1, warm clusters, on the 2-core machine while other
+  jobs kept its load average near 10, so the figures are low and noisy): threads 0.061
+  sub-apertures/s with 1 worker and 0.063 with 2, processes 0.029 and 0.041; cold, the
+  4 GOTCHA degrees with two movers took 36 s on 2 threads, 47 s on 2 processes (each
+  process compiles numba's kernels again, about 20 s) and 63 s without Dask. Inside a
+  task, numba's and the BLAS thread pools are limited to the worker's share of the
+  cores so that the workers do not oversubscribe them.
 - ``scheduler="tcp://host:8786"`` (or a ``distributed.Client``): that cluster's
   workers, which must have sarmotion importable.
 - ``n_workers=0``: no Dask, the sub-apertures one after the other in this process.
@@ -66,7 +70,7 @@ def map_sub_apertures(
     *,
     scheduler: str | Any | None = None,
     n_workers: int | None = None,
-    processes: bool = True,
+    processes: bool = False,
 ) -> Iterator[SubApertureDetections]:
     """Analyse every sub-aperture, on Dask, and yield the results in slow-time order.
 
@@ -85,7 +89,7 @@ def map_sub_apertures(
         Workers of the local cluster (default: the number of cores); 0 runs without
         Dask. Ignored with ``scheduler``.
     processes : bool
-        Local workers as processes (default) or threads of this process.
+        Local workers as processes, or threads of this process (default).
 
     Yields
     ------

@@ -77,7 +77,7 @@ def track(
     roads: Sequence[Road] = (),
     scheduler: str | Any | None = None,
     n_workers: int | None = None,
-    processes: bool = True,
+    processes: bool = False,
     progress: ProgressCallback | None = None,
 ) -> TrackingResult:
     """Follow the movers of ``traces`` across sub-apertures (module notes).
@@ -96,7 +96,8 @@ def track(
     n_workers : int, optional
         Local workers (default one per core; 0: no Dask).
     processes : bool
-        Local workers as processes (default) or threads.
+        Local workers as processes, or threads of this process (default; measured
+        faster, :mod:`sarmotion.tracking.scale`).
     progress : callable, optional
         ``progress("sub-apertures", done, total)``.
 
