@@ -149,8 +149,14 @@ def track(
     for t in doc["tracks"]:
         first, last = t["states"][0], t["states"][-1]
         on_road = sum(1 for s in t["states"] if s.get("road", {}).get("fixed"))
+        parallel = sum(1 for s in t["states"] if s.get("road", {}).get("fixed") is False)
         click.echo(
             f"  track {t['id']}: {t['n_detections']} detection(s), s = {first['time_s']:.2f} "
             f"to {last['time_s']:.2f} s, range speed {first['range_speed_mps']:.2f} to "
             f"{last['range_speed_mps']:.2f} m/s, {on_road} state(s) on a road"
+            + (
+                f", {parallel} with the road parallel to the cross-range family (no point fixed)"
+                if parallel
+                else ""
+            )
         )
