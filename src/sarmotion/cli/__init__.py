@@ -1,4 +1,4 @@
-"""The command line: ``sarmotion simulate | image | inject | separate | analyze | demo | paper``.
+"""The command line: ``sarmotion simulate | image | inject | separate | analyze | convert | ...``.
 
 Commands parse their options, call the library and write their outputs; shared options
 are declared once (:mod:`~sarmotion.cli.common`). Bad input never shows a traceback: one

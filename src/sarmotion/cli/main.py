@@ -17,6 +17,7 @@ import click
 from .. import __version__
 from .analyze import analyze, demo
 from .common import InputError
+from .convert import convert
 from .image import image
 from .inject import inject
 from .paper import paper
@@ -46,7 +47,7 @@ def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
     filters, windowed robust PCA), estimates the movers' velocities and positions, and
     images everything in focus (Borcea, Callaghan & Papanicolaou). Inputs are built-in
     scenes (example1, example2, scene1, filter10, filter30, hyperbola, rotscatt), scene
-    .toml files, native .h5 traces, or GOTCHA .mat phase-history files.
+    .toml files, native .h5 traces, GOTCHA .mat or CPHD .cphd phase-history files.
     """
     level = logging.WARNING - 10 * min(verbose, 2)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
@@ -54,7 +55,7 @@ def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
     ctx.obj["progress"] = not quiet and sys.stderr.isatty()
 
 
-for _command in (simulate, image, inject, separate, analyze, track, demo, paper):
+for _command in (simulate, image, inject, separate, analyze, track, demo, paper, convert):
     main.add_command(_command)
 
 

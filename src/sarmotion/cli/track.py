@@ -94,8 +94,8 @@ def track(
 ) -> None:
     """Follow the movers of INPUTS across overlapping sub-apertures.
 
-    INPUTS: GOTCHA .mat files (consecutive files form one acquisition), a native
-    traces .h5 file, or a scene. Each sub-aperture is analysed as by `sarmotion
+    INPUTS: GOTCHA .mat files (consecutive files form one acquisition), a CPHD file,
+    a native traces .h5 file, or a scene. Each sub-aperture is analysed as by `sarmotion
     analyze` (on Dask: a local cluster, or --scheduler); the detections are associated
     into tracks (Stone Soup), each track's prediction being the known position of its
     next detection. Writes OUT/tracks.json (schema sarmotion.tracks/1), tracks.png and

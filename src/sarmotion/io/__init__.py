@@ -1,9 +1,10 @@
-"""Input and output: GOTCHA phase history, native HDF5 files, the results document.
+"""Input and output: GOTCHA and CPHD phase history, native HDF5 files, the results document.
 
 This is the only layer of sarmotion that opens files. Every bad input raises
 :class:`DataError` (a ``ValueError``) with one line naming the file and the problem.
 """
 
+from .cphd import is_cphd_file, read_cphd, write_cphd
 from .errors import DataError, staged_directory, staged_paths
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
 from .inputs import is_scene_reference, read_inputs
@@ -23,6 +24,9 @@ __all__ = [
     "read_gotcha",
     "write_gotcha",
     "is_gotcha_file",
+    "read_cphd",
+    "write_cphd",
+    "is_cphd_file",
     "save_traces",
     "load_traces",
     "load_extra",

@@ -1,8 +1,9 @@
-"""Reading a command's inputs as traces: a scene, native traces or GOTCHA files.
+"""Reading a command's inputs as traces: a scene, native traces, GOTCHA or CPHD files.
 
 One entry point, :func:`read_inputs`, dispatches on what it is given: a built-in scene
 name or a scene ``.toml`` is simulated (its ground truth kept), a ``.h5`` file is read as
-native traces, ``.mat`` files as GOTCHA phase history (several files form one aperture).
+native traces, ``.mat`` files as GOTCHA phase history (several files form one aperture),
+a ``.cphd`` file as CPHD phase history (one channel).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from pathlib import Path
 
 from ..core.traces import Traces
 from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
+from .cphd import read_cphd
 from .errors import DataError
 from .gotcha import read_gotcha
 from .native import load_traces
@@ -31,13 +33,16 @@ def read_inputs(
     autofocus: bool = False,
     snr_db: float | None = None,
     seed: int = 0,
+    channel: str | None = None,
+    vectors: tuple[int, int] | None = None,
 ) -> tuple[Traces, Simulation | None]:
     """Read ``inputs`` as one acquisition.
 
     Parameters
     ----------
     inputs : sequence of str
-        One scene name or ``.toml``; or one native ``.h5``; or one or more GOTCHA ``.mat``.
+        One scene name or ``.toml``; or one native ``.h5``; or one or more GOTCHA ``.mat``;
+        or one CPHD ``.cphd``.
     speed_mps : float
         GOTCHA: platform speed that sets slow time (m/s).
     autofocus : bool
@@ -46,6 +51,10 @@ def read_inputs(
         Scenes: add white noise at this SNR (dB).
     seed : int
         Scenes: noise seed.
+    channel : str, optional
+        CPHD: channel identifier; default the file's reference channel.
+    vectors : (int, int), optional
+        CPHD: vectors ``start:stop`` to read (0-based, ``stop`` excluded); default all.
 
     Returns
     -------
@@ -73,7 +82,11 @@ def read_inputs(
         return load_traces(first), None
     if suffixes == {".mat"}:
         return read_gotcha(list(inputs), speed_mps=speed_mps, autofocus=autofocus), None
+    if suffixes == {".cphd"}:
+        if len(inputs) != 1:
+            raise DataError("give one CPHD file (.cphd) at a time")
+        return read_cphd(first, channel=channel, vectors=vectors), None
     raise DataError(
         f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
-        "a native traces .h5 file, or GOTCHA .mat files"
+        "a native traces .h5 file, GOTCHA .mat files, or a CPHD .cphd file"
     )

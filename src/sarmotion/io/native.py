@@ -339,7 +339,7 @@ def load_extra(path: PathLike) -> dict[str, NDArray[Any]]:
 
 
 # ------------------------------------------------------------------------------ images
-def _axis(values: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
+def _image_axis(values: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
     a = np.asarray(values, dtype=np.float64)
     if a.shape != (n,):
         raise DataError(f"{name} must have shape ({n},) to match the image, got {a.shape}")
@@ -389,8 +389,8 @@ def save_image(
     if v.ndim != 2 or v.dtype.kind not in "biufc":
         raise DataError(f"values must be a numeric (ny, nx) array, got {v.dtype} {v.shape}")
     _check_finite(v, "save_image", "values")
-    x = _axis(x_m, v.shape[1], "x_m")
-    y = _axis(y_m, v.shape[0], "y_m")
+    x = _image_axis(x_m, v.shape[1], "x_m")
+    y = _image_axis(y_m, v.shape[0], "y_m")
     vel = None
     if velocity_mps is not None:
         vel = np.asarray(velocity_mps, dtype=np.float64)

@@ -8,7 +8,8 @@
 - :mod:`~sarmotion.motion.speed_resolution` — the resolutions of those speeds;
 - :mod:`~sarmotion.motion.aperture` — the cross-range family that fits the data equally
   well, and the focus of an estimate on a whole (wide) aperture;
-- :mod:`~sarmotion.motion.phase_space` — trajectories by the Wigner transform in slow time.
+- :mod:`~sarmotion.motion.wigner` — the Wigner transform in slow time and its ridge;
+- :mod:`~sarmotion.motion.phase_space` — trajectories from the Wigner ridges of sub-apertures.
 """
 
 from .aperture import (
@@ -21,17 +22,11 @@ from .aperture import (
 )
 from .cross_range import CrossRangeSpeed, cross_range_objective, estimate_cross_range_speed
 from .location import MoverLocation, locate_mover
-from .phase_space import (
-    TrajectoryEstimate,
-    WignerRidge,
-    estimate_trajectory,
-    trajectory_error,
-    wigner_ridge,
-    wigner_slow_time,
-)
+from .phase_space import TrajectoryEstimate, estimate_trajectory, trajectory_error
 from .range_speed import RangeSpeeds, estimate_range_speeds, range_speed_objective
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
 from .velocity import MoverEstimate, estimate_velocity
+from .wigner import WignerRidge, wigner_ridge, wigner_slow_time
 
 __all__ = [
     "ApertureFit",

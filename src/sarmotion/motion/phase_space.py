@@ -117,7 +117,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.signal import get_window
 
 from ..core import (
     C,
@@ -130,239 +129,15 @@ from ..core import (
     to_fast_time,
     to_frequency,
 )
-
-__all__ = [
-    "WignerRidge",
-    "TrajectoryEstimate",
-    "wigner_slow_time",
-    "wigner_ridge",
-    "estimate_trajectory",
-    "trajectory_error",
-]
-
-log = logging.getLogger(__name__)
+from .wigner import _check_lag_window, wigner_ridge
 
 #: Fast-time oversampling of the envelope in the coarse range-walk search.
 _ENVELOPE_OVERSAMPLING = 4
 
-
-# --------------------------------------------------------------------------- Wigner
-
-
-def _as_channels(signal: ArrayLike) -> NDArray[np.complex128]:
-    x = np.asarray(signal)
-    if x.ndim == 1:
-        x = x[:, None]
-    if x.ndim != 2 or x.shape[0] < 3:
-        raise ValueError(
-            f"signal must have shape (n,) or (n, n_channels) with n >= 3, got {np.shape(signal)}"
-        )
-    if not np.all(np.isfinite(x)):
-        raise ValueError("signal contains NaN or infinite values")
-    return x.astype(np.complex128, copy=False)
+__all__ = ["TrajectoryEstimate", "estimate_trajectory", "trajectory_error"]
 
 
-def _check_lag_window(lag_window_pulses: int | None, n: int) -> int:
-    if lag_window_pulses is None:
-        return n if n % 2 else n - 1
-    lw = int(lag_window_pulses)
-    if lw != lag_window_pulses or lw < 3 or lw % 2 == 0:
-        raise ValueError(
-            f"lag_window_pulses must be an odd integer >= 3, got {lag_window_pulses!r}"
-        )
-    return lw
-
-
-def _lag_taps(window: str, length: int) -> NDArray[np.float64]:
-    """Symmetric lag window of ``length`` taps, all positive (ends of Hann etc. dropped)."""
-    if window == "boxcar":
-        return np.ones(length)
-    try:
-        return np.asarray(get_window(window, length + 2, fftbins=False), dtype=np.float64)[1:-1]
-    except ValueError as exc:
-        raise ValueError(f"window must be a scipy.signal window name, got {window!r}") from exc
-
-
-def _lag_products(
-    x: NDArray[np.complex128], lag_window_pulses: int, window: str
-) -> tuple[NDArray[np.complex128], NDArray[np.int64]]:
-    """``h_k sum_c x[n + k, c] conj(x[n - k, c])``, shape (n, L), and the lags ``k``."""
-    n = x.shape[0]
-    half = (lag_window_pulses - 1) // 2
-    lags = np.arange(-half, half + 1)
-    taps = _lag_taps(window, lag_window_pulses)
-    plus = np.arange(n)[:, None] + lags[None, :]
-    minus = np.arange(n)[:, None] - lags[None, :]
-    valid = (plus >= 0) & (plus < n) & (minus >= 0) & (minus < n)
-    prod = np.einsum(
-        "nkc,nkc->nk", x[np.clip(plus, 0, n - 1)], np.conj(x[np.clip(minus, 0, n - 1)])
-    )
-    return np.where(valid, prod * taps[None, :], 0.0), lags
-
-
-def wigner_slow_time(
-    signal: ArrayLike,
-    *,
-    pulse_interval_s: float,
-    lag_window_pulses: int | None = None,
-    n_freq: int | None = None,
-    window: str = "hann",
-    centre_hz: float = 0.0,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Discrete pseudo-Wigner(-Ville) transform of a slow-time signal.
-
-    ``W[n, f] = sum_k h_k x[n + k] conj(x[n - k]) exp(-4 i pi (f - f_c) k ds)`` with
-    ``f_c = centre_hz``: the sampled ``int x(s + y/2) conj(x(s - y/2)) exp(-2 i pi f y)
-    dy`` with lags ``y = 2 k ds``, truncated to the data near the ends and evaluated on
-    the band ``|f - f_c| < 1 / (4 ds)`` (aliased modulo ``1 / (2 ds)``). A signal
-    ``exp(2 i pi F(s))`` has its ridge at the instantaneous frequency ``F'(s)``.
-
-    Parameters
-    ----------
-    signal : (n,) or (n, n_channels) array_like
-        Complex slow-time signal, one sample per pulse. Several channels (e.g. fast-time
-        samples) have their transforms summed.
-    pulse_interval_s : float
-        Slow-time sampling interval ``ds`` (s).
-    lag_window_pulses : int, optional
-        Length ``L`` (odd, pulses) of the lag window ``h``; lags ``|k| <= (L - 1) / 2``.
-        Default: the whole signal (``n`` or ``n - 1``).
-    n_freq : int, optional
-        Number of Doppler bins (FFT length, ``>= L``). Default: the power of two
-        ``>= 2 L``, at least 256.
-    window : str
-        Lag window name for :func:`scipy.signal.get_window` (``"hann"``, ``"boxcar"``,
-        ...); the zero end taps of Hann-type windows are dropped.
-    centre_hz : float
-        Centre ``f_c`` of the Doppler axis (Hz).
-
-    Returns
-    -------
-    W : (n, n_freq) ndarray
-        The (real) transform, in signal units squared.
-    doppler_hz : (n_freq,) ndarray
-        Doppler axis (Hz), increasing, ``f_c + m / (2 n_freq ds)`` for
-        ``m = -n_freq/2 .. n_freq/2 - 1``: it spans ``|f - f_c| < 1 / (4 ds)``, half the
-        pulse repetition frequency, so only signals whose frequency stays within
-        ``1 / (4 ds)`` of ``f_c`` are represented without aliasing.
-    """
-    x = _as_channels(signal)
-    if not (np.isfinite(pulse_interval_s) and pulse_interval_s > 0):
-        raise ValueError(f"pulse_interval_s must be positive (s), got {pulse_interval_s!r}")
-    n = x.shape[0]
-    lw = _check_lag_window(lag_window_pulses, n)
-    nf = max(256, int(2 ** np.ceil(np.log2(2 * lw)))) if n_freq is None else int(n_freq)
-    if nf < lw:
-        raise ValueError(f"n_freq must be >= lag_window_pulses ({lw}), got {n_freq!r}")
-    ds = float(pulse_interval_s)
-    if centre_hz != 0.0:
-        x = x * np.exp(-2j * np.pi * centre_hz * ds * np.arange(n))[:, None]
-    r, lags = _lag_products(x, lw, window)
-    buf = np.zeros((n, nf), dtype=np.complex128)
-    buf[:, lags % nf] = r
-    w = np.fft.fftshift(np.fft.fft(buf, axis=1).real, axes=1)
-    f = np.fft.fftshift(np.fft.fftfreq(nf, d=2.0 * ds)) + centre_hz
-    return w, f
-
-
-@dataclass(frozen=True, kw_only=True, eq=False)
-class WignerRidge:
-    """Ridge of a pseudo-Wigner transform, one value per slow-time sample.
-
-    Attributes
-    ----------
-    doppler_hz : (n,) ndarray
-        Instantaneous Doppler ``f_D(s)`` (Hz): the maximiser of ``W[n, f]`` in ``f``.
-    peak : (n,) ndarray
-        ``W`` at the ridge (signal units squared).
-    curvature : (n,) ndarray
-        ``-d^2 W / d f^2`` at the ridge (signal units squared per Hz^2); large where the
-        ridge is sharp and well determined, zero where no lag is available (the ends).
-    centre_hz : float
-        Centre of the unambiguous Doppler band ``|f - centre_hz| < 1 / (4 ds)`` (Hz).
-    """
-
-    doppler_hz: NDArray[np.float64]
-    peak: NDArray[np.float64]
-    curvature: NDArray[np.float64]
-    centre_hz: float
-
-
-def wigner_ridge(
-    signal: ArrayLike,
-    *,
-    pulse_interval_s: float,
-    lag_window_pulses: int | None = None,
-    n_freq: int | None = None,
-    window: str = "hann",
-    centre_hz: float | None = None,
-    n_newton: int = 4,
-) -> WignerRidge:
-    """Instantaneous Doppler of a slow-time signal: the ridge of its Wigner transform.
-
-    The ridge is located on the FFT grid of :func:`wigner_slow_time` and refined by
-    Newton steps on the continuous transform ``W(n, f) = Re sum_k r_k exp(-4 i pi f k
-    ds)`` (exact derivatives in ``f``, steps limited to one bin), so its precision is
-    not limited by the bin width.
-
-    Parameters
-    ----------
-    signal : (n,) or (n, n_channels) array_like
-        Complex slow-time signal; channels are summed incoherently (their transforms add).
-    pulse_interval_s : float
-        Slow-time sampling interval ``ds`` (s).
-    lag_window_pulses, n_freq, window
-        See :func:`wigner_slow_time`.
-    centre_hz : float, optional
-        Centre of the Doppler search band (Hz). Default: the pulse-pair mean Doppler
-        ``arg(sum_n sum_c x[n + 1] conj(x[n])) / (2 pi ds)``, unambiguous in
-        ``(-1/(2 ds), 1/(2 ds))``.
-    n_newton : int
-        Number of Newton refinement steps (``0`` keeps the grid maximum).
-
-    Returns
-    -------
-    WignerRidge
-    """
-    x = _as_channels(signal)
-    if not (np.isfinite(pulse_interval_s) and pulse_interval_s > 0):
-        raise ValueError(f"pulse_interval_s must be positive (s), got {pulse_interval_s!r}")
-    if n_newton < 0:
-        raise ValueError(f"n_newton must be >= 0, got {n_newton!r}")
-    ds = float(pulse_interval_s)
-    n = x.shape[0]
-    lw = _check_lag_window(lag_window_pulses, n)
-    if centre_hz is None:
-        fc = float(np.angle(np.sum(x[1:] * np.conj(x[:-1])))) / (2.0 * np.pi * ds)
-    else:
-        fc = float(centre_hz)
-    xd = x * np.exp(-2j * np.pi * fc * ds * np.arange(n))[:, None]
-    w, f = wigner_slow_time(
-        xd, pulse_interval_s=ds, lag_window_pulses=lw, n_freq=n_freq, window=window
-    )
-    r, lags = _lag_products(xd, lw, window)
-    fd = f[np.argmax(w, axis=1)]
-    df = float(f[1] - f[0])
-    a = 4.0 * np.pi * ds * lags  # phase (rad) per Hz, for each lag
-    for _ in range(n_newton):
-        e = r * np.exp(-1j * np.outer(fd, a))
-        d1 = np.sum((e * (-1j * a)).real, axis=1)
-        d2 = np.sum((e * -(a**2)).real, axis=1)
-        concave = d2 < 0
-        step = np.where(concave, -d1 / np.where(concave, d2, -1.0), 0.0)
-        fd = fd + np.clip(step, -df, df)
-    band = 1.0 / (2.0 * ds)
-    fd = (fd + band / 2) % band - band / 2
-    e = r * np.exp(-1j * np.outer(fd, a))
-    return WignerRidge(
-        doppler_hz=fd + fc,
-        peak=np.sum(e.real, axis=1),
-        curvature=np.sum((e * a**2).real, axis=1),
-        centre_hz=fc,
-    )
-
-
-# --------------------------------------------------------------------------- motion
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -565,6 +340,74 @@ def estimate_trajectory(
     if not isinstance(traces, Traces):
         raise TypeError(f"traces must be a Traces, got {type(traces).__name__}")
     rho0 = as_point(position_m, name="position_m")
+    size, lw, hw, search = _check_trajectory_options(
+        traces,
+        sub_aperture_pulses=sub_aperture_pulses,
+        lag_window_pulses=lag_window_pulses,
+        fast_time_halfwidth=fast_time_halfwidth,
+        fast_time_search=fast_time_search,
+        max_iter=max_iter,
+        tol_mps=tol_mps,
+        max_range_speed_mps=max_range_speed_mps,
+    )
+    if velocity_guess_mps is None:
+        u_init = _coarse_range_speed(
+            traces, rho0, max_range_speed_mps=max_range_speed_mps, search=search
+        )
+    else:
+        u_init = np.asarray(velocity_guess_mps, dtype=np.float64)
+        if u_init.shape != (2,) or not np.all(np.isfinite(u_init)):
+            raise ValueError(
+                "velocity_guess_mps must be a finite (2,) ground velocity (m/s), "
+                f"got {velocity_guess_mps!r}"
+            )
+    log.debug("initial velocity %s m/s", u_init)
+    march = _March(
+        traces,
+        size=size,
+        lag_window=lw,
+        halfwidth=hw,
+        search=search,
+        window=window,
+        max_iter=max_iter,
+        tol_mps=tol_mps,
+    )
+    march.run(rho0, u_init)
+    if not march.converged.all():
+        log.warning(
+            "trajectory estimate: %d of %d sub-apertures did not converge",
+            int((~march.converged).sum()),
+            march.converged.size,
+        )
+    return TrajectoryEstimate(
+        slow_times_s=march.s.copy(),
+        positions_m=march.positions,
+        position_at_zero_m=rho0,
+        sub_aperture_pulses=np.array(march.blocks, dtype=np.int64),
+        knot_times_s=march.knots,
+        velocities_mps=march.velocities,
+        range_rate_mps=march.rate,
+        residual_doppler_hz=march.residual,
+        ridge_weight=march.weight,
+        range_offset_m=march.offset,
+        initial_velocity_mps=np.asarray(u_init, dtype=np.float64),
+        n_iter=march.n_iter,
+        converged=march.converged,
+    )
+
+
+def _check_trajectory_options(
+    traces: Traces,
+    *,
+    sub_aperture_pulses: int,
+    lag_window_pulses: int | None,
+    fast_time_halfwidth: int,
+    fast_time_search: int,
+    max_iter: int,
+    tol_mps: float,
+    max_range_speed_mps: float,
+) -> tuple[int, int, int, int]:
+    """Validate the options of :func:`estimate_trajectory`: ``(size, lag, halfwidth, search)``."""
     n = traces.n_pulses
     size = int(sub_aperture_pulses)
     if size != sub_aperture_pulses or not 5 <= size <= n:
@@ -589,135 +432,157 @@ def estimate_trajectory(
         raise ValueError(f"tol_mps must be positive (m/s), got {tol_mps!r}")
     if not max_range_speed_mps > 0:
         raise ValueError(f"max_range_speed_mps must be positive (m/s), got {max_range_speed_mps!r}")
+    return size, lw, hw, search
 
-    s = traces.slow_times_s
-    ds = traces.trajectory.pulse_interval_s
-    pos = traces.positions_m
-    vplat = np.gradient(pos, s, axis=0)
-    ref = traces.reference_point_m
-    freqs = traces.frequencies_hz
-    half_lambda = 0.5 * C / traces.radar.carrier_hz
-    c0 = traces.n_samples // 2
-    margin = (lw - 1) // 2
 
-    if velocity_guess_mps is None:
-        u_init = _coarse_range_speed(
-            traces, rho0, max_range_speed_mps=max_range_speed_mps, search=search
-        )
-    else:
-        u_init = np.asarray(velocity_guess_mps, dtype=np.float64)
-        if u_init.shape != (2,) or not np.all(np.isfinite(u_init)):
-            raise ValueError(
-                "velocity_guess_mps must be a finite (2,) ground velocity (m/s), "
-                f"got {velocity_guess_mps!r}"
-            )
-    log.debug("initial velocity %s m/s", u_init)
+class _March:
+    """The sub-aperture march of :func:`estimate_trajectory`, outwards from ``s = 0``.
 
-    blocks = _sub_apertures(s, size)
-    centre = next(k for k, (i0, i1) in enumerate(blocks) if i0 <= np.argmin(np.abs(s)) < i1)
-    knots = np.array(
-        [
+    Holds the geometry of the traces and fills, sub-aperture by sub-aperture, the
+    positions, range rates, residual Dopplers and ridge weights per pulse, and the
+    velocity, range offset, iteration count and convergence per sub-aperture.
+    """
+
+    def __init__(
+        self,
+        traces: Traces,
+        *,
+        size: int,
+        lag_window: int,
+        halfwidth: int,
+        search: int,
+        window: str,
+        max_iter: int,
+        tol_mps: float,
+    ) -> None:
+        self.traces = traces
+        self.lw, self.hw, self.search, self.window = lag_window, halfwidth, search, window
+        self.max_iter, self.tol_mps = max_iter, tol_mps
+        n = traces.n_pulses
+        self.s = s = traces.slow_times_s
+        self.pos = traces.positions_m
+        self.vplat = np.gradient(self.pos, s, axis=0)
+        self.half_lambda = 0.5 * C / traces.radar.carrier_hz
+        self.c0 = traces.n_samples // 2
+        self.margin = (lag_window - 1) // 2
+        self.blocks = _sub_apertures(s, size)
+        self.knots = np.array(
             [
-                s[0] if i0 == 0 else 0.5 * (s[i0 - 1] + s[i0]),
-                s[-1] if i1 == n else 0.5 * (s[i1 - 1] + s[i1]),
+                [
+                    s[0] if i0 == 0 else 0.5 * (s[i0 - 1] + s[i0]),
+                    s[-1] if i1 == n else 0.5 * (s[i1 - 1] + s[i1]),
+                ]
+                for i0, i1 in self.blocks
             ]
-            for i0, i1 in blocks
-        ]
-    )
+        )
+        nb = len(self.blocks)
+        self.positions = np.zeros((n, 3))
+        self.rate = np.zeros(n)
+        self.residual = np.zeros(n)
+        self.weight = np.zeros(n)
+        self.velocities = np.zeros((nb, 2))
+        self.offset = np.zeros(nb)
+        self.n_iter = np.zeros(nb, dtype=np.int64)
+        self.converged = np.zeros(nb, dtype=bool)
 
-    positions = np.zeros((n, 3))
-    rate = np.zeros(n)
-    resid = np.zeros(n)
-    weight = np.zeros(n)
-    vel = np.zeros((len(blocks), 2))
-    offset = np.zeros(len(blocks))
-    iters = np.zeros(len(blocks), dtype=np.int64)
-    conv = np.zeros(len(blocks), dtype=bool)
+    def run(self, rho0: NDArray[np.float64], u_init: NDArray[np.float64]) -> None:
+        """Solve the central sub-aperture from ``rho(0)``, then march outwards both ways."""
+        s, blocks, knots, vel = self.s, self.blocks, self.knots, self.velocities
+        centre = next(k for k, (i0, i1) in enumerate(blocks) if i0 <= np.argmin(np.abs(s)) < i1)
+        self.solve(centre, 0.0, rho0, u_init)
+        for k in range(centre + 1, len(blocks)):  # outwards, s > 0
+            a, inner = knots[k, 0], blocks[k - 1][1] - 1
+            anchor = self.positions[inner] + (a - s[inner]) * np.append(vel[k - 1], 0.0)
+            self.solve(k, a, anchor, vel[k - 1])
+        for k in range(centre - 1, -1, -1):  # outwards, s < 0
+            a, inner = knots[k, 1], blocks[k + 1][0]
+            anchor = self.positions[inner] + (a - s[inner]) * np.append(vel[k + 1], 0.0)
+            self.solve(k, a, anchor, vel[k + 1])
 
-    def solve(k: int, anchor_s: float, anchor_m: NDArray, u_start: NDArray) -> None:
-        i0, i1 = blocks[k]
-        e0, e1 = max(0, i0 - margin), min(n, i1 + margin)
-        own = slice(i0 - e0, i1 - e0)
+    def solve(
+        self, k: int, anchor_s: float, anchor_m: NDArray[np.float64], u_start: NDArray
+    ) -> None:
+        """Iterate sub-aperture ``k``'s velocity from ``u_start``; store its results."""
+        i0, i1 = self.blocks[k]
         u = np.array(u_start, dtype=np.float64)
-        it = 0
-        while it < max_iter:
+        it, done = 0, False
+        while it < self.max_iter:
             it += 1
-            u3 = np.array([u[0], u[1], 0.0])
-            path = anchor_m[None, :] + (s[e0:e1, None] - anchor_s) * u3[None, :]
-            shifted = shift_fast_time(
-                traces.data[e0:e1], delta_tau(pos[e0:e1], path, ref), frequencies_hz=freqs
-            )
-            profile = np.sum(
-                np.abs(shifted[own, c0 - search - hw : c0 + search + hw + 1]) ** 2, axis=0
-            )
-            box = np.convolve(profile, np.ones(2 * hw + 1), mode="valid")
-            tc = c0 - search + int(np.argmax(box))
-            ridge = wigner_ridge(
-                shifted[:, tc - hw : tc + hw + 1],
-                pulse_interval_s=ds,
-                lag_window_pulses=lw,
-                window=window,
-            )
-            fd = ridge.doppler_hz[own]
-            wts = np.clip(ridge.curvature[own], 0.0, None)
-            wts = wts / wts.max() if wts.max() > 0 else np.ones_like(wts)
-            guess_rate, _ = _range_rate_and_jacobian(
-                pos[i0:i1], vplat[i0:i1], path[own], u3, s[i0:i1] - anchor_s
-            )
-            measured = guess_rate - half_lambda * fd
-            sw = np.sqrt(wts)
-            u_new = u.copy()
-            for _ in range(3):  # Gauss-Newton on u for the measured range rates
-                un3 = np.array([u_new[0], u_new[1], 0.0])
-                p = anchor_m[None, :] + (s[i0:i1, None] - anchor_s) * un3[None, :]
-                model, jac = _range_rate_and_jacobian(
-                    pos[i0:i1], vplat[i0:i1], p, un3, s[i0:i1] - anchor_s
-                )
-                step, *_ = np.linalg.lstsq(jac * sw[:, None], (measured - model) * sw, rcond=None)
-                u_new = u_new + step
-            done = bool(np.linalg.norm(u_new - u) < tol_mps)
+            measured, fd, wts, tc = self._measure(k, anchor_s, anchor_m, u)
+            u_new = self._fit_velocity(k, anchor_s, anchor_m, u, measured, wts)
+            done = bool(np.linalg.norm(u_new - u) < self.tol_mps)
             u = u_new
             if done:
                 break
         u3 = np.array([u[0], u[1], 0.0])
-        positions[i0:i1] = anchor_m[None, :] + (s[i0:i1, None] - anchor_s) * u3[None, :]
-        rate[i0:i1] = measured
-        resid[i0:i1] = fd
-        weight[i0:i1] = wts
-        vel[k] = u
-        offset[k] = 0.5 * C * (tc - c0) * traces.radar.sample_interval_s
-        iters[k] = it
-        conv[k] = done
+        self.positions[i0:i1] = anchor_m[None, :] + (self.s[i0:i1, None] - anchor_s) * u3[None, :]
+        self.rate[i0:i1] = measured
+        self.residual[i0:i1] = fd
+        self.weight[i0:i1] = wts
+        self.velocities[k] = u
+        self.offset[k] = 0.5 * C * (tc - self.c0) * self.traces.radar.sample_interval_s
+        self.n_iter[k] = it
+        self.converged[k] = done
 
-    solve(centre, 0.0, rho0, u_init)
-    for k in range(centre + 1, len(blocks)):  # outwards, s > 0
-        a, inner = knots[k, 0], blocks[k - 1][1] - 1
-        solve(k, a, positions[inner] + (a - s[inner]) * np.append(vel[k - 1], 0.0), vel[k - 1])
-    for k in range(centre - 1, -1, -1):  # outwards, s < 0
-        a, inner = knots[k, 1], blocks[k + 1][0]
-        solve(k, a, positions[inner] + (a - s[inner]) * np.append(vel[k + 1], 0.0), vel[k + 1])
-    if not conv.all():
-        log.warning(
-            "trajectory estimate: %d of %d sub-apertures did not converge",
-            int((~conv).sum()),
-            conv.size,
+    def _measure(
+        self, k: int, anchor_s: float, anchor_m: NDArray[np.float64], u: NDArray[np.float64]
+    ) -> tuple[NDArray, NDArray, NDArray, int]:
+        """Range rates measured on the Wigner ridge along the hypothesised path.
+
+        Returns the measured range rates (m/s), the ridge Doppler (Hz) and weights of
+        the sub-aperture's pulses, and the fast-time sample of the trace.
+        """
+        tr, s, pos, c0, hw, search = self.traces, self.s, self.pos, self.c0, self.hw, self.search
+        n = tr.n_pulses
+        i0, i1 = self.blocks[k]
+        e0, e1 = max(0, i0 - self.margin), min(n, i1 + self.margin)
+        own = slice(i0 - e0, i1 - e0)
+        u3 = np.array([u[0], u[1], 0.0])
+        path = anchor_m[None, :] + (s[e0:e1, None] - anchor_s) * u3[None, :]
+        shifted = shift_fast_time(
+            tr.data[e0:e1],
+            delta_tau(pos[e0:e1], path, tr.reference_point_m),
+            frequencies_hz=tr.frequencies_hz,
         )
+        profile = np.sum(np.abs(shifted[own, c0 - search - hw : c0 + search + hw + 1]) ** 2, axis=0)
+        box = np.convolve(profile, np.ones(2 * hw + 1), mode="valid")
+        tc = c0 - search + int(np.argmax(box))
+        ridge = wigner_ridge(
+            shifted[:, tc - hw : tc + hw + 1],
+            pulse_interval_s=tr.trajectory.pulse_interval_s,
+            lag_window_pulses=self.lw,
+            window=self.window,
+        )
+        fd = ridge.doppler_hz[own]
+        wts = np.clip(ridge.curvature[own], 0.0, None)
+        wts = wts / wts.max() if wts.max() > 0 else np.ones_like(wts)
+        guess_rate, _ = _range_rate_and_jacobian(
+            pos[i0:i1], self.vplat[i0:i1], path[own], u3, s[i0:i1] - anchor_s
+        )
+        return guess_rate - self.half_lambda * fd, fd, wts, tc
 
-    return TrajectoryEstimate(
-        slow_times_s=s.copy(),
-        positions_m=positions,
-        position_at_zero_m=rho0,
-        sub_aperture_pulses=np.array(blocks, dtype=np.int64),
-        knot_times_s=knots,
-        velocities_mps=vel,
-        range_rate_mps=rate,
-        residual_doppler_hz=resid,
-        ridge_weight=weight,
-        range_offset_m=offset,
-        initial_velocity_mps=np.asarray(u_init, dtype=np.float64),
-        n_iter=iters,
-        converged=conv,
-    )
+    def _fit_velocity(
+        self,
+        k: int,
+        anchor_s: float,
+        anchor_m: NDArray[np.float64],
+        u: NDArray[np.float64],
+        measured: NDArray[np.float64],
+        wts: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """Three weighted Gauss-Newton steps on ``u`` for the measured range rates."""
+        i0, i1 = self.blocks[k]
+        s, sw = self.s, np.sqrt(wts)
+        u_new = u.copy()
+        for _ in range(3):
+            un3 = np.array([u_new[0], u_new[1], 0.0])
+            p = anchor_m[None, :] + (s[i0:i1, None] - anchor_s) * un3[None, :]
+            model, jac = _range_rate_and_jacobian(
+                self.pos[i0:i1], self.vplat[i0:i1], p, un3, s[i0:i1] - anchor_s
+            )
+            step, *_ = np.linalg.lstsq(jac * sw[:, None], (measured - model) * sw, rcond=None)
+            u_new = u_new + step
+        return u_new
 
 
 def trajectory_error(

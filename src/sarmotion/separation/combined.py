@@ -157,21 +157,7 @@ def separate_combined(
         ``moving`` (S), ``stationary`` (L), the locations used and per-candidate details.
     """
     t0 = time.perf_counter()
-    if points_m is None:
-        if image_values is None or x_m is None or y_m is None:
-            raise ValueError("give points_m, or image_values with x_m and y_m")
-        cand = stationary_candidates(
-            image_values,
-            x_m=x_m,
-            y_m=y_m,
-            traces=traces,
-            threshold_db=threshold_db,
-            max_targets=max_targets,
-        )
-    else:
-        cand = np.atleast_2d(np.asarray(points_m, dtype=np.float64))
-        if cand.size and cand.shape[1] == 2:
-            cand = np.column_stack([cand, np.zeros(len(cand))])
+    cand = _candidates(traces, points_m, image_values, x_m, y_m, threshold_db, max_targets)
     if passes < 1:
         raise ValueError(f"passes must be >= 1, got {passes}")
     if half_window is None:
@@ -186,18 +172,11 @@ def separate_combined(
     records: list[dict[str, Any]] = []
     locations = [c.copy() for c in cand]
     total = passes * len(cand)
-    done = 0
     for sweep in range(passes):
         for i, p0 in enumerate(locations):
-            # The contrast barely depends on a sub-pixel offset (the whole column shifts
-            # alike), so movers' streaks are rejected before the costlier refinement.
-            contrast = doppler_contrast_db(traces, p0, phase_history=spectrum)
-            p = p0
-            accepted = contrast >= contrast_db
-            if accepted and refine and sweep == 0:
-                p, _ = refine_location(traces, p0, phase_history=spectrum)
-                contrast = doppler_contrast_db(traces, p, phase_history=spectrum)
-                accepted = contrast >= contrast_db
+            p, contrast, accepted = _test_location(
+                traces, spectrum, p0, contrast_db=contrast_db, refine=refine and sweep == 0
+            )
             if accepted:
                 spectrum = spectrum - aligned_constant_part(
                     traces, spectrum, p, half_window=half_window
@@ -213,8 +192,7 @@ def separate_combined(
                     "accepted": accepted,
                 }
             )
-            done += 1
-            report(progress, "combined separation", done, total)
+            report(progress, "combined separation", len(records), total)
     moving = to_fast_time(spectrum)
     info = {
         "candidates": records,
@@ -232,3 +210,53 @@ def separate_combined(
         stationary_points_m=pts,
         info=info,
     )
+
+
+def _candidates(
+    traces: Traces,
+    points_m: ArrayLike | None,
+    image_values: ArrayLike | None,
+    x_m: ArrayLike | None,
+    y_m: ArrayLike | None,
+    threshold_db: float,
+    max_targets: int,
+) -> NDArray[np.float64]:
+    """Candidate stationary locations ``(k, 3)`` (m): given, or read from the image."""
+    if points_m is not None:
+        cand = np.atleast_2d(np.asarray(points_m, dtype=np.float64))
+        if cand.size and cand.shape[1] == 2:
+            cand = np.column_stack([cand, np.zeros(len(cand))])
+        return cand
+    if image_values is None or x_m is None or y_m is None:
+        raise ValueError("give points_m, or image_values with x_m and y_m")
+    return stationary_candidates(
+        image_values,
+        x_m=x_m,
+        y_m=y_m,
+        traces=traces,
+        threshold_db=threshold_db,
+        max_targets=max_targets,
+    )
+
+
+def _test_location(
+    traces: Traces,
+    spectrum: NDArray[np.complexfloating],
+    p0: NDArray[np.float64],
+    *,
+    contrast_db: float,
+    refine: bool,
+) -> tuple[NDArray[np.float64], float, bool]:
+    """Doppler-test (and refine) one candidate: ``(location, contrast_db, accepted)``.
+
+    The contrast barely depends on a sub-pixel offset (the whole column shifts alike), so
+    movers' streaks are rejected before the costlier refinement.
+    """
+    contrast = doppler_contrast_db(traces, p0, phase_history=spectrum)
+    p = p0
+    accepted = contrast >= contrast_db
+    if accepted and refine:
+        p, _ = refine_location(traces, p0, phase_history=spectrum)
+        contrast = doppler_contrast_db(traces, p, phase_history=spectrum)
+        accepted = contrast >= contrast_db
+    return p, contrast, accepted

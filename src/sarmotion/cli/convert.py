@@ -1,0 +1,95 @@
+"""``sarmotion convert``: traces from one format to another (CPHD, native HDF5, GOTCHA)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..io import read_inputs, save_traces, staged_directory, write_cphd, write_gotcha
+from .common import InputError, noise_options, out_option, speed_option
+
+__all__ = ["convert"]
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True)
+@click.option(
+    "--to",
+    "to",
+    type=click.Choice(["cphd", "h5", "gotcha"]),
+    required=True,
+    help="Output format: cphd (a CPHD 1.1.0 file), h5 (native traces) or gotcha (a directory "
+    "of GOTCHA .mat files).",
+)
+@out_option("Output file (cphd, h5) or directory (gotcha).")
+@click.option(
+    "--channel",
+    default=None,
+    help="CPHD input: channel identifier; default the file's reference channel.",
+)
+@click.option(
+    "--vectors",
+    nargs=2,
+    type=int,
+    default=None,
+    metavar="START STOP",
+    help="CPHD input: vectors START to STOP-1 only (0-based); default all.",
+)
+@click.option(
+    "--origin",
+    "origin_llh",
+    nargs=3,
+    type=float,
+    default=None,
+    metavar="LAT LON HAE",
+    help="--to cphd: geodetic position (deg, deg, m) of the origin of the scene frame; "
+    "default 0 0 0.",
+)
+@speed_option
+@click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
+@noise_options
+def convert(
+    inputs: tuple[str, ...],
+    to: str,
+    out: Path,
+    channel: str | None,
+    vectors: tuple[int, int] | None,
+    origin_llh: tuple[float, float, float] | None,
+    speed_mps: float,
+    autofocus: bool,
+    snr_db: float | None,
+    seed: int,
+) -> None:
+    """Convert INPUTS (a scene, a native .h5 file, GOTCHA .mat files or a .cphd file).
+
+    The traces are written unchanged as CPHD (one FX-domain channel that passes sarkit's
+    consistency checker, geometry on the WGS 84 ellipsoid around --origin), as native
+    traces (.h5) or as GOTCHA .mat files (into the directory OUT). From a CPHD file,
+    --channel and --vectors choose what is read.
+    """
+    cphd_input = all(Path(p).suffix.lower() == ".cphd" for p in inputs)
+    if (channel is not None or vectors is not None) and not cphd_input:
+        raise InputError("--channel and --vectors apply to a CPHD (.cphd) input only")
+    if origin_llh is not None and to != "cphd":
+        raise InputError("--origin applies to --to cphd only")
+    traces, _ = read_inputs(
+        inputs,
+        speed_mps=speed_mps,
+        autofocus=autofocus,
+        snr_db=snr_db,
+        seed=seed,
+        channel=channel,
+        vectors=vectors,
+    )
+    if to == "gotcha":
+        with staged_directory(out) as stage:
+            files = write_gotcha(traces, stage)
+        click.echo(f"wrote {len(files)} GOTCHA file(s) to {out}")
+        return
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if to == "cphd":
+        write_cphd(out, traces, origin_llh=origin_llh or (0.0, 0.0, 0.0))
+    else:
+        save_traces(out, traces)
+    click.echo(f"wrote {out} ({traces.n_pulses} pulses x {traces.n_samples} samples, {to})")

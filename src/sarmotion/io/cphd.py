@@ -1,0 +1,814 @@
+"""CPHD files (Compensated Phase History Data, NGA.STND.0068-1, versions 1.0.1 and 1.1.0).
+
+Files are parsed and written with sarkit (``sarkit.cphd.Reader`` and ``Writer``); this
+module maps them to and from :class:`~sarmotion.traces.Traces`.
+
+Reading (:func:`read_cphd`)
+---------------------------
+Signal
+    FX domain only (``Global/DomainType = FX``): vector ``j`` is the deramped phase
+    history on the frequencies ``SC0_j + k SCSS_j`` (Hz), referenced to the
+    stabilisation reference point ``SRPPos_j``: a point reflector at ``p`` contributes
+    ``exp(2i pi SGN f (TOA_j(p) - TOA_j(SRP_j)))`` with the bistatic time of arrival
+    ``TOA_j(p) = (|TxPos_j - p| + |RcvPos_j - p|) / c``. With ``SGN = -1`` this is the
+    GOTCHA convention of :mod:`sarmotion.spectral` and the vectors are the phase history
+    as they stand; ``SGN = +1`` vectors are conjugated. ``AmpSF`` scales the vectors
+    when present; the sample formats CI2, CI4 and CF8 are read. All selected vectors
+    must share one frequency grid (SC0, SCSS); the bandwidth is ``max FX2 - min FX1``.
+    TOA-domain, compressed and bistatic files are refused (:class:`DataError`).
+Geometry
+    PVP positions are Earth-centred (ECF, m). sarmotion works in the scene frame of the
+    file: origin at the image area reference point (IARP), axes ``uIAX``, ``uIAY`` and
+    ``uIAX x uIAY`` (up) of a planar reference surface, or east, north and up at the
+    IARP for an HAE surface; the ground of the scene is ``z = 0``. The antenna position
+    of a vector is the mid-point of ``TxPos`` and ``RcvPos`` (one antenna, the
+    start-stop model of sarmotion), its slow time ``TxTime``, re-centred so that
+    ``s = 0`` is half-way between the first and last selected vectors.
+Reference point
+    ``SRPPos``. When it moves between the selected vectors the phase history is
+    re-referenced exactly to one point (the SRP of the middle selected vector, or
+    ``reference_point_m``) by ``exp(-2i pi f (TOA_j(SRP_j) - TOA_j(rho_o)))``.
+Not modelled
+    ``TDTropoSRP`` and ``TDIonoSRP`` (the data are taken as referenced to the geometric
+    TOA of the SRP), antenna patterns, noise levels and support arrays.
+
+Writing (:func:`write_cphd`)
+----------------------------
+CPHD 1.1.0, one monostatic spotlight channel of CF8 samples (complex64), FX domain,
+``SGN = -1``: the phase history of the traces as it stands. The scene frame of the
+traces is placed on the WGS 84 ellipsoid as east, north, up at ``origin_llh`` (the
+IARP; the reference surface is that tangent plane), so :func:`read_cphd` gives the
+positions back in the same frame. Per vector: ``TxPos = RcvPos`` = the antenna position
+(start-stop), ``TxTime`` = slow time from the first pulse, ``RcvTime`` = ``TxTime`` plus
+the two-way travel time to the reference point, velocities by finite differences,
+``SRPPos`` = the reference point, ``FX1``/``FX2`` = the pulse band ``carrier +- B/2``
+(the sampled span for a Gaussian pulse), ``TOA1``/``TOA2`` = the fast-time window
+``+-0.4 / SCSS`` (a 1.25 oversampling), ``aFRR1 = aFRR2 = 0`` (no chirp rate is known),
+``SIGNAL = 1``. The exact radar parameters and the traces' metadata go in
+``ProductInfo/Parameter`` elements named ``sarmotion.radar`` and ``sarmotion.metadata``
+(JSON), which :func:`read_cphd` restores. The file passes sarkit's consistency checker
+(``cphdcheck FILE --thorough``) without errors or warnings.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import logging
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import lxml.etree
+import numpy as np
+import sarkit.cphd as skcphd
+import sarkit.wgs84 as skwgs84
+from numpy.typing import ArrayLike, NDArray
+
+from .. import __version__
+from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
+from .errors import DataError, staged_paths
+from .native import _to_json
+
+__all__ = ["read_cphd", "write_cphd", "is_cphd_file"]
+
+logger = logging.getLogger(__name__)
+
+PathLike = str | os.PathLike[str]
+
+#: XML namespace of the CPHD version written.
+CPHD_NAMESPACE = "http://api.nsgreg.nga.mil/schema/cphd/1.1.0"
+
+#: PVPs the reader needs.
+_REQUIRED_PVPS = ("TxTime", "TxPos", "RcvTime", "RcvPos", "SRPPos", "FX1", "FX2", "SC0", "SCSS")
+
+#: Largest spread of ``SC0`` and of ``SCSS`` over the vectors, in steps, taken as one grid.
+_GRID_TOL = 1e-3
+
+#: Name prefix of the ProductInfo parameters written by sarmotion.
+_PARAMETER_PREFIX = "sarmotion."
+
+#: Fast-time (TOA) window saved, as a fraction of the unaliased window ``1 / SCSS``.
+_TOA_FRACTION = 0.8
+
+#: Placeholder collection start for traces without one (they carry relative times only).
+_DEFAULT_COLLECTION_START = "2000-01-01T00:00:00Z"
+
+_BLOCKS = ("XML", "SUPPORT", "PVP", "SIGNAL")
+
+
+# ----------------------------------------------------------------------------- frames
+@dataclass(frozen=True)
+class _Frame:
+    """A Cartesian scene frame in ECF: ``ecf = origin + local @ axes``."""
+
+    origin_ecf: NDArray[np.float64]  # (3,)
+    axes: NDArray[np.float64]  # (3, 3), rows: unit x, y, z in ECF
+
+    def to_ecf(self, local: ArrayLike) -> NDArray[np.float64]:
+        return self.origin_ecf + np.asarray(local, dtype=np.float64) @ self.axes
+
+    def to_local(self, ecf: ArrayLike) -> NDArray[np.float64]:
+        return (np.asarray(ecf, dtype=np.float64) - self.origin_ecf) @ self.axes.T
+
+
+def _enu_frame(llh: ArrayLike) -> _Frame:
+    """East, north, up at a geodetic point ``(lat_deg, lon_deg, hae_m)``."""
+    llh = np.asarray(llh, dtype=np.float64)
+    axes = np.stack([skwgs84.east(llh), skwgs84.north(llh), skwgs84.up(llh)])
+    return _Frame(origin_ecf=skwgs84.geodetic_to_cartesian(llh), axes=axes)
+
+
+# ----------------------------------------------------------------------------- reading
+def is_cphd_file(path: PathLike) -> bool:
+    """Whether ``path`` is a file that starts with a CPHD file type header (``CPHD/``).
+
+    A cheap check for dispatching inputs; :func:`read_cphd` validates the rest.
+    """
+    p = Path(path)
+    if not p.is_file():
+        return False
+    try:
+        with p.open("rb") as fh:
+            return fh.read(5) == b"CPHD/"
+    except OSError:
+        return False
+
+
+def _open(path: Path, fh: Any) -> Any:
+    """A sarkit Reader on ``fh`` after checking the header, version and block sizes."""
+    first = fh.readline(64)
+    if not first.startswith(b"CPHD/"):
+        raise DataError(f"{path}: not a CPHD file (no 'CPHD/' file type header)")
+    version = first[5:].decode("ascii", "replace").strip()
+    supported = sorted(v["version"] for v in skcphd.VERSION_INFO.values())
+    if version not in supported:
+        raise DataError(
+            f"{path}: CPHD version {version!r} is not supported (supported: {', '.join(supported)})"
+        )
+    try:
+        fh.seek(0)
+        _, kvp = skcphd.read_file_header(fh)
+        _check_block_sizes(path, kvp)
+        fh.seek(0)
+        reader = skcphd.Reader(fh)
+    except (ValueError, KeyError, UnicodeDecodeError, lxml.etree.XMLSyntaxError) as exc:
+        if isinstance(exc, DataError):
+            raise
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise DataError(f"{path}: unreadable CPHD header or XML ({msg})") from None
+    return reader
+
+
+def _check_block_sizes(path: Path, kvp: dict[str, str]) -> None:
+    """DataError if the file ends before a block the header declares."""
+    size = path.stat().st_size
+    for block in _BLOCKS:
+        if f"{block}_BLOCK_BYTE_OFFSET" in kvp:
+            end = int(kvp[f"{block}_BLOCK_BYTE_OFFSET"]) + int(kvp.get(f"{block}_BLOCK_SIZE", 0))
+            if end > size:
+                raise DataError(
+                    f"{path}: truncated: {size} bytes, but the header puts the end of the "
+                    f"{block.lower()} block at byte {end}"
+                )
+
+
+def _find(xml: Any, where: str) -> str | None:
+    """Stripped text of the element at ``where`` ("A/B/C", any namespace), or None."""
+    value = xml.findtext("./" + "/".join("{*}" + part for part in where.split("/")))
+    return value.strip() if value is not None else None
+
+
+def _text(xml: Any, where: str, path: Path) -> str:
+    value = _find(xml, where)
+    if value is None:
+        raise DataError(f"{path}: not a usable CPHD file: no XML element {where}")
+    return value
+
+
+def _number(xml: Any, where: str, path: Path) -> float:
+    text = _text(xml, where, path)
+    try:
+        return float(text)
+    except ValueError:
+        raise DataError(f"{path}: XML element {where} is not a number ({text!r})") from None
+
+
+def _check_collection(xml: Any, path: Path) -> None:
+    """Refuse what sarmotion does not model: TOA domain, compression, bistatic data."""
+    domain = _text(xml, "Global/DomainType", path)
+    if domain != "FX":
+        raise DataError(
+            f"{path}: signal in the {domain} domain (Global/DomainType {domain}); sarmotion "
+            "reads FX-domain (deramped phase history) CPHD only"
+        )
+    if _find(xml, "Data/SignalCompressionID") is not None:
+        raise DataError(f"{path}: compressed signal arrays are not supported")
+    kind = _find(xml, "CollectionID/CollectType")
+    if kind is not None and kind != "MONOSTATIC":
+        raise DataError(f"{path}: {kind} collection; sarmotion models one antenna (MONOSTATIC)")
+
+
+def _select_channel(xml: Any, channel: str | int | None, path: Path) -> tuple[str, int, int]:
+    """``(identifier, n_vectors, n_samples)`` of the requested channel."""
+    nodes = xml.findall("./{*}Data/{*}Channel")
+    ids = [_find(n, "Identifier") or "" for n in nodes]
+    if not ids:
+        raise DataError(f"{path}: not a usable CPHD file: no Data/Channel")
+    if channel is None:
+        ref = _find(xml, "Channel/RefChId")
+        index = ids.index(ref) if ref in ids else 0
+    elif isinstance(channel, (int, np.integer)) and not isinstance(channel, bool):
+        if not 0 <= channel < len(ids):
+            raise DataError(f"{path}: channel index {channel} outside 0..{len(ids) - 1}")
+        index = int(channel)
+    elif str(channel) in ids:
+        index = ids.index(str(channel))
+    else:
+        raise DataError(f"{path}: no channel {channel!r} (channels: {', '.join(ids)})")
+    try:
+        n_vectors = int(_find(nodes[index], "NumVectors") or "")
+        n_samples = int(_find(nodes[index], "NumSamples") or "")
+    except ValueError:
+        raise DataError(f"{path}: channel {ids[index]}: bad NumVectors or NumSamples") from None
+    return ids[index], n_vectors, n_samples
+
+
+def _vector_range(vectors: tuple[int, int] | None, n: int, path: Path) -> tuple[int, int]:
+    start, stop = (0, n) if vectors is None else (int(vectors[0]), int(vectors[1]))
+    if not 0 <= start < stop <= n:
+        raise DataError(f"{path}: vectors [{start}, {stop}) outside the channel's [0, {n})")
+    if stop - start < 2:
+        raise DataError(f"{path}: vectors [{start}, {stop}): at least 2 vectors are needed")
+    return start, stop
+
+
+def _read_pvps(reader: Any, ch: str, start: int, stop: int, path: Path) -> NDArray[Any]:
+    """The PVPs of vectors ``start:stop`` after checking the required fields are there."""
+    try:
+        dtype = skcphd.get_pvp_dtype(reader.metadata.xmltree)
+    except (AttributeError, TypeError, ValueError, KeyError) as exc:
+        raise DataError(f"{path}: unreadable PVP layout ({exc})") from None
+    names = dtype.names or ()
+    missing = [name for name in _REQUIRED_PVPS if name not in names]
+    if missing:
+        raise DataError(
+            f"{path}: not a usable CPHD file: no PVP {', '.join(missing)} "
+            f"(needs {', '.join(_REQUIRED_PVPS)})"
+        )
+    pvps = reader.read_pvps(ch, start_vector=start, stop_vector=stop)
+    for name in _REQUIRED_PVPS + (("AmpSF",) if "AmpSF" in names else ()):
+        bad = ~np.isfinite(np.asarray(pvps[name], dtype=np.float64))
+        if np.any(bad):
+            first = int(np.argwhere(bad)[0][0]) + start
+            raise DataError(
+                f"{path}: channel {ch}: PVP {name} is NaN/inf at {int(bad.sum())} value(s) "
+                f"(first at vector {first})"
+            )
+    return pvps
+
+
+def _scene_frame(xml: Any, path: Path) -> tuple[_Frame, str]:
+    """The scene frame of the file (origin IARP) and its description."""
+    origin = np.array([_number(xml, f"SceneCoordinates/IARP/ECF/{k}", path) for k in "XYZ"])
+    planar = xml.find("./{*}SceneCoordinates/{*}ReferenceSurface/{*}Planar")
+    if planar is None:
+        llh = [_number(xml, f"SceneCoordinates/IARP/LLH/{k}", path) for k in ("Lat", "Lon", "HAE")]
+        return _Frame(origin_ecf=origin, axes=_enu_frame(llh).axes), "east, north, up at the IARP"
+    ux = np.array([_number(planar, f"uIAX/{k}", path) for k in "XYZ"])
+    uy = np.array([_number(planar, f"uIAY/{k}", path) for k in "XYZ"])
+    units = np.linalg.norm([ux, uy], axis=1)
+    if np.any(np.abs(units - 1) > 1e-6) or abs(ux @ uy) > 1e-6:
+        raise DataError(f"{path}: ReferenceSurface/Planar uIAX, uIAY are not orthonormal")
+    axes = np.stack([ux, uy, np.cross(ux, uy)])
+    return _Frame(origin_ecf=origin, axes=axes), "IARP, uIAX, uIAY, up"
+
+
+def _stored_parameters(xml: Any, path: Path) -> dict[str, Any]:
+    """The ``sarmotion.*`` ProductInfo parameters, JSON-decoded."""
+    out: dict[str, Any] = {}
+    for node in xml.findall("./{*}ProductInfo/{*}Parameter"):
+        name = node.get("name", "")
+        if name.startswith(_PARAMETER_PREFIX):
+            try:
+                out[name[len(_PARAMETER_PREFIX) :]] = json.loads(node.text or "")
+            except ValueError:
+                raise DataError(f"{path}: ProductInfo parameter {name} is not valid JSON") from None
+    return out
+
+
+def _stored_radar(stored: Any, n_samples: int, carrier: float, df: float) -> Radar | None:
+    """The radar written by :func:`write_cphd`, if it is that of the frequency grid."""
+    if not isinstance(stored, dict):
+        return None
+    try:
+        radar = Radar(**stored)
+    except (TypeError, ValueError):
+        return None
+    same = (
+        radar.n_samples == n_samples
+        and abs(radar.frequency_step_hz - df) * n_samples <= _GRID_TOL * df
+        and abs(radar.carrier_hz - carrier) <= _GRID_TOL * df
+    )
+    return radar if same else None
+
+
+def _radar(pvps: NDArray[Any], n_samples: int, stored: Any, path: Path, ch: str) -> Radar:
+    """One frequency grid for all vectors, as a Radar (the stored one when it agrees)."""
+    sc0 = np.asarray(pvps["SC0"], dtype=np.float64)
+    scss = np.asarray(pvps["SCSS"], dtype=np.float64)
+    df = float(np.median(scss))
+    if not df > 0 or not np.all(sc0 > 0):
+        raise DataError(f"{path}: channel {ch}: SC0 and SCSS must be positive frequencies (Hz)")
+    if np.ptp(sc0) > _GRID_TOL * df or np.ptp(scss) * n_samples > _GRID_TOL * df:
+        raise DataError(
+            f"{path}: channel {ch}: the frequency grid varies between vectors (SC0 spans "
+            f"{np.ptp(sc0):.6g} Hz, SCSS {np.ptp(scss):.6g} Hz); sarmotion needs one grid"
+        )
+    carrier = float(np.median(sc0)) + (n_samples // 2) * df
+    radar = _stored_radar(stored, n_samples, carrier, df)
+    if radar is not None:
+        return radar
+    band = float(np.max(pvps["FX2"]) - np.min(pvps["FX1"]))
+    try:
+        return Radar(
+            carrier_hz=carrier,
+            bandwidth_hz=min(band, n_samples * df),
+            n_samples=n_samples,
+            frequency_step_hz=df,
+            pulse="rect",
+        )
+    except ValueError as exc:
+        raise DataError(f"{path}: channel {ch}: unusable frequency band: {exc}") from None
+
+
+def _signal(
+    reader: Any, ch: str, start: int, stop: int, pvps: NDArray[Any], path: Path
+) -> NDArray[np.complex128]:
+    """Vectors ``start:stop`` as complex128 ``(n_vectors, n_samples)``, AmpSF applied, SGN -1."""
+    sgn = _text(reader.metadata.xmltree.getroot(), "Global/SGN", path).lstrip("+")
+    if sgn not in ("1", "-1"):
+        raise DataError(f"{path}: Global/SGN must be +1 or -1, got {sgn!r}")
+    raw = reader.read_signal(ch, start_vector=start, stop_vector=stop)
+    if raw.dtype.names:  # CI2 / CI4: integer real and imaginary parts
+        data = raw["real"].astype(np.float64) + 1j * raw["imag"].astype(np.float64)
+    else:
+        data = raw.astype(np.complex128)
+    if "AmpSF" in (pvps.dtype.names or ()):
+        data *= np.asarray(pvps["AmpSF"], dtype=np.float64)[:, None]
+    bad = ~np.isfinite(data)
+    if np.any(bad):
+        first = np.argwhere(bad)[0]
+        raise DataError(
+            f"{path}: channel {ch}: signal has {int(bad.sum())} NaN/inf sample(s) (first at "
+            f"vector {int(first[0]) + start}, sample {int(first[1])})"
+        )
+    return np.conj(data) if sgn == "1" else data
+
+
+def _toa(tx: NDArray[np.float64], rx: NDArray[np.float64], p: NDArray[np.float64]) -> Any:
+    """Bistatic time of arrival ``(|tx - p| + |rx - p|) / c`` per vector (s)."""
+    return (np.linalg.norm(tx - p, axis=-1) + np.linalg.norm(rx - p, axis=-1)) / C
+
+
+def read_cphd(
+    path: PathLike,
+    *,
+    channel: str | int | None = None,
+    vectors: tuple[int, int] | None = None,
+    reference_point_m: ArrayLike | None = None,
+) -> Traces:
+    """Read one channel of a CPHD 1.x file (FX domain) as traces.
+
+    Parameters
+    ----------
+    path : path
+        CPHD file (see the module docstring for what is read and how).
+    channel : str or int, optional
+        Channel identifier (``Data/Channel/Identifier``) or 0-based index; default the
+        reference channel ``Channel/RefChId``.
+    vectors : (int, int), optional
+        Vectors ``start:stop`` (0-based, ``stop`` excluded) to read, at least 2; default
+        all of the channel.
+    reference_point_m : (2,) or (3,) array_like, optional
+        Reference point ``rho_o`` (m, scene frame) of the returned traces; the phase
+        history is re-referenced to it exactly. Default: the SRP (of the middle selected
+        vector when the SRP moves).
+
+    Returns
+    -------
+    Traces
+        ``(n_vectors, NumSamples)`` complex128 traces in the scene frame of the file
+        (origin at the IARP, ``z`` up); ``Radar(pulse="rect")`` on the common frequency
+        grid, or the radar stored by :func:`write_cphd`. Metadata: the stored metadata
+        of a file written by sarmotion (else ``source="cphd"``), and ``"cphd"``: file,
+        channel, vector range, collector, core name, collection start, SGN, frame.
+
+    Raises
+    ------
+    DataError
+        Missing or truncated file, not a CPHD file, an unsupported version, TOA-domain,
+        compressed or bistatic data, an unknown channel, a bad vector range, missing or
+        NaN PVPs, NaN samples, frequency grids that differ between vectors, or times
+        that do not increase.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise DataError(f"{p}: file not found" if not p.exists() else f"{p}: not a file")
+    with p.open("rb") as fh:
+        reader = _open(p, fh)
+        xml = reader.metadata.xmltree.getroot()
+        _check_collection(xml, p)
+        ch, n_vectors, n_samples = _select_channel(xml, channel, p)
+        start, stop = _vector_range(vectors, n_vectors, p)
+        pvps = _read_pvps(reader, ch, start, stop, p)
+        phase_history = _signal(reader, ch, start, stop, pvps, p)
+    stored = _stored_parameters(xml, p)
+    radar = _radar(pvps, n_samples, stored.get("radar"), p, ch)
+    frame, frame_name = _scene_frame(xml, p)
+    trajectory, rho_o, phase = _geometry(
+        pvps, frame, reference_point_m, radar, f"{p}: channel {ch}"
+    )
+    if phase is not None:
+        phase_history *= phase
+    metadata = dict(stored.get("metadata") or {"source": "cphd"})
+    metadata["cphd"] = _provenance(xml, p, ch, (start, stop), n_vectors, frame_name, pvps)
+    logger.debug("read CPHD %s channel %s vectors %d:%d", p, ch, start, stop)
+    return Traces.from_phase_history(
+        phase_history,
+        trajectory=trajectory,
+        radar=radar,
+        reference_point_m=rho_o,
+        metadata=metadata,
+    )
+
+
+def _geometry(
+    pvps: NDArray[Any], frame: _Frame, reference_point_m: ArrayLike | None, radar: Radar, where: str
+) -> tuple[Trajectory, NDArray[np.float64], NDArray[np.complex128] | None]:
+    """Trajectory and reference point (scene frame), and the re-referencing phase if any.
+
+    The antenna is the mid-point of TxPos and RcvPos; the phase, ``(n_vectors, n_freq)``,
+    moves the reference of every vector from its SRP to one point ``rho_o``.
+    """
+    tx = np.asarray(pvps["TxPos"], dtype=np.float64)
+    rx = np.asarray(pvps["RcvPos"], dtype=np.float64)
+    srp = np.asarray(pvps["SRPPos"], dtype=np.float64)
+    if reference_point_m is not None:
+        rho_o = frame.to_ecf(as_point(reference_point_m, name="reference_point_m"))
+    else:
+        rho_o = srp[srp.shape[0] // 2]
+    phase = None
+    if np.any(srp != rho_o):
+        phase = delay_phase(_toa(tx, rx, rho_o) - _toa(tx, rx, srp), radar.frequencies_hz)
+    t = np.asarray(pvps["TxTime"], dtype=np.float64)
+    try:
+        trajectory = Trajectory(
+            positions_m=frame.to_local(0.5 * (tx + rx)), slow_times_s=t - 0.5 * (t[0] + t[-1])
+        )
+    except ValueError as exc:
+        raise DataError(f"{where}: unusable antenna positions or times: {exc}") from None
+    return trajectory, frame.to_local(rho_o), phase
+
+
+def _provenance(
+    xml: Any, path: Path, ch: str, span: tuple[int, int], n: int, frame: str, pvps: Any
+) -> dict[str, Any]:
+    """The ``metadata["cphd"]`` record of a read: where the traces come from."""
+    version = skcphd.VERSION_INFO.get(lxml.etree.QName(xml).namespace, {}).get("version")
+    signal = pvps["SIGNAL"] if "SIGNAL" in (pvps.dtype.names or ()) else None
+    return {
+        "file": path.name,
+        "path": str(path),
+        "version": version,
+        "channel": ch,
+        "vectors": [int(span[0]), int(span[1])],
+        "n_vectors_in_channel": int(n),
+        "collector": _find(xml, "CollectionID/CollectorName"),
+        "core_name": _find(xml, "CollectionID/CoreName"),
+        "collection_start": _find(xml, "Global/Timeline/CollectionStart"),
+        "sgn": _find(xml, "Global/SGN"),
+        "frame": frame,
+        "vectors_without_signal": 0 if signal is None else int(np.count_nonzero(signal == 0)),
+    }
+
+
+# ----------------------------------------------------------------------------- writing
+#: PVPs written, in layout order: (name, size in 8-byte words, binary format).
+_PVP_LAYOUT = (
+    ("TxTime", 1, "F8"),
+    ("TxPos", 3, "X=F8;Y=F8;Z=F8;"),
+    ("TxVel", 3, "X=F8;Y=F8;Z=F8;"),
+    ("RcvTime", 1, "F8"),
+    ("RcvPos", 3, "X=F8;Y=F8;Z=F8;"),
+    ("RcvVel", 3, "X=F8;Y=F8;Z=F8;"),
+    ("SRPPos", 3, "X=F8;Y=F8;Z=F8;"),
+    ("aFDOP", 1, "F8"),
+    ("aFRR1", 1, "F8"),
+    ("aFRR2", 1, "F8"),
+    ("FX1", 1, "F8"),
+    ("FX2", 1, "F8"),
+    ("TOA1", 1, "F8"),
+    ("TOA2", 1, "F8"),
+    ("TDTropoSRP", 1, "F8"),
+    ("SC0", 1, "F8"),
+    ("SCSS", 1, "F8"),
+    ("SIGNAL", 1, "I8"),
+)
+
+_CHANNEL_ID = "1"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Layout:
+    """Geometry and sampling of a file being written (ECF m, Hz, s)."""
+
+    frame: _Frame
+    origin_llh: NDArray[np.float64]  # (lat_deg, lon_deg, hae_m) of the IARP
+    srp_local: NDArray[np.float64]  # (3,) scene frame
+    pvps: NDArray[Any]
+    band_hz: tuple[float, float]  # FX1, FX2
+    toa_s: tuple[float, float]  # TOA1, TOA2
+    resolution_m: float  # c / (2 B)
+
+
+def _band(radar: Radar) -> tuple[float, float]:
+    """``(FX1, FX2)``: the pulse band (rect) or the sampled span (Gaussian), Hz."""
+    if radar.pulse == "rect":
+        half = 0.5 * radar.bandwidth_hz
+        return radar.carrier_hz - half, radar.carrier_hz + half
+    f, df = radar.frequencies_hz, radar.frequency_step_hz
+    return float(f[0] - 0.5 * df), float(f[-1] + 0.5 * df)
+
+
+def _pvp_dtype() -> np.dtype[Any]:
+    return np.dtype(
+        [
+            (name, "i8" if fmt == "I8" else ("3f8" if size == 3 else "f8"))
+            for name, size, fmt in _PVP_LAYOUT
+        ]
+    )
+
+
+def _layout(traces: Traces, origin_llh: NDArray[np.float64]) -> _Layout:
+    """PVPs of the traces: start-stop antenna, fixed SRP, one frequency grid."""
+    radar = traces.radar
+    frame = _enu_frame(origin_llh)
+    pos = frame.to_ecf(traces.positions_m)
+    srp = frame.to_ecf(traces.reference_point_m)
+    t = traces.slow_times_s - traces.slow_times_s[0]
+    vel = np.gradient(pos, t, axis=0, edge_order=2 if t.size > 2 else 1)
+    r = np.linalg.norm(pos - srp, axis=1)
+    band = _band(radar)
+    if band[0] <= 0:
+        raise DataError(f"the band starts at {band[0]:.6g} Hz: CPHD needs positive frequencies")
+    half = 0.5 * _TOA_FRACTION / radar.frequency_step_hz
+    pvps = np.zeros(traces.n_pulses, dtype=_pvp_dtype())
+    pvps["TxTime"] = t
+    pvps["TxPos"] = pvps["RcvPos"] = pos
+    pvps["TxVel"] = pvps["RcvVel"] = vel
+    pvps["RcvTime"] = t + 2.0 * r / C
+    pvps["SRPPos"] = srp
+    pvps["aFDOP"] = -2.0 / C * np.sum(vel * (pos - srp), axis=1) / r
+    pvps["FX1"], pvps["FX2"] = band
+    pvps["TOA1"], pvps["TOA2"] = -half, half
+    pvps["SC0"] = radar.frequencies_hz[0]
+    pvps["SCSS"] = radar.frequency_step_hz
+    pvps["SIGNAL"] = 1
+    return _Layout(
+        frame=frame,
+        origin_llh=origin_llh,
+        srp_local=traces.reference_point_m,
+        pvps=pvps,
+        band_hz=band,
+        toa_s=(-half, half),
+        resolution_m=C / (2.0 * radar.bandwidth_hz),
+    )
+
+
+def _scene_coordinates(lay: _Layout) -> dict[str, Any]:
+    """IARP at the frame origin, the tangent plane, an image area around the SRP."""
+    half = 0.5 * C * lay.toa_s[1]  # range half-width of the saved TOA window (m)
+    x1, y1 = lay.srp_local[:2] - half
+    x2, y2 = lay.srp_local[:2] + half
+    corners = np.array([[x1, y1], [x1, y2], [x2, y2], [x2, y1]])  # clockwise seen from above
+    ground = np.column_stack([corners, np.zeros(4)])
+    iacp = skwgs84.cartesian_to_geodetic(lay.frame.to_ecf(ground))[:, :2]
+    spacing = 0.5 * lay.resolution_m
+    n = int(np.ceil((x2 - x1) / spacing))
+    extent = {"FirstLine": 0, "NumLines": n, "LineSpacing": spacing}
+    return {
+        "EarthModel": "WGS_84",
+        "IARP": {"ECF": lay.frame.origin_ecf, "LLH": lay.origin_llh},
+        "ReferenceSurface": {"Planar": {"uIAX": lay.frame.axes[0], "uIAY": lay.frame.axes[1]}},
+        "ImageArea": {"X1Y1": [x1, y1], "X2Y2": [x2, y2], "Polygon": corners},
+        "ImageAreaCornerPoints": iacp,
+        "ImageGrid": {
+            "IARPLocation": [-x1 / spacing - 0.5, -y1 / spacing - 0.5],  # (line, sample)
+            "IAXExtent": extent,
+            "IAYExtent": {"SampleSpacing": spacing, "FirstSample": 0, "NumSamples": n},
+        },
+    }
+
+
+def _channel_parameters(lay: _Layout) -> dict[str, Any]:
+    fx1, fx2 = lay.band_hz
+    return {
+        "RefChId": _CHANNEL_ID,
+        "FXFixedCPHD": True,
+        "TOAFixedCPHD": True,
+        "SRPFixedCPHD": True,
+        "Parameters": [
+            {
+                "Identifier": _CHANNEL_ID,
+                "RefVectorIndex": lay.pvps.size // 2,
+                "FXFixed": True,
+                "TOAFixed": True,
+                "SRPFixed": True,
+                "SignalNormal": True,
+                "Polarization": {"TxPol": "UNSPECIFIED", "RcvPol": "UNSPECIFIED"},
+                "FxC": 0.5 * (fx1 + fx2),
+                "FxBW": fx2 - fx1,
+                "TOASaved": lay.toa_s[1] - lay.toa_s[0],
+                "DwellTimes": {"CODId": "1", "DwellId": "1"},
+            }
+        ],
+    }
+
+
+def _dwell(lay: _Layout) -> dict[str, Any]:
+    """Constant centre-of-dwell and dwell times spanning the reference times of the SRP."""
+    ends = lay.pvps[[0, -1]]
+    # Reference time of the SRP echo; TxPos = RcvPos: half-way between TxTime and RcvTime.
+    t_ref = 0.5 * (ends["TxTime"] + ends["RcvTime"])
+    return {
+        "NumCODTimes": 1,
+        "CODTime": [{"Identifier": "1", "CODTimePoly": np.array([[0.5 * (t_ref[0] + t_ref[1])]])}],
+        "NumDwellTimes": 1,
+        "DwellTime": [{"Identifier": "1", "DwellTimePoly": np.array([[t_ref[1] - t_ref[0]]])}],
+    }
+
+
+def _xml(traces: Traces, lay: _Layout, header: dict[str, Any]) -> Any:
+    """The CPHD 1.1.0 XML tree of the traces, ReferenceGeometry computed by sarkit."""
+    root = skcphd.ElementWrapper(
+        lxml.etree.Element(f"{{{CPHD_NAMESPACE}}}CPHD", nsmap={None: CPHD_NAMESPACE})
+    )
+    root["CollectionID"] = {
+        "CollectorName": "sarmotion",
+        "CoreName": header["core_name"],
+        "CollectType": "MONOSTATIC",
+        "RadarMode": {"ModeType": "SPOTLIGHT"},
+        "Classification": header["classification"],
+        "ReleaseInfo": header["release_info"],
+    }
+    root["Global"] = {
+        "DomainType": "FX",
+        "SGN": -1,
+        "Timeline": {
+            "CollectionStart": header["collection_start"],
+            "TxTime1": float(lay.pvps["TxTime"][0]),
+            "TxTime2": float(lay.pvps["TxTime"][-1]),
+        },
+        "FxBand": {"FxMin": lay.band_hz[0], "FxMax": lay.band_hz[1]},
+        "TOASwath": {"TOAMin": lay.toa_s[0], "TOAMax": lay.toa_s[1]},
+    }
+    root["SceneCoordinates"] = _scene_coordinates(lay)
+    root["Data"] = {
+        "SignalArrayFormat": "CF8",
+        "NumBytesPVP": 8 * sum(size for _, size, _ in _PVP_LAYOUT),
+        "NumCPHDChannels": 1,
+        "Channel": [
+            {
+                "Identifier": _CHANNEL_ID,
+                "NumVectors": traces.n_pulses,
+                "NumSamples": traces.n_samples,
+                "SignalArrayByteOffset": 0,
+                "PVPArrayByteOffset": 0,
+            }
+        ],
+        "NumSupportArrays": 0,
+    }
+    root["Channel"] = _channel_parameters(lay)
+    offsets = np.cumsum([0] + [size for _, size, _ in _PVP_LAYOUT])
+    root["PVP"] = {
+        name: {"Offset": int(off), "Size": size, "dtype": skcphd.binary_format_string_to_dtype(fmt)}
+        for (name, size, fmt), off in zip(_PVP_LAYOUT, offsets, strict=False)
+    }
+    root["Dwell"] = _dwell(lay)
+    root["ProductInfo"] = {
+        "CreationInfo": [{"Application": f"sarmotion {__version__}", "DateTime": header["now"]}],
+        "Parameter": [(_PARAMETER_PREFIX + k, v) for k, v in header["parameters"].items()],
+    }
+    tree = root.elem.getroottree()
+    root["ReferenceGeometry"] = skcphd.compute_reference_geometry(tree, lay.pvps)
+    return tree
+
+
+def _utc(value: _dt.datetime | str | None) -> _dt.datetime:
+    if value is None:
+        value = _DEFAULT_COLLECTION_START
+    if isinstance(value, str):
+        try:
+            value = _dt.datetime.fromisoformat(value.replace("Z", "+00:00"))
+        except ValueError:
+            raise ValueError(f"collection_start must be an ISO 8601 time, got {value!r}") from None
+    if value.tzinfo is None:
+        value = value.replace(tzinfo=_dt.UTC)
+    return value.astimezone(_dt.UTC)
+
+
+def _core_name(traces: Traces, path: Path) -> str:
+    meta = traces.metadata
+    if isinstance(meta.get("scene"), str):
+        return meta["scene"]
+    files = meta.get("files")
+    if isinstance(files, list) and files:
+        return str(files[0]) if len(files) == 1 else f"{files[0]} .. {files[-1]}"
+    return path.stem
+
+
+def write_cphd(
+    path: PathLike,
+    traces: Traces,
+    *,
+    origin_llh: ArrayLike = (0.0, 0.0, 0.0),
+    collection_start: _dt.datetime | str | None = None,
+    classification: str = "UNCLASSIFIED",
+    release_info: str = "UNRESTRICTED",
+    overwrite: bool = True,
+) -> Path:
+    """Write traces as a CPHD 1.1.0 file (one FX-domain channel, CF8 samples).
+
+    Parameters
+    ----------
+    path : path
+        Output file (conventionally ``.cphd``); its directory must exist.
+    traces : Traces
+        The traces; their phase history is written as complex64, positions in float64.
+    origin_llh : (3,) array_like
+        Geodetic position ``(latitude_deg, longitude_deg, hae_m)`` of the origin of the
+        scene frame: the frame becomes east, north, up there (WGS 84), and the origin is
+        the IARP. The traces carry no geodetic position; the default is (0, 0, 0).
+    collection_start : datetime or ISO 8601 str, optional
+        ``Global/Timeline/CollectionStart`` (UTC); the traces carry relative times only,
+        default ``2000-01-01T00:00:00Z``. ``TxTime`` counts from the first pulse.
+    classification, release_info : str
+        ``CollectionID/Classification`` and ``ReleaseInfo`` (also in the file header).
+    overwrite : bool
+        Replace an existing file (default); if False, raise FileExistsError.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    DataError
+        Metadata that is not JSON-serialisable, or a band reaching 0 Hz.
+
+    Notes
+    -----
+    The module docstring lists what each PVP holds. :func:`read_cphd` gives back the
+    traces: the data to complex64 rounding, positions and the reference point to
+    float64 rounding of the ECF transform (nm), slow times re-centred, the radar and the
+    metadata as stored. The file is written to a temporary file and renamed onto
+    ``path`` when complete.
+    """
+    if not isinstance(traces, Traces):
+        raise TypeError(f"traces must be a Traces object, got {type(traces).__name__}")
+    llh = np.asarray(origin_llh, dtype=np.float64)
+    if llh.shape != (3,) or not np.all(np.isfinite(llh)) or abs(llh[0]) > 90:
+        raise ValueError(f"origin_llh must be (lat_deg, lon_deg, hae_m), got {origin_llh!r}")
+    llh[1] = (llh[1] + 180.0) % 360.0 - 180.0
+    target = Path(path)
+    radar = traces.radar
+    radar_json = {
+        "carrier_hz": radar.carrier_hz,
+        "bandwidth_hz": radar.bandwidth_hz,
+        "n_samples": radar.n_samples,
+        "frequency_step_hz": radar.frequency_step_hz,
+        "pulse": radar.pulse,
+    }
+    header = {
+        "core_name": _core_name(traces, target),
+        "classification": classification,
+        "release_info": release_info,
+        "collection_start": _utc(collection_start),
+        "now": _dt.datetime.now(_dt.UTC).replace(microsecond=0),
+        "parameters": {
+            "radar": json.dumps(radar_json),
+            "metadata": _to_json(traces.metadata, "traces"),
+        },
+    }
+    lay = _layout(traces, llh)
+    meta = skcphd.Metadata(xmltree=_xml(traces, lay, header))
+    signal = np.ascontiguousarray(traces.phase_history().astype(np.complex64))
+    with staged_paths([target], overwrite=overwrite) as (tmp,):
+        with tmp.open("xb") as fh, skcphd.Writer(fh, meta) as writer:
+            writer.write_signal(_CHANNEL_ID, signal)
+            writer.write_pvp(_CHANNEL_ID, lay.pvps)
+    logger.debug("wrote CPHD %s: %d vectors of %d samples", target, *traces.shape)
+    return target
