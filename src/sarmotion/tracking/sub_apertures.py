@@ -14,6 +14,7 @@ in m, velocities in m/s.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,8 +94,10 @@ class Detection:
         (:func:`sarmotion.motion.family_direction`).
     peak_db : float
         Its image peak relative to the stationary image's brightest pixel (dB).
-    traces : (n_pulses, n_samples) ndarray
-        Its own separated traces over the sub-aperture (data units).
+    traces : (n_pulses, n_samples) ndarray or None
+        Its own separated traces over the sub-aperture (data units); None in what the
+        tracker keeps (:meth:`light`): over a whole pass they would hold 0.8 MB per
+        detection.
     """
 
     position_m: NDArray[np.float64]
@@ -104,7 +107,11 @@ class Detection:
     family_position_per_m: NDArray[np.float64]
     family_velocity_per_m: NDArray[np.float64]
     peak_db: float
-    traces: NDArray[np.complexfloating]
+    traces: NDArray[np.complexfloating] | None
+
+    def light(self) -> Detection:
+        """The same detection without its traces."""
+        return dataclasses.replace(self, traces=None)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -134,8 +141,9 @@ class SubApertureDetections:
         Ground row vector giving the cross-range speed ``t . P_o u`` of a ground velocity.
     detections : tuple of Detection
         The movers found, strongest first.
-    stationary_db : (ny, nx) ndarray
-        Stationary image magnitude (dB re its brightest pixel).
+    stationary_db : (ny, nx) ndarray or None
+        Stationary image magnitude (dB re its brightest pixel); None in what
+        :func:`~sarmotion.tracking.track` keeps (it keeps their mean).
     grid : ImageGrid
         Its grid.
     seconds : float
@@ -154,9 +162,15 @@ class SubApertureDetections:
     cross_range_speed_resolution_mps: float
     cross_range_speed_row: NDArray[np.float64]
     detections: tuple[Detection, ...]
-    stationary_db: NDArray[np.float64]
+    stationary_db: NDArray[np.float64] | None
     grid: ImageGrid
     seconds: float
+
+    def light(self) -> SubApertureDetections:
+        """The same sub-aperture without its image and its detections' traces."""
+        return dataclasses.replace(
+            self, detections=tuple(d.light() for d in self.detections), stationary_db=None
+        )
 
 
 def analyze_sub_aperture(

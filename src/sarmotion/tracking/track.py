@@ -113,13 +113,24 @@ def track(
     analysis = opts.analysis.resolved(traces)
     tracker = Tracker(traces, opts, roads=roads)
     subs: list[SubApertureDetections] = []
+    power: NDArray[np.float64] | None = None
+    grid: ImageGrid | None = None
     for sub in map_sub_apertures(
         traces, slices, analysis, scheduler=scheduler, n_workers=n_workers, processes=processes
     ):
         tracker.step(sub)
-        subs.append(sub)
+        # Incoherent mean of the stationary images on the first one's grid; only the
+        # light record of each sub-aperture is kept (a whole pass would hold GBs).
+        if grid is None:
+            grid, power = sub.grid, np.zeros(sub.grid.shape)
+        if sub.grid.shape == grid.shape and sub.stationary_db is not None:
+            power += 10.0 ** (np.asarray(sub.stationary_db, dtype=np.float64) / 10.0)
+        subs.append(sub.light())
         report(progress, "sub-apertures", len(subs), len(slices))
-    stationary_db, grid = _mean_image(subs)
+    assert grid is not None and power is not None
+    top = float(power.max())
+    with np.errstate(divide="ignore"):
+        stationary_db = 10.0 * np.log10(power / top) if top > 0 else np.full(power.shape, -np.inf)
     return TrackingResult(
         tracks=tracker.tracks(),
         sub_apertures=tuple(subs),
@@ -132,15 +143,3 @@ def track(
             "analysis": float(sum(s.seconds for s in subs)),
         },
     )
-
-
-def _mean_image(subs: Sequence[SubApertureDetections]) -> tuple[NDArray[np.float64], ImageGrid]:
-    """Incoherent mean of the sub-apertures' stationary images on the first one's grid."""
-    grid = subs[0].grid
-    power = np.zeros(grid.shape)
-    for s in subs:
-        if s.grid.shape == grid.shape:
-            power += 10.0 ** (np.asarray(s.stationary_db, dtype=np.float64) / 10.0)
-    top = float(power.max())
-    with np.errstate(divide="ignore"):
-        return 10.0 * np.log10(power / top), grid

@@ -44,6 +44,10 @@ position along the family, with ``sigma_f``; its updates carry ``100 sigma_f`` t
 i.e. no information along the family. ``position_std_m`` thus stays as large as the data
 make it, and without roads each state carries its family.
 
+Overlapping sub-apertures share pulses: their measurement errors are correlated, and
+the filter, which takes them as independent, is then overconfident in range and range
+speed (by about ``1 / sqrt(1 - overlap)`` in standard deviation).
+
 **Defaults** (:class:`TrackingOptions`): white-noise acceleration of spectral density
 1 m^2/s^3 (a road vehicle's accelerations of about 1 m/s^2 sustained over a second);
 association gate at the 0.999 quantile of chi-square with 4 degrees of freedom; a track
@@ -316,7 +320,7 @@ class Tracker:
         for trk, hyp in hypotheses.items():
             if not hyp:
                 trk.append(hyp.prediction)
-                self._meta[id(hyp.prediction)] = _Meta(sub, None, None, None)
+                self._meta[id(hyp.prediction)] = _Meta(sub.light(), None, None, None)
                 continue
             k = hyp.measurement.metadata["detection"]
             used.add(k)
@@ -392,7 +396,7 @@ class Tracker:
         meas = self._measurement(
             sub, det, position, velocity, road, when, k, update=predicted_m is not None
         )
-        return meas, _Meta(sub, det, (position, velocity), fix)
+        return meas, _Meta(sub.light(), det.light(), (position, velocity), fix)
 
     def _velocity_at(
         self,
