@@ -23,6 +23,8 @@ from sarmotion.tracking import (
     Road,
     Tracker,
     TrackingOptions,
+    TrackingResult,
+    map_sub_apertures,
     road_fix,
     sub_aperture_slices,
     track,
@@ -67,6 +69,7 @@ def _match(trk):
 
 @pytest.fixture(scope="module")
 def gotcha_movers(gotcha_files):
+    """The GOTCHA degrees with the movers injected, and each sub-aperture's analysis (Dask)."""
     clutter = read_gotcha(gotcha_files)
     amp = float(np.median(np.abs(clutter.data[:117]).max(axis=1)))
     targets = [
@@ -74,7 +77,25 @@ def gotcha_movers(gotcha_files):
         for k, (p, v) in MOVERS.items()
     ]
     data = inject(clutter, targets)
-    return data, track(data, OPTIONS, n_workers=2, processes=False)
+    slices = sub_aperture_slices(data, OPTIONS.sub_aperture_deg, OPTIONS.overlap)
+    subs = list(map_sub_apertures(data, slices, OPTIONS.analysis.resolved(data), n_workers=2))
+    return data, subs
+
+
+def _follow(data, subs, roads=()):
+    """Track the sub-apertures' detections (the tracking stage of sarmotion.tracking.track)."""
+    tracker = Tracker(data, OPTIONS, roads=roads)
+    for sub in subs:
+        tracker.step(sub)
+    return TrackingResult(
+        tracks=tracker.tracks(),
+        sub_apertures=tuple(s.light() for s in subs),
+        stationary_db=subs[0].stationary_db,
+        grid=subs[0].grid,
+        options=OPTIONS,
+        roads=tuple(roads),
+        timings_s={},
+    )
 
 
 def test_sub_aperture_slices():
@@ -175,7 +196,8 @@ def test_gotcha_two_movers_two_tracks(gotcha_movers):
     Measured (range speed minus truth, per sub-aperture): B -0.027..-0.030 m/s, A
     -0.12..-0.15 m/s (its 18-20 m family offset, module notes).
     """
-    data, result = gotcha_movers
+    data, subs = gotcha_movers
+    result = _follow(data, subs)
     n_sub = len(result.sub_apertures)
     assert n_sub == 4
     assert len(result.tracks) == 2
@@ -206,15 +228,13 @@ def test_gotcha_roads_fix_positions(gotcha_movers):
 
     Measured: within 0.30 m (A) and 0.04 m (B); range speeds within 0.05 m/s.
     """
-    data, result = gotcha_movers
-    tracker = Tracker(data, OPTIONS, roads=_roads())
-    for sub in result.sub_apertures:
-        tracker.step(sub)
-    tracks = tracker.tracks()
+    data, subs = gotcha_movers
+    result = _follow(data, subs, _roads())
+    tracks = result.tracks
     assert len(tracks) == 2
     for trk in tracks:
         label = _match(trk)
-        assert len(trk.states) == len(result.sub_apertures)
+        assert len(trk.states) == len(subs)
         for s in trk.states:
             p_true, v_true = _truth(label, s.time_s)
             assert np.hypot(*(s.position_m - p_true)) <= ROAD_POSITION_TOL, (label, s.time_s)
