@@ -26,6 +26,7 @@ from .inject import inject
 from .paper import paper
 from .separate import separate
 from .simulate import simulate
+from .track import track
 
 __all__ = ["main", "run", "entry_point"]
 
@@ -90,7 +91,7 @@ def _verbose(ctx: click.Context, param: click.Parameter, value: int) -> None:
         logging.getLogger().setLevel(logging.WARNING - 10 * min(value, 2))
 
 
-for _command in (simulate, image, inject, separate, analyze, demo, paper, convert):
+for _command in (simulate, image, inject, separate, analyze, track, demo, paper, convert):
     # -q and -v work after the command name too (``sarmotion analyze -q ...``).
     _command.params += [
         click.Option(

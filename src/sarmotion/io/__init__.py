@@ -50,3 +50,8 @@ __all__ += [
     "staged_paths",
     "write_json",
 ]
+
+from .roads import read_roads  # noqa: E402
+from .tracks import TRACKS_SCHEMA, tracks_document  # noqa: E402
+
+__all__ += ["TRACKS_SCHEMA", "read_roads", "tracks_document"]

@@ -4,13 +4,17 @@
   ``sarmotion.scene/1`` TOML schema, the built-in scenes (``scenes/*.toml``);
 - :mod:`~sarmotion.simulation.forward` — the traces of a scene (``eq:MOD1``), noise,
   injection of targets into measured data;
+- :mod:`~sarmotion.simulation.paths` — movers on piecewise-straight paths (turns,
+  stops) and radars with a longer range window, for long acquisitions;
 - :mod:`~sarmotion.simulation.signals` — chirps, Gaussian pulses, range compression.
 """
 
 from .forward import Simulation, add_noise, inject, simulate, simulate_phase_history
+from .paths import PathTarget, radar_with_range_window
 from .scene import PointTarget, Scene, SceneError, builtin_scene_names, load_scene, random_scene
 
 __all__ = [
+    "PathTarget",
     "PointTarget",
     "Scene",
     "SceneError",
@@ -19,6 +23,7 @@ __all__ = [
     "builtin_scene_names",
     "inject",
     "load_scene",
+    "radar_with_range_window",
     "random_scene",
     "simulate",
     "simulate_phase_history",

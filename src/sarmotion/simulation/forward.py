@@ -1,8 +1,10 @@
 """Forward model: traces of point targets (paper ``eq:MOD1``, ``eq:Mdef``).
 
 Each target moves on a straight line ``rho_q(s) = rho_q(0) + s u_q`` over the aperture
-(``eq:MOD9``). Its pulse- and range-compressed baseband trace is synthesised exactly in
-the frequency domain::
+(``eq:MOD9``), or on a piecewise-straight path with turns and stops
+(:class:`~sarmotion.simulation.paths.PathTarget`): the model asks of a target only its
+positions ``rho_q(s)`` at the pulses (``positions_at``). Its pulse- and range-compressed
+baseband trace is synthesised exactly in the frequency domain::
 
     P(s, f_k) = sum_q a_q(s) W(f_k) exp(-2i pi f_k dtau_q(s)),
     dtau_q(s) = tau(s, rho_q(s)) - tau(s, rho_o)          (eq:DeltaTau)
@@ -30,7 +32,6 @@ from ..core import (
     as_point,
     delay_phase,
     delta_tau,
-    target_positions,
     to_fast_time,
 )
 from .scene import PointTarget, Scene
@@ -50,8 +51,8 @@ def simulate_phase_history(
 
     Parameters
     ----------
-    targets : sequence of PointTarget
-        Targets (positions at ``s = 0`` in m, velocities in m/s).
+    targets : sequence of PointTarget or PathTarget
+        Targets (positions at ``s = 0`` in m, velocities in m/s; or paths).
     trajectory : Trajectory
         Antenna positions and slow times.
     radar : Radar
@@ -69,7 +70,7 @@ def simulate_phase_history(
     L = float(np.linalg.norm(trajectory.centre_m - rho_o))
     out = np.zeros((trajectory.n_pulses, radar.n_samples), dtype=np.complex128)
     for tgt in targets:
-        rho_s = target_positions(tgt.position_m, tgt.velocity3_mps, s)
+        rho_s = tgt.positions_at(s)
         dtau = delta_tau(pos, rho_s, rho_o)
         amp = np.full(trajectory.n_pulses, tgt.reflectivity, dtype=np.complex128)
         if spreading:

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import Radar, Trajectory, as_point
+from ..core import Radar, Trajectory, as_point, target_positions
 
 __all__ = [
     "PointTarget",
@@ -112,6 +112,10 @@ class PointTarget:
     def velocity3_mps(self) -> NDArray[np.float64]:
         """Velocity lifted to 3-D ``(ux, uy, 0)`` (m/s)."""
         return np.array([self.velocity_mps[0], self.velocity_mps[1], 0.0])
+
+    def positions_at(self, slow_times_s: ArrayLike) -> NDArray[np.float64]:
+        """Positions ``rho(s) = rho(0) + s u`` at the slow times (m), shape (n, 3)."""
+        return target_positions(self.position_m, self.velocity3_mps, slow_times_s)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -1,0 +1,162 @@
+"""``sarmotion track``: movers followed across the sub-apertures of a long acquisition."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..io import read_inputs, read_roads, staged_directory, tracks_document, write_json
+from ..pipeline import AnalysisOptions
+from ..report.tracks import write_tracks_report
+from ..tracking import TrackingOptions
+from ..tracking import track as run_tracking
+from .common import InputError, Progress, out_option, speed_option
+
+__all__ = ["track"]
+
+
+@click.command()
+@click.argument("inputs", nargs=-1, required=True)
+@out_option("Output directory: tracks.json, tracks.png and report.html.")
+@click.option(
+    "--sub-aperture",
+    "sub_aperture_deg",
+    type=float,
+    default=1.0,
+    show_default=True,
+    help="Azimuth span of each sub-aperture (degrees).",
+)
+@click.option(
+    "--overlap",
+    type=float,
+    default=0.5,
+    show_default=True,
+    help="Fraction of a sub-aperture shared with the next, in [0, 1).",
+)
+@click.option(
+    "--roads",
+    "roads_file",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="GeoJSON LineStrings in the scene's ground coordinates (m): each detection is "
+    "placed on the member of its cross-range family on the nearest road.",
+)
+@click.option(
+    "--scheduler",
+    default=None,
+    help="Address of a Dask scheduler (tcp://host:8786); default a local cluster.",
+)
+@click.option(
+    "--workers",
+    "n_workers",
+    type=int,
+    default=None,
+    help="Local Dask workers (default one per core; 0: no Dask).",
+)
+@click.option(
+    "--threads/--processes",
+    "threads",
+    default=True,
+    show_default=True,
+    help="Local Dask workers as threads of this process or as separate processes.",
+)
+@click.option(
+    "--max-movers",
+    type=int,
+    default=5,
+    show_default=True,
+    help="Most movers sought per sub-aperture.",
+)
+@click.option(
+    "--size",
+    "size_m",
+    type=float,
+    default=None,
+    help="Side of each sub-aperture's square image around the reference point (m); "
+    "default from the data's range window, at most 100 m.",
+)
+@speed_option
+@click.pass_context
+def track(
+    ctx: click.Context,
+    inputs: tuple[str, ...],
+    out: Path,
+    sub_aperture_deg: float,
+    overlap: float,
+    roads_file: Path | None,
+    scheduler: str | None,
+    n_workers: int | None,
+    threads: bool,
+    max_movers: int,
+    size_m: float | None,
+    speed_mps: float,
+) -> None:
+    """Follow the movers of INPUTS across overlapping sub-apertures.
+
+    INPUTS: GOTCHA .mat files (consecutive files form one acquisition), a CPHD file,
+    a native traces .h5 file, or a scene. Each sub-aperture is analysed as by `sarmotion
+    analyze` (on Dask: a local cluster, or --scheduler); the detections are associated
+    into tracks (Stone Soup), each track's prediction being the known position of its
+    next detection. Writes OUT/tracks.json (schema sarmotion.tracks/1), tracks.png and
+    report.html.
+    """
+    try:
+        options = TrackingOptions(
+            analysis=AnalysisOptions(max_movers=max_movers, image_size_m=size_m, trajectory=False),
+            sub_aperture_deg=sub_aperture_deg,
+            overlap=overlap,
+        )
+    except (TypeError, ValueError) as exc:
+        text = str(exc)
+        for name, flag in (
+            ("sub_aperture_deg", "--sub-aperture"),
+            ("overlap", "--overlap"),
+            ("max_movers", "--max-movers"),
+            ("image_size_m", "--size"),
+        ):
+            if text.startswith(name + " "):
+                raise InputError(flag + text[len(name) :]) from None
+        raise InputError(text) from None
+    if n_workers is not None and n_workers < 0:
+        raise InputError(f"--workers must be >= 0, got {n_workers}")
+    roads = read_roads(roads_file) if roads_file is not None else ()
+    traces, _ = read_inputs(inputs, speed_mps=speed_mps)
+    with Progress(enabled=ctx.obj["progress"]) as bar:
+        result = run_tracking(
+            traces,
+            options,
+            roads=roads,
+            scheduler=scheduler,
+            n_workers=n_workers,
+            processes=not threads,
+            progress=bar,
+        )
+    doc = tracks_document(result)
+    doc["inputs"] = list(inputs)
+    with staged_directory(out) as stage:
+        write_json(stage / "tracks.json", doc)
+        write_tracks_report(
+            result,
+            stage,
+            document=doc,
+            title=f"sarmotion tracks: {', '.join(Path(i).name for i in inputs)}",
+        )
+    click.echo(
+        f"wrote {out}/tracks.json, tracks.png and report.html: {len(result.tracks)} track(s) "
+        f"over {len(result.sub_apertures)} sub-aperture(s), {result.timings_s['total']:.1f} s"
+    )
+    for t in doc["tracks"]:
+        first, last = t["states"][0], t["states"][-1]
+        on_road = sum(1 for s in t["states"] if s.get("road", {}).get("fixed"))
+        parallel = sum(1 for s in t["states"] if s.get("road", {}).get("fixed") is False)
+        click.echo(
+            f"  track {t['id']}: {t['n_detections']} detection(s), s = {first['time_s']:.2f} "
+            f"to {last['time_s']:.2f} s, range speed {first['range_speed_mps']:.2f} to "
+            f"{last['range_speed_mps']:.2f} m/s, {on_road} state(s) on a road"
+            + (
+                f", {parallel} with the road parallel to the cross-range family (no point fixed)"
+                if parallel
+                else ""
+            )
+        )

@@ -1,0 +1,105 @@
+"""The ``sarmotion.tracks/1`` document: the movers followed through an acquisition.
+
+::
+
+    {"schema": "sarmotion.tracks/1",
+     "sub_apertures": [{"index", "time_s", "first_pulse", "stop_pulse", "look_direction",
+                        "n_detections", "seconds"}],
+     "tracks": [{"id": 1, "n_detections": 7,
+                 "states": [{"time_s", "sub_aperture", "position_m": [x, y],
+                             "velocity_mps": [ux, uy], "position_std_m",
+                             "position_cov_m2", "velocity_std_mps", "speed_mps",
+                             "range_speed_mps", "detected",
+                             "measurement": {"position_m", "velocity_mps"},
+                             "road": {"name", "angle_deg", "fixed", "std_m"},
+                             "cross_range_family": {"position_per_m",
+                                                    "velocity_per_m"}}]}],
+     "roads": [{"name", "points_m"}], "options": {...}, "timings_s": {...}}
+
+``time_s`` is slow time with ``s = 0`` at the centre of the whole acquisition; positions
+in the scene's ground coordinates (m), velocities in m/s, ``range_speed_mps = u . m_o``
+of the sub-aperture. ``road`` is present when the detection's cross-range family
+crossed a road (``fixed`` false: the road runs nearly parallel to the family and fixes
+no point); ``cross_range_family`` when no road fixed the state: the data are then as
+consistent with ``position + t position_per_m``, ``velocity + t velocity_per_m`` for
+any ``t`` (m), and ``position_std_m`` is large accordingly.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from ..tracking import TrackingResult, TrackState
+
+__all__ = ["TRACKS_SCHEMA", "tracks_document"]
+
+#: Schema name of the tracks document.
+TRACKS_SCHEMA = "sarmotion.tracks/1"
+
+
+def tracks_document(result: TrackingResult) -> dict[str, Any]:
+    """The ``sarmotion.tracks/1`` document of ``result`` (lists, floats, strings)."""
+    opts = dataclasses.asdict(result.options)
+    opts["analysis"] = result.options.analysis.to_dict()
+    return {
+        "schema": TRACKS_SCHEMA,
+        "sub_apertures": [
+            {
+                "index": s.index,
+                "time_s": s.time_s,
+                "first_pulse": s.pulses.start,
+                "stop_pulse": s.pulses.stop,
+                "look_direction": s.look_direction.tolist(),
+                "n_detections": len(s.detections),
+                "seconds": s.seconds,
+            }
+            for s in result.sub_apertures
+        ],
+        "tracks": [
+            {
+                "id": t.id,
+                "n_detections": t.n_detections,
+                "states": [_state(s, result) for s in t.states],
+            }
+            for t in result.tracks
+        ],
+        "roads": [{"name": r.name, "points_m": r.points_m.tolist()} for r in result.roads],
+        "options": opts,
+        "timings_s": dict(result.timings_s),
+    }
+
+
+def _state(s: TrackState, result: TrackingResult) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "time_s": s.time_s,
+        "sub_aperture": s.sub_aperture,
+        "position_m": s.position_m.tolist(),
+        "velocity_mps": s.velocity_mps.tolist(),
+        "position_std_m": s.position_std_m,
+        "position_cov_m2": s.position_cov_m2.tolist(),
+        "velocity_std_mps": float(np.sqrt(max(0.0, np.linalg.eigvalsh(s.velocity_cov_m2ps2)[-1]))),
+        "speed_mps": float(np.hypot(*s.velocity_mps)),
+        "range_speed_mps": s.range_speed_mps,
+        "detected": s.detection is not None,
+    }
+    if s.measured_position_m is not None and s.detection is not None:
+        out["measurement"] = {
+            "position_m": s.measured_position_m.tolist(),
+            "velocity_mps": s.measured_velocity_mps.tolist(),
+        }
+    if s.road is not None:
+        out["road"] = {
+            "name": result.roads[s.road.road].name,
+            "angle_deg": s.road.angle_deg,
+            "fixed": s.road.fixed,
+            "std_m": s.road.std_m,
+        }
+    if s.detection is not None and not s.on_road:
+        out["cross_range_family"] = {
+            "position_per_m": s.detection.family_position_per_m.tolist(),
+            "velocity_per_m": s.detection.family_velocity_per_m.tolist(),
+        }
+    return out

@@ -1,0 +1,39 @@
+"""Movers followed through a long acquisition: sub-apertures, tracks, roads, Dask.
+
+- :mod:`~sarmotion.tracking.sub_apertures` — overlapping sub-apertures and the
+  detections of each one's analysis;
+- :mod:`~sarmotion.tracking.scale` — the sub-apertures as independent Dask tasks (a
+  local cluster or any scheduler), results in slow-time order;
+- :mod:`~sarmotion.tracking.tracker` — Stone Soup association and Kalman filtering, and
+  the paper's first scenario: the track's prediction as the known position;
+- :mod:`~sarmotion.tracking.roads` — the member of a cross-range family on a road;
+- :mod:`~sarmotion.tracking.track` — :func:`track`, the whole chain.
+"""
+
+from .roads import Road, RoadFix, road_fix
+from .scale import map_sub_apertures
+from .sub_apertures import (
+    Detection,
+    SubApertureDetections,
+    analyze_sub_aperture,
+    sub_aperture_slices,
+)
+from .track import TrackingResult, track
+from .tracker import Track, Tracker, TrackingOptions, TrackState
+
+__all__ = [
+    "Detection",
+    "Road",
+    "RoadFix",
+    "SubApertureDetections",
+    "Track",
+    "TrackState",
+    "Tracker",
+    "TrackingOptions",
+    "TrackingResult",
+    "analyze_sub_aperture",
+    "map_sub_apertures",
+    "road_fix",
+    "sub_aperture_slices",
+    "track",
+]

@@ -1,0 +1,240 @@
+"""A long acquisition as overlapping sub-apertures, each analysed on its own.
+
+The motion estimates of :mod:`sarmotion.motion` assume about a degree of aperture
+(uniform motion, a straight look). A pass of many degrees is therefore cut into
+sub-apertures of ``sub_aperture_deg`` whose starts advance by ``(1 - overlap)`` of a
+sub-aperture; each is analysed by :func:`sarmotion.pipeline.analyze` independently of
+the others (the unit of work that :mod:`sarmotion.tracking.scale` distributes), and
+reduced to a compact :class:`SubApertureDetections`: the movers' estimates, cross-range
+families and own traces, the look directions, and the stationary image's magnitude.
+
+Times are slow times of the whole acquisition (s, ``s = 0`` at its centre); positions
+in m, velocities in m/s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core import Traces
+from ..imaging import ImageGrid, resolution
+from ..motion import azimuth_span_deg
+from ..motion.speed_resolution import cross_range_speed_resolution, range_speed_resolution
+from ..pipeline import AnalysisOptions, analyze
+
+__all__ = [
+    "Detection",
+    "SubApertureDetections",
+    "analyze_sub_aperture",
+    "sub_aperture_slices",
+]
+
+
+def sub_aperture_slices(
+    traces: Traces, sub_aperture_deg: float = 1.0, overlap: float = 0.5
+) -> list[slice]:
+    """Pulse ranges of overlapping sub-apertures covering the whole acquisition.
+
+    Each holds ``m = round(n_pulses sub_aperture_deg / span)`` pulses (span: the
+    azimuth span of the acquisition, :func:`sarmotion.motion.azimuth_span_deg`); their
+    starts are evenly spread from the first pulse to ``n_pulses - m``, ``round((n_pulses
+    - m) / step) + 1`` of them for a step of ``m (1 - overlap)`` pulses (the overlap is
+    met to a pulse or two: 469 GOTCHA pulses of 4 degrees give 4 sub-apertures with
+    ``overlap=0``, 7 with 0.5).
+
+    Parameters
+    ----------
+    traces : Traces
+        The whole acquisition.
+    sub_aperture_deg : float
+        Azimuth span of one sub-aperture (degrees, > 0).
+    overlap : float
+        Fraction of a sub-aperture shared with the next (0 <= overlap < 1).
+
+    Returns
+    -------
+    list of slice
+        In slow-time order; a single slice of every pulse if the acquisition is
+        shorter than 1.5 sub-apertures.
+    """
+    if not (np.isfinite(sub_aperture_deg) and sub_aperture_deg > 0):
+        raise ValueError(f"sub_aperture_deg must be positive (degrees), got {sub_aperture_deg!r}")
+    if not (np.isfinite(overlap) and 0.0 <= overlap < 1.0):
+        raise ValueError(f"overlap must be in [0, 1), got {overlap!r}")
+    n = traces.n_pulses
+    span = azimuth_span_deg(traces)
+    if span <= 1.5 * sub_aperture_deg:
+        return [slice(0, n)]
+    m = min(n, max(2, int(round(n * sub_aperture_deg / span))))
+    step = max(1, int(np.floor(m * (1.0 - overlap) + 1e-9)))
+    count = max(1, int(round((n - m) / step))) + 1
+    starts = np.round(np.linspace(0, n - m, count)).astype(int)
+    return [slice(int(a), int(a) + m) for a in starts]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Detection:
+    """One mover found in one sub-aperture (the second scenario: position and velocity).
+
+    Attributes
+    ----------
+    position_m : (2,) ndarray
+        Ground position at the sub-aperture's centre time (m).
+    velocity_mps : (2,) ndarray
+        Ground velocity (m/s).
+    range_speed_mps, cross_range_speed_mps : float
+        ``u . m_o`` and the cross-range speed (m/s) of the estimate.
+    family_position_per_m, family_velocity_per_m : (2,) ndarray
+        Tangent of the cross-range family (m/m, (m/s)/m): ``position + t a``,
+        ``velocity + t b`` fit the sub-aperture's data as well for any ``t``
+        (:func:`sarmotion.motion.family_direction`).
+    peak_db : float
+        Its image peak relative to the stationary image's brightest pixel (dB).
+    traces : (n_pulses, n_samples) ndarray or None
+        Its own separated traces over the sub-aperture (data units); None in what the
+        tracker keeps (:meth:`light`): over a whole pass they would hold 0.8 MB per
+        detection.
+    """
+
+    position_m: NDArray[np.float64]
+    velocity_mps: NDArray[np.float64]
+    range_speed_mps: float
+    cross_range_speed_mps: float
+    family_position_per_m: NDArray[np.float64]
+    family_velocity_per_m: NDArray[np.float64]
+    peak_db: float
+    traces: NDArray[np.complexfloating] | None
+
+    def light(self) -> Detection:
+        """The same detection without its traces."""
+        return dataclasses.replace(self, traces=None)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SubApertureDetections:
+    """What one sub-aperture's analysis gives the tracker.
+
+    Attributes
+    ----------
+    index : int
+        Position of the sub-aperture in slow-time order.
+    pulses : slice
+        Its pulses in the whole acquisition.
+    time_s : float
+        Its centre time ``(s_first + s_last) / 2`` in the whole acquisition's slow time
+        (s); the detections' positions are at this time.
+    look_direction : (3,) ndarray
+        Unit vector ``m_o`` from the reference point to the antenna at ``time_s``: a
+        velocity's range speed is ``u . m_o``.
+    range_direction, cross_range_direction : (2,) ndarray
+        Ground unit vectors of range and cross range (:func:`sarmotion.imaging.resolution`).
+    range_cell_m, cross_range_cell_m : float
+        Ground-range and cross-range resolution cells (m).
+    range_speed_resolution_mps, cross_range_speed_resolution_mps : float
+        Resolutions of the range speed (``g``) and of the cross-range speed (``g_perp``)
+        over the sub-aperture (m/s).
+    cross_range_speed_row : (2,) ndarray
+        Ground row vector giving the cross-range speed ``t . P_o u`` of a ground velocity.
+    detections : tuple of Detection
+        The movers found, strongest first.
+    stationary_db : (ny, nx) ndarray or None
+        Stationary image magnitude (dB re its brightest pixel); None in what
+        :func:`~sarmotion.tracking.track` keeps (it keeps their mean).
+    grid : ImageGrid
+        Its grid.
+    seconds : float
+        Wall-clock time of the analysis (s).
+    """
+
+    index: int
+    pulses: slice
+    time_s: float
+    look_direction: NDArray[np.float64]
+    range_direction: NDArray[np.float64]
+    cross_range_direction: NDArray[np.float64]
+    range_cell_m: float
+    cross_range_cell_m: float
+    range_speed_resolution_mps: float
+    cross_range_speed_resolution_mps: float
+    cross_range_speed_row: NDArray[np.float64]
+    detections: tuple[Detection, ...]
+    stationary_db: NDArray[np.float64] | None
+    grid: ImageGrid
+    seconds: float
+
+    def light(self) -> SubApertureDetections:
+        """The same sub-aperture without its image and its detections' traces."""
+        return dataclasses.replace(
+            self, detections=tuple(d.light() for d in self.detections), stationary_db=None
+        )
+
+
+def analyze_sub_aperture(
+    traces: Traces, options: AnalysisOptions, *, index: int, pulses: slice, time_s: float
+) -> SubApertureDetections:
+    """Analyse one sub-aperture (:func:`sarmotion.pipeline.analyze`) and keep its detections.
+
+    Parameters
+    ----------
+    traces : Traces
+        The sub-aperture's traces (slow time re-centred on it, ``Traces.select_pulses``).
+    options : AnalysisOptions
+        Options of the analysis (the same for every sub-aperture).
+    index : int
+        Its position in slow-time order.
+    pulses : slice
+        Its pulses in the whole acquisition.
+    time_s : float
+        Its centre time in the whole acquisition (s).
+
+    Returns
+    -------
+    SubApertureDetections
+    """
+    result = analyze(traces, options)
+    geom = traces.geometry
+    cells = resolution(traces)
+    detections = tuple(
+        Detection(
+            position_m=np.asarray(m.position_m, dtype=np.float64)[:2].copy(),
+            velocity_mps=np.asarray(m.velocity_mps, dtype=np.float64).copy(),
+            range_speed_mps=float(m.estimate.range_speed_mps),
+            cross_range_speed_mps=float(m.estimate.cross_range_speed_mps),
+            family_position_per_m=np.asarray(m.family_position_per_m, dtype=np.float64),
+            family_velocity_per_m=np.asarray(m.family_velocity_per_m, dtype=np.float64),
+            peak_db=float(m.peak_db),
+            traces=m.traces,
+        )
+        for m in result.movers
+    )
+    magnitude = np.abs(result.stationary_image.values)
+    top = float(magnitude.max())
+    with np.errstate(divide="ignore"):
+        db = 20.0 * np.log10(magnitude / top) if top > 0 else np.full(magnitude.shape, -np.inf)
+    return SubApertureDetections(
+        index=int(index),
+        pulses=pulses,
+        time_s=float(time_s),
+        look_direction=np.asarray(geom.m_o, dtype=np.float64).copy(),
+        range_direction=np.asarray(cells.range_direction, dtype=np.float64),
+        cross_range_direction=np.asarray(cells.cross_range_direction, dtype=np.float64),
+        range_cell_m=float(cells.ground_range_m),
+        cross_range_cell_m=float(cells.cross_range_m),
+        range_speed_resolution_mps=float(range_speed_resolution(traces)),
+        cross_range_speed_resolution_mps=float(cross_range_speed_resolution(traces)),
+        cross_range_speed_row=(geom.tangent @ geom.projector)[:2].copy(),
+        detections=detections,
+        stationary_db=db.astype(np.float32),
+        grid=result.stationary_image.grid,
+        seconds=float(result.timings_s["total"]),
+    )
+
+
+def sub_aperture_time_s(traces: Traces, pulses: slice) -> float:
+    """Centre time of the pulses ``pulses`` in ``traces``' slow time (s)."""
+    s = traces.slow_times_s
+    return float(0.5 * (s[pulses.start] + s[pulses.stop - 1]))
