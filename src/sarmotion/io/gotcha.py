@@ -471,6 +471,21 @@ def _phase_history(
     return ph, f"re-referenced from data.r0 (max |r0 - |r(s)|| = {mismatch:.4g} m)"
 
 
+def _trajectory(
+    files: list[_GotchaFile], positions: NDArray[np.float64], speed: float
+) -> Trajectory:
+    """The antenna track with slow time from the along-track distance at ``speed``."""
+    try:
+        return Trajectory.from_positions(positions, speed_mps=speed)
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        names = ", ".join(f.path.name for f in files)
+        logger.debug("Trajectory.from_positions failed: %r", exc)
+        raise DataError(
+            f"{names}: unusable antenna positions: no smooth track fits them at "
+            f"--speed {speed:g} m/s"
+        ) from None
+
+
 def _autofocus_factor(files: list[_GotchaFile], freqs: NDArray[np.float64]) -> Any:
     """AFRL's correction ``exp(+1j ph_correct) exp(-1j 4 pi f / c r_correct)`` per pulse."""
     rc, pc = [], []
@@ -537,17 +552,15 @@ def read_gotcha(
     Returns
     -------
     Traces
-        ``(n_pulses, n_freq)`` complex128 traces; float64 positions (m) in the GOTCHA
-        frame; ``Radar(pulse="rect")`` on the fitted frequency grid; metadata with
-        ``source="gotcha"``, the files, azimuth range (deg), mean elevation (deg), pulses
-        per file, the autofocus flag, the phase reference and ``speed_mps``.
+        ``(n_pulses, n_freq)`` complex128 traces, float64 positions (m) in the GOTCHA
+        frame, ``Radar(pulse="rect")`` on the fitted grid; metadata: ``source="gotcha"``,
+        files, azimuth range and mean elevation (deg), autofocus, phase reference, speed.
 
     Raises
     ------
     DataError
-        One line naming the file, the field, the pulse and the rule: a missing or
-        unreadable file, a missing field, a wrong shape, NaN/inf, a broken plausibility
-        rule, a non-uniform or differing frequency grid, duplicate or non-consecutive files.
+        One line naming the file, field, pulse and rule (unreadable or inconsistent
+        files, a broken plausibility rule, duplicate or non-consecutive files).
     """
     speed = positive(speed_mps, "speed_mps", unit="m/s")
     rho_o = as_point(reference_point_m, name="reference_point_m")
@@ -557,15 +570,7 @@ def read_gotcha(
     files = _flight_order(files)
     _check_consecutive(files)
     positions = np.concatenate([f.positions_m for f in files])
-    try:
-        trajectory = Trajectory.from_positions(positions, speed_mps=speed)
-    except (ValueError, np.linalg.LinAlgError) as exc:
-        names = ", ".join(f.path.name for f in files)
-        logger.debug("Trajectory.from_positions failed: %r", exc)
-        raise DataError(
-            f"{names}: unusable antenna positions: no smooth track fits them at "
-            f"--speed {speed:g} m/s"
-        ) from None
+    trajectory = _trajectory(files, positions, speed)
     freqs = radar.frequencies_hz
     ph, phase_reference = _phase_history(files, freqs, positions)
     if autofocus:
