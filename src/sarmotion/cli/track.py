@@ -11,14 +11,27 @@ from ..pipeline import AnalysisOptions
 from ..report.tracks import write_tracks_report
 from ..tracking import TrackingOptions
 from ..tracking import track as run_tracking
-from .common import InputError, Progress, out_option, speed_option
+from .common import (
+    InputError,
+    Progress,
+    as_flags,
+    check_out,
+    force_option,
+    lenient_option,
+    out_option,
+    speed_option,
+)
 
 __all__ = ["track"]
+
+#: What the command writes into --out.
+OUTPUTS = ("tracks.json", "tracks.png", "report.html")
 
 
 @click.command()
 @click.argument("inputs", nargs=-1, required=True)
 @out_option("Output directory: tracks.json, tracks.png and report.html.")
+@force_option
 @click.option(
     "--sub-aperture",
     "sub_aperture_deg",
@@ -77,6 +90,7 @@ __all__ = ["track"]
     "default from the data's range window, at most 100 m.",
 )
 @speed_option
+@lenient_option
 @click.pass_context
 def track(
     ctx: click.Context,
@@ -91,6 +105,8 @@ def track(
     max_movers: int,
     size_m: float | None,
     speed_mps: float,
+    force: bool,
+    lenient: bool,
 ) -> None:
     """Follow the movers of INPUTS across overlapping sub-apertures.
 
@@ -120,8 +136,10 @@ def track(
         raise InputError(text) from None
     if n_workers is not None and n_workers < 0:
         raise InputError(f"--workers must be >= 0, got {n_workers}")
+    check_out(out, force=force, names=OUTPUTS)
     roads = read_roads(roads_file) if roads_file is not None else ()
-    traces, _ = read_inputs(inputs, speed_mps=speed_mps)
+    with as_flags(speed_mps="--speed"):
+        traces, _ = read_inputs(inputs, speed_mps=speed_mps, lenient=lenient)
     with Progress(enabled=ctx.obj["progress"]) as bar:
         result = run_tracking(
             traces,
