@@ -1,4 +1,4 @@
-"""Cramér–Rao bound of a uniformly moving point target in complex white Gaussian noise.
+r"""Cramér–Rao bound of a uniformly moving point target in complex white Gaussian noise.
 
 Notes
 -----
@@ -6,9 +6,9 @@ Notes
 
 .. math::
 
-    P_{jk} = a\\, W_k\\, e^{-i \\psi_{jk}(\\theta)} + n_{jk}, \\qquad
-    \\psi_{jk} = 2\\pi f_k\\, \\Delta\\tau_j(\\theta), \\qquad
-    \\Delta\\tau_j = \\tfrac{2}{c}\\,(R_j(\\theta) - R_j^{o}),
+    P_{jk} = a\, W_k\, e^{-i \psi_{jk}(\theta)} + n_{jk}, \qquad
+    \psi_{jk} = 2\pi f_k\, \Delta\tau_j(\theta), \qquad
+    \Delta\tau_j = \tfrac{2}{c}\,(R_j(\theta) - R_j^{o}),
 
 with ``R_j = |r(s_j) - rho(theta) - s_j u(theta)|`` the exact range (``eq:MOD1``,
 ``eq:DeltaTau``), ``R_j^o`` that of the reference point, ``W`` the compressed-pulse
@@ -36,19 +36,19 @@ and ``w_jk = |W_k|^2``:
 
 .. math::
 
-    J_{\\theta\\theta} = \\tfrac{2A^2}{\\sigma_P^2} \\sum w\\, \\psi_i \\psi_j, \\quad
-    J_{\\theta\\phi} = -\\tfrac{2A^2}{\\sigma_P^2} \\sum w\\, \\psi_i, \\quad
-    J_{\\phi\\phi} = \\tfrac{2A^2}{\\sigma_P^2} \\sum w, \\quad
-    J_{AA} = \\tfrac{2}{\\sigma_P^2} \\sum w,
+    J_{\theta\theta} = \tfrac{2A^2}{\sigma_P^2} \sum w\, \psi_i \psi_j, \quad
+    J_{\theta\phi} = -\tfrac{2A^2}{\sigma_P^2} \sum w\, \psi_i, \quad
+    J_{\phi\phi} = \tfrac{2A^2}{\sigma_P^2} \sum w, \quad
+    J_{AA} = \tfrac{2}{\sigma_P^2} \sum w,
 
 (``psi_i`` short for ``dpsi/dtheta_i``) and ``J_{A theta} = J_{A phi} = 0``. Eliminating
 the unknown phase (Schur complement) gives
 
 .. math::
 
-    \\mathrm{CRB}(\\theta) = \\frac{1}{2\\,\\mathrm{SNR}}\\, \\Big[\\sum w\\,
-    (\\psi_i - \\bar\\psi_i)(\\psi_j - \\bar\\psi_j) / \\textstyle\\sum w\\Big]^{-1},
-    \\qquad \\mathrm{var}(\\hat A) \\ge \\frac{\\sigma_P^2}{2 \\sum w},
+    \mathrm{CRB}(\theta) = \frac{1}{2\,\mathrm{SNR}}\, \Big[\sum w\,
+    (\psi_i - \bar\psi_i)(\psi_j - \bar\psi_j) / \textstyle\sum w\Big]^{-1},
+    \qquad \mathrm{var}(\hat A) \ge \frac{\sigma_P^2}{2 \sum w},
 
 ``bar psi`` the ``w``-weighted mean and ``SNR = A^2 sum w / sigma_P^2`` the
 matched-filter (integrated) signal-to-noise ratio. The phase gradients are exact and

@@ -68,10 +68,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import C, Traces, range_speed
-from .range_speed import RangeSpeeds, estimate_range_speeds, range_speed_objective
-from .speed_resolution import range_speed_resolution
 from ..imaging import refine_location, resolution
 from .aperture import family_member
+from .range_speed import RangeSpeeds, estimate_range_speeds, range_speed_objective
+from .speed_resolution import range_speed_resolution
 
 __all__ = [
     "NULL_TAIL",
@@ -148,7 +148,9 @@ def peak_statistics(
     u = np.asarray(grid_mps, dtype=np.float64)
     g = np.asarray(objective, dtype=np.float64)
     if u.ndim != 1 or g.shape != u.shape or u.size < 3:
-        raise ValueError(f"grid_mps and objective must be 1-D of the same size >= 3, got {u.shape}, {g.shape}")
+        raise ValueError(
+            f"grid_mps and objective must be 1-D of the same size >= 3, got {u.shape}, {g.shape}"
+        )
     step = float(u[1] - u[0])
     i = np.arange(1, u.size - 1)
     peaks = i[(g[i] >= g[i - 1]) & (g[i] > g[i + 1])]
@@ -465,10 +467,13 @@ def point_peak_width(traces: Traces, *, oversample: int = 16) -> float:
 
     A range-speed error ``du`` shifts the aligned trace of pulse ``j`` by ``2 du s_j / c``
     in fast time, so ``g(u + du) / g(u) = mean_j |p(2 du s_j / c)| / |p(0)|`` with ``p``
-    the compressed pulse (the inverse transform of the pulse spectrum, oversampled); its
-    width at half height between its peak and its far level.
+    the compressed pulse; its width at half height between its peak and its far level.
+    ``p`` is the inverse transform (oversampled) of the pulse spectrum *measured on the
+    data*, ``sqrt(mean_s |P(s, f)|^2)``: the cross terms of targets at different ranges
+    average out over slow time, and a file format that does not record the pulse shape
+    (GOTCHA's) cannot mislead it.
     """
-    w = traces.radar.spectral_weights()
+    w = np.sqrt(np.mean(np.abs(traces.phase_history()) ** 2, axis=0))
     n = w.size
     pad = n * (oversample - 1)
     spectrum = np.pad(w, (pad // 2, pad - pad // 2))

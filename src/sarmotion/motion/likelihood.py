@@ -58,6 +58,7 @@ __all__ = [
     "point_model",
     "refine_jointly",
     "noise_variance",
+    "matched_filter_noise_variance",
 ]
 
 #: Complex exponentials per chunk of parameter sets in :meth:`MatchedFilter.responses`.
@@ -85,7 +86,9 @@ class MatchedFilter:
         self.freq = traces.frequencies_hz
         self.ref_range = np.linalg.norm(self.antenna - traces.reference_point_m, axis=1)
 
-    def responses(self, positions_m: ArrayLike, velocities_mps: ArrayLike) -> NDArray[np.complex128]:
+    def responses(
+        self, positions_m: ArrayLike, velocities_mps: ArrayLike
+    ) -> NDArray[np.complex128]:
         """``I`` at ``(k, 3)`` positions (m, ``s = 0``) and ``(k, 2)`` ground velocities (m/s).
 
         Returns
@@ -99,13 +102,15 @@ class MatchedFilter:
         out = np.empty(pos.shape[0], dtype=np.complex128)
         step = max(1, _CHUNK // self.weighted.size)
         for i0 in range(0, pos.shape[0], step):
-            where = pos[i0 : i0 + step, None, :] + self.slow[None, :, None] * v3[i0 : i0 + step, None]
+            where = (
+                pos[i0 : i0 + step, None, :] + self.slow[None, :, None] * v3[i0 : i0 + step, None]
+            )
             rng = np.linalg.norm(self.antenna[None] - where, axis=2)
             cycles = (2.0 * (rng - self.ref_range[None]) / C)[:, :, None] * self.freq[None, None]
             cycles -= np.rint(cycles)  # exact reduction in float64 before the exponential
-            out[i0 : i0 + step] = np.einsum(
-                "vjk,jk->v", np.exp(2j * np.pi * cycles), self.weighted
-            ) / self.norm
+            out[i0 : i0 + step] = (
+                np.einsum("vjk,jk->v", np.exp(2j * np.pi * cycles), self.weighted) / self.norm
+            )
         return out
 
 
@@ -293,7 +298,9 @@ def point_model(
     ref = np.linalg.norm(traces.positions_m - traces.reference_point_m, axis=1)
     cycles = (2.0 * (rng - ref) / C)[:, None] * traces.frequencies_hz[None, :]
     cycles -= np.rint(cycles)
-    ph = complex(amplitude) * traces.radar.spectral_weights()[None, :] * np.exp(-2j * np.pi * cycles)
+    ph = (
+        complex(amplitude) * traces.radar.spectral_weights()[None, :] * np.exp(-2j * np.pi * cycles)
+    )
     return to_fast_time(ph)
 
 
@@ -338,3 +345,38 @@ def noise_variance(residual: ArrayLike) -> float:
     """
     r = np.asarray(residual)
     return float(np.median(np.abs(r) ** 2) / np.log(2.0))
+
+
+def matched_filter_noise_variance(
+    traces: Traces,
+    data: ArrayLike,
+    *,
+    half_size_m: float,
+    speed_range_mps: tuple[float, float] = (-30.0, 30.0),
+    n_draws: int = 256,
+    seed: int = 0,
+) -> float:
+    """Per-sample noise variance as the matched filter sees it (data units squared).
+
+    ``I`` at ``n_draws`` random positions (within ``half_size_m`` of the reference point)
+    and velocities (range and cross-range speeds uniform over ``speed_range_mps``): away
+    from every target ``I`` is the interference projected on a mover's signature, of
+    variance ``sigma_P^2 n_pulses / sum_k W_k^2`` for white noise of ``sigma_P^2`` per
+    phase-history sample. Its robust level ``median(|I|^2) / ln 2`` (a draw that hits a
+    target does not count) gives ``sigma_P^2``, returned per fast-time sample
+    (``/ n_samples``). Unlike the median of the residual samples it counts the residue
+    of stationary clutter, which RPCA leaves sparse (most samples exactly zero).
+    """
+    gen = np.random.default_rng(seed)
+    ref = traces.reference_point_m
+    pos = (
+        ref[None, :]
+        + np.c_[gen.uniform(-half_size_m, half_size_m, (n_draws, 2)), np.zeros(n_draws)]
+    )
+    lo, hi = speed_range_mps
+    vel = np.array(
+        [ground_velocity(a, b, traces.geometry) for a, b in gen.uniform(lo, hi, (n_draws, 2))]
+    )
+    mf = MatchedFilter(traces, data)
+    level = float(np.median(np.abs(mf.responses(pos, vel)) ** 2) / np.log(2.0))
+    return level * mf.norm / traces.n_pulses / traces.n_samples

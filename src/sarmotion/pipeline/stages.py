@@ -31,7 +31,7 @@ from ..motion import (
     family_direction,
     fit_point_mover,
     local_statistic,
-    noise_variance,
+    matched_filter_noise_variance,
     point_model,
     point_mover_bound,
     range_gradients,
@@ -144,18 +144,24 @@ def estimate_movers(
 
     On the central sub-aperture: each candidate is fitted (:func:`_fit_candidates`),
     all fits are refined jointly (``options.joint_rounds``), the noise level is measured
-    on what they leave, and each gets its Cramér–Rao bound and, for comparison and the
-    paper's figures, ``g_perp`` (``eq:OBJ2``) at its range speed and position. A wide
-    aperture's estimates are then focused on all pulses. Each mover's own traces are
-    extracted from the residual (:func:`extract_mover`) in turn. Returns the fits and
-    the final residual.
+    on what they leave as the matched filter sees it
+    (:func:`~sarmotion.motion.matched_filter_noise_variance`), and each gets its
+    Cramér–Rao bound and, for comparison and the paper's figures, ``g_perp``
+    (``eq:OBJ2``) at its range speed and position. A wide aperture's estimates are then
+    focused on all pulses. Each mover's own traces are extracted from the residual
+    (:func:`extract_mover`) in turn. Returns the fits and the final residual.
     """
     sub = traces.select_pulses(central.start, central.stop)
     moving_sub = np.asarray(moving)[central]
     found = _fit_candidates(sub, moving_sub, detection, options, progress)
     fits = refine_jointly(sub, moving_sub, [f for f, _ in found], rounds=options.joint_rounds)
     models = [point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in fits]
-    variance = noise_variance(moving_sub - sum(models, np.zeros(sub.shape, dtype=complex)))
+    variance = matched_filter_noise_variance(
+        sub,
+        moving_sub - sum(models, np.zeros(sub.shape, dtype=complex)),
+        half_size_m=0.5 * float(options.image_size_m),
+        speed_range_mps=options.speed_range_mps,
+    )
     residual = np.array(moving, dtype=np.complex128)
     out: list[MoverFit] = []
     for k, (fit, (_, evidence)) in enumerate(zip(fits, found, strict=True)):
@@ -219,7 +225,9 @@ def _fit_candidates(
         if statistic < detection.threshold_db:
             log.info("g(u) candidate at %.2f m/s: %.2f dB once movers removed", u, statistic)
             continue
-        fit = fit_point_mover(sub, residual, float(u), cross_speed_range_mps=options.speed_range_mps)
+        fit = fit_point_mover(
+            sub, residual, float(u), cross_speed_range_mps=options.speed_range_mps
+        )
         value = fit.amplitude * sub.n_pulses
         why = stationary_explanation(sub, residual, fit.position_m, fit.velocity_mps, value)
         if why.within_extent and why.focus_gain_db < options.min_focus_gain_db:

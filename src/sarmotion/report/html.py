@@ -86,7 +86,8 @@ def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = 
             color="tab:blue",
             ls="--",
             lw=1,
-            label=f"threshold {det.threshold_db:.1f} dB (false alarms {det.false_alarm_rate:g}/scene)",
+            label=f"threshold {det.threshold_db:.1f} dB "
+            f"(false alarms {det.false_alarm_rate:g} per scene)",
         )
         ax.axvspan(-det.min_speed_mps, det.min_speed_mps, color="0.9", lw=0)
     for k, m in enumerate(result.movers):
@@ -112,7 +113,13 @@ def _cross_panel(ax: Any, k: int, m: Any, truth: dict[str, Any] | None) -> None:
     ax.axvline(cc.speed_mps, color="k", ls=":", lw=1, label=f"g_perp min {cc.speed_mps:.2f} m/s")
     if m.fit is not None:
         f = m.fit
-        ax.plot(f.grid_mps, f.profile / f.profile.max(), color=_COLOURS[k % 6], lw=1.0, label="ML profile")
+        ax.plot(
+            f.grid_mps,
+            f.profile / f.profile.max(),
+            color=_COLOURS[k % 6],
+            lw=1.0,
+            label="ML profile",
+        )
     up = m.estimate.cross_range_speed_mps
     sd = f" +- {m.bound.cross_range_speed_mps:.2g}" if m.bound is not None else ""
     ax.axvline(up, color=_COLOURS[k % 6], ls="--", lw=1, label=f"ML {up:.2f}{sd} m/s")
