@@ -46,7 +46,16 @@ import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
 
-from ..core import C, Traces, as_point, ground_velocity, range_direction_velocity, to_fast_time
+from ..core import (
+    C,
+    Traces,
+    as_point,
+    cross_range_speed,
+    ground_velocity,
+    range_direction_velocity,
+    range_speed,
+    to_fast_time,
+)
 from ..imaging import resolution
 from ._aligned import _Aligner, _g_reduce, _refine_max
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
@@ -353,30 +362,39 @@ def matched_filter_noise_variance(
     *,
     half_size_m: float,
     speed_range_mps: tuple[float, float] = (-30.0, 30.0),
+    centre_m: ArrayLike | None = None,
+    velocity_mps: ArrayLike | None = None,
+    speed_spread_mps: tuple[float, float] = (2.0, 5.0),
     n_draws: int = 256,
     seed: int = 0,
 ) -> float:
     """Per-sample noise variance as the matched filter sees it (data units squared).
 
-    ``I`` at ``n_draws`` random positions (within ``half_size_m`` of the reference point)
-    and velocities (range and cross-range speeds uniform over ``speed_range_mps``): away
-    from every target ``I`` is the interference projected on a mover's signature, of
-    variance ``sigma_P^2 n_pulses / sum_k W_k^2`` for white noise of ``sigma_P^2`` per
+    ``I`` at ``n_draws`` random positions (within ``half_size_m`` of ``centre_m``, default
+    the reference point) and velocities (range and cross-range speeds uniform over
+    ``speed_range_mps``, or within ``speed_spread_mps`` of those of ``velocity_mps``):
+    away from every target ``I`` is the interference projected on a mover's signature,
+    of variance ``sigma_P^2 n_pulses / sum_k W_k^2`` for white noise of ``sigma_P^2`` per
     phase-history sample. Its robust level ``median(|I|^2) / ln 2`` (a draw that hits a
     target does not count) gives ``sigma_P^2``, returned per fast-time sample
     (``/ n_samples``). Unlike the median of the residual samples it counts the residue
-    of stationary clutter, which RPCA leaves sparse (most samples exactly zero).
+    of stationary clutter, which RPCA leaves sparse (most samples exactly zero); drawn
+    around a mover it measures the interference where that mover is.
     """
     gen = np.random.default_rng(seed)
-    ref = traces.reference_point_m
-    pos = (
-        ref[None, :]
-        + np.c_[gen.uniform(-half_size_m, half_size_m, (n_draws, 2)), np.zeros(n_draws)]
-    )
-    lo, hi = speed_range_mps
-    vel = np.array(
-        [ground_velocity(a, b, traces.geometry) for a, b in gen.uniform(lo, hi, (n_draws, 2))]
-    )
+    geom = traces.geometry
+    centre = traces.reference_point_m if centre_m is None else as_point(centre_m, name="centre_m")
+    offsets = gen.uniform(-half_size_m, half_size_m, (n_draws, 2))
+    pos = centre[None, :] + np.c_[offsets, np.zeros(n_draws)]
+    if velocity_mps is None:
+        lo, hi = speed_range_mps
+        speeds = gen.uniform(lo, hi, (n_draws, 2))
+    else:
+        v = np.asarray(velocity_mps, dtype=np.float64).reshape(2)
+        ur, up = range_speed(v, geom), cross_range_speed(v, geom)
+        spread = np.asarray(speed_spread_mps, dtype=np.float64)
+        speeds = np.array([ur, up])[None, :] + gen.uniform(-1.0, 1.0, (n_draws, 2)) * spread
+    vel = np.array([ground_velocity(a, b, geom) for a, b in speeds])
     mf = MatchedFilter(traces, data)
     level = float(np.median(np.abs(mf.responses(pos, vel)) ** 2) / np.log(2.0))
     return level * mf.norm / traces.n_pulses / traces.n_samples

@@ -143,9 +143,9 @@ def estimate_movers(
     """Maximum-likelihood movers, jointly refined, with their bounds; then extracted.
 
     On the central sub-aperture: each candidate is fitted (:func:`_fit_candidates`),
-    all fits are refined jointly (``options.joint_rounds``), the noise level is measured
-    on what they leave as the matched filter sees it
-    (:func:`~sarmotion.motion.matched_filter_noise_variance`), and each gets its
+    all fits are refined jointly (``options.joint_rounds``), the noise level around each
+    is measured on what they leave as the matched filter sees it (:func:`_local_noise`),
+    and each gets its
     Cramér–Rao bound and, for comparison and the paper's figures, ``g_perp``
     (``eq:OBJ2``) at its range speed and position. A wide aperture's estimates are then
     focused on all pulses. Each mover's own traces are extracted from the residual
@@ -156,12 +156,7 @@ def estimate_movers(
     found = _fit_candidates(sub, moving_sub, detection, options, progress)
     fits = refine_jointly(sub, moving_sub, [f for f, _ in found], rounds=options.joint_rounds)
     models = [point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in fits]
-    variance = matched_filter_noise_variance(
-        sub,
-        moving_sub - sum(models, np.zeros(sub.shape, dtype=complex)),
-        half_size_m=0.5 * float(options.image_size_m),
-        speed_range_mps=options.speed_range_mps,
-    )
+    left = moving_sub - sum(models, np.zeros(sub.shape, dtype=complex))
     residual = np.array(moving, dtype=np.complex128)
     out: list[MoverFit] = []
     for k, (fit, (_, evidence)) in enumerate(zip(fits, found, strict=True)):
@@ -185,7 +180,7 @@ def estimate_movers(
                 family_position_per_m=family[0],
                 family_velocity_per_m=family[1],
                 evidence=evidence,
-                bound=_bound(sub, fit, variance),
+                bound=_bound(sub, fit, _local_noise(sub, left, fit)),
                 fit=fit,
             )
         )
@@ -298,6 +293,18 @@ def _estimate(
         range_curve=g,
         cross_curve=cross,
         history=history,
+    )
+
+
+def _local_noise(sub: Traces, residual: NDArray[np.complexfloating], fit: PointFit) -> float:
+    """Noise variance around a mover as the matched filter sees it, on what the fits leave.
+
+    Positions within 10 m of the fit, range speeds within 2 m/s and cross-range speeds
+    within 5 m/s of its own (:func:`~sarmotion.motion.matched_filter_noise_variance`):
+    clutter residue is not white, and its level where the mover is sets the bound.
+    """
+    return matched_filter_noise_variance(
+        sub, residual, half_size_m=10.0, centre_m=fit.position_m, velocity_mps=fit.velocity_mps
     )
 
 
