@@ -18,13 +18,19 @@ __all__ = ["analyze", "demo"]
 
 
 def _options(
-    method: str, max_movers: int, size_m: float | None, trajectory: bool, sub_aperture_deg: float
+    method: str,
+    max_movers: int,
+    size_m: float | None,
+    trajectory: bool,
+    sub_aperture_deg: float,
+    false_alarm_rate: float = 0.01,
 ) -> AnalysisOptions:
     """AnalysisOptions from the flags; a bad value is reported under its flag's name."""
     flags = {
         "max_movers": "--max-movers",
         "image_size_m": "--size",
         "sub_aperture_deg": "--sub-aperture",
+        "false_alarm_rate": "--false-alarm-rate",
     }
     try:
         return AnalysisOptions(
@@ -33,6 +39,7 @@ def _options(
             image_size_m=size_m,
             trajectory=trajectory,
             sub_aperture_deg=sub_aperture_deg,
+            false_alarm_rate=false_alarm_rate,
         )
     except (TypeError, ValueError) as exc:
         text = str(exc)
@@ -93,6 +100,14 @@ def run_analyze(
     "simulated scenes, rpca (eta x 2) for measured data.",
 )
 @click.option("--max-movers", type=int, default=5, show_default=True, help="Most movers sought.")
+@click.option(
+    "--false-alarm-rate",
+    type=float,
+    default=0.01,
+    show_default=True,
+    help="Per-scene false-alarm rate of the mover detector; sets the threshold on the "
+    "g(u) peak over its local floor from the statistic's measured null distribution.",
+)
 @speed_option
 @click.option(
     "--size",
@@ -125,6 +140,7 @@ def analyze(
     out: Path,
     method: str,
     max_movers: int,
+    false_alarm_rate: float,
     speed_mps: float,
     size_m: float | None,
     trajectory: bool,
@@ -138,7 +154,7 @@ def analyze(
     or GOTCHA .mat files. Writes OUT/results.json (schema sarmotion.results/1),
     OUT/report.html (self-contained) and the report's figures as PNG.
     """
-    options = _options(method, max_movers, size_m, trajectory, sub_aperture_deg)
+    options = _options(method, max_movers, size_m, trajectory, sub_aperture_deg, false_alarm_rate)
     run_analyze(
         inputs,
         out,

@@ -40,8 +40,9 @@ candidates.
 ``2 du s / c`` (2.1 resolutions for the GOTCHA rect spectrum, 4.25 for the paper's
 Gaussian pulse). Measured on the coarse grid: injected movers 1.5-3.0 (GOTCHA), Scene 1's
 4.0 (Gaussian); the residue of stationary clutter near the stationary band is broad,
-7-12 (3.3-5.7 point widths). Candidates wider than ``max_width`` point widths (default
-2) are rejected.
+7-12 (3.3-5.7 point widths); two movers within 3 resolutions merge into one peak up to
+2.5 point widths. Candidates wider than ``max_width`` point widths (the analysis uses
+2.5) are rejected.
 
 **Focus gain against a stationary explanation.** Over one degree a mover's range history
 is shared by a one-parameter family of uniform motions (:mod:`sarmotion.motion.aperture`);

@@ -54,8 +54,9 @@ class AnalysisOptions:
         Widest ``g(u)`` peak accepted as a mover, at half height above the local floor,
         in widths of a noise-free point mover's peak
         (:func:`~sarmotion.motion.point_peak_width`: 2.1 range-speed resolutions for
-        GOTCHA). Default 2: movers measured 0.7-1.4 such widths, the residue of
-        stationary clutter 3.3-5.7.
+        GOTCHA). Default 2.5: movers measured 0.7-1.4 such widths, two movers within 3
+        resolutions merge into one peak up to 2.5, the residue of stationary clutter
+        measured 3.3-5.7.
     min_focus_gain_db : float
         Least gain of a mover's matched filter over the best stationary point with the
         same range history, when that point lies within the alias-free cross-range
@@ -94,7 +95,7 @@ class AnalysisOptions:
     speed_range_mps: tuple[float, float] = (-30.0, 30.0)
     false_alarm_rate: float = 0.01
     threshold_db: float | None = None
-    max_peak_width: float = 2.0
+    max_peak_width: float = 2.5
     min_focus_gain_db: float = 1.0
     joint_rounds: int = 2
     stationary_threshold_db: float = -20.0

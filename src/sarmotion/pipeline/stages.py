@@ -24,13 +24,13 @@ from ..motion import (
     PointBound,
     PointFit,
     RangeSpeedDetection,
+    StationaryExplanation,
     TrajectoryEstimate,
     detect_range_speeds,
     estimate_cross_range_speed,
     estimate_trajectory,
     family_direction,
     fit_point_mover,
-    local_statistic,
     matched_filter_noise_variance,
     point_model,
     point_mover_bound,
@@ -202,27 +202,30 @@ def _fit_candidates(
 ) -> list[tuple[PointFit, MoverEvidence]]:
     """Fit the candidates one at a time, strongest first, each on what the others leave.
 
-    A candidate is tested again on the current residual (its statistic must still reach
-    the threshold: a shoulder of a subtracted mover's peak does not), fitted
-    (:func:`~sarmotion.motion.fit_point_mover`), and rejected when a stationary point
-    explains it (:func:`~sarmotion.motion.stationary_explanation`); otherwise its fitted
-    traces are subtracted.
+    The strongest untried candidate is fitted (:func:`~sarmotion.motion.fit_point_mover`)
+    and rejected when a stationary point explains it
+    (:func:`~sarmotion.motion.stationary_explanation`); otherwise its fitted traces are
+    subtracted and the detector runs again on the residual (a second mover within a
+    resolution of the first, hidden under its peak, then stands out; a shoulder of the
+    subtracted peak falls to the floor). The threshold stays the first run's.
     """
     residual = np.array(moving, dtype=np.complex128)
-    rs = detection.range_speeds
+    current = detection
+    tried: list[float] = []
     out: list[tuple[PointFit, MoverEvidence]] = []
-    for k, (u, width) in enumerate(zip(rs.speeds_mps, detection.widths, strict=True)):
-        report(progress, "movers", k, rs.n_movers)
-        if len(out) >= options.max_movers:
+    res = detection.range_speeds.resolution_mps
+    while len(out) < options.max_movers:
+        rs = current.range_speeds
+        untried = [
+            k for k, u in enumerate(rs.speeds_mps) if all(abs(u - t) > 0.5 * res for t in tried)
+        ]
+        report(progress, "movers", len(tried), len(tried) + len(untried))
+        if not untried:
             break
-        current = sub.with_data(residual)
-        statistic = local_statistic(current, float(u)) if out else float(rs.peak_db[k])
-        if statistic < detection.threshold_db:
-            log.info("g(u) candidate at %.2f m/s: %.2f dB once movers removed", u, statistic)
-            continue
-        fit = fit_point_mover(
-            sub, residual, float(u), cross_speed_range_mps=options.speed_range_mps
-        )
+        k = untried[0]
+        u, statistic = float(rs.speeds_mps[k]), float(rs.peak_db[k])
+        tried.append(u)
+        fit = fit_point_mover(sub, residual, u, cross_speed_range_mps=options.speed_range_mps)
         value = fit.amplitude * sub.n_pulses
         why = stationary_explanation(sub, residual, fit.position_m, fit.velocity_mps, value)
         if why.within_extent and why.focus_gain_db < options.min_focus_gain_db:
@@ -235,19 +238,38 @@ def _fit_candidates(
             )
             continue
         residual = residual - point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
-        evidence = MoverEvidence(
-            statistic_db=statistic,
-            threshold_db=detection.threshold_db,
-            false_alarm_rate=detection.false_alarm_rate,
-            p_value=detection.false_alarm_probability(statistic),
-            width_resolutions=float(width),
-            focus_gain_db=why.focus_gain_db,
-            stationary_point_m=(float(why.position_m[0]), float(why.position_m[1])),
-            stationary_within_extent=why.within_extent,
-        )
-        out.append((fit, evidence))
-    report(progress, "movers", rs.n_movers, rs.n_movers)
+        out.append((fit, _evidence(detection, statistic, float(current.widths[k]), why)))
+        current = _redetect(sub.with_data(residual), detection, options)
     return out
+
+
+def _redetect(
+    traces: Traces, first: RangeSpeedDetection, options: AnalysisOptions
+) -> RangeSpeedDetection:
+    """The detector on a residual, with the first run's threshold and speed floor."""
+    return detect_range_speeds(
+        traces,
+        speed_range_mps=options.speed_range_mps,
+        threshold=first.threshold_db,
+        min_speed_mps=first.min_speed_mps,
+        max_width=options.max_peak_width,
+    )
+
+
+def _evidence(
+    detection: RangeSpeedDetection, statistic: float, width: float, why: StationaryExplanation
+) -> MoverEvidence:
+    """The detection record of an accepted candidate."""
+    return MoverEvidence(
+        statistic_db=statistic,
+        threshold_db=detection.threshold_db,
+        false_alarm_rate=detection.false_alarm_rate,
+        p_value=detection.false_alarm_probability(statistic),
+        width_resolutions=width,
+        focus_gain_db=why.focus_gain_db,
+        stationary_point_m=(float(why.position_m[0]), float(why.position_m[1])),
+        stationary_within_extent=why.within_extent,
+    )
 
 
 def _estimate(
