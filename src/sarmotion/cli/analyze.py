@@ -37,11 +37,19 @@ __all__ = ["analyze", "demo"]
 
 
 def _options(
-    method: str, max_movers: int, size_m: float | None, trajectory: bool, sub_aperture_deg: float
+    method: str,
+    max_movers: int,
+    size_m: float | None,
+    trajectory: bool,
+    sub_aperture_deg: float,
+    false_alarm_rate: float = 0.01,
 ) -> AnalysisOptions:
     """AnalysisOptions from the flags; a bad value is reported under its flag's name."""
     with as_flags(
-        max_movers="--max-movers", image_size_m="--size", sub_aperture_deg="--sub-aperture"
+        max_movers="--max-movers",
+        image_size_m="--size",
+        sub_aperture_deg="--sub-aperture",
+        false_alarm_rate="--false-alarm-rate",
     ):
         return AnalysisOptions(
             separation=SeparationOptions(method=None if method == "auto" else method),
@@ -49,6 +57,7 @@ def _options(
             image_size_m=size_m,
             trajectory=trajectory,
             sub_aperture_deg=sub_aperture_deg,
+            false_alarm_rate=false_alarm_rate,
         )
 
 
@@ -116,6 +125,14 @@ def run_analyze(
     "simulated scenes, rpca (eta x 2) for measured data.",
 )
 @click.option("--max-movers", type=int, default=5, show_default=True, help="Most movers sought.")
+@click.option(
+    "--false-alarm-rate",
+    type=float,
+    default=0.01,
+    show_default=True,
+    help="Per-scene false-alarm rate of the mover detector; sets the threshold on the "
+    "g(u) peak over its local floor from the statistic's measured null distribution.",
+)
 @speed_option
 @lenient_option
 @click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
@@ -150,6 +167,7 @@ def analyze(
     out: Path,
     method: str,
     max_movers: int,
+    false_alarm_rate: float,
     speed_mps: float,
     size_m: float | None,
     trajectory: bool,
@@ -166,7 +184,7 @@ def analyze(
     or GOTCHA .mat files. Writes OUT/results.json (schema sarmotion.results/1),
     OUT/report.html (self-contained) and the report's figures as PNG.
     """
-    options = _options(method, max_movers, size_m, trajectory, sub_aperture_deg)
+    options = _options(method, max_movers, size_m, trajectory, sub_aperture_deg, false_alarm_rate)
     run_analyze(
         inputs,
         out,

@@ -2,10 +2,21 @@
 
 Top-level keys: ``schema``, ``method``, ``reference_point_m``, ``platform_speed_mps``,
 ``n_pulses``, ``n_samples``, ``aperture_s``, ``aperture_deg``,
-``range_speed_resolution_mps``, ``movers`` (position_m, velocity_mps, range and
-cross-range speeds, peak levels, ``cross_range_family``, ``trajectory``), ``stationary``,
-``timings_s``, ``options``, ``source``; for simulated inputs also ``truth``, per-mover
-``errors``, ``false_movers`` and ``missed_movers`` (:mod:`sarmotion.pipeline.truth`).
+``range_speed_resolution_mps``, ``detection`` (the test: statistic, threshold,
+false-alarm rate, the measured null tail, every candidate), ``movers`` (position_m,
+velocity_mps, range and cross-range speeds, peak levels, ``detection`` (statistic,
+threshold, false-alarm rate, p-value, width, focus gain), ``standard_errors`` (the
+Cramér–Rao bound at the measured SNR), ``snr_db``, ``amplitude``,
+``g_perp_cross_range_speed_mps``, ``cross_range_family``, ``trajectory``),
+``stationary``, ``timings_s``, ``options``, ``source``; for simulated inputs also
+``truth``, per-mover ``errors``, ``false_movers`` and ``missed_movers``
+(:mod:`sarmotion.pipeline.truth`).
+
+The schema name stays ``sarmotion.results/1``: ``detection``, and per mover
+``detection``, ``standard_errors``, ``snr_db``, ``amplitude`` and
+``g_perp_cross_range_speed_mps``, were added; no key was removed or changed meaning
+except ``g_peak_db``, now the ``g(u)`` peak over its *local* floor (the detector's
+statistic) instead of over the global median.
 """
 
 from __future__ import annotations
@@ -14,7 +25,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..motion import azimuth_span_deg
+from ..motion import NULL_TAIL, azimuth_span_deg
 from ..pipeline import AnalysisResult, MoverResult, TruthComparison
 
 __all__ = ["RESULTS_SCHEMA", "results_document", "write_json"]
@@ -47,6 +58,7 @@ def results_document(
         "aperture_s": float(tr.slow_times_s[-1] - tr.slow_times_s[0]),
         "aperture_deg": float(azimuth_span_deg(tr)),
         "range_speed_resolution_mps": float(result.range_speeds.resolution_mps),
+        "detection": _detection(result),
         "movers": [_mover(m) for m in result.movers],
         "stationary": [
             {"position_m": list(s.position_m), "peak_db": float(s.peak_db)}
@@ -81,6 +93,31 @@ def _mover(m: MoverResult) -> dict[str, Any]:
             "velocity_mps_per_m": [float(v) for v in m.family_velocity_per_m],
         },
     }
+    if m.evidence is not None:
+        ev = m.evidence
+        entry["detection"] = {
+            "statistic_db": float(ev.statistic_db),
+            "threshold_db": float(ev.threshold_db),
+            "false_alarm_rate": float(ev.false_alarm_rate),
+            "p_value": float(ev.p_value),
+            "width_resolutions": float(ev.width_resolutions),
+            "focus_gain_db": float(ev.focus_gain_db),
+            "stationary_point_m": [float(v) for v in ev.stationary_point_m],
+            "stationary_within_extent": bool(ev.stationary_within_extent),
+        }
+    if m.bound is not None:
+        b = m.bound
+        entry["standard_errors"] = {
+            "range_position_m": b.range_position_m,
+            "range_speed_mps": b.range_speed_mps,
+            "cross_range_speed_mps": b.cross_range_speed_mps,
+            "amplitude": b.amplitude,
+            "kind": "Cramér–Rao bound at the measured SNR, cross-range coordinate held",
+        }
+        entry["snr_db"] = b.snr_db
+    if m.fit is not None:
+        entry["amplitude"] = [float(m.fit.amplitude.real), float(m.fit.amplitude.imag)]
+        entry["g_perp_cross_range_speed_mps"] = float(m.estimate.cross_curve.speed_mps)
     if m.trajectory is not None:
         knots = m.trajectory.knot_times_s
         entry["trajectory"] = {
@@ -88,6 +125,29 @@ def _mover(m: MoverResult) -> dict[str, Any]:
             "velocities_mps": m.trajectory.velocities_mps.tolist(),
         }
     return entry
+
+
+def _detection(result: AnalysisResult) -> dict[str, Any] | None:
+    """The detector's test and every ``g(u)`` candidate (:mod:`sarmotion.motion.detector`)."""
+    d = result.detection
+    if d is None:
+        return None
+    st = d.statistics
+    return {
+        "statistic": "g(u) peak over the median of g at 2-12 range-speed resolutions (dB)",
+        "threshold_db": float(d.threshold_db),
+        "false_alarm_rate": float(d.false_alarm_rate),
+        "n_candidates": d.n_candidates,
+        "null_tail": dict(NULL_TAIL),
+        "min_speed_mps": float(d.min_speed_mps),
+        "max_width_resolutions": float(d.max_width),
+        "min_focus_gain_db": float(result.options.min_focus_gain_db),
+        "candidates": [
+            {"range_speed_mps": float(u), "statistic_db": float(t), "width_resolutions": float(w)}
+            for u, t, w in zip(st.speeds_mps, st.statistic_db, st.width_resolutions, strict=True)
+            if t >= d.threshold_db - 3.0
+        ],
+    }
 
 
 def _jsonable(v: Any) -> bool:

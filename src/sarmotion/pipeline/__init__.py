@@ -11,7 +11,7 @@
 
 from .analyze import analyze
 from .options import AnalysisOptions
-from .results import AnalysisResult, MoverResult, StationaryTarget
+from .results import AnalysisResult, MoverEvidence, MoverResult, StationaryTarget
 from .stages import MoverFit, extract_mover
 from .truth import MoverErrors, TrueMover, TruthComparison, compare_with_truth
 
@@ -19,6 +19,7 @@ __all__ = [
     "AnalysisOptions",
     "AnalysisResult",
     "MoverErrors",
+    "MoverEvidence",
     "MoverFit",
     "MoverResult",
     "StationaryTarget",

@@ -5,25 +5,26 @@
 
 1. **preliminary image** ``eq:image`` on a square grid around the reference point;
 2. **stationary / moving separation** ``M = L + S`` (:func:`sarmotion.separation.separate`);
-3. **number of movers and their range speeds**: the peaks of ``g(u)`` (``eq:OBJg``) on
-   ``S`` (:func:`sarmotion.motion.estimate_range_speeds`);
-4. **one mover at a time** (``fig:rpca2movFinalSep``), strongest first, on the current
-   residual ``R`` (initially ``S``): location and velocity
-   (:func:`sarmotion.motion.estimate_velocity`, range speed re-refined on ``R``);
-   then the mover is *separated*: ``T_+^{u, rho}`` at its estimate makes its trace
-   vertical (``s``-independent, rank one) at ``t = 0``; its part is the slow-time mean
-   of the aligned traces in a fast-time window of ``+- mover_half_window`` samples
-   around ``t = 0`` (the orthogonal projection on ``s``-independent traces, i.e. the
-   rank-one part of the window); mapped back by ``T_-^{u, rho}`` it is the mover's own
-   trace ``D_q``, and ``R <- R - D_q`` before the next mover is estimated;
-   Steps 3 and 4 run on a sub-aperture of about a degree (``sub_aperture_deg``), as the
-   velocity estimation assumes: for a wider aperture, on its central degree. Each
+3. **detection** (:func:`sarmotion.motion.detect_range_speeds`): the peaks of ``g(u)``
+   (``eq:OBJg``) on ``S`` are candidates; each is tested by its height over the local
+   floor of ``g`` against the threshold of a stated false-alarm rate (set from the
+   statistic's measured distribution on data without movers), and by its width;
+4. **movers** (:func:`sarmotion.pipeline.stages.estimate_movers`), strongest first, each
+   on ``S`` minus the movers already fitted: the maximum-likelihood range position,
+   range speed and cross-range speed (:func:`sarmotion.motion.fit_point_mover`: the
+   coherent matched filter, searched globally in cross-range speed); a candidate that a
+   stationary point with the same range history focuses as well is rejected. All movers
+   are then refined jointly, each with the others subtracted, and get their Cramér–Rao
+   bound at the measured SNR (:mod:`sarmotion.motion.bounds`) and, beside the fit,
+   ``g_perp`` (``eq:OBJ2``). Steps 3 and 4 run on a sub-aperture of about a degree
+   (``sub_aperture_deg``): for a wider aperture, on its central degree, and each
    estimate is then moved to the aperture's ``s = 0`` and focused on all pulses
-   (:func:`sarmotion.motion.refine_on_aperture`: the coherent point response is
-   maximised over range, range speed and cross-range speed) before its extraction. Each
-   mover also gets its cross-range *family*
-   (:func:`sarmotion.motion.family_direction`): the data do not fix where along it
-   the mover is;
+   (:func:`sarmotion.motion.refine_on_aperture`). Each mover also gets its cross-range
+   *family* (:func:`sarmotion.motion.family_direction`): the data do not fix where along
+   it the mover is. Finally each mover is *separated*: ``T_+^{u, rho}`` at its estimate
+   makes its trace vertical at ``t = 0``; its part is the slow-time mean of the aligned
+   traces in a fast-time window of ``+- mover_half_window`` samples, mapped back by
+   ``T_-^{u, rho}``: the mover's own trace ``D_q``, and ``R <- R - D_q``;
 5. **trajectory** of each mover by the phase-space algorithm
    (:func:`sarmotion.motion.estimate_trajectory`) from its own traces;
 6. **images**: the stationary image from ``L`` (``M - S``), and each mover's image
@@ -109,10 +110,10 @@ def analyze(
         sep = separate(traces, prelim, opts.separation, progress=progress)
     with _timed(timings, "range_speeds"):
         sub = traces.select_pulses(central.start, central.stop)
-        speeds = find_range_speeds(sub, sep.moving[central], opts)
+        detection = find_range_speeds(sub, sep.moving[central], opts)
     with _timed(timings, "movers"):
         fits, residual = estimate_movers(
-            traces, sep.moving, speeds, opts, central=central, progress=progress
+            traces, sep.moving, detection, opts, central=central, progress=progress
         )
     with _timed(timings, "trajectories"):
         trajs = (
@@ -129,7 +130,8 @@ def analyze(
     return AnalysisResult(
         traces=traces,
         separation=sep,
-        range_speeds=speeds,
+        range_speeds=detection.range_speeds,
+        detection=detection,
         movers=movers,
         residual=residual,
         preliminary_image=prelim,

@@ -9,11 +9,56 @@ from numpy.typing import NDArray
 
 from ..core.traces import Traces
 from ..imaging import Image
-from ..motion import MoverEstimate, RangeSpeeds, TrajectoryEstimate
+from ..motion import (
+    MoverEstimate,
+    PointBound,
+    PointFit,
+    RangeSpeedDetection,
+    RangeSpeeds,
+    TrajectoryEstimate,
+)
 from ..separation import Separation
 from .options import AnalysisOptions
 
-__all__ = ["MoverResult", "StationaryTarget", "AnalysisResult"]
+__all__ = ["MoverEvidence", "MoverResult", "StationaryTarget", "AnalysisResult"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class MoverEvidence:
+    """Why a mover was declared (:mod:`sarmotion.motion.detector`).
+
+    Attributes
+    ----------
+    statistic_db : float
+        ``g(u)`` peak over its local floor (dB), re-measured after the stronger movers
+        were subtracted.
+    threshold_db : float
+        Threshold it passed (dB).
+    false_alarm_rate : float
+        Per-scene false-alarm rate the threshold was set for.
+    p_value : float
+        Per-scene probability that clutter and noise alone reach ``statistic_db``
+        (the measured null tail, union over the candidates).
+    width_resolutions : float
+        Half-height width of the ``g`` peak (range-speed resolutions).
+    focus_gain_db : float
+        Matched filter at the fit over the best stationary point with the same range
+        history (dB).
+    stationary_point_m : (float, float)
+        That stationary point (m).
+    stationary_within_extent : bool
+        Whether it lies within the alias-free cross-range extent (only then is the gain
+        tested).
+    """
+
+    statistic_db: float
+    threshold_db: float
+    false_alarm_rate: float
+    p_value: float
+    width_resolutions: float
+    focus_gain_db: float
+    stationary_point_m: tuple[float, float]
+    stationary_within_extent: bool
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -40,6 +85,15 @@ class MoverResult:
         (m/s)/m). The data of a few degrees do not fix ``t`` (:mod:`sarmotion.motion.aperture`).
     trajectory : TrajectoryEstimate or None
         Phase-space trajectory, if requested.
+    evidence : MoverEvidence or None
+        The detection test it passed.
+    bound : PointBound or None
+        Cramér–Rao bound of its range position, range and cross-range speeds and
+        amplitude at its measured SNR, on the sub-aperture it was estimated on
+        (:mod:`sarmotion.motion.bounds`): its standard errors.
+    fit : PointFit or None
+        The maximum-likelihood fit on that sub-aperture (with the global
+        cross-range-speed profile).
     """
 
     estimate: MoverEstimate
@@ -50,6 +104,9 @@ class MoverResult:
     family_position_per_m: NDArray[np.float64]
     family_velocity_per_m: NDArray[np.float64]
     trajectory: TrajectoryEstimate | None = None
+    evidence: MoverEvidence | None = None
+    bound: PointBound | None = None
+    fit: PointFit | None = None
 
     @property
     def position_m(self) -> NDArray[np.float64]:
@@ -89,7 +146,9 @@ class AnalysisResult:
     separation : Separation
         ``S`` (moving) and ``L`` (stationary, None for annihilation).
     range_speeds : RangeSpeeds
-        ``g(u)`` on ``S`` and its peaks (the number of movers).
+        ``g(u)`` on ``S`` and the candidates that passed its statistical test.
+    detection : RangeSpeedDetection or None
+        The test: every candidate's statistic, the threshold and its false-alarm rate.
     movers : tuple of MoverResult
         The movers, in the order they were separated (strongest first).
     residual : (n_pulses, n_samples) ndarray
@@ -107,6 +166,7 @@ class AnalysisResult:
     traces: Traces
     separation: Separation
     range_speeds: RangeSpeeds
+    detection: RangeSpeedDetection | None = None
     movers: tuple[MoverResult, ...]
     residual: NDArray[np.complexfloating]
     preliminary_image: Image

@@ -73,42 +73,72 @@ def traces_panels_figure(result: AnalysisResult) -> Figure:
 
 
 def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
-    """``g(u)`` on ``S`` with the detected range speeds, and each mover's ``g_perp``."""
+    """``g(u)`` on ``S`` with its detection threshold, and each mover's ``g_perp`` and ML profile.
+
+    Left: ``g``, its local floor and the threshold (floor times the statistic's
+    threshold), the detected range speeds. Right, per mover: ``g_perp`` (``eq:OBJ2``,
+    minimum) and the matched filter's global profile over the cross-range speed
+    (maximum: the maximum-likelihood estimate).
+    """
     rs = result.range_speeds
+    det = result.detection
     n = len(result.movers)
     fig, axes = subplots(1, 1 + n, figsize=(4.6 * (1 + n), 3.6), squeeze=False)
     ax = axes[0, 0]
-    ax.plot(rs.grid_mps, rs.objective / rs.objective.max(), color="k", lw=1.0)
-    ax.axhline(rs.floor / rs.objective.max(), color="0.6", ls=":", lw=1, label="median (floor)")
-    for k, u in enumerate(rs.speeds_mps):
-        ax.axvline(u, color=_COLOURS[k % 6], ls="--", lw=1, label=f"peak {k + 1}: {u:.2f} m/s")
+    top = float(rs.objective.max())
+    ax.plot(rs.grid_mps, rs.objective / top, color="k", lw=1.0, label="g(u)")
+    if det is not None:
+        ax.plot(rs.grid_mps, det.floor_curve / top, color="0.6", ls=":", lw=1, label="local floor")
+        ax.plot(
+            rs.grid_mps,
+            det.floor_curve * 10.0 ** (det.threshold_db / 20.0) / top,
+            color="tab:blue",
+            ls="--",
+            lw=1,
+            label=f"threshold {det.threshold_db:.1f} dB "
+            f"(false alarms {det.false_alarm_rate:g} per scene)",
+        )
+        ax.axvspan(-det.min_speed_mps, det.min_speed_mps, color="0.9", lw=0)
+    for k, m in enumerate(result.movers):
+        u = m.estimate.range_speed_mps
+        ax.axvline(u, color=_COLOURS[k % 6], ls="--", lw=1, label=f"mover {k + 1}: {u:.2f} m/s")
     if truth:
         for t in truth["truth"]:
             ax.plot(t["range_speed_mps"], 1.02, "v", color="k", ms=6)
     ax.set_xlabel("range speed u (m/s)")
     ax.set_ylabel("g(u) / max")
-    ax.set_title("g(u) on S (eq:OBJg)")
-    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title("g(u) on S (eq:OBJg) and the detector")
+    ax.legend(fontsize=6, loc="upper left")
     for k, m in enumerate(result.movers):
-        cc = m.estimate.cross_curve
-        ax = axes[0, 1 + k]
-        ax.plot(cc.grid_mps, cc.objective / cc.objective.max(), color="k", lw=1.0)
-        ax.axvline(
-            cc.speed_mps,
-            color=_COLOURS[k % 6],
-            ls="--",
-            lw=1,
-            label=f"estimate {cc.speed_mps:.2f} m/s",
-        )
-        if truth and truth["errors"][k] is not None:
-            err = truth["errors"][k]["cross_range_speed_mps"]
-            ax.axvline(cc.speed_mps - err, color="k", ls=":", lw=1, label="truth")
-        ax.set_xlabel("cross-range speed u_perp (m/s)")
-        ax.set_ylabel("g_perp / max")
-        ax.set_title(f"mover {k + 1}: g_perp (eq:OBJ2)")
-        ax.legend(fontsize=7)
+        _cross_panel(axes[0, 1 + k], k, m, truth)
     fig.tight_layout()
     return fig
+
+
+def _cross_panel(ax: Any, k: int, m: Any, truth: dict[str, Any] | None) -> None:
+    """One mover's ``g_perp`` and maximum-likelihood profile against the cross-range speed."""
+    cc = m.estimate.cross_curve
+    ax.plot(cc.grid_mps, cc.objective / cc.objective.max(), color="k", lw=1.0, label="g_perp")
+    ax.axvline(cc.speed_mps, color="k", ls=":", lw=1, label=f"g_perp min {cc.speed_mps:.2f} m/s")
+    if m.fit is not None:
+        f = m.fit
+        ax.plot(
+            f.grid_mps,
+            f.profile / f.profile.max(),
+            color=_COLOURS[k % 6],
+            lw=1.0,
+            label="ML profile",
+        )
+    up = m.estimate.cross_range_speed_mps
+    sd = f" +- {m.bound.cross_range_speed_mps:.2g}" if m.bound is not None else ""
+    ax.axvline(up, color=_COLOURS[k % 6], ls="--", lw=1, label=f"ML {up:.2f}{sd} m/s")
+    if truth and truth["errors"][k] is not None:
+        err = truth["errors"][k]["cross_range_speed_mps"]
+        ax.axvline(up - err, color="0.4", ls="-.", lw=1, label="truth")
+    ax.set_xlabel("cross-range speed u_perp (m/s)")
+    ax.set_ylabel("/ max")
+    ax.set_title(f"mover {k + 1}: g_perp (eq:OBJ2) and matched filter")
+    ax.legend(fontsize=6)
 
 
 def images_figure(result: AnalysisResult) -> Figure:
@@ -238,6 +268,26 @@ img{max-width:100%;height:auto;display:block;margin:6px 0}
 """
 
 
+def _detection_cell(m: dict[str, Any]) -> str:
+    d = m.get("detection")
+    if d is None:
+        return _fmt(m["g_peak_db"], 1)
+    return (
+        f"{d['statistic_db']:.1f} / {d['threshold_db']:.1f}, p = {d['p_value']:.1e}, "
+        f"{d['focus_gain_db']:.1f}"
+    )
+
+
+def _errors_cell(m: dict[str, Any]) -> str:
+    e = m.get("standard_errors")
+    if e is None:
+        return "&ndash;"
+    return (
+        f"{e['range_position_m']:.2g}, {e['range_speed_mps']:.2g}, "
+        f"{e['cross_range_speed_mps']:.2g}; {m['snr_db']:.1f}"
+    )
+
+
 def _html_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     h = "".join(f"<th>{html.escape(c)}</th>" for c in head)
     body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
@@ -321,9 +371,11 @@ def _figures(
         ),
         (
             "Motion estimation",
-            "g(u): peaks are the movers' range speeds"
-            + (" (triangles: truth)" if marks else "")
-            + ". g_perp: its minimum is the cross-range speed"
+            "g(u) with its local floor and the detection threshold (a stated false-alarm "
+            "rate; grey band: the stationary band, not tested); dashed: the movers' range "
+            "speeds" + (" (triangles: truth)" if marks else "") + ". Per mover: g_perp (its "
+            "minimum) and the matched filter's global profile over the cross-range speed (its "
+            "maximum is the maximum-likelihood estimate, with its Cramér–Rao standard error)"
             + (" (dotted: truth)." if marks else "."),
             objectives_figure(result, truth=truth),
             "objectives.png",
@@ -372,20 +424,22 @@ def _movers_html(doc: dict[str, Any]) -> str:
                 _fmt(m["velocity_mps"]),
                 _fmt(m["range_speed_mps"], 3),
                 _fmt(m["cross_range_speed_mps"], 3),
-                _fmt(m["g_peak_db"], 1),
+                _detection_cell(m),
+                _errors_cell(m),
                 _fmt(m["peak_db"], 1),
                 _fmt(fam["position_per_m"], 3) + " / " + _fmt(fam["velocity_mps_per_m"], 4),
             ]
         )
     if not rows:
-        return "<p>No mover found above the g(u) threshold.</p>"
+        return "<p>No mover passed the detector.</p>"
     head = [
         "estimate",
         "position at s=0 (m)",
         "velocity (m/s)",
         "range speed (m/s)",
         "cross-range speed (m/s)",
-        "g peak/floor (dB)",
+        "detection: statistic / threshold (dB), p, focus gain (dB)",
+        "standard errors: range position (m), range speed, cross-range speed (m/s); SNR (dB)",
         "image peak (dB re stationary)",
         "family, per m of cross-range offset: position (m/m) / velocity (m/s per m)",
     ]
@@ -507,6 +561,18 @@ def _acquisition_html(doc: dict[str, Any], inputs: Sequence[str]) -> str:
         ["separation method", html.escape(doc["method"])],
         ["range-speed resolution (m/s)", _fmt(doc["range_speed_resolution_mps"], 3)],
     ]
+    if doc.get("detection"):
+        det = doc["detection"]
+        acq.append(
+            [
+                "mover detector",
+                f"g(u) over its local floor &ge; {det['threshold_db']:.2f} dB "
+                f"(false-alarm rate {det['false_alarm_rate']:g} per scene, "
+                f"{det['n_candidates']} candidates), |u| &ge; {det['min_speed_mps']:.2f} m/s, "
+                f"width &le; {det['max_width_resolutions']:.1f} resolutions, "
+                f"focus gain &ge; {det['min_focus_gain_db']:.1f} dB",
+            ]
+        )
     return (
         '<table class="kv">'
         + "".join(f"<tr><td>{a}</td><td>{b}</td></tr>" for a, b in acq)

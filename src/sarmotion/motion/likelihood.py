@@ -1,0 +1,400 @@
+"""Maximum-likelihood position and velocity of point movers (the matched filter).
+
+For a point mover ``a W_k exp(-i psi_jk(theta))`` in complex white Gaussian noise
+(:mod:`sarmotion.motion.bounds`) the log-likelihood maximised over the complex amplitude
+is ``|<P, m(theta)>|^2 / ||m(theta)||^2``; ``||m||`` does not depend on ``theta``, so the
+maximum-likelihood ``theta`` maximises the modulus of the *matched filter*
+
+    I(theta) = sum_jk P_jk W_k exp(+i psi_jk(theta)) / sum_k W_k^2,
+
+the coherent motion-compensated point response (``eq:imagecompu`` evaluated exactly,
+weighted by the pulse spectrum); ``I = a n_pulses`` for a noise-free mover at
+``theta``, and the amplitude estimate is ``I / n_pulses``.
+
+``theta`` is ``(x, u_r, u_p)``: ground-range offset of the position at ``s = 0``, range
+speed and cross-range speed, with the cross-range coordinate of the position held (the
+data of about a degree fix a mover's range history, not where it is along its
+cross-range family, :mod:`sarmotion.motion.aperture`). The search
+(:func:`fit_point_mover`) is
+
+1. **global** in the cross-range speed: every ``u_p`` of a grid of half a
+   cross-range-speed resolution over the whole searched interval; at each, the traces
+   are aligned by ``T_+`` at ``(u_r^0, u_p)`` (``eq:TTu+``, :class:`._aligned._Aligner`)
+   on the reference point, and the matched filter is profiled over the ground-range
+   offset (fast time of the aligned traces, a window around the trace of the ``g(u)``
+   peak) and over a residual range speed ``+- lambda PRF / 4`` (a Doppler FFT over slow
+   time, padded four times): the linear phase ``exp(i 4 pi du s / lambda)`` that a
+   range-speed error leaves on the aligned trace;
+2. **local**: Nelder–Mead on the exact ``|I(theta)|`` from the best grid point.
+
+:func:`refine_jointly` re-fits every mover with the others' fitted models subtracted
+from the data, a few rounds (the alternating maximisation of the joint likelihood).
+
+Measured: on GOTCHA degrees with injected movers the global search is within 0.07 m/s of
+the true cross-range speed where ``g_perp`` (``eq:OBJ2``) was up to 4.1 m/s off, and on
+one mover in white noise the RMSE is within 1.05-1.22 of the Cramér–Rao bound.
+Positions in m, speeds in m/s, geometry in float64.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.fft as sfft
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import minimize
+
+from ..core import (
+    C,
+    Traces,
+    as_point,
+    cross_range_speed,
+    ground_velocity,
+    range_direction_velocity,
+    range_speed,
+    to_fast_time,
+)
+from ..imaging import resolution
+from ._aligned import _Aligner, _g_reduce, _refine_max
+from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
+
+__all__ = [
+    "MatchedFilter",
+    "PointFit",
+    "fit_point_mover",
+    "point_model",
+    "refine_jointly",
+    "noise_variance",
+    "matched_filter_noise_variance",
+]
+
+#: Complex exponentials per chunk of parameter sets in :meth:`MatchedFilter.responses`.
+_CHUNK = 1 << 21
+
+
+class MatchedFilter:
+    """``I(theta)`` of one data set for batches of positions and velocities.
+
+    Parameters
+    ----------
+    traces : Traces
+        Acquisition (geometry, frequencies, reference point, pulse spectrum).
+    data : (n_pulses, n_samples) array_like
+        The traces filtered (e.g. the moving residual); default ``traces.data``.
+    """
+
+    def __init__(self, traces: Traces, data: ArrayLike | None = None) -> None:
+        d = traces if data is None else traces.with_data(np.asarray(data))
+        w = traces.radar.spectral_weights()
+        self.weighted = d.phase_history() * w[None, :]
+        self.norm = float(np.sum(w**2))
+        self.antenna = traces.positions_m
+        self.slow = traces.slow_times_s
+        self.freq = traces.frequencies_hz
+        self.ref_range = np.linalg.norm(self.antenna - traces.reference_point_m, axis=1)
+
+    def responses(
+        self, positions_m: ArrayLike, velocities_mps: ArrayLike
+    ) -> NDArray[np.complex128]:
+        """``I`` at ``(k, 3)`` positions (m, ``s = 0``) and ``(k, 2)`` ground velocities (m/s).
+
+        Returns
+        -------
+        (k,) ndarray
+            Complex; ``a n_pulses`` for a mover of reflectivity ``a`` at the parameters.
+        """
+        pos = np.atleast_2d(np.asarray(positions_m, dtype=np.float64))
+        vel = np.atleast_2d(np.asarray(velocities_mps, dtype=np.float64))
+        v3 = np.concatenate([vel, np.zeros((vel.shape[0], 1))], axis=1)
+        out = np.empty(pos.shape[0], dtype=np.complex128)
+        step = max(1, _CHUNK // self.weighted.size)
+        for i0 in range(0, pos.shape[0], step):
+            where = (
+                pos[i0 : i0 + step, None, :] + self.slow[None, :, None] * v3[i0 : i0 + step, None]
+            )
+            rng = np.linalg.norm(self.antenna[None] - where, axis=2)
+            cycles = (2.0 * (rng - self.ref_range[None]) / C)[:, :, None] * self.freq[None, None]
+            cycles -= np.rint(cycles)  # exact reduction in float64 before the exponential
+            out[i0 : i0 + step] = (
+                np.einsum("vjk,jk->v", np.exp(2j * np.pi * cycles), self.weighted) / self.norm
+            )
+        return out
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class PointFit:
+    """One mover's maximum-likelihood fit (:func:`fit_point_mover`).
+
+    Attributes
+    ----------
+    position_m : (3,) ndarray
+        Position at ``s = 0`` (m); its cross-range coordinate is the one held.
+    range_speed_mps, cross_range_speed_mps : float
+        ``u_r``, ``u_p`` (m/s).
+    velocity_mps : (2,) ndarray
+        Ground velocity (m/s).
+    amplitude : complex
+        ``I / n_pulses``: the reflectivity estimate (data units).
+    grid_mps, profile : (n_grid,) ndarray
+        The global search: cross-range speeds and ``max |I|`` over range and range speed
+        at each (data units times ``n_pulses``), for plotting beside ``g_perp``.
+    """
+
+    position_m: NDArray[np.float64]
+    range_speed_mps: float
+    cross_range_speed_mps: float
+    velocity_mps: NDArray[np.float64]
+    amplitude: complex
+    grid_mps: NDArray[np.float64]
+    profile: NDArray[np.float64]
+
+
+def _global_cross_search(
+    traces: Traces, data: NDArray, range_speed_mps: float, grid: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], float, float, float]:
+    """Profile of ``max |I|`` over range and residual range speed for each ``u_p`` of ``grid``.
+
+    Returns the profile, and at its maximum the cross-range speed, the residual range
+    speed (m/s) and the slant-range delay of the aligned trace (s).
+    """
+    d = traces.with_data(data)
+    al = _Aligner(d, d.reference_point_m)
+    geom = d.geometry
+    # fast-time window: the aligned trace of the g(u) peak, +- 12 samples (1.4 m at GOTCHA)
+    x0 = al.spectra(range_direction_velocity(range_speed_mps, geom)[None])
+    padded = np.zeros(x0.shape[:2] + (al.n_fft,), dtype=np.complex64)
+    padded[..., al.slots] = x0
+    centre = int(np.argmax(np.abs(sfft.ifft(padded, axis=-1)).sum(axis=1)[0]))
+    cols = (centre + np.arange(-12, 13)) % al.n_fft
+    n = d.n_pulses
+    n_dop = 1 << int(np.ceil(np.log2(4 * n)))
+    profile = np.empty(grid.size)
+    where = np.empty((grid.size, 2), dtype=int)
+    for i0 in range(0, grid.size, 8):
+        vel = np.array([ground_velocity(range_speed_mps, up, geom) for up in grid[i0 : i0 + 8]])
+        padded = np.zeros((vel.shape[0], n, al.n_fft), dtype=np.complex64)
+        padded[..., al.slots] = al.spectra(vel)
+        aligned = sfft.ifft(padded, axis=-1, workers=-1)[..., cols]
+        dop = np.abs(sfft.fft(aligned, n=n_dop, axis=1, workers=-1)).reshape(vel.shape[0], -1)
+        k = dop.argmax(axis=1)
+        profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
+        where[i0 : i0 + 8] = np.stack(np.unravel_index(k, (n_dop, cols.size)), axis=1)
+    b = int(np.argmax(profile))
+    kd, it = where[b]
+    ds = float(np.median(np.diff(d.slow_times_s)))
+    doppler_hz = (kd if kd < n_dop // 2 else kd - n_dop) / (n_dop * ds)
+    du = doppler_hz * C / (2.0 * d.radar.carrier_hz)
+    return profile, float(grid[b]), du, float(al.times_s[cols[it]])
+
+
+def _local_fit(
+    traces: Traces,
+    mf: MatchedFilter,
+    position_m: NDArray[np.float64],
+    range_speed_mps: float,
+    cross_range_speed_mps: float,
+) -> tuple[NDArray[np.float64], float, float, complex]:
+    """Nelder–Mead on ``-|I|`` over ``(x, u_r, u_p)``, the cross-range coordinate held.
+
+    Initial steps: 3 cm of range, 0.01 m/s of range speed (about half the Doppler
+    resolution ``lambda / (2 T)`` of a GOTCHA degree) and 0.15 m/s of cross-range speed
+    (a fifth of its resolution).
+    """
+    geom = traces.geometry
+    e_r = np.r_[resolution(traces).range_direction, 0.0]
+
+    def unpack(q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        vel = ground_velocity(range_speed_mps + q[1], cross_range_speed_mps + q[2], geom)
+        return position_m + q[0] * e_r, vel
+
+    def cost(q: NDArray[np.float64]) -> float:
+        p, v = unpack(q)
+        return -float(abs(mf.responses(p[None], v[None])[0]))
+
+    q0 = np.zeros(3)
+    res = minimize(
+        cost,
+        q0,
+        method="Nelder-Mead",
+        options={
+            "initial_simplex": np.vstack([q0, np.diag([0.03, 0.01, 0.15])]),
+            "xatol": 1e-5,
+            "fatol": 1e-10 * max(1e-300, -cost(q0)),
+            "maxiter": 800,
+        },
+    )
+    q = res.x if res.fun <= cost(q0) else q0
+    p, v = unpack(q)
+    value = complex(mf.responses(p[None], v[None])[0])
+    return p, range_speed_mps + float(q[1]), cross_range_speed_mps + float(q[2]), value
+
+
+def fit_point_mover(
+    traces: Traces,
+    data: ArrayLike,
+    range_speed_mps: float,
+    *,
+    cross_speed_range_mps: tuple[float, float] = (-30.0, 30.0),
+    step_mps: float | None = None,
+) -> PointFit:
+    """Maximum-likelihood ``(x, u_r, u_p)`` of one mover near a ``g(u)`` peak (module notes).
+
+    Parameters
+    ----------
+    traces : Traces
+        Acquisition of about a degree (its ``s = 0`` is the time of the position).
+    data : (n_pulses, n_samples) array_like
+        Traces holding the mover, stationary targets and other movers removed.
+    range_speed_mps : float
+        The ``g(u)`` peak (m/s); refined on ``g`` within half a range-speed resolution
+        first, then by the Doppler search within ``+- lambda PRF / 4``.
+    cross_speed_range_mps : (float, float)
+        The cross-range speeds searched globally (m/s).
+    step_mps : float, optional
+        Grid step of the global search (m/s); default half of
+        :func:`cross_range_speed_resolution` (0.37 m/s for a GOTCHA degree).
+
+    Returns
+    -------
+    PointFit
+        Its position is on the reference point's cross range.
+    """
+    d = np.asarray(data)
+    tr = traces.with_data(d)
+    res_u = range_speed_resolution(tr)
+    al = _Aligner(tr, tr.reference_point_m)
+
+    def g(u: float) -> float:
+        return float(al.map_chunks(range_direction_velocity(u, tr.geometry)[None], _g_reduce)[0])
+
+    u0, _ = _refine_max(g, float(range_speed_mps), 0.5 * res_u, 1e-3)
+    lo, hi = cross_speed_range_mps
+    step = 0.5 * cross_range_speed_resolution(tr) if step_mps is None else float(step_mps)
+    grid = lo + step * np.arange(int(np.floor((hi - lo) / step)) + 1)
+    profile, up, du, delay = _global_cross_search(tr, d, u0, grid)
+    cells = resolution(tr)
+    x = -0.5 * C * delay / np.cos(cells.elevation_rad)  # ground-range offset of the trace
+    start = tr.reference_point_m + x * np.r_[cells.range_direction, 0.0]
+    mf = MatchedFilter(tr, d)
+    pos, ur, up, value = _local_fit(tr, mf, start, u0 + du, up)
+    return PointFit(
+        position_m=pos,
+        range_speed_mps=ur,
+        cross_range_speed_mps=up,
+        velocity_mps=ground_velocity(ur, up, tr.geometry),
+        amplitude=value / tr.n_pulses,
+        grid_mps=grid,
+        profile=profile,
+    )
+
+
+def point_model(
+    traces: Traces, position_m: ArrayLike, velocity_mps: ArrayLike, amplitude: complex
+) -> NDArray[np.complex128]:
+    """Traces of one point mover on the acquisition of ``traces`` (``eq:MOD1``).
+
+    Returns
+    -------
+    (n_pulses, n_samples) ndarray
+        ``a W_k exp(-i psi_jk)`` brought to fast time (data units).
+    """
+    rho = as_point(position_m, name="position_m")
+    v3 = np.r_[np.asarray(velocity_mps, dtype=np.float64).reshape(2), 0.0]
+    where = rho[None, :] + traces.slow_times_s[:, None] * v3[None, :]
+    rng = np.linalg.norm(traces.positions_m - where, axis=1)
+    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m, axis=1)
+    cycles = (2.0 * (rng - ref) / C)[:, None] * traces.frequencies_hz[None, :]
+    cycles -= np.rint(cycles)
+    ph = (
+        complex(amplitude) * traces.radar.spectral_weights()[None, :] * np.exp(-2j * np.pi * cycles)
+    )
+    return to_fast_time(ph)
+
+
+def refine_jointly(
+    traces: Traces, data: ArrayLike, fits: Sequence[PointFit], *, rounds: int = 2
+) -> list[PointFit]:
+    """Re-fit every mover locally on ``data`` minus the other movers' models, ``rounds`` times.
+
+    The alternating (coordinate-wise) maximisation of the joint likelihood of several
+    point movers; one mover is returned unchanged.
+    """
+    d = np.asarray(data)
+    out = list(fits)
+    if len(out) < 2:
+        return out
+    models = [point_model(traces, f.position_m, f.velocity_mps, f.amplitude) for f in out]
+    for _ in range(int(rounds)):
+        for k, f in enumerate(out):
+            others = sum((m for j, m in enumerate(models) if j != k), np.zeros_like(models[k]))
+            mf = MatchedFilter(traces, d - others)
+            pos, ur, up, value = _local_fit(
+                traces, mf, f.position_m, f.range_speed_mps, f.cross_range_speed_mps
+            )
+            vel = ground_velocity(ur, up, traces.geometry)
+            out[k] = replace(
+                f,
+                position_m=pos,
+                range_speed_mps=ur,
+                cross_range_speed_mps=up,
+                velocity_mps=vel,
+                amplitude=value / traces.n_pulses,
+            )
+            models[k] = point_model(traces, pos, vel, out[k].amplitude)
+    return out
+
+
+def noise_variance(residual: ArrayLike) -> float:
+    """Robust per-sample variance of circular complex noise: ``median(|r|^2) / ln 2``.
+
+    ``|r|^2`` of circular complex Gaussian noise of variance ``sigma^2`` is exponential
+    with median ``sigma^2 ln 2``; the median ignores the few samples of bright residue.
+    """
+    r = np.asarray(residual)
+    return float(np.median(np.abs(r) ** 2) / np.log(2.0))
+
+
+def matched_filter_noise_variance(
+    traces: Traces,
+    data: ArrayLike,
+    *,
+    half_size_m: float,
+    speed_range_mps: tuple[float, float] = (-30.0, 30.0),
+    centre_m: ArrayLike | None = None,
+    velocity_mps: ArrayLike | None = None,
+    speed_spread_mps: tuple[float, float] = (2.0, 5.0),
+    n_draws: int = 256,
+    seed: int = 0,
+) -> float:
+    """Per-sample noise variance as the matched filter sees it (data units squared).
+
+    ``I`` at ``n_draws`` random positions (within ``half_size_m`` of ``centre_m``, default
+    the reference point) and velocities (range and cross-range speeds uniform over
+    ``speed_range_mps``, or within ``speed_spread_mps`` of those of ``velocity_mps``):
+    away from every target ``I`` is the interference projected on a mover's signature,
+    of variance ``sigma_P^2 n_pulses / sum_k W_k^2`` for white noise of ``sigma_P^2`` per
+    phase-history sample. Its robust level ``median(|I|^2) / ln 2`` (a draw that hits a
+    target does not count) gives ``sigma_P^2``, returned per fast-time sample
+    (``/ n_samples``). Unlike the median of the residual samples it counts the residue
+    of stationary clutter, which RPCA leaves sparse (most samples exactly zero); drawn
+    around a mover it measures the interference where that mover is.
+    """
+    gen = np.random.default_rng(seed)
+    geom = traces.geometry
+    centre = traces.reference_point_m if centre_m is None else as_point(centre_m, name="centre_m")
+    offsets = gen.uniform(-half_size_m, half_size_m, (n_draws, 2))
+    pos = centre[None, :] + np.c_[offsets, np.zeros(n_draws)]
+    if velocity_mps is None:
+        lo, hi = speed_range_mps
+        speeds = gen.uniform(lo, hi, (n_draws, 2))
+    else:
+        v = np.asarray(velocity_mps, dtype=np.float64).reshape(2)
+        ur, up = range_speed(v, geom), cross_range_speed(v, geom)
+        spread = np.asarray(speed_spread_mps, dtype=np.float64)
+        speeds = np.array([ur, up])[None, :] + gen.uniform(-1.0, 1.0, (n_draws, 2)) * spread
+    vel = np.array([ground_velocity(a, b, geom) for a, b in speeds])
+    mf = MatchedFilter(traces, data)
+    level = float(np.median(np.abs(mf.responses(pos, vel)) ** 2) / np.log(2.0))
+    return level * mf.norm / traces.n_pulses / traces.n_samples
