@@ -431,7 +431,7 @@ def _movers_html(doc: dict[str, Any]) -> str:
             ]
         )
     if not rows:
-        return "<p>No mover passed the detector.</p>"
+        return "<p>No mover found: no candidate passed the detector.</p>"
     head = [
         "estimate",
         "position at s=0 (m)",
