@@ -466,8 +466,9 @@ _SERIES_TOLERANCE_M = 2e-8
 #: Largest carrier-phase offset from a tile's anchor (quarter cycles) accepted: float32
 #: keeps it to 2.4e-4 of a quarter cycle (4e-4 rad), 68 dB below the signal at worst.
 _MAX_QUARTER_CYCLES = 4096.0
-#: Candidate tile shapes (rows, columns), largest first; columns a multiple of LANES.
-_TILES = ((64, 64), (32, 32), (16, 16))
+#: Candidate tile shapes (rows, columns), preferred first; columns a multiple of LANES.
+#: Wide, short tiles serve grids with coarse rows (the sub-images of :mod:`.ffbp`).
+_TILES = ((64, 64), (32, 64), (16, 64), (8, 64), (32, 32), (16, 32), (16, 16), (8, 16), (4, 16))
 #: Bytes of complex64 trace tables kept by the cache (least recently used dropped first).
 _CACHE_BYTES = 512 * 2**20
 
@@ -549,25 +550,28 @@ _TABLES = _TableCache()
 
 @numba.njit(parallel=True, cache=True)
 def _tile_kernel(
-    tab, ant_x, ant_y, ant_z2, ref, x0, dx, nx, y0, dy, ny, idx_scale, idx_offset, n_up,
-    quarter_scale, tile_rows, tile_cols, ty0, ty1, out_re, out_im,
+    tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, nx, y0, dy, ny, idx_scale,
+    idx_offset, n_up, quarter_scale, tile_rows, tile_cols, ty0, ty1, out_re, out_im,
 ):  # pragma: no cover - compiled  # fmt: skip
-    """Add every pulse to the tiles of tile rows ``ty0:ty1`` of ``out_re + 1j out_im``.
+    """Add pulses to the tiles of tile rows ``ty0:ty1`` of ``out_re + 1j out_im``.
 
-    The image ``(ny, nx)``, pixel ``(iy, ix)`` at ``(x0 + ix dx, y0 + iy dy, 0)``, is cut
-    in ``tile_rows x tile_cols`` tiles, one parallel task each. ``tab`` is
-    :attr:`_TraceTable.values`, one row per pulse (same order as ``ant_*`` and ``ref``).
+    The images ``out[i]``, ``(ny, nx)`` each, pixel ``(iy, ix)`` at
+    ``(x0 + ix dx, y0 + iy dy, 0)``, are cut in ``tile_rows x tile_cols`` tiles; image
+    ``i`` sums pulses ``starts[i]:stops[i]``; one parallel task per (image, tile). ``tab``
+    is :attr:`_TraceTable.values`, one row per pulse (same order as ``ant_*`` and ``ref``).
     Per pulse and tile, the anchor quantities are float64 and the rest float32 (see the
     module docstring); :func:`~sarmotion.imaging._simd.tile_pulse` does the pixels.
     """
     n_tx = (nx + tile_cols - 1) // tile_cols
-    n_pulses = ant_x.size
+    n_tiles = (ty1 - ty0) * n_tx
     stride = tab.shape[1]
     f32 = np.float32
     hi = f32(n_up)
     si = f32(idx_scale)
     sq = f32(quarter_scale)
-    for tile in numba.prange((ty1 - ty0) * n_tx):
+    for task in numba.prange(starts.size * n_tiles):
+        item = task // n_tiles
+        tile = task % n_tiles
         ty = ty0 + tile // n_tx
         r0 = ty * tile_rows
         c0 = (tile % n_tx) * tile_cols
@@ -582,7 +586,7 @@ def _tile_kernel(
         acc_im = np.zeros(nr * ncp, np.float32)
         nxv = np.empty(ncp, np.float32)
         nyv = np.empty(nr, np.float32)
-        for j in range(n_pulses):
+        for j in range(starts[item], stops[item]):
             ddx = xc - ant_x[j]
             ddy = yc - ant_y[j]
             r_anchor = math.sqrt(ddx * ddx + ddy * ddy + ant_z2[j])
@@ -609,8 +613,8 @@ def _tile_kernel(
             )  # fmt: skip
         for r in range(nr):
             for k in range(nc):
-                out_re[r0 + r, c0 + k] += acc_re[r * ncp + k]
-                out_im[r0 + r, c0 + k] += acc_im[r * ncp + k]
+                out_re[item, r0 + r, c0 + k] += acc_re[r * ncp + k]
+                out_im[item, r0 + r, c0 + k] += acc_im[r * ncp + k]
 
 
 def _tile_shape(
@@ -664,7 +668,7 @@ def _kernel_constants(
 
 
 def _backproject_f32(
-    table_rows: NDArray[np.uint64],
+    table_values: NDArray[np.uint64],
     positions: NDArray[np.float64],
     ref_ranges: NDArray[np.float64],
     x_m: NDArray[np.float64],
@@ -674,20 +678,24 @@ def _backproject_f32(
     tile: tuple[int, int],
     progress: ProgressCallback | None = None,
     steps: int = 1,
+    pulse_ranges: NDArray[np.int64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Backprojection of the pulses of ``table_rows`` on the grid ``x_m`` x ``y_m``.
+    """Backprojection images of pulse ranges on the grid ``x_m`` x ``y_m``.
 
-    ``table_rows`` has one row per pulse, matching ``positions`` and ``ref_ranges``.
-    Returns ``(re, im)``, shape ``(y_m.size, x_m.size)``, float64. ``steps`` parallel
-    regions, each followed by a progress report.
+    ``table_values``, ``positions`` and ``ref_ranges`` have one row per pulse.
+    ``pulse_ranges`` ``(n_images, 2)`` gives each image's pulses ``[start, stop)`` (default
+    one image of every pulse). Returns ``(re, im)``, shape
+    ``(n_images, y_m.size, x_m.size)``, float64. ``steps`` parallel regions, each followed
+    by a progress report.
     """
     ny, nx = y_m.size, x_m.size
-    dx = float(x_m[1] - x_m[0]) if nx > 1 else 1.0
-    dy = float(y_m[1] - y_m[0]) if ny > 1 else 1.0
-    dx = (float(x_m[-1]) - float(x_m[0])) / (nx - 1) if nx > 1 else dx
-    dy = (float(y_m[-1]) - float(y_m[0])) / (ny - 1) if ny > 1 else dy
-    out_re = np.zeros((ny, nx))
-    out_im = np.zeros((ny, nx))
+    dx = (float(x_m[-1]) - float(x_m[0])) / (nx - 1) if nx > 1 else 1.0
+    dy = (float(y_m[-1]) - float(y_m[0])) / (ny - 1) if ny > 1 else 1.0
+    if pulse_ranges is None:
+        pulse_ranges = np.array([[0, positions.shape[0]]], dtype=np.int64)
+    ranges = np.ascontiguousarray(pulse_ranges, dtype=np.int64)
+    out_re = np.zeros((ranges.shape[0], ny, nx))
+    out_im = np.zeros((ranges.shape[0], ny, nx))
     idx_scale, idx_offset, quarter_scale = constants
     ant = (
         np.ascontiguousarray(positions[:, 0]),
@@ -700,9 +708,10 @@ def _backproject_f32(
     for step, (g0, g1) in enumerate(zip(groups[:-1], groups[1:], strict=True), start=1):
         with numba.parallel_chunksize(1):  # tiles handed out one at a time
             _tile_kernel(
-                table_rows, *ant, float(x_m[0]), dx, nx, float(y_m[0]), dy, ny, idx_scale,
-                idx_offset, n_up, quarter_scale, tile[0], tile[1], int(g0), int(g1), out_re,
-                out_im,
+                table_values, np.ascontiguousarray(ranges[:, 0]),
+                np.ascontiguousarray(ranges[:, 1]), *ant, float(x_m[0]), dx, nx, float(y_m[0]),
+                dy, ny, idx_scale, idx_offset, n_up, quarter_scale, tile[0], tile[1], int(g0),
+                int(g1), out_re, out_im,
             )  # fmt: skip
         if progress is not None:
             progress("backprojection", step, len(groups) - 1)
@@ -726,7 +735,7 @@ def _run_numba(
         table.values, st.eff_positions, st.ref_ranges, np.asarray(grid.x_m), np.asarray(grid.y_m),
         constants, table.n_up, tile, progress, _STEPS if progress is not None else 1,
     )  # fmt: skip
-    return re + 1j * im, "numba-float32"
+    return re[0] + 1j * im[0], "numba-float32"
 
 
 def _run_ffbp(

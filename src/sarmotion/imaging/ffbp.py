@@ -77,13 +77,15 @@ _C0, _C1, _C2, _C3, _C4, _C5, _C6 = (
 # ============================================================================ kernels
 @numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
 def _modulate(re_in, im_in, re_out, im_out, us, vs, cu, cv, cz2, rref, quarter_scale, sign):
-    """``out[r, k] = in[r, k] exp(sign i pi/2 quarter_scale (|c - rho| - rref))``.
+    """``out[i, r, k] = in[i, r, k] exp(sign i pi/2 quarter_scale (|c - rho| - rref))``.
 
     ``rho = (us[k], vs[r], 0)`` in the ``(u, v)`` frame, ``c = (cu, cv, sqrt(cz2))``; the
     phase in quarter cycles is folded exactly before a float64 polynomial sine/cosine.
     """  # pragma: no cover - compiled
-    nv, nu = re_in.shape
-    for r in numba.prange(nv):
+    n_img, nv, nu = re_in.shape
+    for task in numba.prange(n_img * nv):
+        i = task // nv
+        r = task % nv
         dv = vs[r] - cv
         c2 = dv * dv + cz2
         for k in range(nu):
@@ -101,10 +103,10 @@ def _modulate(re_in, im_in, re_out, im_out, us, vs, cu, cv, cz2, rref, quarter_s
             cs = -cs if ((q + 1) & 2) != 0 else cs
             sn = -sn if (q & 2) != 0 else sn
             sn = sn * sign
-            a = re_in[r, k]
-            b = im_in[r, k]
-            re_out[r, k] = a * cs - b * sn
-            im_out[r, k] = a * sn + b * cs
+            a = re_in[i, r, k]
+            b = im_in[i, r, k]
+            re_out[i, r, k] = a * cs - b * sn
+            im_out[i, r, k] = a * sn + b * cs
 
 
 @numba.njit(fastmath=_FASTMATH, inline="always")
@@ -152,16 +154,20 @@ def _add_child(pre, pim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compi
 
 
 @numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _merge(pre, pim, are, aim, ka, ratio_a, ga, bre, bim, kb, ratio_b, gb):
-    """Parent ``(pre, pim)`` (rows ``v``, columns ``u``) = two children resampled along ``v``.
+def _merge(pre, pim, cre, cim, k0, ratio, g):
+    """Parents ``p`` = children ``2p`` and ``2p + 1`` resampled along ``v``.
 
-    Child row ``k0 + m / ratio`` sits at parent row ``m``. ``ratio == 1``: same spacing, rows
-    added. ``ratio == 2``: even parent rows are child rows; odd ones the half-sample
-    interpolation ``sum_t g[t] x[k0 + (m - 1)/2 + t - 3]``, ``g = (re[8], im[8])``.
+    Arrays ``(n, rows v, columns u)``. Child row ``k0 + m / ratio`` sits at parent row
+    ``m``. ``ratio == 1``: same spacing, rows added. ``ratio == 2``: even parent rows are
+    child rows; odd ones the half-sample interpolation ``sum_t g[c, :, t] x[k0 + (m - 1)/2
+    + t - 3]`` with child ``c``'s complex filter ``g[c] = (re[8], im[8])``.
     """  # pragma: no cover - compiled
-    for m in numba.prange(pre.shape[0]):
-        _add_child(pre, pim, m, are, aim, ka, ratio_a, ga)
-        _add_child(pre, pim, m, bre, bim, kb, ratio_b, gb)
+    n_parents, nvp, _ = pre.shape
+    for task in numba.prange(n_parents * nvp):
+        p = task // nvp
+        m = task % nvp
+        for c in (2 * p, 2 * p + 1):
+            _add_child(pre[p], pim[p], m, cre[c], cim[c], k0, ratio, g[c])
 
 
 # ============================================================================= plan
@@ -219,25 +225,31 @@ def _band(pos, j0, j1, f_lo, f_hi, nu_o, centre, probes) -> tuple[float, float]:
     pu, pv = probes[:, 0], probes[:, 1]
     dc = np.sqrt((pu - centre[0]) ** 2 + (pv - centre[1]) ** 2 + centre[2] ** 2)
     demod = (2.0 * nu_o / C) * (pv - centre[1]) / dc
-    lo, hi = math.inf, -math.inf
-    for j in {j0, (j0 + j1 - 1) // 2, j1 - 1}:
-        r = pos[j]
-        d = np.sqrt((pu - r[0]) ** 2 + (pv - r[1]) ** 2 + r[2] ** 2)
-        for f in (f_lo, f_hi):
-            g = (2.0 * f / C) * (pv - r[1]) / d - demod
-            lo = min(lo, float(g.min()))
-            hi = max(hi, float(g.max()))
-    return lo, hi
+    r = pos[[j0, (j0 + j1 - 1) // 2, j1 - 1]]
+    du = pu[None, :] - r[:, 0:1]
+    dv = pv[None, :] - r[:, 1:2]
+    slope = dv / np.sqrt(du * du + dv * dv + r[:, 2:3] ** 2)  # d|r - rho|/dv
+    g_lo = (2.0 / C) * np.minimum(f_lo * slope, f_hi * slope) - demod[None, :]
+    g_hi = (2.0 / C) * np.maximum(f_lo * slope, f_hi * slope) - demod[None, :]
+    return float(g_lo.min()), float(g_hi.max())
 
 
-def _plan(pos, n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
-    """Levels of the tree, root first; children of a node have half its ``v`` sampling."""
+def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
+    """Levels of the tree, root first.
+
+    A node splits in two when both halves' bands fit twice its ``v`` spacing; otherwise it
+    is a leaf. Level ``d + 1`` lists the children of the split nodes of level ``d``, in
+    order, so node ``i`` of a level's split nodes has children ``2i`` and ``2i + 1``. All
+    nodes of a level share one grid.
+    """
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
     levels = [[root]]
     margin = TAPS // 2 + 1
     while True:
+        level = levels[-1]
+        dv = 2.0 * level[0].dv
         nxt: list[_Node] = []
-        for node in levels[-1]:
+        for node in level:
             if node.j1 - node.j0 < 2 * _MIN_LEAF:
                 continue
             mid = (node.j0 + node.j1) // 2
@@ -245,14 +257,14 @@ def _plan(pos, n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node
             for kid in kids:
                 lo, hi = band(kid.j0, kid.j1)
                 kid.centre, kid.half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-            if any(2.0 * node.dv * 2.0 * alpha * kid.half > 1.0 for kid in kids):
+            if any(dv * 2.0 * alpha * kid.half > 1.0 for kid in kids):
                 continue  # halving the aperture does not halve the band: a leaf
             for kid in kids:
                 kid.ratio = 2
-                kid.dv = 2.0 * node.dv
+                kid.dv = dv
                 kid.k0 = margin
-                kid.v0 = node.v0 - margin * kid.dv
-                kid.nv = (node.nv + 1) // 2 + 2 * margin + 1
+                kid.v0 = level[0].v0 - margin * dv
+                kid.nv = (level[0].nv + 1) // 2 + 2 * margin + 1
             node.children = kids
             nxt.extend(kids)
         if not nxt:
@@ -368,8 +380,7 @@ def ffbp_values(
 
         lo, hi = band(0, n_pulses)
         n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
-        levels = _plan(pos, n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1,
-                       alpha)  # fmt: skip
+        levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1, alpha)
         return levels, n_sub
 
     def cost(levels: list[list[_Node]]) -> float:
@@ -392,8 +403,9 @@ def ffbp_values(
         bounds = np.linspace(0, nv_, n_strips + 1).round().astype(int)
         plans = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         c = sum(cost(levels) for levels, _ in plans)
-        if best is None or c < best[0]:
-            best = (c, bounds, plans)
+        if best is not None and c >= best[0]:
+            break  # more strips cost more margins than they save
+        best = (c, bounds, plans)
     c_best, bounds, plans = best
     if c_best > 0.7 * n_pulses * nv_ * us.size:
         return None, {"fallback": "exact (the factorisation would not save work here)"}
@@ -403,45 +415,52 @@ def ffbp_values(
                 strips=len(plans))  # fmt: skip
     total = sum(len(levels) for levels, _ in plans)
     done = 0
+    offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
     for (levels, n_sub), r0, r1 in zip(plans, bounds[:-1], bounds[1:], strict=True):
-        images: dict[int, tuple[NDArray[np.float32], NDArray[np.float32]]] = {}
+        below: tuple[NDArray[np.float32], NDArray[np.float32]] | None = None
         for level in reversed(levels):
-            for node in level:
-                if not node.children:
-                    vs = node.v0 + np.arange(node.nv) * node.dv
-                    tile = tile_for(pos[node.j0 : node.j1], us, vs)
-                    re, im = backproject_f32(
-                        table_values[node.j0 : node.j1], pos[node.j0 : node.j1],
-                        ref_ranges[node.j0 : node.j1], us, vs, constants, n_up, tile,
-                    )  # fmt: skip
-                    jr = np.empty(re.shape, np.float32)
-                    ji = np.empty(re.shape, np.float32)
-                    _modulate(re, im, jr, ji, us, vs, centre[0], centre[1], cz2, rref,
-                              quarter_scale, -1.0)  # fmt: skip
-                    images[id(node)] = (jr, ji)
-                    info["leaves"] += 1
-                    info["leaf_pixel_pulses"] += (node.j1 - node.j0) * node.nv * us.size
-                    continue
-                pre = np.zeros((node.nv, us.size), np.float32)
-                pim = np.zeros((node.nv, us.size), np.float32)
-                args: list = []
-                offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
-                for kid in node.children:
-                    cre, cim = images.pop(id(kid))
-                    g = half_sample_filter(kid.half * kid.dv)
-                    gc = g * np.exp(-2j * np.pi * kid.centre * kid.dv * offsets)
-                    args += [cre, cim, kid.k0, kid.ratio, np.array([gc.real, gc.imag], np.float32)]
-                _merge(pre, pim, *args)
-                images[id(node)] = (pre, pim)
+            first = level[0]
+            jr = np.empty((len(level), first.nv, us.size), np.float32)
+            ji = np.empty_like(jr)
+            leaves = [i for i, node in enumerate(level) if not node.children]
+            split = [i for i, node in enumerate(level) if node.children]
+            if leaves:  # one batch of backprojections on the level's grid, demodulated
+                vs = first.v0 + np.arange(first.nv) * first.dv
+                ranges = np.array([[level[i].j0, level[i].j1] for i in leaves], dtype=np.int64)
+                re, im = backproject_f32(
+                    table_values, pos, ref_ranges, us, vs, constants, n_up,
+                    tile_for(pos, us, vs), pulse_ranges=ranges,
+                )  # fmt: skip
+                lr = np.empty(re.shape, np.float32)
+                li = np.empty(re.shape, np.float32)
+                _modulate(re, im, lr, li, us, vs, centre[0], centre[1], cz2, rref,
+                          quarter_scale, -1.0)  # fmt: skip
+                jr[leaves] = lr
+                ji[leaves] = li
+                info["leaves"] += len(leaves)
+                info["leaf_pixel_pulses"] += int(np.sum(ranges[:, 1] - ranges[:, 0])) * re[0].size
+            if split:  # children 2i, 2i + 1 of split node i, all in one parallel region
+                kids = [kid for i in split for kid in level[i].children]
+                g = np.empty((len(kids), 2, TAPS), np.float32)
+                for c, kid in enumerate(kids):
+                    gc = half_sample_filter(kid.half * kid.dv)
+                    gc = gc * np.exp(-2j * np.pi * kid.centre * kid.dv * offsets)
+                    g[c, 0], g[c, 1] = gc.real, gc.imag
+                pre = np.zeros((len(split), first.nv, us.size), np.float32)
+                pim = np.zeros_like(pre)
+                _merge(pre, pim, below[0], below[1], kids[0].k0, kids[0].ratio, g)
+                jr[split] = pre
+                ji[split] = pim
+            below = (jr, ji)
             done += 1
             if progress is not None:
                 progress("backprojection", done, total)
-        jr, ji = images[id(levels[0][0])]
-        rows_re = np.ascontiguousarray(jr[::n_sub], np.float64)
-        rows_im = np.ascontiguousarray(ji[::n_sub], np.float64)
+        jr, ji = below
+        rows_re = np.ascontiguousarray(jr[:, ::n_sub], np.float64)
+        rows_im = np.ascontiguousarray(ji[:, ::n_sub], np.float64)
         ore = np.empty_like(rows_re)
         oim = np.empty_like(rows_im)
         _modulate(rows_re, rows_im, ore, oim, us, y[r0:r1], centre[0], centre[1], cz2, rref,
                   quarter_scale, 1.0)  # fmt: skip
-        out[r0:r1, k_lo:k_hi] = ore + 1j * oim
+        out[r0:r1, k_lo:k_hi] = ore[0] + 1j * oim[0]
     return (out.T if transpose else out), info
