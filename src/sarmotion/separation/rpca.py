@@ -738,6 +738,7 @@ def _gavish_donoho_omega(beta: float) -> float:
     return 0.56 * beta**3 - 0.95 * beta**2 + 1.82 * beta + 1.43
 
 
+@_single_threaded_blas
 def choose_window(
     M: ArrayLike,
     *,
@@ -931,7 +932,8 @@ def windowed_rpca(
     if len(bounds) == 1:
         rank = ranks[0]
     else:
-        s_low = scipy.linalg.svd(low, compute_uv=False, check_finite=False)
+        with threadpool_limits(limits=1, user_api="blas"):
+            s_low = scipy.linalg.svd(low, compute_uv=False, check_finite=False)
         rank = int(np.count_nonzero(s_low > max(low.shape) * np.finfo(float).eps * s_low[0]))
     logger.debug(
         "windowed_rpca: %d windows of %d samples, iterations %d..%d, all converged=%s",
