@@ -1,4 +1,4 @@
-"""Backprojection throughput in pixel-pulses per second: compiled kernel vs numpy reference.
+"""Backprojection speed and accuracy, every figure against its reference in the same run.
 
 Run with::
 
@@ -7,16 +7,31 @@ Run with::
 (``--benchmark-only`` overrides the ``--benchmark-skip`` of the project configuration;
 ``--benchmark-enable`` does not.)
 
-The acquisition is GOTCHA-like: 468 pulses (4 degrees) x 424 samples, upsample 8, three
-point targets. Each benchmark first runs the image once outside the timing (JIT compile
-or cache load, thread-pool start-up). ``extra_info`` records the pixel-pulse rate from the
-fastest and the median round; the time includes the per-call upsampling of the traces.
-The numba/numpy signal-to-error ratio of the same image is recorded too.
+Data: the four GOTCHA degrees (469 pulses x 424 samples; ``$SARMOTION_GOTCHA_DIR`` or
+``../shared/data/gotcha``), or, without them, a simulated GOTCHA-like 4-degree aperture
+(468 pulses, three points and a mover). Upsample 8, 0.25 m pixels, numba's default threads.
+
+- ``test_exact``: the compiled float32 kernel at 128^2 ... 1024^2 (``extra_info``:
+  ``pixel_pulses_per_second_{median,best}``, the signal-to-error ratio against the float64
+  numpy reference at 128^2 and 256^2, against the float64 compiled kernel, itself ~190 dB
+  from the reference, above);
+- ``test_float64_kernel``: the float64 compiled kernel the float32 one replaced, same
+  sizes (the "before" figures);
+- ``test_exact_in_swath``: 1024^2 at 0.1 m, every pixel inside the fast-time window (a
+  0.25 m 1024^2 grid is 256 m wide, the window reaches ~+-70 m of ground range);
+- ``test_ffbp``: fast factorised backprojection at 2048^2 with the exact image of the same
+  run: ``speed_up`` (median exact / median FFBP) and ``ser_db``.
+
+Each benchmark first runs once outside the timing (JIT cache load, thread start-up, the
+upsampled-trace table, which later calls on the same traces reuse). ``extra_info`` also
+records the 1-minute load average: on a shared machine the wall-clock rates fall with it.
 """
 
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -24,13 +39,29 @@ import pytest
 
 from sarmotion.core import Trajectory
 from sarmotion.imaging import ImageGrid, backproject
+from sarmotion.imaging import backprojection as bp
+from sarmotion.io import read_gotcha
 from sarmotion.simulation import PointTarget, Scene, simulate
 
 SPACING_M = 0.25
+SIZES = (128, 256, 512, 1024)
+
+
+def _gotcha_files() -> list[Path]:
+    env = os.environ.get("SARMOTION_GOTCHA_DIR")
+    root = Path(__file__).resolve().parents[1]
+    for d in ([Path(env)] if env else []) + [root.parent / "shared" / "data" / "gotcha"]:
+        files = sorted(d.glob("data_3dsar_pass1_az00*_HH.mat")) if d.is_dir() else []
+        if len(files) == 4:
+            return files
+    return []
 
 
 @pytest.fixture(scope="module")
 def traces():
+    files = _gotcha_files()
+    if files:
+        return read_gotcha(files)
     scene = Scene(
         name="bench",
         targets=[
@@ -39,43 +70,89 @@ def traces():
             PointTarget(position_m=(0.0, 0.0), velocity_mps=(10.0, 5.0)),
         ],
     )
-    tr = simulate(scene, trajectory=Trajectory.circular(aperture_deg=4.0)).traces
-    assert tr.shape == (468, 424)
-    return tr
+    return simulate(scene, trajectory=Trajectory.circular(aperture_deg=4.0)).traces
 
 
-def _run(benchmark, traces, n: int, kernel: str, rounds: int):
-    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
-    backproject(traces, grid, kernel=kernel)  # warm-up: compile / load cache, start threads
-    img = benchmark.pedantic(
-        backproject, args=(traces, grid), kwargs={"kernel": kernel}, rounds=rounds, iterations=1
-    )
+def _ser_db(ref: np.ndarray, x: np.ndarray) -> float:
+    err = float(np.linalg.norm(x - ref))
+    return math.inf if err == 0 else 20.0 * math.log10(float(np.linalg.norm(ref)) / err)
+
+
+def _float64_kernel(traces, grid):
+    return bp._run_numba_f64(bp._setup(traces, None, 8), grid, None)
+
+
+def _rates(benchmark, traces, n: int) -> None:
     work = n * n * traces.n_pulses
     stats = benchmark.stats.stats
     benchmark.extra_info.update(
         {
-            "kernel": kernel,
             "grid": f"{n}x{n}",
+            "spacing_m": SPACING_M,
             "pulses": traces.n_pulses,
             "samples": traces.n_samples,
-            "upsample": 8,
-            "threads": numba.get_num_threads() if kernel == "numba" else 1,
-            "pixel_pulses_per_second_best": work / stats.min,
+            "threads": numba.get_num_threads(),
             "pixel_pulses_per_second_median": work / stats.median,
+            "pixel_pulses_per_second_best": work / stats.min,
+            "load_average_1min": os.getloadavg()[0],
         }
     )
-    return img
 
 
-@pytest.mark.parametrize("n", [128, 256, 512])
-def test_numba(benchmark, traces, n):
-    _run(benchmark, traces, n, "numba", rounds=10 if n < 512 else 5)
+@pytest.mark.parametrize("n", SIZES)
+def test_exact(benchmark, traces, n):
+    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+    img = backproject(traces, grid)
+    benchmark.pedantic(backproject, args=(traces, grid), rounds=15 if n < 512 else 5, iterations=1)
+    _rates(benchmark, traces, n)
+    if n <= 256:
+        ref = backproject(traces, grid, kernel="numpy").values
+        benchmark.extra_info["ser_db_vs_numpy_float64_reference"] = _ser_db(ref, img.values)
+    else:
+        ref = _float64_kernel(traces, grid)
+        benchmark.extra_info["ser_db_vs_float64_compiled_kernel"] = _ser_db(ref, img.values)
+    benchmark.extra_info["kernel_variant"] = img.metadata["kernel_variant"]
 
 
-def test_numpy_reference(benchmark, traces):
-    img = _run(benchmark, traces, 128, "numpy", rounds=3)
-    fast = backproject(traces, img.grid, kernel="numba").values
-    err = np.linalg.norm(fast - img.values)
-    benchmark.extra_info["ser_numba_vs_numpy_db"] = 20 * math.log10(
-        np.linalg.norm(img.values) / err
+@pytest.mark.parametrize("n", SIZES)
+def test_float64_kernel(benchmark, traces, n):
+    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+    _float64_kernel(traces, grid)
+    benchmark.pedantic(_float64_kernel, args=(traces, grid), rounds=5 if n < 1024 else 3,
+                       iterations=1)  # fmt: skip
+    _rates(benchmark, traces, n)
+
+
+def test_exact_in_swath(benchmark, traces):
+    n = 1024
+    grid = ImageGrid.square(size_m=n * 0.1, spacing_m=0.1)
+    backproject(traces, grid)
+    benchmark.pedantic(backproject, args=(traces, grid), rounds=5, iterations=1)
+    _rates(benchmark, traces, n)
+    benchmark.extra_info["spacing_m"] = 0.1
+
+
+def test_ffbp(benchmark, traces):
+    n = 2048
+    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+    exact = backproject(traces, grid)
+    times = []
+    for _ in range(3):
+        t0 = os.times()
+        backproject(traces, grid)
+        times.append(os.times().elapsed - t0.elapsed)
+    fast = backproject(traces, grid, method="ffbp")
+    benchmark.pedantic(backproject, args=(traces, grid), kwargs={"method": "ffbp"}, rounds=5,
+                       iterations=1)  # fmt: skip
+    t_exact = float(np.median(times))
+    benchmark.extra_info.update(
+        {
+            "grid": f"{n}x{n}",
+            "exact_seconds_median": t_exact,
+            "ffbp_seconds_median": benchmark.stats.stats.median,
+            "speed_up": t_exact / benchmark.stats.stats.median,
+            "ser_db_vs_exact": _ser_db(exact.values, fast.values),
+            "ffbp": fast.metadata["ffbp"],
+            "load_average_1min": os.getloadavg()[0],
+        }
     )

@@ -384,3 +384,47 @@ def test_windowed_default_window_uses_choose_window():
     res = windowed_rpca(low + sparse, tol=1e-6)
     width = choose_window(low + sparse)
     assert all(b - a == width for a, b in res.windows)
+
+
+# --------------------------------------------------------------------------------------
+# accelerated alternating projections
+# --------------------------------------------------------------------------------------
+@pytest.mark.parametrize("shape", [(200, 300), (117, 424)])
+def test_accaltproj_recovers_planted_low_rank_plus_sparse(shape):
+    rng = np.random.default_rng(30)
+    low, sparse = low_rank_plus_sparse(rng, *shape, rank=5)
+    m = low + sparse
+    fast = rpca(m, tol=1e-7, solver="accaltproj")
+    assert fast.converged and fast.rank == 5  # rank found by the Gavish-Donoho rule
+    # Stopping at a 1e-7 residual leaves errors of that order (~2e-7 measured).
+    assert rel(fast.low_rank, low) < 1e-5
+    assert rel(fast.sparse, sparse) < 1e-5
+    # Same decomposition as principal component pursuit (IALM) on these matrices.
+    slow = rpca(m, tol=1e-7)
+    assert rel(fast.low_rank, slow.low_rank) < 1e-5
+    assert rel(fast.sparse, slow.sparse) < 1e-5
+    assert fast.n_iter < 30 and fast.residuals[-1] <= 1e-7
+
+
+def test_accaltproj_options_dtype_and_windows():
+    rng = np.random.default_rng(31)
+    low, sparse = low_rank_plus_sparse(rng, 120, 160, rank=3)
+    m = (low + sparse).astype(np.complex64)
+    res = rpca(m, tol=1e-5, solver="accaltproj", rank=3)
+    assert res.low_rank.dtype == np.complex64 and res.rank == 3
+    assert rel(res.sparse, sparse) < 1e-4
+    # A heavier weight on ||S||_1 is a higher threshold: fewer entries in S.
+    light = rpca(low + sparse, tol=1e-5, solver="accaltproj", eta=0.5 * default_eta(m.shape))
+    heavy = rpca(low + sparse, tol=1e-5, solver="accaltproj", eta=4.0 * default_eta(m.shape))
+    assert np.count_nonzero(heavy.sparse) <= np.count_nonzero(light.sparse)
+    # Windowed: each window by the same solver, blended as for IALM.
+    w = windowed_rpca(low + sparse, window=64, solver="accaltproj", tol=1e-6)
+    assert w.converged and len(w.windows) > 1
+    np.testing.assert_allclose(w.low_rank + w.sparse, low + sparse, atol=1e-4)
+    assert rpca(np.zeros((5, 6)), solver="accaltproj").converged
+    with pytest.raises(ValueError, match="solver"):
+        rpca(m, solver="svt")
+    with pytest.raises(ValueError, match="rank"):
+        rpca(m, solver="accaltproj", rank=0)
+    with pytest.raises(TypeError, match="rank"):
+        windowed_rpca(m, solver="accaltproj", rank=2.5)

@@ -14,10 +14,13 @@ cancel to machine precision.
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["to_frequency", "to_fast_time", "delay_phase", "shift_fast_time"]
+__all__ = ["to_frequency", "to_fast_time", "delay_phase", "phased_row_sums", "shift_fast_time"]
 
 
 def to_frequency(traces: ArrayLike, *, axis: int = -1) -> NDArray[np.complexfloating]:
@@ -68,11 +71,87 @@ def delay_phase(delays_s: ArrayLike, frequencies_hz: ArrayLike) -> NDArray[np.co
         Unit phasors; multiplying a phase history by them shifts its traces by
         ``+delta`` (``D(s, t) -> D(s, t + delta(s))``), carrier included.
     """
-    cycles = np.multiply.outer(
-        np.asarray(delays_s, dtype=np.float64), np.asarray(frequencies_hz, dtype=np.float64)
-    )
-    cycles -= np.round(cycles)
-    return np.exp(2j * np.pi * cycles)
+    d = np.ascontiguousarray(delays_s, dtype=np.float64)
+    f = np.ascontiguousarray(frequencies_hz, dtype=np.float64)
+    out = np.empty((d.size, f.size), dtype=np.complex128)
+    _delay_phase(d.reshape(-1), f.reshape(-1), out.view(np.float64))
+    return out.reshape(np.shape(delays_s) + np.shape(frequencies_hz))
+
+
+# exp(2i pi c) for c = delta f (float64): c is reduced exactly to quarter cycles,
+# t = 4 c - k, k = rint(4 c), |t| <= 1/2, and exp(2i pi c) = i^k exp(i pi t / 2) with
+# minimax polynomials for cos and sin of pi t / 2 (error < 1e-14, exact at t = 0; np.exp
+# of the reduced phase agrees to 1e-14). Compiled and vectorised: 5-10x faster than numpy's complex exp,
+# which made delay_phase the largest single cost of analyze on Scene 1 (3.9 of 12 s).
+_S = (1.57079632679489, -0.6459640975043288, 0.07969262615641214, -0.0046817525994714984,
+      0.00016042930460199835, -3.5564543255214174e-06)  # fmt: skip
+_C = (1.0, -1.2337005501361604, 0.2536695079002106, -0.02086348074043811,
+      0.0009192599906072516, -2.5200275027694737e-05, 4.657112551982875e-07)  # fmt: skip
+
+
+@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+def unit_phasor(c: float) -> complex:
+    """``exp(2i pi c)`` with ``c`` reduced exactly (compiled code; error < 1e-14)."""
+    t = 4.0 * c
+    k = np.rint(t)
+    x = t - k
+    z = x * x
+    s = x * (_S[0] + z * (_S[1] + z * (_S[2] + z * (_S[3] + z * (_S[4] + z * _S[5])))))
+    co = _C[0] + z * (_C[1] + z * (_C[2] + z * (_C[3] + z * (_C[4] + z * (_C[5] + z * _C[6])))))
+    q = np.int64(k)
+    swap = (q & 1) != 0
+    cs = s if swap else co
+    sn = co if swap else s
+    cs = -cs if ((q + 1) & 2) != 0 else cs
+    sn = -sn if (q & 2) != 0 else sn
+    return complex(cs, sn)
+
+
+@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+def _delay_phase(delays, freqs, out):  # pragma: no cover - compiled
+    """``out[j, k] = exp(2i pi delays[j] freqs[k])``; ``out`` is the float64 (re, im) view."""
+    for j in range(delays.size):
+        dj = delays[j]
+        for k in range(freqs.size):
+            c = dj * freqs[k]
+            t = 4.0 * (c - math.floor(c))
+            q = np.rint(t)
+            x = t - q
+            z = x * x
+            s = x * (_S[0] + z * (_S[1] + z * (_S[2] + z * (_S[3] + z * (_S[4] + z * _S[5])))))
+            co = _C[0] + z * (_C[1] + z * (_C[2] + z * (_C[3] + z * (_C[4] + z * (_C[5]
+                                                                         + z * _C[6])))))
+            qi = np.int64(q)
+            swap = (qi & 1) != 0
+            cs = s if swap else co
+            sn = co if swap else s
+            out[j, 2 * k] = -cs if ((qi + 1) & 2) != 0 else cs
+            out[j, 2 * k + 1] = -sn if (qi & 2) != 0 else sn
+
+
+@numba.njit(cache=True)
+def phased_row_sums(values, delays, f_first, f_step):  # pragma: no cover - compiled
+    """``sum_k values[j, k] exp(2i pi delays[j] (f_first + k f_step))`` for every row ``j``.
+
+    The phasors of a row advance by a fixed rotation ``exp(2i pi delays[j] f_step)``; the
+    product is re-seeded exactly (:func:`unit_phasor`) every 32 terms, which keeps the
+    rounding below ~1e-14 of the row's sum of moduli. Compiled code and callers.
+    """
+    n_rows, n = values.shape
+    out = np.empty(n_rows, dtype=np.complex128)
+    for j in range(n_rows):
+        dj = delays[j]
+        step = dj * f_step
+        rot = unit_phasor(step - math.floor(step))
+        acc = 0j
+        for k0 in range(0, n, 32):
+            c = dj * (f_first + f_step * k0)
+            w = unit_phasor(c - math.floor(c))
+            for k in range(k0, min(k0 + 32, n)):
+                acc += values[j, k] * w
+                w *= rot
+        out[j] = acc
+    return out
 
 
 def shift_fast_time(

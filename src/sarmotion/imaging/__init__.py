@@ -2,7 +2,10 @@
 
 - :mod:`~sarmotion.imaging.grid` — :class:`ImageGrid` (pixel axes in m) and :class:`Image`;
 - :mod:`~sarmotion.imaging.backprojection` — :func:`backproject` (``eq:image``, with motion
-  compensation ``eq:imagecompu``), at pixels or at arbitrary points;
+  compensation ``eq:imagecompu``), at pixels or at arbitrary points; its compiled kernel
+  runs on float32 tiles (inner loop in :mod:`~sarmotion.imaging._simd`);
+- :mod:`~sarmotion.imaging.ffbp` — fast factorised backprojection for large images
+  (``backproject(..., method="ffbp")``);
 - :mod:`~sarmotion.imaging.resolution` — the theoretical resolution cell and 3 dB widths;
 - :mod:`~sarmotion.imaging.peaks` — the one peak finder (non-maximum suppression);
 - :mod:`~sarmotion.imaging.point_response` — the exact point response from the phase

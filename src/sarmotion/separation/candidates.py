@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import Traces, delay_phase
+from ..core import Traces
+from ..core.spectral import phased_row_sums
 from ..imaging import find_peaks, resolution
 from .transforms import travel_time_delays
 
@@ -52,7 +53,9 @@ def doppler_contrast_db(
     """
     P = traces.phase_history() if phase_history is None else np.asarray(phase_history)
     f = traces.frequencies_hz
-    column = np.sum(P * delay_phase(travel_time_delays(traces, point_m), f), axis=1)
+    delays = np.ascontiguousarray(travel_time_delays(traces, point_m), dtype=np.float64)
+    rows = np.ascontiguousarray(P, dtype=np.complex128)
+    column = phased_row_sums(rows, delays, float(f[0]), float(traces.radar.frequency_step_hz))
     column /= traces.n_samples
     doppler = np.abs(np.fft.fft(column)) ** 2
     floor = float(np.median(doppler))

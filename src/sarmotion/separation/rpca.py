@@ -58,6 +58,8 @@ logger = logging.getLogger(__name__)
 
 SvdMode = Literal["auto", "full", "partial"]
 _SVD_MODES = ("auto", "full", "partial")
+Solver = Literal["ialm", "accaltproj"]
+_SOLVERS = ("ialm", "accaltproj")
 
 #: Ratio ``mu_bar / mu_0`` of the IALM penalty cap to its initial value (Lin et al.).
 _MU_BAR_FACTOR = 1e7
@@ -345,6 +347,8 @@ def rpca(
     mu: float | None = None,
     rho: float = 1.5,
     svd: SvdMode = "auto",
+    solver: Solver = "ialm",
+    rank: int | None = None,
 ) -> RPCAResult:
     r"""Principal component pursuit ``M = L + S`` by the inexact ALM method.
 
@@ -387,6 +391,19 @@ def rpca(
         threshold, so the thresholding is exact), or the faster of the two as measured
         on the target sizes (``"auto"``, see Notes). All three give the same iterates up
         to rounding.
+    solver : {"ialm", "accaltproj"}
+        ``"ialm"``: principal component pursuit as above. ``"accaltproj"``: accelerated
+        alternating projections (:mod:`sarmotion.separation.accaltproj`), a non-convex
+        fixed-rank solver: ``eta`` scales its threshold (``beta = default_beta * eta /
+        default_eta``), ``mu``, ``rho`` and ``svd`` are unused. On low-rank + sparse data
+        it recovers the same ``L`` and ``S`` 10-50x faster than the full-SVD IALM; on real
+        GOTCHA clutter (far from low rank, IALM's ``L`` has full rank) it leaves more
+        clutter in ``S`` (measured on a degree with two injected movers, windows of 64,
+        ``eta`` x 2: 4 dB of clutter reduction against IALM's 14 dB), so IALM stays the
+        default.
+    rank : int, optional
+        ``solver="accaltproj"``: rank of ``L``; default estimated from the data
+        (:func:`sarmotion.separation.accaltproj.estimate_rank`). Ignored by IALM.
 
     Returns
     -------
@@ -421,13 +438,15 @@ def rpca(
     rho = float(rho)
     if not (math.isfinite(rho) and rho >= 1.0):
         raise ValueError(f"rho must be finite and >= 1, got {rho}")
+    _check_solver(solver, rank)
     out_dtype = _output_dtype(np.asarray(M).dtype)
     m = _as_work_array(M)
     if eta is None:
         eta = default_eta(m.shape)
-    low, sparse, n_iter, converged, residuals, rank = _ialm(
-        m, eta=eta, tol=tol, max_iter=max_iter, mu=mu, rho=rho, svd=svd
-    )
+    low, sparse, n_iter, converged, residuals, rank = _solve(
+        m, solver=solver, rank=rank, eta=eta, tol=tol, max_iter=max_iter, mu=mu, rho=rho,
+        svd=svd,
+    )  # fmt: skip
     return RPCAResult(
         low_rank=low.astype(out_dtype, copy=False),
         sparse=sparse.astype(out_dtype, copy=False),
@@ -437,6 +456,26 @@ def rpca(
         rank=rank,
         eta=eta,
     )
+
+
+def _check_solver(solver: str, rank: int | None) -> None:
+    if solver not in _SOLVERS:
+        raise ValueError(f"solver must be one of {_SOLVERS}, got {solver!r}")
+    if rank is not None:
+        if isinstance(rank, bool) or not isinstance(rank, int | np.integer):
+            raise TypeError(f"rank must be an int, got {rank!r}")
+        if rank < 1:
+            raise ValueError(f"rank must be >= 1, got {rank}")
+
+
+def _solve(
+    m: NDArray[np.inexact], *, solver: str, rank: int | None, eta: float, tol: float,
+    max_iter: int, mu: float | None, rho: float, svd: str,
+) -> tuple[NDArray, NDArray, int, bool, NDArray[np.float64], int]:
+    """One matrix by the chosen solver: ``(L, S, n_iter, converged, residuals, rank)``."""
+    if solver == "ialm":
+        return _ialm(m, eta=eta, tol=tol, max_iter=max_iter, mu=mu, rho=rho, svd=svd)
+    return _accaltproj(m, rank=rank, eta=eta, tol=tol, max_iter=max_iter)
 
 
 def _largest_singular_value(m: NDArray) -> float:
@@ -516,6 +555,20 @@ def _ialm(
         threshold.n_full,
     )
     return low, sparse, k, converged, residuals[:k].copy(), rank
+
+
+@_single_threaded_blas
+def _accaltproj(
+    m: NDArray[np.inexact], *, rank: int | None, eta: float, tol: float, max_iter: int
+) -> tuple[NDArray, NDArray, int, bool, NDArray[np.float64], int]:
+    """:func:`sarmotion.separation.accaltproj.accaltproj` with ``beta`` scaled by ``eta``."""
+    from .accaltproj import accaltproj, default_beta
+
+    beta = default_beta(m.shape) * eta / default_eta(m.shape)
+    out = accaltproj(m, rank=rank, tol=tol, max_iter=max_iter, beta=beta)
+    logger.debug("AccAltProj %s: %d iterations, converged=%s, rank %d", m.shape, out[2],
+                 out[3], out[5])  # fmt: skip
+    return out
 
 
 class _Thresholder:
@@ -685,6 +738,7 @@ def _gavish_donoho_omega(beta: float) -> float:
     return 0.56 * beta**3 - 0.95 * beta**2 + 1.82 * beta + 1.43
 
 
+@_single_threaded_blas
 def choose_window(
     M: ArrayLike,
     *,
@@ -794,6 +848,8 @@ def windowed_rpca(
     max_iter: int = 1000,
     svd: SvdMode = "auto",
     progress: ProgressCallback | None = None,
+    solver: Solver = "ialm",
+    rank: int | None = None,
 ) -> RPCAResult:
     r"""Robust PCA on overlapping fast-time windows, blended into one ``L + S``.
 
@@ -819,7 +875,7 @@ def windowed_rpca(
     eta : float, optional
         Sparsity weight for every window. Default per window
         ``1 / sqrt(max(n_pulses, window))``.
-    tol, max_iter, svd
+    tol, max_iter, svd, solver, rank
         As in :func:`rpca`, for each window.
     progress : callable, optional
         ``progress("rpca", n_done, n_windows)`` after each window, ``n_done`` = 1, ...,
@@ -834,6 +890,7 @@ def windowed_rpca(
         ``L``; ``windows`` and the per-window ``window_*`` fields.
     """
     eta, tol, max_iter = _check_options(eta=eta, tol=tol, max_iter=max_iter, svd=svd)
+    _check_solver(solver, rank)
     out_dtype = _output_dtype(np.asarray(M).dtype)
     m = _as_work_array(M)
     n_pulses, n_samples = m.shape
@@ -854,15 +911,16 @@ def windowed_rpca(
         block = m[:, a:b]
         eta_i = eta if eta is not None else default_eta(block.shape)
         etas.append(eta_i)
-        l_i, s_i, it, conv, hist, rank = _ialm(
-            block, eta=eta_i, tol=tol, max_iter=max_iter, mu=None, rho=1.5, svd=svd
-        )
+        l_i, s_i, it, conv, hist, rank_i = _solve(
+            block, solver=solver, rank=rank, eta=eta_i, tol=tol, max_iter=max_iter, mu=None,
+            rho=1.5, svd=svd,
+        )  # fmt: skip
         w = weights[i, a:b]
         low[:, a:b] += l_i * w
         sparse[:, a:b] += s_i * w
         n_iters.append(it)
         convs.append(conv)
-        ranks.append(rank)
+        ranks.append(rank_i)
         histories.append(hist)
         report(progress, "rpca", i + 1, len(bounds))
     n_iter = max(n_iters)
@@ -874,7 +932,8 @@ def windowed_rpca(
     if len(bounds) == 1:
         rank = ranks[0]
     else:
-        s_low = scipy.linalg.svd(low, compute_uv=False, check_finite=False)
+        with threadpool_limits(limits=1, user_api="blas"):
+            s_low = scipy.linalg.svd(low, compute_uv=False, check_finite=False)
         rank = int(np.count_nonzero(s_low > max(low.shape) * np.finfo(float).eps * s_low[0]))
     logger.debug(
         "windowed_rpca: %d windows of %d samples, iterations %d..%d, all converged=%s",

@@ -59,8 +59,9 @@ def separate_rpca(
     if eta is None and eta_scale != 1.0:
         from .rpca import choose_window, default_eta
 
-        w = window if window is not None else choose_window(traces.data)
-        eta = eta_scale * default_eta((traces.n_pulses, min(int(w), traces.n_samples)))
+        if window is None:  # chosen once, here, rather than again by windowed_rpca
+            window = choose_window(traces.data)
+        eta = eta_scale * default_eta((traces.n_pulses, min(int(window), traces.n_samples)))
     res = windowed_rpca(
         traces.data,
         window=window,
