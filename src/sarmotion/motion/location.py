@@ -87,6 +87,45 @@ def _defocus_half_width_m(traces: Traces, cross_speed_mps: float) -> float:
     return 0.5 * _aperture_time_s(traces) * ((v + du) ** 2 - v**2) / v
 
 
+def _centroid(
+    tr: Traces,
+    brightest: NDArray[np.float64],
+    vel: NDArray[np.float64],
+    ph: NDArray[np.complexfloating],
+    *,
+    half: float,
+    step: float,
+    max_up: float,
+    thr: float,
+) -> tuple[NDArray[np.float64], complex, NDArray[np.float64], NDArray[np.complex128]]:
+    """The defocused streak's power centroid in cross range, then the range of best focus.
+
+    Returns the position (m), the point response there, and the cross-range cut through
+    the brightest pixel (offsets in m, values).
+    """
+    e_r, e_c = _image_axes(tr.geometry)
+    cross_res = resolution(tr).cross_range_m
+    reach = half + _defocus_half_width_m(tr, max_up)
+    offsets = np.arange(-reach, reach + 0.125 * cross_res, 0.25 * cross_res)
+    cut = backproject_points(
+        tr, brightest[None, :] + offsets[:, None] * e_c[None, :], velocity_mps=vel
+    )
+    power = np.abs(cut) ** 2
+    weight = np.where(power >= power.max() * 10.0 ** (thr / 10.0), power, 0.0)
+    base = brightest + float((weight * offsets).sum() / weight.sum()) * e_c
+
+    def neg_modulus(a: float) -> float:
+        pt = base + a * e_r
+        return -float(np.abs(point_response(tr, pt, velocity_mps=vel, phase_history=ph)[0]))
+
+    best = minimize_scalar(
+        neg_modulus, bounds=(-step, step), method="bounded", options={"xatol": 1e-3}
+    )
+    pos = base + float(best.x) * e_r
+    value = complex(point_response(tr, pos, velocity_mps=vel, phase_history=ph)[0])
+    return pos, value, offsets, cut
+
+
 def locate_mover(
     traces: Traces,
     range_speed_mps: float,
@@ -191,25 +230,9 @@ def locate_mover(
             cut_values=np.zeros(0, dtype=np.complex128),
             cross_axis=e_c,
         )
-    cross_res = resolution(tr).cross_range_m
-    reach = half + _defocus_half_width_m(tr, max_up)
-    offsets = np.arange(-reach, reach + 0.125 * cross_res, 0.25 * cross_res)
-    cut = backproject_points(
-        tr, brightest[None, :] + offsets[:, None] * e_c[None, :], velocity_mps=vel
+    pos, value, offsets, cut = _centroid(
+        tr, brightest, vel, ph, half=half, step=step, max_up=max_up, thr=thr
     )
-    power = np.abs(cut) ** 2
-    weight = np.where(power >= power.max() * 10.0 ** (thr / 10.0), power, 0.0)
-    base = brightest + float((weight * offsets).sum() / weight.sum()) * e_c
-
-    def neg_modulus(a: float) -> float:
-        pt = base + a * e_r
-        return -float(np.abs(point_response(tr, pt, velocity_mps=vel, phase_history=ph)[0]))
-
-    best = minimize_scalar(
-        neg_modulus, bounds=(-step, step), method="bounded", options={"xatol": 1e-3}
-    )
-    pos = base + float(best.x) * e_r
-    value = complex(point_response(tr, pos, velocity_mps=vel, phase_history=ph)[0])
     return MoverLocation(
         position_m=pos,
         value=value,

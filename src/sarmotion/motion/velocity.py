@@ -49,6 +49,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -242,7 +243,57 @@ def estimate_velocity(
     history.append({"stage": "g_perp", "cross_range_speed_mps": up})
 
     # 4. alternations
-    for k in range(int(n_alternations)):
+    rho, u, up, cross = _alternate(
+        tr,
+        rho,
+        u,
+        up,
+        cross,
+        known=known,
+        n_alternations=int(n_alternations),
+        search_half_size_m=float(search_half_size_m),
+        g_perp_form=g_perp_form,
+        history=history,
+    )
+
+    vel = ground_velocity(u, up, geom)
+    peak = _g_scalar(tr, rho, up)(u)
+    value = complex(point_response(tr, rho, velocity_mps=vel)[0])
+    return MoverEstimate(
+        position_m=np.asarray(rho, dtype=np.float64).copy(),
+        velocity_mps=vel,
+        range_speed_mps=u,
+        cross_range_speed_mps=up,
+        peak_value=peak,
+        peak_db=float(20.0 * np.log10(peak / curve.floor)) if curve.floor > 0 else np.inf,
+        image_value=value,
+        range_curve=curve,
+        cross_curve=cross,
+        history=tuple(history),
+    )
+
+
+def _alternate(
+    tr: Traces,
+    rho: NDArray[np.float64],
+    u: float,
+    up: float,
+    cross: CrossRangeSpeed,
+    *,
+    known: bool,
+    n_alternations: int,
+    search_half_size_m: float,
+    g_perp_form: dict[str, Any],
+    history: list[dict[str, object]],
+) -> tuple[NDArray[np.float64], float, float, CrossRangeSpeed]:
+    """Stage 4 of :func:`estimate_velocity`: rounds of location (or range speed) and u_perp.
+
+    With a known position the range speed is re-refined on ``g`` at the cross-range
+    speed; otherwise the location is searched again near the current one. Each round
+    appends to ``history``. Returns the final ``(rho, u, u_perp, cross-range result)``.
+    """
+    res = range_speed_resolution(tr)
+    for k in range(n_alternations):
         if known:
             u, _ = _refine_max(_g_scalar(tr, rho, up), u, res, 1e-4)
         else:
@@ -251,7 +302,7 @@ def estimate_velocity(
                 u,
                 cross_range_speed_mps=up,
                 centre_m=rho,
-                search_half_size_m=min(float(search_half_size_m), 10.0),
+                search_half_size_m=min(search_half_size_m, 10.0),
             ).position_m
         width = 4.0 * cross.resolution_mps
         cross = estimate_cross_range_speed(
@@ -270,22 +321,7 @@ def estimate_velocity(
                 "cross_range_speed_mps": up,
             }
         )
-
-    vel = ground_velocity(u, up, geom)
-    peak = _g_scalar(tr, rho, up)(u)
-    value = complex(point_response(tr, rho, velocity_mps=vel)[0])
-    return MoverEstimate(
-        position_m=np.asarray(rho, dtype=np.float64).copy(),
-        velocity_mps=vel,
-        range_speed_mps=u,
-        cross_range_speed_mps=up,
-        peak_value=peak,
-        peak_db=float(20.0 * np.log10(peak / curve.floor)) if curve.floor > 0 else np.inf,
-        image_value=value,
-        range_curve=curve,
-        cross_curve=cross,
-        history=tuple(history),
-    )
+    return rho, u, up, cross
 
 
 def _g_scalar(
