@@ -13,10 +13,10 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 import scipy.io
 
+from gotcha_files import small_struct
 from sarmotion.cli.main import EXIT_BAD_INPUT, EXIT_TERMINATED, run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,32 +43,10 @@ def _refused(args, capsys, pattern, target):
     return err
 
 
-def _gotcha_struct(n_pulses=24, n_freq=32):
-    rng = np.random.default_rng(3)
-    az = np.deg2rad(0.3 + np.arange(n_pulses) * 0.00853)
-    x, y, z = 7088.9 * np.cos(az), 7088.9 * np.sin(az), np.full(n_pulses, 7275.7)
-    f = 9.28808e9 + 1.471488e6 * np.arange(n_freq)
-    fp = rng.standard_normal((n_freq, n_pulses)) + 1j * rng.standard_normal((n_freq, n_pulses))
-
-    def row(v):
-        return np.asarray(v, np.float32)[None, :]
-
-    return {
-        "fp": fp.astype(np.complex64),
-        "freq": f.astype(np.float32)[:, None],
-        "x": row(x),
-        "y": row(y),
-        "z": row(z),
-        "r0": row(np.sqrt(x**2 + y**2 + z**2)),
-        "th": row(np.rad2deg(az)),
-        "phi": row(np.rad2deg(np.arctan2(z, np.hypot(x, y)))),
-    }
-
-
 @pytest.fixture
 def work(tmp_path):
     """A directory with a good small GOTCHA file and an existing output directory."""
-    scipy.io.savemat(tmp_path / "good.mat", {"data": _gotcha_struct()})
+    scipy.io.savemat(tmp_path / "good.mat", {"data": small_struct(24, 32, az0_deg=0.3, seed=3)})
     out = tmp_path / "out"
     out.mkdir()
     (out / "keep.txt").write_text("previous result")
@@ -76,7 +54,7 @@ def work(tmp_path):
 
 
 def _corrupt(work, name, edit):
-    s = _gotcha_struct()
+    s = small_struct(24, 32, az0_deg=0.3, seed=3)
     edit(s)
     path = work / name
     scipy.io.savemat(path, {"data": s})
