@@ -380,3 +380,57 @@ def test_nan_pvp_and_varying_grid(tmp_path, good):
 def test_bad_vector_range(good):
     one_line_error(good, r"vectors \[5, 500\) outside", vectors=(5, 500))
     one_line_error(good, "at least 2 vectors", vectors=(5, 6))
+
+
+def _antenna_off_track(root, signals, pvps):
+    pvps["1"]["TxPos"][9] += [0.0, 0.0, 0.2]  # 20 cm: 19 % of the 1.06 m spacing
+    pvps["1"]["RcvPos"][9] += [0.0, 0.0, 0.2]
+
+
+def _srp_outlier(root, signals, pvps):
+    pvps["1"]["SRPPos"][4] += [3.0, 0.0, 0.0]
+
+
+def _time_gap(root, signals, pvps):
+    t = pvps["1"]["TxTime"]
+    t[6:] += 3.0 * (t[1] - t[0])  # a gap of 4 intervals
+
+
+def _iarp_disagrees(root, signals, pvps):
+    iarp = root["SceneCoordinates"]["IARP"]
+    iarp["ECF"] = np.asarray(iarp["ECF"]) + [0.0, 0.0, 5.0]
+
+
+def _bright_sample(root, signals, pvps):
+    signals["1"] = np.array(signals["1"])
+    signals["1"][3, 5] = 1e4 * np.abs(signals["1"]).max()
+
+
+@pytest.mark.parametrize(
+    ("edit", "match", "lenient_reads"),
+    [
+        (_antenna_off_track, r"TxPos/RcvPos \(mid-point\), pulse 9: the antenna is 0.2 m", True),
+        (_srp_outlier, r"PVP SRPPos, vector 4: the SRP of this vector alone", True),
+        (_time_gap, r"PVP TxTime, pulse 6: 0.0\d+ s after pulse 5", True),
+        (_iarp_disagrees, r"IARP: ECF and LLH are 5 m apart", False),
+        (_bright_sample, r"signal, pulse 3, frequency index 5: magnitude", True),
+    ],
+)
+def test_implausible_files_are_refused_in_one_line(
+    tmp_path, good, caplog, edit, match, lenient_reads
+):
+    """Each plausibility rule refuses its case; ``lenient`` reads it with the same warning."""
+    path = rewrite(good, tmp_path / "bad.cphd", edit)
+    message = one_line_error(path, match)
+    assert "--lenient accepts it" in message or not lenient_reads
+    if lenient_reads:
+        with caplog.at_level("WARNING", logger="sarmotion.io"):
+            read_cphd(path, lenient=True)
+        assert any("accepted: --lenient" in r.getMessage() for r in caplog.records)
+    else:
+        one_line_error(path, match, lenient=True)
+
+
+def test_plausibility_accepts_the_written_and_gotcha_shaped_files(good, sim_traces):
+    """The rules pass on a file as written (fixed SRP, uniform PRF): nothing refused."""
+    assert read_cphd(good).shape == sim_traces.shape

@@ -297,8 +297,8 @@ def _saved_scene(tmp_path, edit):
     [
         (lambda d, p: d.__setitem__((40, 200), 1e9), r"data \(as phase history\), pulse 40,"),
         (lambda d, p: p.__setitem__((30, 2), 0.0), r"/traces/positions_m, pulse 30"),
-        # y + 0.5 m at one pulse: a second difference of 1 m.
-        (lambda d, p: p.__setitem__((30, 1), p[30, 1] + 0.5), r"pulse 30: the antenna is 1 m off"),
+        # y + 0.5 m at one pulse: 0.5 m off the midpoint, a second difference of 1 m.
+        (lambda d, p: p.__setitem__((30, 1), p[30, 1] + 0.5), r"pulse 30: the antenna is 0.5 m"),
     ],
 )
 def test_implausible_native_traces_are_refused(tmp_path, edit, message):

@@ -28,6 +28,18 @@ Reference point
     ``SRPPos``. When it moves between the selected vectors the phase history is
     re-referenced exactly to one point (the SRP of the middle selected vector, or
     ``reference_point_m``) by ``exp(-2i pi f (TOA_j(SRP_j) - TOA_j(rho_o)))``.
+Plausibility
+    The rules of :mod:`sarmotion.io.plausibility` (a one-line DataError naming the file,
+    channel, PVP and vector; ``lenient=True``, ``--lenient``, logs a warning instead):
+    the antenna above the ground and 10 m to 1000 km from the reference point, a track
+    that moves by more than 0 and at most 2.5 median spacings per vector with second
+    differences within 1 % of the spacing, ``TxTime`` increasing by at most 2.5 median
+    intervals, an ``SRPPos`` track as smooth as the antenna's (second differences within
+    1 % of the antenna spacing: a fixed SRP, one moving smoothly, or jumps that hold for
+    two vectors or more), the IARP's ECF and LLH within 0.1 m, and a largest
+    sample modulus at most 1000 times the median. A corrupted PVP that passes them
+    changes the differential range of the scene by less than a quarter cycle
+    (``tests/test_fuzz_cphd.py``).
 Not modelled
     ``TDTropoSRP`` and ``TDIonoSRP`` (the data are taken as referenced to the geometric
     TOA of the SRP), antenna patterns, noise levels and support arrays.
@@ -70,6 +82,14 @@ from .. import __version__
 from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
 from .errors import DataError, staged_paths
 from .native import _to_json
+from .plausibility import (
+    MAX_BEND,
+    check_dynamic_range,
+    check_envelope,
+    check_times,
+    check_track,
+    violation,
+)
 
 __all__ = ["read_cphd", "write_cphd", "is_cphd_file"]
 
@@ -96,6 +116,9 @@ _TOA_FRACTION = 0.8
 _DEFAULT_COLLECTION_START = "2000-01-01T00:00:00Z"
 
 _BLOCKS = ("XML", "SUPPORT", "PVP", "SIGNAL")
+
+#: Largest distance between the IARP given in ECF and the IARP given in LLH (m).
+_IARP_TOL_M = 0.1
 
 
 # ----------------------------------------------------------------------------- frames
@@ -162,16 +185,29 @@ def _open(path: Path, fh: Any) -> Any:
 
 
 def _check_block_sizes(path: Path, kvp: dict[str, str]) -> None:
-    """DataError if the file ends before a block the header declares."""
+    """DataError for a block size or offset that is missing or not a count, or past the end.
+
+    Every block but SUPPORT must be declared; the file may not end before a block does.
+    """
     size = path.stat().st_size
     for block in _BLOCKS:
-        if f"{block}_BLOCK_BYTE_OFFSET" in kvp:
-            end = int(kvp[f"{block}_BLOCK_BYTE_OFFSET"]) + int(kvp.get(f"{block}_BLOCK_SIZE", 0))
-            if end > size:
-                raise DataError(
-                    f"{path}: truncated: {size} bytes, but the header puts the end of the "
-                    f"{block.lower()} block at byte {end}"
-                )
+        keys = (f"{block}_BLOCK_BYTE_OFFSET", f"{block}_BLOCK_SIZE")
+        if block == "SUPPORT" and keys[0] not in kvp:
+            continue  # the only optional block
+        try:
+            offset, length = (int(kvp[k]) for k in keys)
+        except (KeyError, ValueError):
+            raise DataError(
+                f"{path}: file header: {keys[0]} and {keys[1]} must be byte counts, got "
+                f"{kvp.get(keys[0])!r} and {kvp.get(keys[1])!r}"
+            ) from None
+        if offset < 0 or length < 0:
+            raise DataError(f"{path}: file header: negative {block.lower()} block offset or size")
+        if offset + length > size:
+            raise DataError(
+                f"{path}: truncated: {size} bytes, but the header puts the end of the "
+                f"{block.lower()} block at byte {offset + length}"
+            )
 
 
 def _find(xml: Any, where: str) -> str | None:
@@ -272,9 +308,15 @@ def _read_pvps(reader: Any, ch: str, start: int, stop: int, path: Path) -> NDArr
 def _scene_frame(xml: Any, path: Path) -> tuple[_Frame, str]:
     """The scene frame of the file (origin IARP) and its description."""
     origin = np.array([_number(xml, f"SceneCoordinates/IARP/ECF/{k}", path) for k in "XYZ"])
+    llh = [_number(xml, f"SceneCoordinates/IARP/LLH/{k}", path) for k in ("Lat", "Lon", "HAE")]
+    gap = float(np.linalg.norm(skwgs84.geodetic_to_cartesian(llh) - origin))
+    if not gap <= _IARP_TOL_M:
+        raise DataError(
+            f"{path}: SceneCoordinates/IARP: ECF and LLH are {gap:.4g} m apart (at most "
+            f"{_IARP_TOL_M:g} m: the scene origin is ambiguous)"
+        )
     planar = xml.find("./{*}SceneCoordinates/{*}ReferenceSurface/{*}Planar")
     if planar is None:
-        llh = [_number(xml, f"SceneCoordinates/IARP/LLH/{k}", path) for k in ("Lat", "Lon", "HAE")]
         return _Frame(origin_ecf=origin, axes=_enu_frame(llh).axes), "east, north, up at the IARP"
     ux = np.array([_number(planar, f"uIAX/{k}", path) for k in "XYZ"])
     uy = np.array([_number(planar, f"uIAY/{k}", path) for k in "XYZ"])
@@ -378,6 +420,7 @@ def read_cphd(
     channel: str | int | None = None,
     vectors: tuple[int, int] | None = None,
     reference_point_m: ArrayLike | None = None,
+    lenient: bool = False,
 ) -> Traces:
     """Read one channel of a CPHD 1.x file (FX domain) as traces.
 
@@ -395,6 +438,9 @@ def read_cphd(
         Reference point ``rho_o`` (m, scene frame) of the returned traces; the phase
         history is re-referenced to it exactly. Default: the SRP (of the middle selected
         vector when the SRP moves).
+    lenient : bool
+        Log a broken plausibility rule (module notes) as a warning instead of refusing
+        the file.
 
     Returns
     -------
@@ -410,8 +456,8 @@ def read_cphd(
     DataError
         Missing or truncated file, not a CPHD file, an unsupported version, TOA-domain,
         compressed or bistatic data, an unknown channel, a bad vector range, missing or
-        NaN PVPs, NaN samples, frequency grids that differ between vectors, or times
-        that do not increase.
+        NaN PVPs, NaN samples, frequency grids that differ between vectors, or a broken
+        plausibility rule (module notes; unless ``lenient``).
     """
     p = Path(path)
     if not p.is_file():
@@ -424,9 +470,10 @@ def read_cphd(
         start, stop = _vector_range(vectors, n_vectors, p)
         pvps = _read_pvps(reader, ch, start, stop, p)
         phase_history = _signal(reader, ch, start, stop, pvps, p)
+    frame, frame_name = _scene_frame(xml, p)
+    _check_plausible(p, ch, pvps, frame, phase_history, lenient=lenient)
     stored = _stored_parameters(xml, p)
     radar = _radar(pvps, n_samples, stored.get("radar"), p, ch)
-    frame, frame_name = _scene_frame(xml, p)
     trajectory, rho_o, phase = _geometry(
         pvps, frame, reference_point_m, radar, f"{p}: channel {ch}"
     )
@@ -442,6 +489,61 @@ def read_cphd(
         reference_point_m=rho_o,
         metadata=metadata,
     )
+
+
+def _check_plausible(
+    path: Path,
+    ch: str,
+    pvps: NDArray[Any],
+    frame: _Frame,
+    phase_history: NDArray[np.complex128],
+    *,
+    lenient: bool,
+) -> None:
+    """The plausibility rules of the module notes (vector indices within the selection)."""
+    where = f"{path}: channel {ch}"
+    antenna = frame.to_local(0.5 * (np.asarray(pvps["TxPos"]) + np.asarray(pvps["RcvPos"])))
+    srp = frame.to_local(np.asarray(pvps["SRPPos"], dtype=np.float64))
+    field = "PVP TxPos/RcvPos (mid-point)"
+    check_envelope(where, field, antenna - srp[srp.shape[0] // 2], lenient=lenient)
+    check_track(where, field, antenna, lenient=lenient)
+    times = np.asarray(pvps["TxTime"], dtype=np.float64)
+    check_times(where, "PVP TxTime", times, lenient=lenient)
+    spacing = float(np.median(np.linalg.norm(np.diff(antenna, axis=0), axis=1)))
+    j = _isolated_srp(srp, MAX_BEND * spacing)
+    if j is not None:
+        violation(
+            f"{where}: PVP SRPPos, vector {j}: the SRP of this vector alone is away from the "
+            f"line of its neighbours (rule: a fixed SRP, one moving smoothly, or jumps that "
+            f"hold for at least two vectors, to {MAX_BEND:g} x the antenna's median spacing "
+            f"of {spacing:.4g} m)",
+            lenient=lenient,
+        )
+    check_dynamic_range(where, "signal", np.abs(phase_history), lenient=lenient)
+
+
+def _isolated_srp(srp: NDArray[np.float64], tol_m: float) -> int | None:
+    """First vector whose SRP alone leaves the line of its neighbours by more than ``tol_m``.
+
+    A vector ``j`` inside is isolated when its SRP is more than ``tol_m`` from the
+    midpoint of its neighbours' and further from it than they are from each other (a
+    jump that holds, ``A A B B``, is not: ``B`` is half as far from the midpoint as ``A``
+    from ``B``); an end vector when it is more than ``tol_m`` from the line through the
+    next two and further from it than they are apart.
+    """
+    n = srp.shape[0]
+    if n < 3:
+        return None
+    dev = np.linalg.norm(srp[1:-1] - 0.5 * (srp[:-2] + srp[2:]), axis=1)
+    apart = np.linalg.norm(srp[2:] - srp[:-2], axis=1)
+    inside = np.flatnonzero((dev > tol_m) & (dev > apart)) + 1
+    ends = []
+    for j, a, b in ((0, 1, 2), (n - 1, n - 2, n - 3)):
+        d = float(np.linalg.norm(srp[j] - (2.0 * srp[a] - srp[b])))
+        if d > tol_m and d > float(np.linalg.norm(srp[a] - srp[b])):
+            ends.append(j)
+    bad = sorted(ends + inside.tolist())
+    return int(bad[0]) if bad else None
 
 
 def _geometry(

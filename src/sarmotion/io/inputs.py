@@ -92,7 +92,7 @@ def read_inputs(
     if suffixes == {".cphd"}:
         if len(inputs) != 1:
             raise DataError("give one CPHD file (.cphd) at a time")
-        return read_cphd(first, channel=channel, vectors=vectors), None
+        return read_cphd(first, channel=channel, vectors=vectors, lenient=lenient), None
     raise DataError(
         f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
         "a native traces .h5 file, GOTCHA .mat files, or a CPHD .cphd file"

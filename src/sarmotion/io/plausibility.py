@@ -23,6 +23,7 @@ __all__ = [
     "RANGE_ENVELOPE_M",
     "check_dynamic_range",
     "check_envelope",
+    "check_times",
     "check_track",
     "violation",
 ]
@@ -89,9 +90,9 @@ def check_track(
     if float(bend.max()) > MAX_BEND * spacing:
         j = int(np.argmax(bend)) + 1
         violation(
-            f"{path}: {field}, pulse {j}: the antenna is {bend[j - 1]:.3g} m off the midpoint "
-            f"of its neighbours (rule: at most {MAX_BEND:g} x the median spacing of "
-            f"{spacing:.4g} m, a smooth track)",
+            f"{path}: {field}, pulse {j}: the antenna is {0.5 * bend[j - 1]:.3g} m off the "
+            f"midpoint of its neighbours (rule: second differences at most {MAX_BEND:g} x "
+            f"the median spacing of {spacing:.4g} m, a smooth track)",
             lenient=lenient,
         )
 
@@ -109,5 +110,24 @@ def check_dynamic_range(
             f"{path}: {field}, pulse {j}, frequency index {k}: magnitude {peak:.4g} against a "
             f"median of {median:.4g} ({ratio}; rule: at most {MAX_DYNAMIC_RANGE:g} x the "
             "median magnitude)",
+            lenient=lenient,
+        )
+
+
+def check_times(
+    path: Path | str, field: str, times_s: NDArray[np.float64], *, lenient: bool
+) -> None:
+    """Slow times increase by more than 0 and at most ``MAX_STEP`` median intervals per pulse."""
+    if times_s.shape[0] < 2:
+        return
+    steps = np.diff(times_s)
+    interval = float(np.median(steps))
+    bad = np.flatnonzero(~(steps > 0.0) | (steps > MAX_STEP * interval))
+    if bad.size or not interval > 0.0:
+        j = int(bad[0]) + 1 if bad.size else 1
+        violation(
+            f"{path}: {field}, pulse {j}: {steps[j - 1]:.6g} s after pulse {j - 1} against a "
+            f"median interval of {interval:.6g} s (rule: times increase by more than 0 and at "
+            f"most {MAX_STEP:g} intervals per pulse)",
             lenient=lenient,
         )
