@@ -34,6 +34,13 @@ degree) the per-scene false-alarm rate ``alpha`` is met by :func:`threshold_db`
 tail). The threshold is the one stated principle; the two tests below only remove
 candidates.
 
+``benchmarks/detector_null.py`` measures the distribution again (table in
+``benchmarks/results/detector_null.md``). On its own seeds (31: 25 simulated scenes per
+method, 6238 candidates with the real degrees) the simulated RPCA tail is lighter than
+the one above (90 % quantile 0.55 dB, mean excess 0.33 dB; largest 3.47 dB) and 0.05 %
+of all candidates pass the model's 1 % point (2.72 dB), none its 0.1 % point: the model
+is conservative, and no scene's largest candidate reached its threshold.
+
 **Shape.** A point mover's ``g`` peak has the half-height width of
 :func:`point_peak_width`: its aligned trace tilts by ``du s`` in range, so
 ``g(u + du) / g(u)`` is the slow-time mean of the compressed-pulse envelope at
