@@ -240,12 +240,14 @@ def test_sigterm_leaves_nothing_behind(tmp_path):
     out = tmp_path / "demo"
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     proc = subprocess.Popen(
-        [sys.executable, "-m", "sarmotion", "analyze", "scene1", "--out", str(out)],
+        [sys.executable, "-m", "sarmotion", "-v", "analyze", "scene1", "--out", str(out)],
         env=env,
         stderr=subprocess.PIPE,
         text=True,
     )
-    time.sleep(4.0)  # inside the analysis (~10 s)
+    # the first log line comes after the separation stage: the analysis is under way
+    first = proc.stderr.readline()
+    assert "separation" in first, first
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == EXIT_TERMINATED, err
