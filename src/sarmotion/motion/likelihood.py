@@ -56,6 +56,7 @@ from ..core import (
     range_speed,
     to_fast_time,
 )
+from ..core.spectral import phased_row_sums
 from ..imaging import resolution
 from ._aligned import _Aligner, _g_reduce, _refine_max
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
@@ -70,7 +71,7 @@ __all__ = [
     "matched_filter_noise_variance",
 ]
 
-#: Complex exponentials per chunk of parameter sets in :meth:`MatchedFilter.responses`.
+#: Pulse-frequency terms per chunk of parameter sets in :meth:`MatchedFilter.responses`.
 _CHUNK = 1 << 21
 
 
@@ -88,17 +89,24 @@ class MatchedFilter:
     def __init__(self, traces: Traces, data: ArrayLike | None = None) -> None:
         d = traces if data is None else traces.with_data(np.asarray(data))
         w = traces.radar.spectral_weights()
-        self.weighted = d.phase_history() * w[None, :]
+        self.weighted = np.ascontiguousarray(d.phase_history() * w[None, :], dtype=np.complex128)
         self.norm = float(np.sum(w**2))
         self.antenna = traces.positions_m
         self.slow = traces.slow_times_s
         self.freq = traces.frequencies_hz
+        self.freq_step = float(traces.radar.frequency_step_hz)
         self.ref_range = np.linalg.norm(self.antenna - traces.reference_point_m, axis=1)
 
     def responses(
         self, positions_m: ArrayLike, velocities_mps: ArrayLike
     ) -> NDArray[np.complex128]:
         """``I`` at ``(k, 3)`` positions (m, ``s = 0``) and ``(k, 2)`` ground velocities (m/s).
+
+        The delays are float64; the sum over frequencies runs compiled with phasors
+        advancing by a fixed rotation (:func:`sarmotion.core.spectral.phased_row_sums`,
+        re-seeded exactly every 32 bins): the same values as forming
+        ``exp(2i pi f dtau)`` to ~1e-14 of ``sum |P W|`` (tested against that direct
+        form), 10x faster on a GOTCHA degree.
 
         Returns
         -------
@@ -110,17 +118,16 @@ class MatchedFilter:
         v3 = np.concatenate([vel, np.zeros((vel.shape[0], 1))], axis=1)
         out = np.empty(pos.shape[0], dtype=np.complex128)
         step = max(1, _CHUNK // self.weighted.size)
+        f0 = float(self.freq[0])
         for i0 in range(0, pos.shape[0], step):
             where = (
                 pos[i0 : i0 + step, None, :] + self.slow[None, :, None] * v3[i0 : i0 + step, None]
             )
             rng = np.linalg.norm(self.antenna[None] - where, axis=2)
-            cycles = (2.0 * (rng - self.ref_range[None]) / C)[:, :, None] * self.freq[None, None]
-            cycles -= np.rint(cycles)  # exact reduction in float64 before the exponential
-            out[i0 : i0 + step] = (
-                np.einsum("vjk,jk->v", np.exp(2j * np.pi * cycles), self.weighted) / self.norm
-            )
-        return out
+            delays = np.ascontiguousarray(2.0 * (rng - self.ref_range[None]) / C)
+            for i, d in enumerate(delays):
+                out[i0 + i] = phased_row_sums(self.weighted, d, f0, self.freq_step).sum()
+        return out / self.norm
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
