@@ -175,15 +175,16 @@ def _global_cross_search(
     padded[..., al.slots] = x0
     centre = int(np.argmax(np.abs(sfft.ifft(padded, axis=-1)).sum(axis=1)[0]))
     cols = (centre + np.arange(-12, 13)) % al.n_fft
+    basis = al.column_basis(cols)
     n = d.n_pulses
     n_dop = 1 << int(np.ceil(np.log2(4 * n)))
     profile = np.empty(grid.size)
     where = np.empty((grid.size, 2), dtype=int)
     for i0 in range(0, grid.size, 8):
         vel = np.array([ground_velocity(range_speed_mps, up, geom) for up in grid[i0 : i0 + 8]])
-        padded = np.zeros((vel.shape[0], n, al.n_fft), dtype=np.complex64)
-        padded[..., al.slots] = al.spectra(vel)
-        aligned = sfft.ifft(padded, axis=-1, workers=-1)[..., cols]
+        # the window's fast-time samples only: inverse-DFT columns instead of the FFT
+        spectra = al.spectra(vel)
+        aligned = (spectra.reshape(-1, spectra.shape[-1]) @ basis).reshape(vel.shape[0], n, -1)
         dop = np.abs(sfft.fft(aligned, n=n_dop, axis=1, workers=-1)).reshape(vel.shape[0], -1)
         k = dop.argmax(axis=1)
         profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
