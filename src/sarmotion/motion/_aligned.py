@@ -185,42 +185,43 @@ def _modulate(delays, freq, spectrum, slots, out):  # pragma: no cover - compile
     n_freq = freq.size
     n_pos = n_freq - n_freq // 2
     df = freq[1] - freq[0] if n_pos > 1 else 0.0  # one bin per run: no rotation needed
-    for v in range(n_vel):
-        for j in range(n):
-            d = delays[v, j]
-            st = d * df
-            r1 = unit_phasor(st - math.floor(st))
-            r2 = r1 * r1
-            r4 = r2 * r2
-            for lo, hi in ((0, n_pos), (n_pos, n_freq)):
-                for k0 in range(lo, hi, 32):
-                    c = d * freq[k0]
-                    w0 = unit_phasor(c - math.floor(c))
-                    w1 = w0 * r1
-                    w2 = w0 * r2
-                    w3 = w1 * r2
-                    k1 = min(k0 + 32, hi)
-                    k = k0
-                    while k + 4 <= k1:
-                        for q, w in ((0, w0), (1, w1), (2, w2), (3, w3)):
-                            sp = spectrum[j, k + q]
-                            out[v, j, slots[k + q]] = complex(
-                                np.float32(w.real * sp.real - w.imag * sp.imag),
-                                np.float32(w.real * sp.imag + w.imag * sp.real),
-                            )
-                        w0 = w0 * r4
-                        w1 = w1 * r4
-                        w2 = w2 * r4
-                        w3 = w3 * r4
-                        k += 4
-                    while k < k1:
-                        sp = spectrum[j, k]
-                        out[v, j, slots[k]] = complex(
-                            np.float32(w0.real * sp.real - w0.imag * sp.imag),
-                            np.float32(w0.real * sp.imag + w0.imag * sp.real),
+    for row in range(n_vel * n):
+        v = row // n
+        j = row - v * n
+        d = delays[v, j]
+        st = d * df
+        r1 = unit_phasor(st - math.floor(st))
+        r2 = r1 * r1
+        r4 = r2 * r2
+        for lo, hi in ((0, n_pos), (n_pos, n_freq)):
+            for k0 in range(lo, hi, 32):
+                c = d * freq[k0]
+                w0 = unit_phasor(c - math.floor(c))
+                w1 = w0 * r1
+                w2 = w0 * r2
+                w3 = w1 * r2
+                k1 = min(k0 + 32, hi)
+                k = k0
+                while k + 4 <= k1:
+                    for q, w in ((0, w0), (1, w1), (2, w2), (3, w3)):
+                        sp = spectrum[j, k + q]
+                        out[v, j, slots[k + q]] = complex(
+                            np.float32(w.real * sp.real - w.imag * sp.imag),
+                            np.float32(w.real * sp.imag + w.imag * sp.real),
                         )
-                        w0 = w0 * r1
-                        k += 1
+                    w0 = w0 * r4
+                    w1 = w1 * r4
+                    w2 = w2 * r4
+                    w3 = w3 * r4
+                    k += 4
+                while k < k1:
+                    sp = spectrum[j, k]
+                    out[v, j, slots[k]] = complex(
+                        np.float32(w0.real * sp.real - w0.imag * sp.imag),
+                        np.float32(w0.real * sp.imag + w0.imag * sp.real),
+                    )
+                    w0 = w0 * r1
+                    k += 1
 
 
 def _basis(geometry: LookGeometry) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -247,9 +248,8 @@ def _sum_abs_max(x):  # pragma: no cover - compiled
     """``max_t sum_j |x[v, j, t]|``, shape (n_vel,), accumulated in float64."""
     n_vel, n, m = x.shape
     out = np.empty(n_vel)
-    acc = np.empty(m)
     for v in range(n_vel):
-        acc[:] = 0.0
+        acc = np.zeros(m)
         for j in range(n):
             for t in range(m):
                 z = x[v, j, t]
