@@ -10,6 +10,7 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar
+from threadpoolctl import threadpool_limits
 
 from ..core import C, LookGeometry, Traces, ground_velocity, range_direction_velocity
 from ..core.spectral import unit_phasor
@@ -148,8 +149,7 @@ class _Aligner:
                     h = lag
                     x = (x[:, 2 * h :] - 2.0 * x[:, h:-h] + x[:, : -2 * h]) * (inv_ds2 / h**2)
                 if basis is not None:
-                    cols = np.ascontiguousarray(x).reshape(-1, x.shape[-1]) @ basis
-                    out[i0 : i0 + self.chunk] = reduce(cols.reshape(x.shape[:2] + (-1,)))
+                    out[i0 : i0 + self.chunk] = reduce(_columns(x, basis))
                     continue
                 padded[..., self.slots] = x
             else:
@@ -168,6 +168,17 @@ class _Aligner:
         c = np.asarray(columns, dtype=np.int64) % self.n_fft
         turns = (self.slots[:, None] * c[None, :]) % self.n_fft / self.n_fft
         return (np.exp(2j * np.pi * turns) / self.n_fft).astype(np.complex64)
+
+
+def _columns(x: NDArray[np.complex64], basis: NDArray[np.complex64]) -> NDArray[np.complex64]:
+    """``x @ basis`` over the last axis as one matrix product, on one BLAS thread.
+
+    One thread: measured 0.85 ms for (936, 424) x (424, 25) in complex64, 10 ms with the
+    default threads on the shared 2-core machine (load 5).
+    """
+    with threadpool_limits(limits=1, user_api="blas"):
+        y = np.ascontiguousarray(x).reshape(-1, x.shape[-1]) @ basis
+    return y.reshape(x.shape[:-1] + (basis.shape[1],))
 
 
 @numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})

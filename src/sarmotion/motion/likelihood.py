@@ -58,7 +58,7 @@ from ..core import (
 )
 from ..core.spectral import phased_row_sums
 from ..imaging import resolution
-from ._aligned import _Aligner, _g_reduce, _refine_max
+from ._aligned import _Aligner, _columns, _g_reduce, _refine_max
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
 
 __all__ = [
@@ -183,8 +183,7 @@ def _global_cross_search(
     for i0 in range(0, grid.size, 8):
         vel = np.array([ground_velocity(range_speed_mps, up, geom) for up in grid[i0 : i0 + 8]])
         # the window's fast-time samples only: inverse-DFT columns instead of the FFT
-        spectra = al.spectra(vel)
-        aligned = (spectra.reshape(-1, spectra.shape[-1]) @ basis).reshape(vel.shape[0], n, -1)
+        aligned = _columns(al.spectra(vel), basis)
         dop = np.abs(sfft.fft(aligned, n=n_dop, axis=1, workers=-1)).reshape(vel.shape[0], -1)
         k = dop.argmax(axis=1)
         profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
