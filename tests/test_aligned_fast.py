@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import scipy.fft as sfft
 
 from sarmotion.motion._aligned import _Aligner, _g_reduce
 from sarmotion.motion.range_speed import _range_trials

@@ -127,7 +127,6 @@ def _phase_history(
     return np.asarray(phase_history)
 
 
-
 def refine_location(
     traces: Traces,
     point_m: ArrayLike,
