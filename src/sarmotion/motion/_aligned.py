@@ -134,11 +134,28 @@ class _Aligner:
         rounding; 17 columns of a GOTCHA degree 1.5x faster than the 848-point FFT).
         """
         out = np.empty(velocities.shape[0])
-        inv_ds2 = np.float32(1.0 / self.traces.trajectory.pulse_interval_s**2)
-        padded = None
         basis = None
         if columns is not None and len(columns) <= _MAX_DFT_COLUMNS:
             basis = self.column_basis(columns)
+            # one BLAS thread for the small products (see _columns), set once per call
+            with threadpool_limits(limits=1, user_api="blas"):
+                self._map(velocities, reduce, lag, columns, basis, out)
+        else:
+            self._map(velocities, reduce, lag, columns, basis, out)
+        return out
+
+    def _map(
+        self,
+        velocities: NDArray[np.float64],
+        reduce: Callable[[NDArray[np.complex64]], NDArray[np.float64]],
+        lag: int,
+        columns: NDArray[np.intp] | None,
+        basis: NDArray[np.complex64] | None,
+        out: NDArray[np.float64],
+    ) -> None:
+        """The chunk loop of :meth:`map_chunks`, results into ``out``."""
+        inv_ds2 = np.float32(1.0 / self.traces.trajectory.pulse_interval_s**2)
+        padded = None
         for i0 in range(0, velocities.shape[0], self.chunk):
             vel = velocities[i0 : i0 + self.chunk]
             n_out = self.traces.n_pulses - 2 * lag
@@ -160,7 +177,6 @@ class _Aligner:
                 _modulate(delays, self.freq, self.spectrum, self.slots, padded)
             y = sfft.ifft(padded, axis=-1, workers=-1)
             out[i0 : i0 + self.chunk] = reduce(y if columns is None else y[..., columns])
-        return out
 
     def column_basis(self, columns: NDArray[np.intp]) -> NDArray[np.complex64]:
         """Columns of the zero-padded inverse DFT, shape (n_samples, n_columns).
@@ -174,13 +190,14 @@ class _Aligner:
 
 
 def _columns(x: NDArray[np.complex64], basis: NDArray[np.complex64]) -> NDArray[np.complex64]:
-    """``x @ basis`` over the last axis as one matrix product, on one BLAS thread.
+    """``x @ basis`` over the last axis as one matrix product.
 
-    One thread: measured 0.85 ms for (936, 424) x (424, 25) in complex64, 10 ms with the
-    default threads on the shared 2-core machine (load 5).
+    Callers limit BLAS to one thread around their loops (``threadpool_limits``, ~0.1 ms
+    each time, so not per product): measured 0.85 ms for (936, 424) x (424, 25) in
+    complex64 on one thread, 10 ms with the default threads on the shared 2-core machine
+    (load 5).
     """
-    with threadpool_limits(limits=1, user_api="blas"):
-        y = np.ascontiguousarray(x).reshape(-1, x.shape[-1]) @ basis
+    y = np.ascontiguousarray(x).reshape(-1, x.shape[-1]) @ basis
     return y.reshape(x.shape[:-1] + (basis.shape[1],))
 
 

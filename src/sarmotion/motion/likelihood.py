@@ -45,6 +45,7 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
+from threadpoolctl import threadpool_limits
 
 from ..core import (
     C,
@@ -180,14 +181,15 @@ def _global_cross_search(
     n_dop = 1 << int(np.ceil(np.log2(4 * n)))
     profile = np.empty(grid.size)
     where = np.empty((grid.size, 2), dtype=int)
-    for i0 in range(0, grid.size, 8):
-        vel = np.array([ground_velocity(range_speed_mps, up, geom) for up in grid[i0 : i0 + 8]])
-        # the window's fast-time samples only: inverse-DFT columns instead of the FFT
-        aligned = _columns(al.spectra(vel), basis)
-        dop = np.abs(sfft.fft(aligned, n=n_dop, axis=1, workers=-1)).reshape(vel.shape[0], -1)
-        k = dop.argmax(axis=1)
-        profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
-        where[i0 : i0 + 8] = np.stack(np.unravel_index(k, (n_dop, cols.size)), axis=1)
+    with threadpool_limits(limits=1, user_api="blas"):  # small products: one thread
+        for i0 in range(0, grid.size, 8):
+            vel = np.array([ground_velocity(range_speed_mps, up, geom) for up in grid[i0 : i0 + 8]])
+            # the window's fast-time samples only: inverse-DFT columns instead of the FFT
+            aligned = _columns(al.spectra(vel), basis)
+            dop = np.abs(sfft.fft(aligned, n=n_dop, axis=1, workers=-1)).reshape(vel.shape[0], -1)
+            k = dop.argmax(axis=1)
+            profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
+            where[i0 : i0 + 8] = np.stack(np.unravel_index(k, (n_dop, cols.size)), axis=1)
     b = int(np.argmax(profile))
     kd, it = where[b]
     ds = float(np.median(np.diff(d.slow_times_s)))
