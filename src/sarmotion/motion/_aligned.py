@@ -65,16 +65,20 @@ def _aperture_time_s(traces: Traces) -> float:
 class _Aligner:
     """``T_+^{u, rho}`` of one data set for many trial velocities, in the frequency domain.
 
-    The phase history ``P(s_j, f_k)`` is computed once. For a chunk of trial velocities
-    the delays ``dtau(s_j, rho + s_j u)`` and the cycles ``f_k dtau`` (up to ~1e4) are
-    float64 and reduced exactly to ``[-1/2, 1/2]``; only then is the unit phasor formed in
-    single precision (phase error < 1e-6 rad) and multiplied with the complex64 spectrum.
-    Single precision after the reduction is 3-4x faster and far below every other error
-    (the data themselves are often complex64); float32 *before* the reduction would lose
-    the image. The spectra are zero-padded to ``M = 2 n_samples`` and inverse-transformed,
-    one FFT per trial: the transformed traces at twice the fast-time sampling of the
-    traces (band-limited interpolation; the original samples are every other one), scaled
-    as :attr:`Traces.data`.
+    The phase history ``P(s_j, f_k)`` is computed once (complex64). For a chunk of trial
+    velocities the delays ``dtau(s_j, rho + s_j u)`` are float64; the phasors
+    ``exp(2i pi f_k dtau)`` (``f_k dtau`` up to ~1e4 cycles) are formed compiled from the
+    cycles reduced exactly to whole turns every 32 bins and a fixed rotation in between
+    (error ~1e-14), and the product with the spectrum is rounded to complex64, written
+    straight into the zero-padded FFT buffer (:func:`_modulate`). Single precision after
+    the reduction is far below every other error (the data themselves are often
+    complex64); float32 *before* the reduction would lose the image. The spectra are
+    zero-padded to ``M = 2 n_samples`` and inverse-transformed, one FFT per trial: the
+    transformed traces at twice the fast-time sampling of the traces (band-limited
+    interpolation; the original samples are every other one), scaled as
+    :attr:`Traces.data`. Objectives that read a few fast-time samples only (``g_perp``,
+    the likelihood's global search) form those by a matrix product with columns of the
+    inverse DFT instead (:meth:`map_chunks`, :meth:`column_basis`).
     """
 
     def __init__(self, traces: Traces, point_m: NDArray[np.float64]) -> None:
