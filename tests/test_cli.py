@@ -30,6 +30,41 @@ def test_help_explains_every_command(capsys):
         assert "Usage:" in text and len(text) > 200
 
 
+def test_command_list_is_the_commands_own_help(capsys):
+    """``sarmotion --help`` lists every command with the first sentence of its own help.
+
+    The list is written without importing the commands (start-up); each entry must be
+    what the command itself says, and every command of the group must be listed.
+    """
+    import click
+
+    from sarmotion.cli.main import COMMANDS, main
+
+    ctx = click.Context(main)
+    for name, (_, sentence) in COMMANDS.items():
+        command = main.get_command(ctx, name)
+        assert command is not None and command.name == name
+        assert command.get_short_help_str(limit=10_000) == sentence
+    assert run(["--help"]) == 0
+    listed = capsys.readouterr().out.split("Commands:")[1]
+    assert [line.split()[0] for line in listed.strip().splitlines()] == sorted(COMMANDS)
+
+
+def test_help_starts_without_the_numerical_libraries():
+    """``sarmotion --help`` imports neither numba, scipy nor matplotlib (start-up time)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from sarmotion.cli import run; run(['--help']); "
+        "print(sorted(m for m in ('numba', 'scipy', 'matplotlib') if m in sys.modules))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    assert out.strip().splitlines()[-1] == "[]"
+
+
 def test_simulate_native_and_gotcha(tmp_path, capsys):
     out = tmp_path / "s.h5"
     assert run(["simulate", "rotscatt", "--out", str(out)]) == 0

@@ -306,6 +306,41 @@ def test_matched_filter_and_model_agree():
     assert value == pytest.approx(a * traces.n_pulses, rel=1e-9)
 
 
+def _matched_filter_direct(traces, data, positions, velocities):
+    """``I(theta)`` by the direct sum over the array of phasors ``exp(2i pi f dtau)``."""
+    w = traces.radar.spectral_weights()
+    weighted = traces.with_data(data).phase_history() * w[None, :]
+    v3 = np.concatenate([velocities, np.zeros((len(velocities), 1))], axis=1)
+    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m, axis=1)
+    where = positions[:, None, :] + traces.slow_times_s[None, :, None] * v3[:, None]
+    rng = np.linalg.norm(traces.positions_m[None] - where, axis=2)
+    cycles = (2.0 * (rng - ref[None]) / C)[:, :, None] * traces.frequencies_hz[None, None]
+    cycles -= np.rint(cycles)
+    return np.einsum("vjk,jk->v", np.exp(2j * np.pi * cycles), weighted) / np.sum(w**2)
+
+
+def test_matched_filter_compiled_sums_match_the_direct_sum():
+    """The compiled frequency sums give the direct phasor sum to 1e-12 of sum |P W|.
+
+    Data: a mover in noise; 40 seeded parameter sets within 20 m and 10 m/s of it (on
+    and off the peak). The rotation is re-seeded exactly every 32 bins, so the error
+    stays at rounding level (measured ~1e-15).
+    """
+    traces = simulate(random_scene(n_stationary=1, rng=0)).traces
+    geom = traces.geometry
+    gen = np.random.default_rng(41)
+    pos0, vel0 = np.array([2.0, 1.0, 0.0]), ground_velocity(3.0, 5.0, geom)
+    noise = 0.1 * (gen.standard_normal(traces.shape) + 1j * gen.standard_normal(traces.shape))
+    data = point_model(traces, pos0, vel0, 0.3 - 0.4j) + noise
+    pos = pos0[None] + np.c_[gen.uniform(-20, 20, (40, 2)), np.zeros(40)]
+    vel = vel0[None] + gen.uniform(-10, 10, (40, 2))
+    got = MatchedFilter(traces, data).responses(pos, vel)
+    want = _matched_filter_direct(traces, data, pos, vel)
+    w = traces.radar.spectral_weights()
+    scale = np.abs(traces.with_data(data).phase_history() * w).sum() / np.sum(w**2)
+    assert np.max(np.abs(got - want)) <= 1e-12 * scale
+
+
 def test_detection_needs_no_fixed_db_level():
     """A weak mover in noise is a candidate from 6.7 dB over the local floor; noise is not.
 

@@ -36,3 +36,40 @@ def test_phased_row_sums_matches_the_phasor_matrix():
     ref = np.sum(values * _reference(delays, freqs), axis=1)
     # Re-seeded every 32 terms: errors ~1e-13 of the sum of moduli (6e-13 seen).
     assert np.max(np.abs(got - ref) / np.abs(values).sum(axis=1)) < 5e-12
+
+
+def test_frequency_planes_sum_as_the_rows():
+    """The frequency-major sums equal phased_row_sums (and the phasor matrix) on any block.
+
+    Same re-seeding every 32 terms: measured ~1e-16 of the sum of moduli apart.
+    """
+    from sarmotion.core.spectral import FrequencyPlanes
+
+    rng = np.random.default_rng(5)
+    values = rng.standard_normal((70, 424)) + 1j * rng.standard_normal((70, 424))
+    delays = rng.uniform(-1e-6, 1e-6, 70)
+    f0, df = 9.28e9, 1.47e6
+    planes = FrequencyPlanes(values)
+    for rows in (slice(None), slice(10, 45)):
+        got = planes.sums(delays[rows], f0, df, rows=rows)
+        want = phased_row_sums(values[rows], delays[rows], f0, df)
+        scale = np.abs(values[rows]).sum(axis=1)
+        assert np.max(np.abs(got - want) / scale) < 1e-14
+        ref = np.sum(values[rows] * _reference(delays[rows], f0 + np.arange(424) * df), axis=1)
+        assert np.max(np.abs(got - ref) / scale) < 5e-12
+
+
+def test_pulse_responses_from_planes_match_the_phase_history():
+    """pulse_responses with FrequencyPlanes gives the array path's terms (to 1e-14)."""
+    from sarmotion.core.spectral import FrequencyPlanes
+    from sarmotion.imaging import pulse_responses
+    from sarmotion.simulation import random_scene, simulate
+
+    traces = simulate(random_scene(n_stationary=5, rng=2)).traces
+    P = traces.phase_history()
+    planes = FrequencyPlanes(P)
+    for pulses in (slice(None), slice(20, 90)):
+        a = pulse_responses(traces, (3.0, -2.0), (4.0, 1.0), phase_history=P, pulses=pulses)
+        b = pulse_responses(traces, (3.0, -2.0), (4.0, 1.0), phase_history=planes, pulses=pulses)
+        scale = np.abs(P[pulses]).sum(axis=1) / traces.n_samples
+        assert np.max(np.abs(a - b) / scale) < 1e-14

@@ -15,11 +15,28 @@ The names a user starts with are here: :func:`analyze` with :class:`AnalysisOpti
 
 __version__ = "0.1.0"
 
-from .core import Traces  # noqa: E402
-from .imaging import backproject  # noqa: E402
-from .io import read_gotcha  # noqa: E402
-from .pipeline import AnalysisOptions, analyze  # noqa: E402
-from .simulation import Scene, load_scene, simulate  # noqa: E402
+from importlib import import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .core import Traces
+    from .imaging import backproject
+    from .io import read_gotcha
+    from .pipeline import AnalysisOptions, analyze
+    from .simulation import Scene, load_scene, simulate
+
+# The names are imported on first use (PEP 562): ``import sarmotion`` and the command
+# line's start-up do not pay for numba, scipy and matplotlib before they are needed.
+_LAZY = {
+    "AnalysisOptions": ".pipeline",
+    "Scene": ".simulation",
+    "Traces": ".core",
+    "analyze": ".pipeline",
+    "backproject": ".imaging",
+    "load_scene": ".simulation",
+    "read_gotcha": ".io",
+    "simulate": ".simulation",
+}
 
 __all__ = [
     "AnalysisOptions",
@@ -32,3 +49,15 @@ __all__ = [
     "read_gotcha",
     "simulate",
 ]
+
+
+def __getattr__(name: str) -> object:
+    if name in _LAZY:
+        value = getattr(import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -9,6 +9,7 @@ failed run leaves nothing half-written.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import logging
 import signal
 import sys
@@ -16,17 +17,9 @@ import threading
 from collections.abc import Iterator, Sequence
 
 import click
+from click.utils import make_default_short_help
 
 from .. import __version__
-from .analyze import analyze, demo
-from .common import InputError
-from .convert import convert
-from .image import image
-from .inject import inject
-from .paper import paper
-from .separate import separate
-from .simulate import simulate
-from .track import track
 
 __all__ = ["main", "run", "entry_point"]
 
@@ -61,7 +54,70 @@ def _sigterm_raises() -> Iterator[None]:
 
 
 # --------------------------------------------------------------------------- commands
-@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+#: Each command: its module (imported when the command runs or shows its own help) and
+#: the first sentence of its help, which ``sarmotion --help`` lists without importing
+#: the library (numba, scipy and matplotlib take ~1.5 s to load); a test checks that the
+#: sentences are the commands' own.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "analyze": (
+        "analyze",
+        "Separate, estimate and image the stationary and moving targets of INPUTS.",
+    ),
+    "convert": (
+        "convert",
+        "Convert INPUTS (a scene, a native .h5 file, GOTCHA .mat files or a .cphd file).",
+    ),
+    "demo": (
+        "analyze",
+        "Analyse the built-in Scene 1 (20 stationary targets, 2 movers) into OUT.",
+    ),
+    "image": (
+        "image",
+        "Backprojection image of INPUTS: a scene, native traces or GOTCHA .mat files.",
+    ),
+    "inject": (
+        "inject",
+        "Add simulated point targets (stationary or moving) to real or simulated traces.",
+    ),
+    "paper": ("paper", "Regenerate every figure of the paper, with the numbers behind it."),
+    "separate": ("separate", "Separate the traces of stationary and moving targets in INPUTS."),
+    "simulate": (
+        "simulate",
+        "Simulate the traces of SCENE (a built-in name or a scene .toml file).",
+    ),
+    "track": ("track", "Follow the movers of INPUTS across overlapping sub-apertures."),
+}
+
+
+class _LazyGroup(click.Group):
+    """A command group that imports a command's module only when the command is used."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in COMMANDS:
+            return None
+        if cmd_name not in self.commands:
+            module = importlib.import_module(f".{COMMANDS[cmd_name][0]}", __package__)
+            command = getattr(module, cmd_name)
+            _add_shared_options(command)
+            self.add_command(command, cmd_name)
+        return self.commands[cmd_name]
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The command list with the sentences of :data:`COMMANDS` (no import)."""
+        names = self.list_commands(ctx)
+        limit = formatter.width - 6 - max(len(n) for n in names)
+        rows = [(n, make_default_short_help(COMMANDS[n][1], limit)) for n in names]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+@click.group(
+    cls=_LazyGroup,
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+)
 @click.version_option(__version__, prog_name="sarmotion")
 @click.option("-v", "--verbose", count=True, help="More log output (-v info, -vv debug).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars.")
@@ -91,9 +147,9 @@ def _verbose(ctx: click.Context, param: click.Parameter, value: int) -> None:
         logging.getLogger().setLevel(logging.WARNING - 10 * min(value, 2))
 
 
-for _command in (simulate, image, inject, separate, analyze, track, demo, paper, convert):
-    # -q and -v work after the command name too (``sarmotion analyze -q ...``).
-    _command.params += [
+def _add_shared_options(command: click.Command) -> None:
+    """-q and -v after the command name too (``sarmotion analyze -q ...``)."""
+    command.params += [
         click.Option(
             ["-q", "--quiet"],
             is_flag=True,
@@ -109,12 +165,12 @@ for _command in (simulate, image, inject, separate, analyze, track, demo, paper,
             help="More log output (-v info, -vv debug).",
         ),
     ]
-    main.add_command(_command)
 
 
 def _known_errors() -> tuple[type[BaseException], ...]:
     from ..io import DataError
     from ..simulation import SceneError
+    from .common import InputError
 
     return (InputError, DataError, SceneError, ValueError, FileNotFoundError, OSError)
 

@@ -19,10 +19,12 @@ from __future__ import annotations
 import json
 import logging
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from ..tracking import Road
 from .errors import DataError
+
+if TYPE_CHECKING:
+    from ..tracking import Road
 
 __all__ = ["read_roads"]
 
@@ -87,6 +89,8 @@ def _geometries(doc: Any, p: Path) -> list[tuple[Any, str]]:
 
 
 def _road(line: Any, name: str, p: Path, k: int) -> Road:
+    from ..tracking import Road  # Stone Soup takes ~0.9 s to import: only to read roads
+
     try:
         points = [[float(c[0]), float(c[1])] for c in line]
         return Road(points_m=points, name=name)

@@ -52,15 +52,19 @@ def _lag(traces: Traces, lag_pulses: int | None) -> int:
     return h
 
 
-def _g_perp_reduce(
-    times_s: NDArray[np.float64], window_s: float, trim_fraction: float
-) -> Callable[[NDArray[np.complex64]], NDArray[np.float64]]:
+def _g_perp_columns(times_s: NDArray[np.float64], window_s: float) -> NDArray[np.intp]:
+    """Fast-time samples (indices into ``times_s``) within ``+- window_s`` of ``t = 0``."""
     keep = np.flatnonzero(np.abs(times_s) <= window_s)
     if keep.size == 0:
         keep = np.array([int(np.argmin(np.abs(times_s)))])
+    return keep
+
+
+def _g_perp_reduce(trim_fraction: float) -> Callable[[NDArray[np.complex64]], NDArray[np.float64]]:
+    """``g_perp`` of the window's samples ``x`` (n_chunk, n', n_window): trimmed pulse sums."""
 
     def reduce(x: NDArray[np.complex64]) -> NDArray[np.float64]:
-        per_pulse = np.abs(x[..., keep]).sum(axis=-1, dtype=np.float64)  # (n_chunk, n')
+        per_pulse = np.abs(x).sum(axis=-1, dtype=np.float64)  # (n_chunk, n')
         n_keep = per_pulse.shape[1] - int(np.floor(trim_fraction * per_pulse.shape[1]))
         if n_keep < per_pulse.shape[1]:
             per_pulse = np.partition(per_pulse, n_keep - 1, axis=1)[:, :n_keep]
@@ -83,16 +87,16 @@ class _CrossObjective:
         lag_pulses: int | None,
     ) -> None:
         self.aligner = _Aligner(traces, position_m)
-        self.reduce = _g_perp_reduce(
-            self.aligner.times_s, _window_s(traces, window_m), _trim(trim_fraction)
-        )
+        # only the window's fast-time samples are formed (inverse-DFT columns, no FFT)
+        self.columns = _g_perp_columns(self.aligner.times_s, _window_s(traces, window_m))
+        self.reduce = _g_perp_reduce(_trim(trim_fraction))
         self.lag = _lag(traces, lag_pulses)
         e_r, self.e_p = _basis(traces.geometry)
         self.base = range_speed_mps * e_r
 
     def __call__(self, cross_speeds: NDArray[np.float64]) -> NDArray[np.float64]:
         vel = self.base[None, :] + cross_speeds[:, None] * self.e_p[None, :]
-        return self.aligner.map_chunks(vel, self.reduce, lag=self.lag)
+        return self.aligner.map_chunks(vel, self.reduce, lag=self.lag, columns=self.columns)
 
 
 def cross_range_objective(

@@ -45,6 +45,7 @@ import numpy as np
 import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
+from threadpoolctl import threadpool_limits
 
 from ..core import (
     C,
@@ -56,8 +57,9 @@ from ..core import (
     range_speed,
     to_fast_time,
 )
+from ..core.spectral import phased_row_sums
 from ..imaging import resolution
-from ._aligned import _Aligner, _g_reduce, _refine_max
+from ._aligned import _Aligner, _columns, _g_reduce, _refine_max
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
 
 __all__ = [
@@ -70,7 +72,7 @@ __all__ = [
     "matched_filter_noise_variance",
 ]
 
-#: Complex exponentials per chunk of parameter sets in :meth:`MatchedFilter.responses`.
+#: Pulse-frequency terms per chunk of parameter sets in :meth:`MatchedFilter.responses`.
 _CHUNK = 1 << 21
 
 
@@ -88,17 +90,24 @@ class MatchedFilter:
     def __init__(self, traces: Traces, data: ArrayLike | None = None) -> None:
         d = traces if data is None else traces.with_data(np.asarray(data))
         w = traces.radar.spectral_weights()
-        self.weighted = d.phase_history() * w[None, :]
+        self.weighted = np.ascontiguousarray(d.phase_history() * w[None, :], dtype=np.complex128)
         self.norm = float(np.sum(w**2))
         self.antenna = traces.positions_m
         self.slow = traces.slow_times_s
         self.freq = traces.frequencies_hz
+        self.freq_step = float(traces.radar.frequency_step_hz)
         self.ref_range = np.linalg.norm(self.antenna - traces.reference_point_m, axis=1)
 
     def responses(
         self, positions_m: ArrayLike, velocities_mps: ArrayLike
     ) -> NDArray[np.complex128]:
         """``I`` at ``(k, 3)`` positions (m, ``s = 0``) and ``(k, 2)`` ground velocities (m/s).
+
+        The delays are float64; the sum over frequencies runs compiled with phasors
+        advancing by a fixed rotation (:func:`sarmotion.core.spectral.phased_row_sums`,
+        re-seeded exactly every 32 bins): the same values as forming
+        ``exp(2i pi f dtau)`` to ~1e-14 of ``sum |P W|`` (tested against that direct
+        form), 10x faster on a GOTCHA degree.
 
         Returns
         -------
@@ -110,17 +119,16 @@ class MatchedFilter:
         v3 = np.concatenate([vel, np.zeros((vel.shape[0], 1))], axis=1)
         out = np.empty(pos.shape[0], dtype=np.complex128)
         step = max(1, _CHUNK // self.weighted.size)
+        f0 = float(self.freq[0])
         for i0 in range(0, pos.shape[0], step):
             where = (
                 pos[i0 : i0 + step, None, :] + self.slow[None, :, None] * v3[i0 : i0 + step, None]
             )
             rng = np.linalg.norm(self.antenna[None] - where, axis=2)
-            cycles = (2.0 * (rng - self.ref_range[None]) / C)[:, :, None] * self.freq[None, None]
-            cycles -= np.rint(cycles)  # exact reduction in float64 before the exponential
-            out[i0 : i0 + step] = (
-                np.einsum("vjk,jk->v", np.exp(2j * np.pi * cycles), self.weighted) / self.norm
-            )
-        return out
+            delays = np.ascontiguousarray(2.0 * (rng - self.ref_range[None]) / C)
+            for i, d in enumerate(delays):
+                out[i0 + i] = phased_row_sums(self.weighted, d, f0, self.freq_step).sum()
+        return out / self.norm
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -168,19 +176,20 @@ def _global_cross_search(
     padded[..., al.slots] = x0
     centre = int(np.argmax(np.abs(sfft.ifft(padded, axis=-1)).sum(axis=1)[0]))
     cols = (centre + np.arange(-12, 13)) % al.n_fft
+    basis = al.column_basis(cols)
     n = d.n_pulses
     n_dop = 1 << int(np.ceil(np.log2(4 * n)))
     profile = np.empty(grid.size)
     where = np.empty((grid.size, 2), dtype=int)
-    for i0 in range(0, grid.size, 8):
-        vel = np.array([ground_velocity(range_speed_mps, up, geom) for up in grid[i0 : i0 + 8]])
-        padded = np.zeros((vel.shape[0], n, al.n_fft), dtype=np.complex64)
-        padded[..., al.slots] = al.spectra(vel)
-        aligned = sfft.ifft(padded, axis=-1, workers=-1)[..., cols]
-        dop = np.abs(sfft.fft(aligned, n=n_dop, axis=1, workers=-1)).reshape(vel.shape[0], -1)
-        k = dop.argmax(axis=1)
-        profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
-        where[i0 : i0 + 8] = np.stack(np.unravel_index(k, (n_dop, cols.size)), axis=1)
+    with threadpool_limits(limits=1, user_api="blas"):  # small products: one thread
+        for i0 in range(0, grid.size, 8):
+            vel = np.array([ground_velocity(range_speed_mps, up, geom) for up in grid[i0 : i0 + 8]])
+            # the window's fast-time samples only: inverse-DFT columns instead of the FFT
+            aligned = _columns(al.spectra(vel), basis)
+            dop = np.abs(sfft.fft(aligned, n=n_dop, axis=1, workers=-1)).reshape(vel.shape[0], -1)
+            k = dop.argmax(axis=1)
+            profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
+            where[i0 : i0 + 8] = np.stack(np.unravel_index(k, (n_dop, cols.size)), axis=1)
     b = int(np.argmax(profile))
     kd, it = where[b]
     ds = float(np.median(np.diff(d.slow_times_s)))

@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.signal import get_window
 
 __all__ = ["WignerRidge", "wigner_slow_time", "wigner_ridge"]
 
@@ -39,6 +38,8 @@ def _lag_taps(window: str, length: int) -> NDArray[np.float64]:
     """Symmetric lag window of ``length`` taps, all positive (ends of Hann etc. dropped)."""
     if window == "boxcar":
         return np.ones(length)
+    from scipy.signal import get_window  # scipy.signal takes ~0.5 s to import: when needed
+
     try:
         return np.asarray(get_window(window, length + 2, fftbins=False), dtype=np.float64)[1:-1]
     except ValueError as exc:

@@ -70,7 +70,6 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.signal import savgol_filter
 
 from ..core import (
     Traces,
@@ -212,6 +211,8 @@ def slow_time_difference(
     if kind == "savgol":
         if window % 2 == 0 or window < 3 or window > x.shape[0]:
             raise ValueError(f"window must be odd, >= 3 and <= n_pulses, got {window}")
+        from scipy.signal import savgol_filter  # ~0.5 s to import: only when needed
+
         re = savgol_filter(x.real, window, 2, deriv=1, delta=ds, axis=0, mode="interp")
         im = savgol_filter(x.imag, window, 2, deriv=1, delta=ds, axis=0, mode="interp")
         return re + 1j * im

@@ -67,7 +67,6 @@ from datetime import datetime, timedelta
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import chi2
 from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
 from stonesoup.deleter.time import UpdateTimeStepsDeleter
 from stonesoup.hypothesiser.distance import DistanceHypothesiser
@@ -293,6 +292,8 @@ class Tracker:
         )
         self._predictor = KalmanPredictor(transition)
         self._updater = KalmanUpdater(measurement_model=None)
+        from scipy.stats import chi2  # scipy.stats takes ~0.7 s to import: when needed
+
         gate = float(np.sqrt(chi2.ppf(options.gate_probability, 4)))
         hypothesiser = DistanceHypothesiser(
             self._predictor, self._updater, measure=Mahalanobis(), missed_distance=gate
