@@ -75,49 +75,58 @@ _C0, _C1, _C2, _C3, _C4, _C5, _C6 = (
 
 
 # ============================================================================ kernels
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _modulate(re_in, im_in, re_out, im_out, us, vs, cu, cv, cz2, rref, quarter_scale, sign):
-    """``out[i, r, k] = in[i, r, k] exp(sign i pi/2 quarter_scale (|c - rho| - rref))``.
+@numba.njit(fastmath=_FASTMATH, inline="always")
+def _quarter_turns(t):  # pragma: no cover - compiled
+    """``(cos, sin)`` of ``pi t / 2``: ``t`` folded exactly to ``|t - k| <= 1/2``, float64."""
+    kq = np.rint(t)
+    x = t - kq
+    z = x * x
+    s = x * (_S0 + z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * _S5)))))
+    c = _C0 + z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
+    q = np.int64(kq)
+    swap = (q & 1) != 0
+    cs = s if swap else c
+    sn = c if swap else s
+    cs = -cs if ((q + 1) & 2) != 0 else cs
+    sn = -sn if (q & 2) != 0 else sn
+    return cs, sn
 
-    ``rho = (us[k], vs[r], 0)`` in the ``(u, v)`` frame, ``c = (cu, cv, sqrt(cz2))``; the
-    phase in quarter cycles is folded exactly before a float64 polynomial sine/cosine.
+
+@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+def _demodulate(re, im, n_images, us, vs, cu, cv, cz2, rref, quarter_scale):
+    """``x[i, r, k] *= exp(-i pi/2 quarter_scale (|c - rho| - rref))`` for ``i < n_images``.
+
+    In place; ``rho = (us[k], vs[r], 0)``, ``c = (cu, cv, sqrt(cz2))``. The phase is
+    evaluated once per pixel (float64) and applied to every image.
     """  # pragma: no cover - compiled
-    n_img, nv, nu = re_in.shape
-    for task in numba.prange(n_img * nv):
-        i = task // nv
-        r = task % nv
+    nv, nu = re.shape[1], re.shape[2]
+    for r in numba.prange(nv):
+        cs = np.empty(nu, np.float32)
+        sn = np.empty(nu, np.float32)
         dv = vs[r] - cv
         c2 = dv * dv + cz2
         for k in range(nu):
             du = us[k] - cu
-            t = (math.sqrt(du * du + c2) - rref) * quarter_scale
-            kq = np.rint(t)
-            x = t - kq
-            z = x * x
-            s = x * (_S0 + z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * _S5)))))
-            c = _C0 + z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-            q = np.int64(kq)
-            swap = (q & 1) != 0
-            cs = s if swap else c
-            sn = c if swap else s
-            cs = -cs if ((q + 1) & 2) != 0 else cs
-            sn = -sn if (q & 2) != 0 else sn
-            sn = sn * sign
-            a = re_in[i, r, k]
-            b = im_in[i, r, k]
-            re_out[i, r, k] = a * cs - b * sn
-            im_out[i, r, k] = a * sn + b * cs
+            a, b = _quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
+            cs[k] = a
+            sn[k] = -b
+        for i in range(n_images):
+            for k in range(nu):
+                a = re[i, r, k]
+                b = im[i, r, k]
+                re[i, r, k] = a * cs[k] - b * sn[k]
+                im[i, r, k] = a * sn[k] + b * cs[k]
 
 
 @numba.njit(fastmath=_FASTMATH, inline="always")
-def _add_child(pre, pim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compiled
-    """Add child row(s) for parent row ``m`` (see :func:`_merge`)."""
-    nu = pre.shape[1]
+def _add_child(dre, dim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compiled
+    """Add parent row ``m`` of one child to the row ``dre + 1j dim`` (see :func:`_merge`)."""
+    nu = dre.shape[0]
     if ratio == 1 or m % 2 == 0:
         mc = k0 + m if ratio == 1 else k0 + m // 2
         for i in range(nu):
-            pre[m, i] += cre[mc, i]
-            pim[m, i] += cim[mc, i]
+            dre[i] += cre[mc, i]
+            dim[i] += cim[mc, i]
         return
     b = k0 + (m - 1) // 2 - TAPS // 2 + 1
     g0r, g1r, g2r, g3r = g[0, 0], g[0, 1], g[0, 2], g[0, 3]
@@ -141,12 +150,12 @@ def _add_child(pre, pim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compi
         x6i = cim[b + 6, i]
         x7r = cre[b + 7, i]
         x7i = cim[b + 7, i]
-        pre[m, i] += (
+        dre[i] += (
             g0r * x0r - g0i * x0i + g1r * x1r - g1i * x1i + g2r * x2r - g2i * x2i
             + g3r * x3r - g3i * x3i + g4r * x4r - g4i * x4i + g5r * x5r - g5i * x5i
             + g6r * x6r - g6i * x6i + g7r * x7r - g7i * x7i
         )  # fmt: skip
-        pim[m, i] += (
+        dim[i] += (
             g0r * x0i + g0i * x0r + g1r * x1i + g1i * x1r + g2r * x2i + g2i * x2r
             + g3r * x3i + g3i * x3r + g4r * x4i + g4i * x4r + g5r * x5i + g5i * x5r
             + g6r * x6i + g6i * x6r + g7r * x7i + g7i * x7r
@@ -154,20 +163,51 @@ def _add_child(pre, pim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compi
 
 
 @numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _merge(pre, pim, cre, cim, k0, ratio, g):
-    """Parents ``p`` = children ``2p`` and ``2p + 1`` resampled along ``v``.
+def _merge(re, im, first, kids, cre, cim, k0, ratio, g):
+    """Images ``first + p`` = children ``kids[p, 0]`` and ``kids[p, 1]`` resampled along ``v``.
 
-    Arrays ``(n, rows v, columns u)``. Child row ``k0 + m / ratio`` sits at parent row
-    ``m``. ``ratio == 1``: same spacing, rows added. ``ratio == 2``: even parent rows are
-    child rows; odd ones the half-sample interpolation ``sum_t g[c, :, t] x[k0 + (m - 1)/2
-    + t - 3]`` with child ``c``'s complex filter ``g[c] = (re[8], im[8])``.
+    Arrays ``(images, rows v, columns u)``; ``re``, ``im`` of the parents' level, ``cre``,
+    ``cim`` of the children's. Child row ``k0 + m / ratio`` sits at parent row ``m``.
+    ``ratio == 1``: same spacing, rows added. ``ratio == 2``: even parent rows are child
+    rows; odd ones the half-sample interpolation ``sum_t g[c, :, t] x[k0 + (m - 1)/2 + t - 3]``
+    with child ``c``'s complex filter ``g[c] = (re[8], im[8])``.
     """  # pragma: no cover - compiled
-    n_parents, nvp, _ = pre.shape
+    n_parents = kids.shape[0]
+    nvp, nu = re.shape[1], re.shape[2]
     for task in numba.prange(n_parents * nvp):
-        p = task // nvp
+        q = first + task // nvp
         m = task % nvp
-        for c in (2 * p, 2 * p + 1):
-            _add_child(pre[p], pim[p], m, cre[c], cim[c], k0, ratio, g[c])
+        dre = re[q, m]
+        dim = im[q, m]
+        for i in range(nu):
+            dre[i] = 0.0
+            dim[i] = 0.0
+        for c in (kids[task // nvp, 0], kids[task // nvp, 1]):
+            _add_child(dre, dim, m, cre[c], cim[c], k0, ratio, g[c])
+
+
+@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+def _root_rows(out, r0, k_lo, kids, cre, cim, k0, ratio, g, n_sub, us, ys, cu, cv, cz2, rref,
+               quarter_scale):  # fmt: skip
+    """Image rows ``r0 + r`` = root row ``r n_sub`` (its children ``kids`` added), remodulated.
+
+    ``out[r0 + r, k_lo + k] = J(us[k], ys[r]) exp(+i pi/2 quarter_scale (|c - rho| - rref))``
+    (complex128), ``J`` the sum of the children rows as in :func:`_merge`.
+    """  # pragma: no cover - compiled
+    nu = us.size
+    for r in numba.prange(ys.size):
+        dre = np.zeros(nu, np.float32)
+        dim = np.zeros(nu, np.float32)
+        for c in kids:
+            _add_child(dre, dim, r * n_sub, cre[c], cim[c], k0, ratio, g[c])
+        dv = ys[r] - cv
+        c2 = dv * dv + cz2
+        for k in range(nu):
+            du = us[k] - cu
+            cs, sn = _quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
+            a = np.float64(dre[k])
+            b = np.float64(dim[k])
+            out[r0 + r, k_lo + k] = complex(a * cs - b * sn, a * sn + b * cs)
 
 
 # ============================================================================= plan
@@ -213,25 +253,25 @@ class _Node:
     ratio: int = 1
     centre: float = 0.0  # band centre (cycles/m)
     half: float = 0.0  # band half-width (cycles/m)
+    slot: int = 0  # index in its level's arrays: leaves first, then split nodes
     children: list[_Node] = field(default_factory=list)
 
 
-def _band(pos, j0, j1, f_lo, f_hi, nu_o, centre, probes) -> tuple[float, float]:
-    """``(min, max)`` local ``v`` frequency (cycles/m) of pulses ``j0:j1``, demodulated.
+def _pulse_bands(pos, f_lo, f_hi, nu_o, centre, probes) -> tuple[NDArray, NDArray]:
+    """Per pulse, ``(min, max)`` local ``v`` frequency (cycles/m) over the probes, demodulated.
 
-    Over the probe points (corners, edge midpoints, centre of the region), the first,
-    middle and last pulse and the two band edges.
+    The probe points are the corners, edge midpoints and centre of a region; the extremes
+    are over both band edges ``f_lo``, ``f_hi``. Returns two ``(n_pulses,)`` arrays.
     """
     pu, pv = probes[:, 0], probes[:, 1]
     dc = np.sqrt((pu - centre[0]) ** 2 + (pv - centre[1]) ** 2 + centre[2] ** 2)
     demod = (2.0 * nu_o / C) * (pv - centre[1]) / dc
-    r = pos[[j0, (j0 + j1 - 1) // 2, j1 - 1]]
-    du = pu[None, :] - r[:, 0:1]
-    dv = pv[None, :] - r[:, 1:2]
-    slope = dv / np.sqrt(du * du + dv * dv + r[:, 2:3] ** 2)  # d|r - rho|/dv
+    du = pu[None, :] - pos[:, 0:1]
+    dv = pv[None, :] - pos[:, 1:2]
+    slope = dv / np.sqrt(du * du + dv * dv + pos[:, 2:3] ** 2)  # d|r - rho|/dv
     g_lo = (2.0 / C) * np.minimum(f_lo * slope, f_hi * slope) - demod[None, :]
     g_hi = (2.0 / C) * np.maximum(f_lo * slope, f_hi * slope) - demod[None, :]
-    return float(g_lo.min()), float(g_hi.max())
+    return g_lo.min(axis=1), g_hi.max(axis=1)
 
 
 def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
@@ -239,8 +279,7 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
 
     A node splits in two when both halves' bands fit twice its ``v`` spacing; otherwise it
     is a leaf. Level ``d + 1`` lists the children of the split nodes of level ``d``, in
-    order, so node ``i`` of a level's split nodes has children ``2i`` and ``2i + 1``. All
-    nodes of a level share one grid.
+    order. All nodes of a level share one grid; in its arrays the leaves come first.
     """
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
     levels = [[root]]
@@ -267,9 +306,182 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
                 kid.nv = (level[0].nv + 1) // 2 + 2 * margin + 1
             node.children = kids
             nxt.extend(kids)
+        order = [n for n in level if not n.children] + [n for n in level if n.children]
+        for slot, node in enumerate(order):
+            node.slot = slot
         if not nxt:
             return levels
         levels.append(nxt)
+
+
+@dataclass(frozen=True, eq=False)
+class _Frame:
+    """Everything the levels share, in the ``(u, v)`` frame (``u`` the image columns)."""
+
+    table_values: NDArray[np.uint64]
+    antennas: tuple[NDArray, NDArray, NDArray, NDArray]  # x, y, z^2, reference range
+    us: NDArray[np.float64]  # the columns computed (m)
+    constants: tuple[float, float, float]
+    n_up: int
+    centre: NDArray[np.float64]  # c, aperture centre (m)
+    rref: float  # |c - rho_o| (m)
+    tile_for: object
+    tile_kernel: object
+    pos: NDArray[np.float64]
+
+    def grid(self, node: _Node) -> NDArray[np.float64]:
+        return node.v0 + np.arange(node.nv) * node.dv
+
+
+# ====================================================================== evaluation
+def _leaves(fr: _Frame, level: list[_Node], re: NDArray, im: NDArray) -> int:
+    """Leaves of one level, exact backprojection on the level's grid, demodulated.
+
+    Writes slots ``0..n_leaves - 1`` of ``re``, ``im`` (zero on entry); returns the
+    pixel-pulses computed.
+    """
+    leaves = [n for n in level if not n.children]
+    first = level[0]
+    us, vs = fr.us, fr.grid(first)
+    starts = np.array([n.j0 for n in leaves], np.int64)
+    stops = np.array([n.j1 for n in leaves], np.int64)
+    rows, cols = fr.tile_for(fr.pos, us, vs)
+    idx_scale, idx_offset, quarter_scale = fr.constants
+    du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
+    with numba.parallel_chunksize(1):  # tiles handed out one at a time
+        fr.tile_kernel(
+            fr.table_values, starts, stops, *fr.antennas, float(us[0]), du, us.size,
+            float(vs[0]), first.dv, first.nv, idx_scale, idx_offset, fr.n_up, quarter_scale,
+            rows, cols, 0, -(-first.nv // rows), re, im,
+        )  # fmt: skip
+    c = fr.centre
+    _demodulate(re, im, len(leaves), us, vs, c[0], c[1], c[2] ** 2, fr.rref, quarter_scale)
+    return int(np.sum(stops - starts)) * first.nv * us.size
+
+
+def _filters(below: list[_Node]) -> NDArray[np.float32]:
+    """``(len(below), 2, TAPS)`` complex half-sample filters of the nodes, by slot."""
+    offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
+    g = np.zeros((len(below), 2, TAPS), np.float32)
+    for kid in below:
+        gc = half_sample_filter(kid.half * kid.dv)
+        gc = gc * np.exp(-2j * np.pi * kid.centre * kid.dv * offsets)
+        g[kid.slot, 0], g[kid.slot, 1] = gc.real, gc.imag
+    return g
+
+
+def _kids(nodes: list[_Node]) -> NDArray[np.int64]:
+    """``(len(nodes), 2)`` slots of the nodes' children."""
+    return np.array([[k.slot for k in n.children] for n in nodes], np.int64).reshape(-1, 2)
+
+
+def _level(fr: _Frame, level: list[_Node], below, info: dict):
+    """``(re, im)`` of one level below the root, ``(nodes, rows, columns)`` float32."""
+    first = level[0]
+    re = np.zeros((len(level), first.nv, fr.us.size), np.float32)
+    im = np.zeros_like(re)
+    n_leaves = sum(1 for n in level if not n.children)
+    if n_leaves:
+        info["leaf_pixel_pulses"] += _leaves(fr, level, re, im)
+        info["leaves"] += n_leaves
+    split = sorted((n for n in level if n.children), key=lambda n: n.slot)
+    if split:  # every split node of the level in one parallel region
+        kid = split[0].children[0]
+        _merge(re, im, n_leaves, _kids(split), below[0], below[1], kid.k0, kid.ratio,
+               _filters([k for n in split for k in n.children]))  # fmt: skip
+    return re, im
+
+
+def _strip(fr, levels, n_sub, ys, out, r0, k_lo, info, report) -> None:
+    """Evaluate one strip's tree bottom-up and write its image rows ``out[r0:r0 + ys.size]``."""
+    root = levels[0][0]
+    c = fr.centre
+    quarter_scale = fr.constants[2]
+    if not root.children:  # the whole aperture is one leaf: on the image rows directly
+        root.v0, root.dv, root.nv = float(ys[0]), float(ys[1] - ys[0]) if ys.size > 1 else 1.0, ys.size
+        below = _level(fr, [root], None, info)
+        kids, ratio, k0, g, n_sub = np.zeros(1, np.int64), 1, 0, np.zeros((1, 2, TAPS), np.float32), 1
+    else:
+        below = None
+        for level in reversed(levels[1:]):
+            below = _level(fr, level, below, info)
+            report()
+        kids, ratio, k0 = _kids([root])[0], root.children[0].ratio, root.children[0].k0
+        g = _filters(root.children)
+    _root_rows(out, r0, k_lo, kids, below[0], below[1], k0, ratio, g, n_sub, fr.us, ys, c[0],
+               c[1], c[2] ** 2, fr.rref, quarter_scale)  # fmt: skip
+    report()
+
+
+def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
+    """Columns ``x`` that some pulse's fast-time window reaches (1 m margin), ascending."""
+    idx_scale, idx_offset, _ = constants
+    n_pulses = pos.shape[0]
+    d_lo = (1.0 - idx_offset) / idx_scale - 1.0
+    d_hi = (n_up - idx_offset) / idx_scale + 1.0
+    centre = pos.mean(axis=0)
+    v_probe = np.array([y[0], y[-1], min(max(centre[1], y[0]), y[-1])])
+    active = np.zeros(x.size, bool)
+    for j in sorted({0, n_pulses // 2, n_pulses - 1}):
+        r = pos[j]
+        d = np.sqrt((x[None, :] - r[0]) ** 2 + (v_probe[:, None] - r[1]) ** 2 + r[2] ** 2)
+        d -= ref_ranges[j]
+        active |= (d.max(axis=0) >= d_lo) & (d.min(axis=0) <= d_hi)
+    return np.flatnonzero(active)
+
+
+def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
+    """The cheapest cut of the rows in 1, 2, 4, 8 or 16 strips, by the cost model.
+
+    A narrower strip sees the look direction turn less, which lowers the band floor and
+    lets the leaves grow; each strip pays its own interpolation margins. Returns
+    ``(cost, bounds, [(levels, n_sub), ...])``; the cost is in pixel-pulses of the leaves
+    plus ~2 per merged sample (measured), the root's merge counted on the image rows only.
+    """
+    n_pulses, nv_ = pos.shape[0], y.size
+    centre = pos.mean(axis=0)
+    dy = (y[-1] - y[0]) / (nv_ - 1)
+
+    def plan(r0: int, r1: int) -> tuple[list[list[_Node]], int]:
+        ys = y[r0:r1]
+        probes = np.array(
+            [[a, b] for a in (us[0], us.mean(), us[-1]) for b in (ys[0], ys.mean(), ys[-1])]
+        )
+        lo_j, hi_j = _pulse_bands(pos, f_lo, f_hi, nu_o, centre, probes)
+        lo_j, hi_j = lo_j.tolist(), hi_j.tolist()
+
+        def band(j0: int, j1: int) -> tuple[float, float]:
+            """First, middle and last pulse of ``j0:j1``: the band's extremes."""
+            js = (j0, (j0 + j1 - 1) // 2, j1 - 1)
+            return min(lo_j[j] for j in js), max(hi_j[j] for j in js)
+
+        lo, hi = band(0, n_pulses)
+        n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
+        levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1, alpha)
+        return levels, n_sub
+
+    def cost(levels: list[list[_Node]], rows: int) -> float:
+        c = 0.0
+        for d, level in enumerate(levels):
+            for node in level:
+                if node.children:
+                    c += 2.0 * 2.0 * (rows if d == 0 else node.nv) * us.size
+                else:
+                    c += (node.j1 - node.j0) * (rows if d == 0 else node.nv) * us.size
+        return c
+
+    best = None
+    for n_strips in (1, 2, 4, 8, 16):
+        if nv_ // n_strips < 16:
+            break
+        bounds = np.linspace(0, nv_, n_strips + 1).round().astype(int)
+        plans = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        c = sum(cost(levels, b - a) for (levels, _), a, b in
+                zip(plans, bounds[:-1], bounds[1:], strict=True))  # fmt: skip
+        if best is not None and c >= best[0]:
+            break  # more strips cost more margins than they save
+        best = (c, bounds, plans)
+    return best
 
 
 # ========================================================================= driver
@@ -286,7 +498,7 @@ def ffbp_values(
     carrier_hz: float,
     bandwidth_hz: float,
     tile_for,
-    backproject_f32,
+    tile_kernel,
     alpha: float = DEFAULT_ALPHA,
     progress: ProgressCallback | None = None,
 ) -> tuple[NDArray[np.complex128] | None, dict]:
@@ -316,9 +528,10 @@ def ffbp_values(
     carrier_hz, bandwidth_hz : float
         ``nu_o`` and ``B`` (Hz).
     tile_for : callable
-        ``tile_for(positions, u_m, v_m) -> (rows, cols) | None``, the tile of the exact kernel.
-    backproject_f32 : callable
-        The exact float32 kernel driver of :mod:`.backprojection`.
+        ``tile_for(positions, u_m, v_m) -> (rows, cols)``, the tile of the exact kernel.
+    tile_kernel : callable
+        The exact float32 tile kernel of :mod:`.backprojection` (``_tile_kernel``); the
+        leaves call it with float32 outputs.
     alpha : float
         Oversampling of each sub-image's band, > 1.
     progress : callable, optional
@@ -335,132 +548,44 @@ def ffbp_values(
     pos = np.asarray(positions, np.float64)
     look = np.array([x.mean(), y.mean()]) - pos.mean(axis=0)[:2]
     transpose = abs(look[1]) > abs(look[0])
+    rho_o = np.asarray(reference_point_m, np.float64)
     if transpose:  # u = y, v = x: swap the coordinates of everything
-        pos = pos[:, [1, 0, 2]]
-        rho_o = np.asarray(reference_point_m, np.float64)[[1, 0, 2]]
+        pos = np.ascontiguousarray(pos[:, [1, 0, 2]])
+        rho_o = rho_o[[1, 0, 2]]
         x, y = y, x
-    else:
-        rho_o = np.asarray(reference_point_m, np.float64)
-    nu_, nv_ = x.size, y.size  # image columns (u) and rows (v)
-    out = np.zeros((nv_, nu_), np.complex128)
-    idx_scale, idx_offset, quarter_scale = constants
-    centre = pos.mean(axis=0)
-    n_pulses = pos.shape[0]
-    # Columns that some pulse's fast-time window reaches (1 m margin).
-    d_lo = (1.0 - idx_offset) / idx_scale - 1.0
-    d_hi = (n_up - idx_offset) / idx_scale + 1.0
-    v_probe = np.array([y[0], y[-1], min(max(centre[1], y[0]), y[-1])])
-    active = np.zeros(nu_, bool)
-    for j in sorted({0, n_pulses // 2, n_pulses - 1}):
-        r = pos[j]
-        d = np.sqrt((x[None, :] - r[0]) ** 2 + (v_probe[:, None] - r[1]) ** 2 + r[2] ** 2)
-        d -= ref_ranges[j]
-        active |= (d.max(axis=0) >= d_lo) & (d.min(axis=0) <= d_hi)
+    out = np.zeros((y.size, x.size), np.complex128)
     info: dict = {"levels": 0, "leaves": 0, "leaf_pixel_pulses": 0, "columns": 0}
-    cols = np.flatnonzero(active)
+    cols = _active_columns(pos, ref_ranges, x, y, constants, n_up)
     if cols.size == 0:
         return (out.T if transpose else out), info
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
     us = np.ascontiguousarray(x[k_lo:k_hi])
-    dy = (y[-1] - y[0]) / (nv_ - 1)
     f_lo = carrier_hz - 0.5 * bandwidth_hz
     f_hi = carrier_hz + 0.5 * bandwidth_hz
-
-    def plan(r0: int, r1: int) -> tuple[list[list[_Node]], int]:
-        ys = y[r0:r1]
-        probes = np.array(
-            [[a, b] for a in (us[0], us.mean(), us[-1]) for b in (ys[0], ys.mean(), ys[-1])]
-        )
-        cache: dict[tuple[int, int], tuple[float, float]] = {}
-
-        def band(j0: int, j1: int) -> tuple[float, float]:
-            if (j0, j1) not in cache:
-                cache[(j0, j1)] = _band(pos, j0, j1, f_lo, f_hi, carrier_hz, centre, probes)
-            return cache[(j0, j1)]
-
-        lo, hi = band(0, n_pulses)
-        n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
-        levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1, alpha)
-        return levels, n_sub
-
-    def cost(levels: list[list[_Node]]) -> float:
-        """Relative cost: pixel-pulses of the leaves plus ~2 per merged sample (measured)."""
-        c = 0.0
-        for level in levels:
-            for node in level:
-                if node.children:
-                    c += 2.0 * 2.0 * node.nv * us.size
-                else:
-                    c += (node.j1 - node.j0) * node.nv * us.size
-        return c
-
-    # Strips of rows: a narrower strip sees the look direction turn less, which lowers the
-    # band floor and lets the leaves grow; each strip pays its own interpolation margins.
-    best = None
-    for n_strips in (1, 2, 4, 8, 16):
-        if nv_ // n_strips < 16:
-            break
-        bounds = np.linspace(0, nv_, n_strips + 1).round().astype(int)
-        plans = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-        c = sum(cost(levels) for levels, _ in plans)
-        if best is not None and c >= best[0]:
-            break  # more strips cost more margins than they save
-        best = (c, bounds, plans)
-    c_best, bounds, plans = best
-    if c_best > 0.7 * n_pulses * nv_ * us.size:
+    c_best, bounds, plans = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz, alpha)
+    if c_best > 0.7 * pos.shape[0] * y.size * us.size:
         return None, {"fallback": "exact (the factorisation would not save work here)"}
-    rref = float(np.linalg.norm(centre - rho_o))
-    cz2 = float(centre[2] ** 2)
+    centre = pos.mean(axis=0)
+    fr = _Frame(
+        table_values=table_values,
+        antennas=(np.ascontiguousarray(pos[:, 0]), np.ascontiguousarray(pos[:, 1]),
+                  np.ascontiguousarray(pos[:, 2] ** 2),
+                  np.ascontiguousarray(ref_ranges, dtype=np.float64)),
+        us=us, constants=tuple(float(c) for c in constants), n_up=int(n_up), centre=centre,
+        rref=float(np.linalg.norm(centre - rho_o)), tile_for=tile_for, tile_kernel=tile_kernel,
+        pos=pos,
+    )  # fmt: skip
     info.update(levels=max(len(levels) for levels, _ in plans), columns=int(us.size),
                 strips=len(plans))  # fmt: skip
     total = sum(len(levels) for levels, _ in plans)
     done = 0
-    offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
+
+    def report() -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress("backprojection", done, total)
+
     for (levels, n_sub), r0, r1 in zip(plans, bounds[:-1], bounds[1:], strict=True):
-        below: tuple[NDArray[np.float32], NDArray[np.float32]] | None = None
-        for level in reversed(levels):
-            first = level[0]
-            jr = np.empty((len(level), first.nv, us.size), np.float32)
-            ji = np.empty_like(jr)
-            leaves = [i for i, node in enumerate(level) if not node.children]
-            split = [i for i, node in enumerate(level) if node.children]
-            if leaves:  # one batch of backprojections on the level's grid, demodulated
-                vs = first.v0 + np.arange(first.nv) * first.dv
-                ranges = np.array([[level[i].j0, level[i].j1] for i in leaves], dtype=np.int64)
-                re, im = backproject_f32(
-                    table_values, pos, ref_ranges, us, vs, constants, n_up,
-                    tile_for(pos, us, vs), pulse_ranges=ranges,
-                )  # fmt: skip
-                lr = np.empty(re.shape, np.float32)
-                li = np.empty(re.shape, np.float32)
-                _modulate(re, im, lr, li, us, vs, centre[0], centre[1], cz2, rref,
-                          quarter_scale, -1.0)  # fmt: skip
-                jr[leaves] = lr
-                ji[leaves] = li
-                info["leaves"] += len(leaves)
-                info["leaf_pixel_pulses"] += int(np.sum(ranges[:, 1] - ranges[:, 0])) * re[0].size
-            if split:  # children 2i, 2i + 1 of split node i, all in one parallel region
-                kids = [kid for i in split for kid in level[i].children]
-                g = np.empty((len(kids), 2, TAPS), np.float32)
-                for c, kid in enumerate(kids):
-                    gc = half_sample_filter(kid.half * kid.dv)
-                    gc = gc * np.exp(-2j * np.pi * kid.centre * kid.dv * offsets)
-                    g[c, 0], g[c, 1] = gc.real, gc.imag
-                pre = np.zeros((len(split), first.nv, us.size), np.float32)
-                pim = np.zeros_like(pre)
-                _merge(pre, pim, below[0], below[1], kids[0].k0, kids[0].ratio, g)
-                jr[split] = pre
-                ji[split] = pim
-            below = (jr, ji)
-            done += 1
-            if progress is not None:
-                progress("backprojection", done, total)
-        jr, ji = below
-        rows_re = np.ascontiguousarray(jr[:, ::n_sub], np.float64)
-        rows_im = np.ascontiguousarray(ji[:, ::n_sub], np.float64)
-        ore = np.empty_like(rows_re)
-        oim = np.empty_like(rows_im)
-        _modulate(rows_re, rows_im, ore, oim, us, y[r0:r1], centre[0], centre[1], cz2, rref,
-                  quarter_scale, 1.0)  # fmt: skip
-        out[r0:r1, k_lo:k_hi] = ore[0] + 1j * oim[0]
+        _strip(fr, levels, n_sub, y[r0:r1], out, int(r0), k_lo, info, report)
     return (out.T if transpose else out), info
