@@ -762,7 +762,7 @@ def _run_ffbp(
         table.values, st.eff_positions, st.ref_ranges, traces.reference_point_m,
         np.asarray(grid.x_m), np.asarray(grid.y_m), constants=constants, n_up=table.n_up,
         carrier_hz=st.carrier_hz, bandwidth_hz=float(traces.radar.bandwidth_hz),
-        tile_for=tile_for, tile_kernel=_tile_kernel, alpha=alpha, progress=progress,
+        tile_for=tile_for, alpha=alpha, progress=progress,
     )  # fmt: skip
     if values is None:
         values, variant = _run_numba(st, traces, grid, progress)

@@ -52,6 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core import C, ProgressCallback
+from . import _ffbp_kernels as _kernels
 
 __all__ = ["ffbp_values"]
 
@@ -62,159 +63,11 @@ DEFAULT_ALPHA = 1.5
 #: Smallest leaf (pulses).
 _MIN_LEAF = 2
 
-_FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
-# float64 minimax sine/cosine of pi r / 2 on |r| <= 1/2 (as in .backprojection).
-_S0, _S1, _S2, _S3, _S4, _S5 = (
-    1.57079632679489, -0.6459640975043288, 0.07969262615641214, -0.0046817525994714984,
-    0.00016042930460199835, -3.5564543255214174e-06,
-)  # fmt: skip
-_C0, _C1, _C2, _C3, _C4, _C5, _C6 = (
-    0.9999999999999951, -1.2337005501361604, 0.2536695079002106, -0.02086348074043811,
-    0.0009192599906072516, -2.5200275027694737e-05, 4.657112551982875e-07,
-)  # fmt: skip
-
-
-# ============================================================================ kernels
-@numba.njit(fastmath=_FASTMATH, inline="always")
-def _quarter_turns(t):  # pragma: no cover - compiled
-    """``(cos, sin)`` of ``pi t / 2``: ``t`` folded exactly to ``|t - k| <= 1/2``, float64."""
-    kq = np.rint(t)
-    x = t - kq
-    z = x * x
-    s = x * (_S0 + z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * _S5)))))
-    c = _C0 + z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-    q = np.int64(kq)
-    swap = (q & 1) != 0
-    cs = s if swap else c
-    sn = c if swap else s
-    cs = -cs if ((q + 1) & 2) != 0 else cs
-    sn = -sn if (q & 2) != 0 else sn
-    return cs, sn
-
-
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _demodulate(re, im, n_images, us, vs, cu, cv, cz2, rref, quarter_scale):
-    """``x[i, r, k] *= exp(-i pi/2 quarter_scale (|c - rho| - rref))`` for ``i < n_images``.
-
-    In place; ``rho = (us[k], vs[r], 0)``, ``c = (cu, cv, sqrt(cz2))``. The phase is
-    evaluated once per pixel (float64) and applied to every image.
-    """  # pragma: no cover - compiled
-    nv, nu = re.shape[1], re.shape[2]
-    for r in numba.prange(nv):
-        cs = np.empty(nu, np.float32)
-        sn = np.empty(nu, np.float32)
-        dv = vs[r] - cv
-        c2 = dv * dv + cz2
-        for k in range(nu):
-            du = us[k] - cu
-            a, b = _quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
-            cs[k] = a
-            sn[k] = -b
-        for i in range(n_images):
-            for k in range(nu):
-                a = re[i, r, k]
-                b = im[i, r, k]
-                re[i, r, k] = a * cs[k] - b * sn[k]
-                im[i, r, k] = a * sn[k] + b * cs[k]
-
-
-@numba.njit(fastmath=_FASTMATH, inline="always")
-def _add_child(dre, dim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compiled
-    """Add parent row ``m`` of one child to the row ``dre + 1j dim`` (see :func:`_merge`)."""
-    nu = dre.shape[0]
-    if ratio == 1 or m % 2 == 0:
-        mc = k0 + m if ratio == 1 else k0 + m // 2
-        for i in range(nu):
-            dre[i] += cre[mc, i]
-            dim[i] += cim[mc, i]
-        return
-    b = k0 + (m - 1) // 2 - TAPS // 2 + 1
-    g0r, g1r, g2r, g3r = g[0, 0], g[0, 1], g[0, 2], g[0, 3]
-    g4r, g5r, g6r, g7r = g[0, 4], g[0, 5], g[0, 6], g[0, 7]
-    g0i, g1i, g2i, g3i = g[1, 0], g[1, 1], g[1, 2], g[1, 3]
-    g4i, g5i, g6i, g7i = g[1, 4], g[1, 5], g[1, 6], g[1, 7]
-    for i in range(nu):
-        x0r = cre[b, i]
-        x0i = cim[b, i]
-        x1r = cre[b + 1, i]
-        x1i = cim[b + 1, i]
-        x2r = cre[b + 2, i]
-        x2i = cim[b + 2, i]
-        x3r = cre[b + 3, i]
-        x3i = cim[b + 3, i]
-        x4r = cre[b + 4, i]
-        x4i = cim[b + 4, i]
-        x5r = cre[b + 5, i]
-        x5i = cim[b + 5, i]
-        x6r = cre[b + 6, i]
-        x6i = cim[b + 6, i]
-        x7r = cre[b + 7, i]
-        x7i = cim[b + 7, i]
-        dre[i] += (
-            g0r * x0r - g0i * x0i + g1r * x1r - g1i * x1i + g2r * x2r - g2i * x2i
-            + g3r * x3r - g3i * x3i + g4r * x4r - g4i * x4i + g5r * x5r - g5i * x5i
-            + g6r * x6r - g6i * x6i + g7r * x7r - g7i * x7i
-        )  # fmt: skip
-        dim[i] += (
-            g0r * x0i + g0i * x0r + g1r * x1i + g1i * x1r + g2r * x2i + g2i * x2r
-            + g3r * x3i + g3i * x3r + g4r * x4i + g4i * x4r + g5r * x5i + g5i * x5r
-            + g6r * x6i + g6i * x6r + g7r * x7i + g7i * x7r
-        )  # fmt: skip
-
-
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _merge(re, im, first, kids, cre, cim, k0, ratio, g):
-    """Images ``first + p`` = children ``kids[p, 0]`` and ``kids[p, 1]`` resampled along ``v``.
-
-    Arrays ``(images, rows v, columns u)``; ``re``, ``im`` of the parents' level, ``cre``,
-    ``cim`` of the children's. Child row ``k0 + m / ratio`` sits at parent row ``m``.
-    ``ratio == 1``: same spacing, rows added. ``ratio == 2``: even parent rows are child
-    rows; odd ones the half-sample interpolation ``sum_t g[c, :, t] x[k0 + (m - 1)/2 + t - 3]``
-    with child ``c``'s complex filter ``g[c] = (re[8], im[8])``.
-    """  # pragma: no cover - compiled
-    n_parents = kids.shape[0]
-    nvp, nu = re.shape[1], re.shape[2]
-    for task in numba.prange(n_parents * nvp):
-        q = first + task // nvp
-        m = task % nvp
-        dre = re[q, m]
-        dim = im[q, m]
-        for i in range(nu):
-            dre[i] = 0.0
-            dim[i] = 0.0
-        for c in (kids[task // nvp, 0], kids[task // nvp, 1]):
-            _add_child(dre, dim, m, cre[c], cim[c], k0, ratio, g[c])
-
-
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _root_rows(out, r0, k_lo, kids, cre, cim, k0, ratio, g, n_sub, us, ys, cu, cv, cz2, rref,
-               quarter_scale):  # fmt: skip
-    """Image rows ``r0 + r`` = root row ``r n_sub`` (its children ``kids`` added), remodulated.
-
-    ``out[r0 + r, k_lo + k] = J(us[k], ys[r]) exp(+i pi/2 quarter_scale (|c - rho| - rref))``
-    (complex128), ``J`` the sum of the children rows as in :func:`_merge`.
-    """  # pragma: no cover - compiled
-    nu = us.size
-    for r in numba.prange(ys.size):
-        dre = np.zeros(nu, np.float32)
-        dim = np.zeros(nu, np.float32)
-        for c in kids:
-            _add_child(dre, dim, r * n_sub, cre[c], cim[c], k0, ratio, g[c])
-        dv = ys[r] - cv
-        c2 = dv * dv + cz2
-        for k in range(nu):
-            du = us[k] - cu
-            cs, sn = _quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
-            a = np.float64(dre[k])
-            b = np.float64(dim[k])
-            out[r0 + r, k_lo + k] = complex(a * cs - b * sn, a * sn + b * cs)
-
-
 # ============================================================================= plan
-_FILTERS: dict[float, NDArray[np.float64]] = {}
+_FILTERS: dict[tuple[float, int], NDArray[np.float64]] = {}
 
 
-def half_sample_filter(band: float) -> NDArray[np.float64]:
+def half_sample_filter(band: float, taps: int | None = None) -> NDArray[np.float64]:
     """Real 8-tap filter ``g`` with ``sum_t g[t] exp(2i pi f (t - 7/2)) ~= 1`` for ``|f| <= band``.
 
     Taps at offsets ``t - 7/2``, ``t = 0..7``, samples from the output point (a half-sample
@@ -230,11 +83,12 @@ def half_sample_filter(band: float) -> NDArray[np.float64]:
     -------
     (8,) ndarray
     """
-    key = math.ceil(band * 200.0) / 200.0
+    taps = TAPS if taps is None else int(taps)
+    key = (math.ceil(band * 200.0) / 200.0, taps)
     g = _FILTERS.get(key)
     if g is None:
-        offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
-        f = np.linspace(-key, key, 101)
+        offsets = np.arange(taps) - (taps - 1) / 2.0
+        f = np.linspace(-key[0], key[0], 101)
         a = np.exp(2j * np.pi * np.outer(f, offsets))
         rhs = np.concatenate([np.ones(f.size), np.zeros(f.size)])
         g = np.linalg.lstsq(np.vstack([a.real, a.imag]), rhs, rcond=None)[0]
@@ -279,11 +133,11 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
 
     A node splits in two when both halves' bands fit twice its ``v`` spacing; otherwise it
     is a leaf. Level ``d + 1`` lists the children of the split nodes of level ``d``, in
-    order. All nodes of a level share one grid; in its arrays the leaves come first.
+    order. All nodes of a level share one grid.
     """
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
     levels = [[root]]
-    margin = TAPS // 2 + 1
+    k0 = TAPS // 2 - 1  # child rows before the parent's row 0 (the filter's reach)
     while True:
         level = levels[-1]
         dv = 2.0 * level[0].dv
@@ -301,116 +155,95 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
             for kid in kids:
                 kid.ratio = 2
                 kid.dv = dv
-                kid.k0 = margin
-                kid.v0 = level[0].v0 - margin * dv
-                kid.nv = (level[0].nv + 1) // 2 + 2 * margin + 1
+                kid.k0 = k0
+                kid.v0 = level[0].v0 - k0 * dv
+                kid.nv = k0 + (level[0].nv - 2) // 2 + TAPS // 2 + 1
             node.children = kids
             nxt.extend(kids)
-        order = [n for n in level if not n.children] + [n for n in level if n.children]
-        for slot, node in enumerate(order):
-            node.slot = slot
         if not nxt:
             return levels
         levels.append(nxt)
 
 
-@dataclass(frozen=True, eq=False)
-class _Frame:
-    """Everything the levels share, in the ``(u, v)`` frame (``u`` the image columns)."""
-
-    table_values: NDArray[np.uint64]
-    antennas: tuple[NDArray, NDArray, NDArray, NDArray]  # x, y, z^2, reference range
-    us: NDArray[np.float64]  # the columns computed (m)
-    constants: tuple[float, float, float]
-    n_up: int
-    centre: NDArray[np.float64]  # c, aperture centre (m)
-    rref: float  # |c - rho_o| (m)
-    tile_for: object
-    tile_kernel: object
-    pos: NDArray[np.float64]
-
-    def grid(self, node: _Node) -> NDArray[np.float64]:
-        return node.v0 + np.arange(node.nv) * node.dv
-
-
 # ====================================================================== evaluation
-def _leaves(fr: _Frame, level: list[_Node], re: NDArray, im: NDArray) -> int:
-    """Leaves of one level, exact backprojection on the level's grid, demodulated.
+def _depths(plans, bounds, y) -> tuple[list[list[_Node]], list[_Node | None]]:
+    """The nodes below the roots, all strips together, by depth (1, 2, ...).
 
-    Writes slots ``0..n_leaves - 1`` of ``re``, ``im`` (zero on entry); returns the
-    pixel-pulses computed.
+    Slots: in each depth's arrays the leaves come first, then the split nodes. A strip
+    whose root does not split gets one leaf on its image rows at depth 1 (read unfiltered).
+    Returns the depths and, per strip, that substitute leaf (else ``None``).
     """
-    leaves = [n for n in level if not n.children]
-    first = level[0]
-    us, vs = fr.us, fr.grid(first)
-    starts = np.array([n.j0 for n in leaves], np.int64)
-    stops = np.array([n.j1 for n in leaves], np.int64)
-    rows, cols = fr.tile_for(fr.pos, us, vs)
-    idx_scale, idx_offset, quarter_scale = fr.constants
-    du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
-    with numba.parallel_chunksize(1):  # tiles handed out one at a time
-        fr.tile_kernel(
-            fr.table_values, starts, stops, *fr.antennas, float(us[0]), du, us.size,
-            float(vs[0]), first.dv, first.nv, idx_scale, idx_offset, fr.n_up, quarter_scale,
-            rows, cols, 0, -(-first.nv // rows), re, im,
-        )  # fmt: skip
-    c = fr.centre
-    _demodulate(re, im, len(leaves), us, vs, c[0], c[1], c[2] ** 2, fr.rref, quarter_scale)
-    return int(np.sum(stops - starts)) * first.nv * us.size
+    depths: list[list[_Node]] = []
+    substitutes: list[_Node | None] = []
+    dy = (y[-1] - y[0]) / (y.size - 1)
+    for (levels, _), r0, r1 in zip(plans, bounds[:-1], bounds[1:], strict=True):
+        root = levels[0][0]
+        if root.children:
+            below = levels[1:]
+            substitutes.append(None)
+        else:
+            leaf = _Node(root.j0, root.j1, dv=dy, v0=float(y[r0]), nv=int(r1 - r0))
+            below = [[leaf]]
+            substitutes.append(leaf)
+        for d, nodes in enumerate(below):
+            if d == len(depths):
+                depths.append([])
+            depths[d].extend(nodes)
+    for nodes in depths:
+        order = [n for n in nodes if not n.children] + [n for n in nodes if n.children]
+        nodes[:] = order
+        for slot, node in enumerate(order):
+            node.slot = slot
+    return depths, substitutes
 
 
-def _filters(below: list[_Node]) -> NDArray[np.float32]:
-    """``(len(below), 2, TAPS)`` complex half-sample filters of the nodes, by slot."""
+def _filters(nodes: list[_Node]) -> NDArray[np.float32]:
+    """``(len(nodes), 2, TAPS)`` complex half-sample filters of the nodes, by slot."""
     offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
-    g = np.zeros((len(below), 2, TAPS), np.float32)
-    for kid in below:
-        gc = half_sample_filter(kid.half * kid.dv)
-        gc = gc * np.exp(-2j * np.pi * kid.centre * kid.dv * offsets)
-        g[kid.slot, 0], g[kid.slot, 1] = gc.real, gc.imag
+    g = np.zeros((max(len(nodes), 1), 2, TAPS), np.float32)
+    for node in nodes:
+        if node.ratio == 2:
+            gc = half_sample_filter(node.half * node.dv, TAPS)
+            gc = gc * np.exp(-2j * np.pi * node.centre * node.dv * offsets)
+            g[node.slot, 0], g[node.slot, 1] = gc.real, gc.imag
     return g
 
 
-def _kids(nodes: list[_Node]) -> NDArray[np.int64]:
-    """``(len(nodes), 2)`` slots of the nodes' children."""
-    return np.array([[k.slot for k in n.children] for n in nodes], np.int64).reshape(-1, 2)
-
-
-def _level(fr: _Frame, level: list[_Node], below, info: dict):
-    """``(re, im)`` of one level below the root, ``(nodes, rows, columns)`` float32."""
-    first = level[0]
-    re = np.zeros((len(level), first.nv, fr.us.size), np.float32)
-    im = np.zeros_like(re)
-    n_leaves = sum(1 for n in level if not n.children)
-    if n_leaves:
-        info["leaf_pixel_pulses"] += _leaves(fr, level, re, im)
-        info["leaves"] += n_leaves
-    split = sorted((n for n in level if n.children), key=lambda n: n.slot)
-    if split:  # every split node of the level in one parallel region
-        kid = split[0].children[0]
-        _merge(re, im, n_leaves, _kids(split), below[0], below[1], kid.k0, kid.ratio,
-               _filters([k for n in split for k in n.children]))  # fmt: skip
-    return re, im
-
-
-def _strip(fr, levels, n_sub, ys, out, r0, k_lo, info, report) -> None:
-    """Evaluate one strip's tree bottom-up and write its image rows ``out[r0:r0 + ys.size]``."""
-    root = levels[0][0]
-    c = fr.centre
-    quarter_scale = fr.constants[2]
-    if not root.children:  # the whole aperture is one leaf: on the image rows directly
-        root.v0, root.dv, root.nv = float(ys[0]), float(ys[1] - ys[0]) if ys.size > 1 else 1.0, ys.size
-        below = _level(fr, [root], None, info)
-        kids, ratio, k0, g, n_sub = np.zeros(1, np.int64), 1, 0, np.zeros((1, 2, TAPS), np.float32), 1
-    else:
-        below = None
-        for level in reversed(levels[1:]):
-            below = _level(fr, level, below, info)
-            report()
-        kids, ratio, k0 = _kids([root])[0], root.children[0].ratio, root.children[0].k0
-        g = _filters(root.children)
-    _root_rows(out, r0, k_lo, kids, below[0], below[1], k0, ratio, g, n_sub, fr.us, ys, c[0],
-               c[1], c[2] ** 2, fr.rref, quarter_scale)  # fmt: skip
-    report()
+def _evaluate(depths, frame: dict, tile_for, info: dict, report):
+    """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes."""
+    us = frame["us"]
+    du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
+    k0 = TAPS // 2 - 1
+    cre = np.zeros((1, 1, us.size), np.float32)
+    cim = cre
+    g = np.zeros((1, 2, TAPS), np.float32)
+    for d in range(len(depths) - 1, -1, -1):
+        nodes = depths[d]
+        leaves = [n for n in nodes if not n.children]
+        split = nodes[len(leaves):]
+        n_rows = max(n.nv for n in nodes)
+        re = np.zeros((len(nodes), n_rows, us.size), np.float32)
+        im = np.zeros_like(re)
+        tile = (n_rows, 64)
+        for n in leaves:  # the smallest tile any leaf grid needs (in bounds for all)
+            rows, cols = tile_for(frame["pos"], us, n.v0 + np.arange(n.nv) * n.dv)
+            tile = (min(tile[0], rows), min(tile[1], cols))
+        starts = np.array([n.j0 for n in leaves], np.int64)
+        stops = np.array([n.j1 for n in leaves], np.int64)
+        kids = np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2)
+        with numba.parallel_chunksize(1):  # tiles and rows handed out one at a time
+            _kernels.level(
+            re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
+            np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]),
+            np.array([n.nv for n in nodes], np.int64), *frame["constants"][:2], frame["n_up"],
+            frame["constants"][2], tile[0], tile[1], *frame["centre"], kids, cre, cim, k0, 2, g,
+        )  # fmt: skip
+        info["leaves"] += len(leaves)
+        info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
+        cre, cim = re, im
+        g = _filters(nodes)
+        report()
+    return cre, cim, g
 
 
 def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
@@ -498,7 +331,6 @@ def ffbp_values(
     carrier_hz: float,
     bandwidth_hz: float,
     tile_for,
-    tile_kernel,
     alpha: float = DEFAULT_ALPHA,
     progress: ProgressCallback | None = None,
 ) -> tuple[NDArray[np.complex128] | None, dict]:
@@ -528,10 +360,8 @@ def ffbp_values(
     carrier_hz, bandwidth_hz : float
         ``nu_o`` and ``B`` (Hz).
     tile_for : callable
-        ``tile_for(positions, u_m, v_m) -> (rows, cols)``, the tile of the exact kernel.
-    tile_kernel : callable
-        The exact float32 tile kernel of :mod:`.backprojection` (``_tile_kernel``); the
-        leaves call it with float32 outputs.
+        ``tile_for(positions, u_m, v_m) -> (rows, cols)``, the tile of the exact kernel
+        (the leaves use its float32 arithmetic, so its bounds).
     alpha : float
         Oversampling of each sub-image's band, > 1.
     progress : callable, optional
@@ -566,26 +396,48 @@ def ffbp_values(
     if c_best > 0.7 * pos.shape[0] * y.size * us.size:
         return None, {"fallback": "exact (the factorisation would not save work here)"}
     centre = pos.mean(axis=0)
-    fr = _Frame(
-        table_values=table_values,
-        antennas=(np.ascontiguousarray(pos[:, 0]), np.ascontiguousarray(pos[:, 1]),
-                  np.ascontiguousarray(pos[:, 2] ** 2),
-                  np.ascontiguousarray(ref_ranges, dtype=np.float64)),
-        us=us, constants=tuple(float(c) for c in constants), n_up=int(n_up), centre=centre,
-        rref=float(np.linalg.norm(centre - rho_o)), tile_for=tile_for, tile_kernel=tile_kernel,
-        pos=pos,
-    )  # fmt: skip
-    info.update(levels=max(len(levels) for levels, _ in plans), columns=int(us.size),
-                strips=len(plans))  # fmt: skip
-    total = sum(len(levels) for levels, _ in plans)
+    frame = {
+        "table": table_values,
+        "antennas": (np.ascontiguousarray(pos[:, 0]), np.ascontiguousarray(pos[:, 1]),
+                     np.ascontiguousarray(pos[:, 2] ** 2),
+                     np.ascontiguousarray(ref_ranges, dtype=np.float64)),
+        "us": us,
+        "constants": tuple(float(c) for c in constants),
+        "n_up": int(n_up),
+        "pos": pos,
+        # c, |c|_z^2, |c - rho_o|: the demodulation (see the module docstring)
+        "centre": (float(centre[0]), float(centre[1]), float(centre[2] ** 2),
+                   float(np.linalg.norm(centre - rho_o))),
+    }  # fmt: skip
+    depths, substitutes = _depths(plans, bounds, y)
+    info.update(levels=len(depths) + 1, columns=int(us.size), strips=len(plans))
     done = 0
 
     def report() -> None:
         nonlocal done
         done += 1
         if progress is not None:
-            progress("backprojection", done, total)
+            progress("backprojection", done, len(depths) + 1)
 
-    for (levels, n_sub), r0, r1 in zip(plans, bounds[:-1], bounds[1:], strict=True):
-        _strip(fr, levels, n_sub, y[r0:r1], out, int(r0), k_lo, info, report)
+    cre, cim, g = _evaluate(depths, frame, tile_for, info, report)
+    # The image rows: row r of strip s is root row r n_sub[s], its children added.
+    n_strips = len(plans)
+    kids = np.full((n_strips, 2), -1, np.int64)
+    n_sub = np.ones(n_strips, np.int64)
+    k0 = np.zeros(n_strips, np.int64)
+    ratio = np.ones(n_strips, np.int64)
+    for s, ((levels, ns), leaf) in enumerate(zip(plans, substitutes, strict=True)):
+        if leaf is not None:
+            kids[s, 0] = leaf.slot
+        else:
+            root = levels[0][0]
+            kids[s] = [k.slot for k in root.children]
+            n_sub[s], k0[s], ratio[s] = ns, root.children[0].k0, root.children[0].ratio
+    row_strip = np.repeat(np.arange(n_strips), np.diff(bounds)).astype(np.int64)
+    row_local = (np.arange(y.size) - bounds[row_strip]).astype(np.int64)
+    _kernels.root_rows(
+        out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, us, y,
+        *frame["centre"], frame["constants"][2],
+    )  # fmt: skip
+    report()
     return (out.T if transpose else out), info
