@@ -17,14 +17,15 @@ So ``J_A`` is sampled on the image's own columns ``u`` (no interpolation across 
 and on rows ``v`` spaced ``1 / (2 alpha b_A)``: coarse for short sub-apertures. The tree is
 evaluated bottom-up:
 
-- leaves: exact backprojection (the float32 kernel of :mod:`.backprojection`) of a few
-  tens of pulses on their coarse grid, times the demodulation factor;
+- leaves: exact backprojection (the float32 tile arithmetic of :mod:`.backprojection`) of
+  a few to a hundred pulses on their coarse grid, demodulated as each tile is written;
 - a parent ``J_P = J_A + J_B`` on a grid twice as fine in ``v``: even rows are the
-  children's rows, odd rows the half-sample interpolation of each child by an 8-tap filter,
-  least-squares optimal over the child's band and shifted to its centre ``f_A`` (no phase
-  correction is needed: all sub-images share the demodulation);
-- the root is sampled at ``dy / n`` (``n`` the smallest integer that holds its band) and
-  read on the image rows, then remodulated pixel by pixel.
+  children's rows, odd rows the half-sample interpolation of each child by a ``TAPS``-tap
+  filter, least-squares optimal over the child's band and shifted to its centre ``f_A``
+  (no phase correction is needed: all sub-images share the demodulation);
+- the root's grid is ``dy / n`` (``n`` the smallest integer that holds its band), but only
+  its rows on the image rows are formed (its children's rows added, or interpolated when
+  ``n`` is 1), then remodulated pixel by pixel.
 
 Leaves stop where halving the aperture no longer halves the band (the floor dominates).
 The rows are cut in strips (1 to 16, the cheapest by a cost model): a narrower strip sees
@@ -32,10 +33,22 @@ the look direction turn less, so its floor is lower. The floor also grows with t
 between the look direction and the ``u`` axis (the range band leaks into ``v``): the
 factorisation pays off within a few degrees of a grid axis (GOTCHA's first degrees, looking
 along ``x``), and ``method="ffbp"`` runs exact backprojection when it would not save work.
-The error against exact backprojection comes from the interpolations; measured on
-GOTCHA (4 degrees, 0.25 m pixels, default ``alpha = 1.5``): 47 dB at 512 x 512, 45 dB at
-2048 x 2048 (spec: >= 40 dB; see ``benchmarks/bench_backprojection.py``). Columns whose
-pixels no pulse's fast-time window reaches are zero, as in exact backprojection.
+
+Evaluation: the nodes of all strips at one depth of the tree are one parallel region
+(:mod:`._ffbp_kernels`): leaf tiles and merged rows are tasks of the same loop, and the
+image rows of every strip one last region. On the shared 2-core machine every region ends
+in a barrier that waits for a descheduled thread, so the number of regions (about the
+depth, 7 at 2048 x 2048), not only the arithmetic, sets the time.
+
+Accuracy. The error against exact backprojection comes from the interpolations: it grows
+as ``alpha`` falls and with the number of levels. The default ``alpha = 1.4`` is the
+smallest multiple of 0.1 for which every GOTCHA geometry measured stays 3 dB above the
+40 dB specification: 4 degrees at 0.25 m, 512^2 to 2048^2: 47.1, 44.7, 43.9, 44.0 dB
+(512, 1024, 1536, 2048); 4 degrees at 0.5 m, 1024^2: 45.2 dB; at 0.1 m, 1024^2: 48.3 dB;
+two degrees at 1024^2 and 2048^2: 44.8, 43.9 dB; one degree at 1024^2: 44.7 dB
+(``alpha = 1.3``: 42.9 dB at 1536^2). Not used in the choice: simulated point scenes,
+48.6-50.2 dB; motion-compensated (four velocities, 64 m and 128 m), 46.5-52.4 dB. Columns
+whose pixels no pulse's fast-time window reaches are zero, as in exact backprojection.
 
 References: L. M. H. Ulander, H. Hellsten, G. Stenström, "Synthetic-aperture radar
 processing using fast factorized back-projection", IEEE Trans. AES 39(3), 2003 (polar
@@ -56,32 +69,37 @@ from . import _ffbp_kernels as _kernels
 
 __all__ = ["ffbp_values"]
 
-#: Taps of the half-sample interpolation filter (fixed: the merge kernel is unrolled).
+#: Taps of the half-sample interpolation filter (even). On GOTCHA at ``alpha = 1.3``, 10
+#: taps measured 0.7-1.1 dB above 8 (1024^2, 2048^2): less than raising ``alpha`` by 0.1.
 TAPS = 8
 #: Oversampling of every sub-image's band along ``v``.
-DEFAULT_ALPHA = 1.5
+DEFAULT_ALPHA = 1.4
 #: Smallest leaf (pulses).
 _MIN_LEAF = 2
+#: Cost of a merged sample in pixel-pulses (two children, half the rows interpolated).
+_MERGE_COST = 4.0
 
 # ============================================================================= plan
 _FILTERS: dict[tuple[float, int], NDArray[np.float64]] = {}
 
 
 def half_sample_filter(band: float, taps: int | None = None) -> NDArray[np.float64]:
-    """Real 8-tap filter ``g`` with ``sum_t g[t] exp(2i pi f (t - 7/2)) ~= 1`` for ``|f| <= band``.
+    """Real filter ``g`` with ``sum_t g[t] exp(2i pi f (t - (T-1)/2)) ~= 1`` for ``|f| <= band``.
 
-    Taps at offsets ``t - 7/2``, ``t = 0..7``, samples from the output point (a half-sample
-    delay); least squares on 101 frequencies of ``[-band, band]`` (cycles per sample,
-    ``band < 1/2``), rounded up to 1/200 and cached.
+    ``T = taps`` taps at offsets ``t - (T - 1)/2``, ``t = 0..T-1``, samples from the output
+    point (a half-sample delay); least squares on 101 frequencies of ``[-band, band]``
+    (cycles per sample, ``band < 1/2``), rounded up to 1/200 and cached.
 
     Parameters
     ----------
     band : float
         Half-width of the band (cycles per sample).
+    taps : int, optional
+        Even number of taps ``T``; default :data:`TAPS`.
 
     Returns
     -------
-    (8,) ndarray
+    (T,) ndarray
     """
     taps = TAPS if taps is None else int(taps)
     key = (math.ceil(band * 200.0) / 200.0, taps)
@@ -131,8 +149,11 @@ def _pulse_bands(pos, f_lo, f_hi, nu_o, centre, probes) -> tuple[NDArray, NDArra
 def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
     """Levels of the tree, root first.
 
-    A node splits in two when both halves' bands fit twice its ``v`` spacing; otherwise it
-    is a leaf. Level ``d + 1`` lists the children of the split nodes of level ``d``, in
+    A node splits in two when both halves' bands fit twice its ``v`` spacing and two leaves
+    plus the merge cost less than the node as a leaf (rows times pulses, a merged row
+    :data:`_MERGE_COST` pulses); otherwise it is a leaf. The second rule also keeps the
+    tree shallow: every level of interpolation adds error (a 64 m motion-compensated image
+    split down to 2-pulse leaves: 34 dB; with the rule 47 dB). Level ``d + 1`` lists the children of the split nodes of level ``d``, in
     order. All nodes of a level share one grid.
     """
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
@@ -152,12 +173,15 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
                 kid.centre, kid.half = 0.5 * (lo + hi), 0.5 * (hi - lo)
             if any(dv * 2.0 * alpha * kid.half > 1.0 for kid in kids):
                 continue  # halving the aperture does not halve the band: a leaf
+            nv = k0 + (level[0].nv - 2) // 2 + TAPS // 2 + 1
+            if (node.j1 - node.j0) * node.nv <= (node.j1 - node.j0) * nv + _MERGE_COST * node.nv:
+                continue  # two leaves and a merge would cost more than this leaf
             for kid in kids:
                 kid.ratio = 2
                 kid.dv = dv
                 kid.k0 = k0
                 kid.v0 = level[0].v0 - k0 * dv
-                kid.nv = k0 + (level[0].nv - 2) // 2 + TAPS // 2 + 1
+                kid.nv = nv
             node.children = kids
             nxt.extend(kids)
         if not nxt:
@@ -222,8 +246,9 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         leaves = [n for n in nodes if not n.children]
         split = nodes[len(leaves):]
         n_rows = max(n.nv for n in nodes)
-        re = np.zeros((len(nodes), n_rows, us.size), np.float32)
-        im = np.zeros_like(re)
+        # Every row a parent reads is written (leaf tiles and merged rows below nv).
+        re = np.empty((len(nodes), n_rows, us.size), np.float32)
+        im = np.empty_like(re)
         tile = (n_rows, 64)
         for n in leaves:  # the smallest tile any leaf grid needs (in bounds for all)
             rows, cols = tile_for(frame["pos"], us, n.v0 + np.arange(n.nv) * n.dv)
@@ -298,7 +323,7 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
         for d, level in enumerate(levels):
             for node in level:
                 if node.children:
-                    c += 2.0 * 2.0 * (rows if d == 0 else node.nv) * us.size
+                    c += _MERGE_COST * (rows if d == 0 else node.nv) * us.size
                 else:
                     c += (node.j1 - node.j0) * (rows if d == 0 else node.nv) * us.size
         return c
