@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 
 from sarmotion.core import Trajectory
-from sarmotion.imaging import ImageGrid, backproject
+from sarmotion.imaging import ImageGrid, backproject, ffbp
 from sarmotion.imaging import backprojection as bp
-from sarmotion.imaging import ffbp
 from sarmotion.imaging.ffbp import half_sample_filter
 from sarmotion.io import read_gotcha
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate

@@ -153,8 +153,9 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
     plus the merge cost less than the node as a leaf (rows times pulses, a merged row
     :data:`_MERGE_COST` pulses); otherwise it is a leaf. The second rule also keeps the
     tree shallow: every level of interpolation adds error (a 64 m motion-compensated image
-    split down to 2-pulse leaves: 34 dB; with the rule 47 dB). Level ``d + 1`` lists the children of the split nodes of level ``d``, in
-    order. All nodes of a level share one grid.
+    split down to 2-pulse leaves: 34 dB; with the rule 46.5 dB). Level ``d + 1`` lists the
+    children of the split nodes of level ``d``, in order. All nodes of a level share one
+    grid.
     """
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
     levels = [[root]]
@@ -244,7 +245,7 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
     for d in range(len(depths) - 1, -1, -1):
         nodes = depths[d]
         leaves = [n for n in nodes if not n.children]
-        split = nodes[len(leaves):]
+        split = nodes[len(leaves) :]
         n_rows = max(n.nv for n in nodes)
         # Every row a parent reads is written (leaf tiles and merged rows below nv).
         re = np.empty((len(nodes), n_rows, us.size), np.float32)
