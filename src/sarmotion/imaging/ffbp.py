@@ -251,19 +251,21 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         re = np.empty((len(nodes), n_rows, us.size), np.float32)
         im = np.empty_like(re)
         tile = (n_rows, 64)
-        for n in leaves:  # the smallest tile any leaf grid needs (in bounds for all)
-            rows, cols = tile_for(frame["pos"], us, n.v0 + np.arange(n.nv) * n.dv)
+        for v0, dv, nv in {(n.v0, n.dv, n.nv) for n in leaves}:
+            # the smallest tile any leaf grid needs (in bounds for all)
+            rows, cols = tile_for(frame["pos"], us, v0 + np.arange(nv) * dv)
             tile = (min(tile[0], rows), min(tile[1], cols))
         starts = np.array([n.j0 for n in leaves], np.int64)
         stops = np.array([n.j1 for n in leaves], np.int64)
         kids = np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2)
         with numba.parallel_chunksize(1):  # tiles and rows handed out one at a time
             _kernels.level(
-            re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
-            np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]),
-            np.array([n.nv for n in nodes], np.int64), *frame["constants"][:2], frame["n_up"],
-            frame["constants"][2], tile[0], tile[1], *frame["centre"], kids, cre, cim, k0, 2, g,
-        )  # fmt: skip
+                re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
+                np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]),
+                np.array([n.nv for n in nodes], np.int64), *frame["constants"][:2],
+                frame["n_up"], frame["constants"][2], tile[0], tile[1], *frame["centre"], kids,
+                cre, cim, k0, 2, g,
+            )  # fmt: skip
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
         cre, cim = re, im
@@ -311,8 +313,9 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
 
         def band(j0: int, j1: int) -> tuple[float, float]:
             """First, middle and last pulse of ``j0:j1``: the band's extremes."""
-            js = (j0, (j0 + j1 - 1) // 2, j1 - 1)
-            return min(lo_j[j] for j in js), max(hi_j[j] for j in js)
+            jm = (j0 + j1 - 1) // 2
+            return (min(lo_j[j0], lo_j[jm], lo_j[j1 - 1]),
+                    max(hi_j[j0], hi_j[jm], hi_j[j1 - 1]))  # fmt: skip
 
         lo, hi = band(0, n_pulses)
         n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
@@ -409,10 +412,10 @@ def ffbp_values(
         pos = np.ascontiguousarray(pos[:, [1, 0, 2]])
         rho_o = rho_o[[1, 0, 2]]
         x, y = y, x
-    out = np.zeros((y.size, x.size), np.complex128)
     info: dict = {"levels": 0, "leaves": 0, "leaf_pixel_pulses": 0, "columns": 0}
     cols = _active_columns(pos, ref_ranges, x, y, constants, n_up)
     if cols.size == 0:
+        out = np.zeros((y.size, x.size), np.complex128)
         return (out.T if transpose else out), info
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
     us = np.ascontiguousarray(x[k_lo:k_hi])
@@ -446,6 +449,7 @@ def ffbp_values(
             progress("backprojection", done, len(depths) + 1)
 
     cre, cim, g = _evaluate(depths, frame, tile_for, info, report)
+    out = np.zeros((y.size, x.size), np.complex128)
     # The image rows: row r of strip s is root row r n_sub[s], its children added.
     n_strips = len(plans)
     kids = np.full((n_strips, 2), -1, np.int64)
