@@ -274,6 +274,33 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
     return cre, cim, g
 
 
+def _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame: dict) -> None:
+    """Write the image rows into ``out``: row ``r`` of strip ``s`` is root row ``r n_sub[s]``.
+
+    The root rows are the roots' children (planes ``cre``, ``cim`` of depth 1, filters
+    ``g``) added, or a strip's substitute leaf read as is, then remodulated.
+    """
+    n_strips = len(plans)
+    kids = np.full((n_strips, 2), -1, np.int64)
+    n_sub = np.ones(n_strips, np.int64)
+    k0 = np.zeros(n_strips, np.int64)
+    ratio = np.ones(n_strips, np.int64)
+    for s, ((levels, ns), leaf) in enumerate(zip(plans, substitutes, strict=True)):
+        if leaf is not None:
+            kids[s, 0] = leaf.slot
+        else:
+            root = levels[0][0]
+            kids[s] = [k.slot for k in root.children]
+            n_sub[s], k0[s], ratio[s] = ns, root.children[0].k0, root.children[0].ratio
+    ny = out.shape[0]
+    row_strip = np.repeat(np.arange(n_strips), np.diff(bounds)).astype(np.int64)
+    row_local = (np.arange(ny) - bounds[row_strip]).astype(np.int64)
+    _kernels.root_rows(
+        out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, frame["us"],
+        frame["y"], *frame["centre"], frame["constants"][2],
+    )  # fmt: skip
+
+
 def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
     """Columns ``x`` that some pulse's fast-time window reaches (1 m margin), ascending."""
     idx_scale, idx_offset, _ = constants
@@ -431,6 +458,7 @@ def ffbp_values(
                      np.ascontiguousarray(pos[:, 2] ** 2),
                      np.ascontiguousarray(ref_ranges, dtype=np.float64)),
         "us": us,
+        "y": y,
         "constants": tuple(float(c) for c in constants),
         "n_up": int(n_up),
         "pos": pos,
@@ -450,24 +478,6 @@ def ffbp_values(
 
     cre, cim, g = _evaluate(depths, frame, tile_for, info, report)
     out = np.zeros((y.size, x.size), np.complex128)
-    # The image rows: row r of strip s is root row r n_sub[s], its children added.
-    n_strips = len(plans)
-    kids = np.full((n_strips, 2), -1, np.int64)
-    n_sub = np.ones(n_strips, np.int64)
-    k0 = np.zeros(n_strips, np.int64)
-    ratio = np.ones(n_strips, np.int64)
-    for s, ((levels, ns), leaf) in enumerate(zip(plans, substitutes, strict=True)):
-        if leaf is not None:
-            kids[s, 0] = leaf.slot
-        else:
-            root = levels[0][0]
-            kids[s] = [k.slot for k in root.children]
-            n_sub[s], k0[s], ratio[s] = ns, root.children[0].k0, root.children[0].ratio
-    row_strip = np.repeat(np.arange(n_strips), np.diff(bounds)).astype(np.int64)
-    row_local = (np.arange(y.size) - bounds[row_strip]).astype(np.int64)
-    _kernels.root_rows(
-        out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, us, y,
-        *frame["centre"], frame["constants"][2],
-    )  # fmt: skip
+    _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame)
     report()
     return (out.T if transpose else out), info
