@@ -762,7 +762,7 @@ def _run_ffbp(
         table.values, st.eff_positions, st.ref_ranges, traces.reference_point_m,
         np.asarray(grid.x_m), np.asarray(grid.y_m), constants=constants, n_up=table.n_up,
         carrier_hz=st.carrier_hz, bandwidth_hz=float(traces.radar.bandwidth_hz),
-        tile_for=tile_for, backproject_f32=_backproject_f32, alpha=alpha, progress=progress,
+        tile_for=tile_for, alpha=alpha, progress=progress,
     )  # fmt: skip
     if values is None:
         values, variant = _run_numba(st, traces, grid, progress)
@@ -791,7 +791,7 @@ def backproject(
     upsample: int = 8,
     kernel: Kernel = "numba",
     method: Method = "exact",
-    ffbp_oversampling: float = 1.5,
+    ffbp_oversampling: float = 1.4,
     progress: ProgressCallback | None = None,
 ) -> Image:
     """Backprojection image ``eq:image``, or ``eq:imagecompu`` with a velocity.
@@ -817,7 +817,7 @@ def backproject(
         disk). ``"numpy"``: the plain reference, slow but obviously correct.
     method : {"exact", "ffbp"}
         ``"exact"``: the sum over every pulse at every pixel. ``"ffbp"``: fast factorised
-        backprojection (:mod:`sarmotion.imaging.ffbp`), for large images: 45 dB
+        backprojection (:mod:`sarmotion.imaging.ffbp`), for large images: 44 dB
         signal-to-error against ``"exact"`` on a 2048 x 2048 GOTCHA image, several times
         faster (see the module). Needs ``kernel="numba"``.
     ffbp_oversampling : float

@@ -17,14 +17,15 @@ So ``J_A`` is sampled on the image's own columns ``u`` (no interpolation across 
 and on rows ``v`` spaced ``1 / (2 alpha b_A)``: coarse for short sub-apertures. The tree is
 evaluated bottom-up:
 
-- leaves: exact backprojection (the float32 kernel of :mod:`.backprojection`) of a few
-  tens of pulses on their coarse grid, times the demodulation factor;
+- leaves: exact backprojection (the float32 tile arithmetic of :mod:`.backprojection`) of
+  a few to a hundred pulses on their coarse grid, demodulated as each tile is written;
 - a parent ``J_P = J_A + J_B`` on a grid twice as fine in ``v``: even rows are the
-  children's rows, odd rows the half-sample interpolation of each child by an 8-tap filter,
-  least-squares optimal over the child's band and shifted to its centre ``f_A`` (no phase
-  correction is needed: all sub-images share the demodulation);
-- the root is sampled at ``dy / n`` (``n`` the smallest integer that holds its band) and
-  read on the image rows, then remodulated pixel by pixel.
+  children's rows, odd rows the half-sample interpolation of each child by a ``TAPS``-tap
+  filter, least-squares optimal over the child's band and shifted to its centre ``f_A``
+  (no phase correction is needed: all sub-images share the demodulation);
+- the root's grid is ``dy / n`` (``n`` the smallest integer that holds its band), but only
+  its rows on the image rows are formed (its children's rows added, or interpolated when
+  ``n`` is 1), then remodulated pixel by pixel.
 
 Leaves stop where halving the aperture no longer halves the band (the floor dominates).
 The rows are cut in strips (1 to 16, the cheapest by a cost model): a narrower strip sees
@@ -32,10 +33,22 @@ the look direction turn less, so its floor is lower. The floor also grows with t
 between the look direction and the ``u`` axis (the range band leaks into ``v``): the
 factorisation pays off within a few degrees of a grid axis (GOTCHA's first degrees, looking
 along ``x``), and ``method="ffbp"`` runs exact backprojection when it would not save work.
-The error against exact backprojection comes from the interpolations; measured on
-GOTCHA (4 degrees, 0.25 m pixels, default ``alpha = 1.5``): 47 dB at 512 x 512, 45 dB at
-2048 x 2048 (spec: >= 40 dB; see ``benchmarks/bench_backprojection.py``). Columns whose
-pixels no pulse's fast-time window reaches are zero, as in exact backprojection.
+
+Evaluation: the nodes of all strips at one depth of the tree are one parallel region
+(:mod:`._ffbp_kernels`): leaf tiles and merged rows are tasks of the same loop, and the
+image rows of every strip one last region. On the shared 2-core machine every region ends
+in a barrier that waits for a descheduled thread, so the number of regions (about the
+depth, 7 at 2048 x 2048), not only the arithmetic, sets the time.
+
+Accuracy. The error against exact backprojection comes from the interpolations: it grows
+as ``alpha`` falls and with the number of levels. The default ``alpha = 1.4`` is the
+smallest multiple of 0.1 for which every GOTCHA geometry measured stays 3 dB above the
+40 dB specification: 4 degrees at 0.25 m, 512^2 to 2048^2: 47.1, 44.7, 43.9, 44.0 dB
+(512, 1024, 1536, 2048); 4 degrees at 0.5 m, 1024^2: 45.2 dB; at 0.1 m, 1024^2: 48.3 dB;
+two degrees at 1024^2 and 2048^2: 44.8, 43.9 dB; one degree at 1024^2: 44.7 dB
+(``alpha = 1.3``: 42.9 dB at 1536^2). Not used in the choice: simulated point scenes,
+48.6-50.2 dB; motion-compensated (four velocities, 64 m and 128 m), 46.5-52.4 dB. Columns
+whose pixels no pulse's fast-time window reaches are zero, as in exact backprojection.
 
 References: L. M. H. Ulander, H. Hellsten, G. Stenström, "Synthetic-aperture radar
 processing using fast factorized back-projection", IEEE Trans. AES 39(3), 2003 (polar
@@ -52,149 +65,48 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core import C, ProgressCallback
+from . import _ffbp_kernels as _kernels
 
 __all__ = ["ffbp_values"]
 
-#: Taps of the half-sample interpolation filter (fixed: the merge kernel is unrolled).
+#: Taps of the half-sample interpolation filter (even). On GOTCHA at ``alpha = 1.3``, 10
+#: taps measured 0.7-1.1 dB above 8 (1024^2, 2048^2): less than raising ``alpha`` by 0.1.
 TAPS = 8
 #: Oversampling of every sub-image's band along ``v``.
-DEFAULT_ALPHA = 1.5
+DEFAULT_ALPHA = 1.4
 #: Smallest leaf (pulses).
 _MIN_LEAF = 2
-
-_FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
-# float64 minimax sine/cosine of pi r / 2 on |r| <= 1/2 (as in .backprojection).
-_S0, _S1, _S2, _S3, _S4, _S5 = (
-    1.57079632679489, -0.6459640975043288, 0.07969262615641214, -0.0046817525994714984,
-    0.00016042930460199835, -3.5564543255214174e-06,
-)  # fmt: skip
-_C0, _C1, _C2, _C3, _C4, _C5, _C6 = (
-    0.9999999999999951, -1.2337005501361604, 0.2536695079002106, -0.02086348074043811,
-    0.0009192599906072516, -2.5200275027694737e-05, 4.657112551982875e-07,
-)  # fmt: skip
-
-
-# ============================================================================ kernels
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _modulate(re_in, im_in, re_out, im_out, us, vs, cu, cv, cz2, rref, quarter_scale, sign):
-    """``out[i, r, k] = in[i, r, k] exp(sign i pi/2 quarter_scale (|c - rho| - rref))``.
-
-    ``rho = (us[k], vs[r], 0)`` in the ``(u, v)`` frame, ``c = (cu, cv, sqrt(cz2))``; the
-    phase in quarter cycles is folded exactly before a float64 polynomial sine/cosine.
-    """  # pragma: no cover - compiled
-    n_img, nv, nu = re_in.shape
-    for task in numba.prange(n_img * nv):
-        i = task // nv
-        r = task % nv
-        dv = vs[r] - cv
-        c2 = dv * dv + cz2
-        for k in range(nu):
-            du = us[k] - cu
-            t = (math.sqrt(du * du + c2) - rref) * quarter_scale
-            kq = np.rint(t)
-            x = t - kq
-            z = x * x
-            s = x * (_S0 + z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * _S5)))))
-            c = _C0 + z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-            q = np.int64(kq)
-            swap = (q & 1) != 0
-            cs = s if swap else c
-            sn = c if swap else s
-            cs = -cs if ((q + 1) & 2) != 0 else cs
-            sn = -sn if (q & 2) != 0 else sn
-            sn = sn * sign
-            a = re_in[i, r, k]
-            b = im_in[i, r, k]
-            re_out[i, r, k] = a * cs - b * sn
-            im_out[i, r, k] = a * sn + b * cs
-
-
-@numba.njit(fastmath=_FASTMATH, inline="always")
-def _add_child(pre, pim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compiled
-    """Add child row(s) for parent row ``m`` (see :func:`_merge`)."""
-    nu = pre.shape[1]
-    if ratio == 1 or m % 2 == 0:
-        mc = k0 + m if ratio == 1 else k0 + m // 2
-        for i in range(nu):
-            pre[m, i] += cre[mc, i]
-            pim[m, i] += cim[mc, i]
-        return
-    b = k0 + (m - 1) // 2 - TAPS // 2 + 1
-    g0r, g1r, g2r, g3r = g[0, 0], g[0, 1], g[0, 2], g[0, 3]
-    g4r, g5r, g6r, g7r = g[0, 4], g[0, 5], g[0, 6], g[0, 7]
-    g0i, g1i, g2i, g3i = g[1, 0], g[1, 1], g[1, 2], g[1, 3]
-    g4i, g5i, g6i, g7i = g[1, 4], g[1, 5], g[1, 6], g[1, 7]
-    for i in range(nu):
-        x0r = cre[b, i]
-        x0i = cim[b, i]
-        x1r = cre[b + 1, i]
-        x1i = cim[b + 1, i]
-        x2r = cre[b + 2, i]
-        x2i = cim[b + 2, i]
-        x3r = cre[b + 3, i]
-        x3i = cim[b + 3, i]
-        x4r = cre[b + 4, i]
-        x4i = cim[b + 4, i]
-        x5r = cre[b + 5, i]
-        x5i = cim[b + 5, i]
-        x6r = cre[b + 6, i]
-        x6i = cim[b + 6, i]
-        x7r = cre[b + 7, i]
-        x7i = cim[b + 7, i]
-        pre[m, i] += (
-            g0r * x0r - g0i * x0i + g1r * x1r - g1i * x1i + g2r * x2r - g2i * x2i
-            + g3r * x3r - g3i * x3i + g4r * x4r - g4i * x4i + g5r * x5r - g5i * x5i
-            + g6r * x6r - g6i * x6i + g7r * x7r - g7i * x7i
-        )  # fmt: skip
-        pim[m, i] += (
-            g0r * x0i + g0i * x0r + g1r * x1i + g1i * x1r + g2r * x2i + g2i * x2r
-            + g3r * x3i + g3i * x3r + g4r * x4i + g4i * x4r + g5r * x5i + g5i * x5r
-            + g6r * x6i + g6i * x6r + g7r * x7i + g7i * x7r
-        )  # fmt: skip
-
-
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
-def _merge(pre, pim, cre, cim, k0, ratio, g):
-    """Parents ``p`` = children ``2p`` and ``2p + 1`` resampled along ``v``.
-
-    Arrays ``(n, rows v, columns u)``. Child row ``k0 + m / ratio`` sits at parent row
-    ``m``. ``ratio == 1``: same spacing, rows added. ``ratio == 2``: even parent rows are
-    child rows; odd ones the half-sample interpolation ``sum_t g[c, :, t] x[k0 + (m - 1)/2
-    + t - 3]`` with child ``c``'s complex filter ``g[c] = (re[8], im[8])``.
-    """  # pragma: no cover - compiled
-    n_parents, nvp, _ = pre.shape
-    for task in numba.prange(n_parents * nvp):
-        p = task // nvp
-        m = task % nvp
-        for c in (2 * p, 2 * p + 1):
-            _add_child(pre[p], pim[p], m, cre[c], cim[c], k0, ratio, g[c])
-
+#: Cost of a merged sample in pixel-pulses (two children, half the rows interpolated).
+_MERGE_COST = 4.0
 
 # ============================================================================= plan
-_FILTERS: dict[float, NDArray[np.float64]] = {}
+_FILTERS: dict[tuple[float, int], NDArray[np.float64]] = {}
 
 
-def half_sample_filter(band: float) -> NDArray[np.float64]:
-    """Real 8-tap filter ``g`` with ``sum_t g[t] exp(2i pi f (t - 7/2)) ~= 1`` for ``|f| <= band``.
+def half_sample_filter(band: float, taps: int | None = None) -> NDArray[np.float64]:
+    """Real filter ``g`` with ``sum_t g[t] exp(2i pi f (t - (T-1)/2)) ~= 1`` for ``|f| <= band``.
 
-    Taps at offsets ``t - 7/2``, ``t = 0..7``, samples from the output point (a half-sample
-    delay); least squares on 101 frequencies of ``[-band, band]`` (cycles per sample,
-    ``band < 1/2``), rounded up to 1/200 and cached.
+    ``T = taps`` taps at offsets ``t - (T - 1)/2``, ``t = 0..T-1``, samples from the output
+    point (a half-sample delay); least squares on 101 frequencies of ``[-band, band]``
+    (cycles per sample, ``band < 1/2``), rounded up to 1/200 and cached.
 
     Parameters
     ----------
     band : float
         Half-width of the band (cycles per sample).
+    taps : int, optional
+        Even number of taps ``T``; default :data:`TAPS`.
 
     Returns
     -------
-    (8,) ndarray
+    (T,) ndarray
     """
-    key = math.ceil(band * 200.0) / 200.0
+    taps = TAPS if taps is None else int(taps)
+    key = (math.ceil(band * 200.0) / 200.0, taps)
     g = _FILTERS.get(key)
     if g is None:
-        offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
-        f = np.linspace(-key, key, 101)
+        offsets = np.arange(taps) - (taps - 1) / 2.0
+        f = np.linspace(-key[0], key[0], 101)
         a = np.exp(2j * np.pi * np.outer(f, offsets))
         rhs = np.concatenate([np.ones(f.size), np.zeros(f.size)])
         g = np.linalg.lstsq(np.vstack([a.real, a.imag]), rhs, rcond=None)[0]
@@ -213,38 +125,41 @@ class _Node:
     ratio: int = 1
     centre: float = 0.0  # band centre (cycles/m)
     half: float = 0.0  # band half-width (cycles/m)
+    slot: int = 0  # index in its level's arrays: leaves first, then split nodes
     children: list[_Node] = field(default_factory=list)
 
 
-def _band(pos, j0, j1, f_lo, f_hi, nu_o, centre, probes) -> tuple[float, float]:
-    """``(min, max)`` local ``v`` frequency (cycles/m) of pulses ``j0:j1``, demodulated.
+def _pulse_bands(pos, f_lo, f_hi, nu_o, centre, probes) -> tuple[NDArray, NDArray]:
+    """Per pulse, ``(min, max)`` local ``v`` frequency (cycles/m) over the probes, demodulated.
 
-    Over the probe points (corners, edge midpoints, centre of the region), the first,
-    middle and last pulse and the two band edges.
+    The probe points are the corners, edge midpoints and centre of a region; the extremes
+    are over both band edges ``f_lo``, ``f_hi``. Returns two ``(n_pulses,)`` arrays.
     """
     pu, pv = probes[:, 0], probes[:, 1]
     dc = np.sqrt((pu - centre[0]) ** 2 + (pv - centre[1]) ** 2 + centre[2] ** 2)
     demod = (2.0 * nu_o / C) * (pv - centre[1]) / dc
-    r = pos[[j0, (j0 + j1 - 1) // 2, j1 - 1]]
-    du = pu[None, :] - r[:, 0:1]
-    dv = pv[None, :] - r[:, 1:2]
-    slope = dv / np.sqrt(du * du + dv * dv + r[:, 2:3] ** 2)  # d|r - rho|/dv
+    du = pu[None, :] - pos[:, 0:1]
+    dv = pv[None, :] - pos[:, 1:2]
+    slope = dv / np.sqrt(du * du + dv * dv + pos[:, 2:3] ** 2)  # d|r - rho|/dv
     g_lo = (2.0 / C) * np.minimum(f_lo * slope, f_hi * slope) - demod[None, :]
     g_hi = (2.0 / C) * np.maximum(f_lo * slope, f_hi * slope) - demod[None, :]
-    return float(g_lo.min()), float(g_hi.max())
+    return g_lo.min(axis=1), g_hi.max(axis=1)
 
 
 def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
     """Levels of the tree, root first.
 
-    A node splits in two when both halves' bands fit twice its ``v`` spacing; otherwise it
-    is a leaf. Level ``d + 1`` lists the children of the split nodes of level ``d``, in
-    order, so node ``i`` of a level's split nodes has children ``2i`` and ``2i + 1``. All
-    nodes of a level share one grid.
+    A node splits in two when both halves' bands fit twice its ``v`` spacing and two leaves
+    plus the merge cost less than the node as a leaf (rows times pulses, a merged row
+    :data:`_MERGE_COST` pulses); otherwise it is a leaf. The second rule also keeps the
+    tree shallow: every level of interpolation adds error (a 64 m motion-compensated image
+    split down to 2-pulse leaves: 34 dB; with the rule 46.5 dB). Level ``d + 1`` lists the
+    children of the split nodes of level ``d``, in order. All nodes of a level share one
+    grid.
     """
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
     levels = [[root]]
-    margin = TAPS // 2 + 1
+    k0 = TAPS // 2 - 1  # child rows before the parent's row 0 (the filter's reach)
     while True:
         level = levels[-1]
         dv = 2.0 * level[0].dv
@@ -259,17 +174,203 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
                 kid.centre, kid.half = 0.5 * (lo + hi), 0.5 * (hi - lo)
             if any(dv * 2.0 * alpha * kid.half > 1.0 for kid in kids):
                 continue  # halving the aperture does not halve the band: a leaf
+            nv = k0 + (level[0].nv - 2) // 2 + TAPS // 2 + 1
+            if (node.j1 - node.j0) * node.nv <= (node.j1 - node.j0) * nv + _MERGE_COST * node.nv:
+                continue  # two leaves and a merge would cost more than this leaf
             for kid in kids:
                 kid.ratio = 2
                 kid.dv = dv
-                kid.k0 = margin
-                kid.v0 = level[0].v0 - margin * dv
-                kid.nv = (level[0].nv + 1) // 2 + 2 * margin + 1
+                kid.k0 = k0
+                kid.v0 = level[0].v0 - k0 * dv
+                kid.nv = nv
             node.children = kids
             nxt.extend(kids)
         if not nxt:
             return levels
         levels.append(nxt)
+
+
+# ====================================================================== evaluation
+def _depths(plans, bounds, y) -> tuple[list[list[_Node]], list[_Node | None]]:
+    """The nodes below the roots, all strips together, by depth (1, 2, ...).
+
+    Slots: in each depth's arrays the leaves come first, then the split nodes. A strip
+    whose root does not split gets one leaf on its image rows at depth 1 (read unfiltered).
+    Returns the depths and, per strip, that substitute leaf (else ``None``).
+    """
+    depths: list[list[_Node]] = []
+    substitutes: list[_Node | None] = []
+    dy = (y[-1] - y[0]) / (y.size - 1)
+    for (levels, _), r0, r1 in zip(plans, bounds[:-1], bounds[1:], strict=True):
+        root = levels[0][0]
+        if root.children:
+            below = levels[1:]
+            substitutes.append(None)
+        else:
+            leaf = _Node(root.j0, root.j1, dv=dy, v0=float(y[r0]), nv=int(r1 - r0))
+            below = [[leaf]]
+            substitutes.append(leaf)
+        for d, nodes in enumerate(below):
+            if d == len(depths):
+                depths.append([])
+            depths[d].extend(nodes)
+    for nodes in depths:
+        order = [n for n in nodes if not n.children] + [n for n in nodes if n.children]
+        nodes[:] = order
+        for slot, node in enumerate(order):
+            node.slot = slot
+    return depths, substitutes
+
+
+def _filters(nodes: list[_Node]) -> NDArray[np.float32]:
+    """``(len(nodes), 2, TAPS)`` complex half-sample filters of the nodes, by slot."""
+    offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
+    g = np.zeros((max(len(nodes), 1), 2, TAPS), np.float32)
+    for node in nodes:
+        if node.ratio == 2:
+            gc = half_sample_filter(node.half * node.dv, TAPS)
+            gc = gc * np.exp(-2j * np.pi * node.centre * node.dv * offsets)
+            g[node.slot, 0], g[node.slot, 1] = gc.real, gc.imag
+    return g
+
+
+def _evaluate(depths, frame: dict, tile_for, info: dict, report):
+    """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes."""
+    us = frame["us"]
+    du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
+    k0 = TAPS // 2 - 1
+    cre = np.zeros((1, 1, us.size), np.float32)
+    cim = cre
+    g = np.zeros((1, 2, TAPS), np.float32)
+    for d in range(len(depths) - 1, -1, -1):
+        nodes = depths[d]
+        leaves = [n for n in nodes if not n.children]
+        split = nodes[len(leaves) :]
+        n_rows = max(n.nv for n in nodes)
+        # Every row a parent reads is written (leaf tiles and merged rows below nv).
+        re = np.empty((len(nodes), n_rows, us.size), np.float32)
+        im = np.empty_like(re)
+        tile = (n_rows, 64)
+        for v0, dv, nv in {(n.v0, n.dv, n.nv) for n in leaves}:
+            # the smallest tile any leaf grid needs (in bounds for all)
+            rows, cols = tile_for(frame["pos"], us, v0 + np.arange(nv) * dv)
+            tile = (min(tile[0], rows), min(tile[1], cols))
+        starts = np.array([n.j0 for n in leaves], np.int64)
+        stops = np.array([n.j1 for n in leaves], np.int64)
+        kids = np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2)
+        with numba.parallel_chunksize(1):  # tiles and rows handed out one at a time
+            _kernels.level(
+                re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
+                np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]),
+                np.array([n.nv for n in nodes], np.int64), *frame["constants"][:2],
+                frame["n_up"], frame["constants"][2], tile[0], tile[1], *frame["centre"], kids,
+                cre, cim, k0, 2, g,
+            )  # fmt: skip
+        info["leaves"] += len(leaves)
+        info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
+        cre, cim = re, im
+        g = _filters(nodes)
+        report()
+    return cre, cim, g
+
+
+def _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame: dict) -> None:
+    """Write the image rows into ``out``: row ``r`` of strip ``s`` is root row ``r n_sub[s]``.
+
+    The root rows are the roots' children (planes ``cre``, ``cim`` of depth 1, filters
+    ``g``) added, or a strip's substitute leaf read as is, then remodulated.
+    """
+    n_strips = len(plans)
+    kids = np.full((n_strips, 2), -1, np.int64)
+    n_sub = np.ones(n_strips, np.int64)
+    k0 = np.zeros(n_strips, np.int64)
+    ratio = np.ones(n_strips, np.int64)
+    for s, ((levels, ns), leaf) in enumerate(zip(plans, substitutes, strict=True)):
+        if leaf is not None:
+            kids[s, 0] = leaf.slot
+        else:
+            root = levels[0][0]
+            kids[s] = [k.slot for k in root.children]
+            n_sub[s], k0[s], ratio[s] = ns, root.children[0].k0, root.children[0].ratio
+    ny = out.shape[0]
+    row_strip = np.repeat(np.arange(n_strips), np.diff(bounds)).astype(np.int64)
+    row_local = (np.arange(ny) - bounds[row_strip]).astype(np.int64)
+    _kernels.root_rows(
+        out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, frame["us"],
+        frame["y"], *frame["centre"], frame["constants"][2],
+    )  # fmt: skip
+
+
+def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
+    """Columns ``x`` that some pulse's fast-time window reaches (1 m margin), ascending."""
+    idx_scale, idx_offset, _ = constants
+    n_pulses = pos.shape[0]
+    d_lo = (1.0 - idx_offset) / idx_scale - 1.0
+    d_hi = (n_up - idx_offset) / idx_scale + 1.0
+    centre = pos.mean(axis=0)
+    v_probe = np.array([y[0], y[-1], min(max(centre[1], y[0]), y[-1])])
+    active = np.zeros(x.size, bool)
+    for j in sorted({0, n_pulses // 2, n_pulses - 1}):
+        r = pos[j]
+        d = np.sqrt((x[None, :] - r[0]) ** 2 + (v_probe[:, None] - r[1]) ** 2 + r[2] ** 2)
+        d -= ref_ranges[j]
+        active |= (d.max(axis=0) >= d_lo) & (d.min(axis=0) <= d_hi)
+    return np.flatnonzero(active)
+
+
+def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
+    """The cheapest cut of the rows in 1, 2, 4, 8 or 16 strips, by the cost model.
+
+    A narrower strip sees the look direction turn less, which lowers the band floor and
+    lets the leaves grow; each strip pays its own interpolation margins. Returns
+    ``(cost, bounds, [(levels, n_sub), ...])``; the cost is in pixel-pulses of the leaves
+    plus ~2 per merged sample (measured), the root's merge counted on the image rows only.
+    """
+    n_pulses, nv_ = pos.shape[0], y.size
+    centre = pos.mean(axis=0)
+    dy = (y[-1] - y[0]) / (nv_ - 1)
+
+    def plan(r0: int, r1: int) -> tuple[list[list[_Node]], int]:
+        ys = y[r0:r1]
+        probes = np.array(
+            [[a, b] for a in (us[0], us.mean(), us[-1]) for b in (ys[0], ys.mean(), ys[-1])]
+        )
+        lo_j, hi_j = _pulse_bands(pos, f_lo, f_hi, nu_o, centre, probes)
+        lo_j, hi_j = lo_j.tolist(), hi_j.tolist()
+
+        def band(j0: int, j1: int) -> tuple[float, float]:
+            """First, middle and last pulse of ``j0:j1``: the band's extremes."""
+            jm = (j0 + j1 - 1) // 2
+            return (min(lo_j[j0], lo_j[jm], lo_j[j1 - 1]),
+                    max(hi_j[j0], hi_j[jm], hi_j[j1 - 1]))  # fmt: skip
+
+        lo, hi = band(0, n_pulses)
+        n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
+        levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1, alpha)
+        return levels, n_sub
+
+    def cost(levels: list[list[_Node]], rows: int) -> float:
+        c = 0.0
+        for d, level in enumerate(levels):
+            for node in level:
+                if node.children:
+                    c += _MERGE_COST * (rows if d == 0 else node.nv) * us.size
+                else:
+                    c += (node.j1 - node.j0) * (rows if d == 0 else node.nv) * us.size
+        return c
+
+    best = None
+    for n_strips in (1, 2, 4, 8, 16):
+        if nv_ // n_strips < 16:
+            break
+        bounds = np.linspace(0, nv_, n_strips + 1).round().astype(int)
+        plans = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        c = sum(cost(levels, b - a) for (levels, _), a, b in
+                zip(plans, bounds[:-1], bounds[1:], strict=True))  # fmt: skip
+        if best is not None and c >= best[0]:
+            break  # more strips cost more margins than they save
+        best = (c, bounds, plans)
+    return best
 
 
 # ========================================================================= driver
@@ -286,7 +387,6 @@ def ffbp_values(
     carrier_hz: float,
     bandwidth_hz: float,
     tile_for,
-    backproject_f32,
     alpha: float = DEFAULT_ALPHA,
     progress: ProgressCallback | None = None,
 ) -> tuple[NDArray[np.complex128] | None, dict]:
@@ -316,9 +416,8 @@ def ffbp_values(
     carrier_hz, bandwidth_hz : float
         ``nu_o`` and ``B`` (Hz).
     tile_for : callable
-        ``tile_for(positions, u_m, v_m) -> (rows, cols) | None``, the tile of the exact kernel.
-    backproject_f32 : callable
-        The exact float32 kernel driver of :mod:`.backprojection`.
+        ``tile_for(positions, u_m, v_m) -> (rows, cols)``, the tile of the exact kernel
+        (the leaves use its float32 arithmetic, so its bounds).
     alpha : float
         Oversampling of each sub-image's band, > 1.
     progress : callable, optional
@@ -335,132 +434,50 @@ def ffbp_values(
     pos = np.asarray(positions, np.float64)
     look = np.array([x.mean(), y.mean()]) - pos.mean(axis=0)[:2]
     transpose = abs(look[1]) > abs(look[0])
+    rho_o = np.asarray(reference_point_m, np.float64)
     if transpose:  # u = y, v = x: swap the coordinates of everything
-        pos = pos[:, [1, 0, 2]]
-        rho_o = np.asarray(reference_point_m, np.float64)[[1, 0, 2]]
+        pos = np.ascontiguousarray(pos[:, [1, 0, 2]])
+        rho_o = rho_o[[1, 0, 2]]
         x, y = y, x
-    else:
-        rho_o = np.asarray(reference_point_m, np.float64)
-    nu_, nv_ = x.size, y.size  # image columns (u) and rows (v)
-    out = np.zeros((nv_, nu_), np.complex128)
-    idx_scale, idx_offset, quarter_scale = constants
-    centre = pos.mean(axis=0)
-    n_pulses = pos.shape[0]
-    # Columns that some pulse's fast-time window reaches (1 m margin).
-    d_lo = (1.0 - idx_offset) / idx_scale - 1.0
-    d_hi = (n_up - idx_offset) / idx_scale + 1.0
-    v_probe = np.array([y[0], y[-1], min(max(centre[1], y[0]), y[-1])])
-    active = np.zeros(nu_, bool)
-    for j in sorted({0, n_pulses // 2, n_pulses - 1}):
-        r = pos[j]
-        d = np.sqrt((x[None, :] - r[0]) ** 2 + (v_probe[:, None] - r[1]) ** 2 + r[2] ** 2)
-        d -= ref_ranges[j]
-        active |= (d.max(axis=0) >= d_lo) & (d.min(axis=0) <= d_hi)
     info: dict = {"levels": 0, "leaves": 0, "leaf_pixel_pulses": 0, "columns": 0}
-    cols = np.flatnonzero(active)
+    cols = _active_columns(pos, ref_ranges, x, y, constants, n_up)
     if cols.size == 0:
+        out = np.zeros((y.size, x.size), np.complex128)
         return (out.T if transpose else out), info
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
     us = np.ascontiguousarray(x[k_lo:k_hi])
-    dy = (y[-1] - y[0]) / (nv_ - 1)
     f_lo = carrier_hz - 0.5 * bandwidth_hz
     f_hi = carrier_hz + 0.5 * bandwidth_hz
-
-    def plan(r0: int, r1: int) -> tuple[list[list[_Node]], int]:
-        ys = y[r0:r1]
-        probes = np.array(
-            [[a, b] for a in (us[0], us.mean(), us[-1]) for b in (ys[0], ys.mean(), ys[-1])]
-        )
-        cache: dict[tuple[int, int], tuple[float, float]] = {}
-
-        def band(j0: int, j1: int) -> tuple[float, float]:
-            if (j0, j1) not in cache:
-                cache[(j0, j1)] = _band(pos, j0, j1, f_lo, f_hi, carrier_hz, centre, probes)
-            return cache[(j0, j1)]
-
-        lo, hi = band(0, n_pulses)
-        n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
-        levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1, alpha)
-        return levels, n_sub
-
-    def cost(levels: list[list[_Node]]) -> float:
-        """Relative cost: pixel-pulses of the leaves plus ~2 per merged sample (measured)."""
-        c = 0.0
-        for level in levels:
-            for node in level:
-                if node.children:
-                    c += 2.0 * 2.0 * node.nv * us.size
-                else:
-                    c += (node.j1 - node.j0) * node.nv * us.size
-        return c
-
-    # Strips of rows: a narrower strip sees the look direction turn less, which lowers the
-    # band floor and lets the leaves grow; each strip pays its own interpolation margins.
-    best = None
-    for n_strips in (1, 2, 4, 8, 16):
-        if nv_ // n_strips < 16:
-            break
-        bounds = np.linspace(0, nv_, n_strips + 1).round().astype(int)
-        plans = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-        c = sum(cost(levels) for levels, _ in plans)
-        if best is not None and c >= best[0]:
-            break  # more strips cost more margins than they save
-        best = (c, bounds, plans)
-    c_best, bounds, plans = best
-    if c_best > 0.7 * n_pulses * nv_ * us.size:
+    c_best, bounds, plans = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz, alpha)
+    if c_best > 0.7 * pos.shape[0] * y.size * us.size:
         return None, {"fallback": "exact (the factorisation would not save work here)"}
-    rref = float(np.linalg.norm(centre - rho_o))
-    cz2 = float(centre[2] ** 2)
-    info.update(levels=max(len(levels) for levels, _ in plans), columns=int(us.size),
-                strips=len(plans))  # fmt: skip
-    total = sum(len(levels) for levels, _ in plans)
+    centre = pos.mean(axis=0)
+    frame = {
+        "table": table_values,
+        "antennas": (np.ascontiguousarray(pos[:, 0]), np.ascontiguousarray(pos[:, 1]),
+                     np.ascontiguousarray(pos[:, 2] ** 2),
+                     np.ascontiguousarray(ref_ranges, dtype=np.float64)),
+        "us": us,
+        "y": y,
+        "constants": tuple(float(c) for c in constants),
+        "n_up": int(n_up),
+        "pos": pos,
+        # c, |c|_z^2, |c - rho_o|: the demodulation (see the module docstring)
+        "centre": (float(centre[0]), float(centre[1]), float(centre[2] ** 2),
+                   float(np.linalg.norm(centre - rho_o))),
+    }  # fmt: skip
+    depths, substitutes = _depths(plans, bounds, y)
+    info.update(levels=len(depths) + 1, columns=int(us.size), strips=len(plans))
     done = 0
-    offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
-    for (levels, n_sub), r0, r1 in zip(plans, bounds[:-1], bounds[1:], strict=True):
-        below: tuple[NDArray[np.float32], NDArray[np.float32]] | None = None
-        for level in reversed(levels):
-            first = level[0]
-            jr = np.empty((len(level), first.nv, us.size), np.float32)
-            ji = np.empty_like(jr)
-            leaves = [i for i, node in enumerate(level) if not node.children]
-            split = [i for i, node in enumerate(level) if node.children]
-            if leaves:  # one batch of backprojections on the level's grid, demodulated
-                vs = first.v0 + np.arange(first.nv) * first.dv
-                ranges = np.array([[level[i].j0, level[i].j1] for i in leaves], dtype=np.int64)
-                re, im = backproject_f32(
-                    table_values, pos, ref_ranges, us, vs, constants, n_up,
-                    tile_for(pos, us, vs), pulse_ranges=ranges,
-                )  # fmt: skip
-                lr = np.empty(re.shape, np.float32)
-                li = np.empty(re.shape, np.float32)
-                _modulate(re, im, lr, li, us, vs, centre[0], centre[1], cz2, rref,
-                          quarter_scale, -1.0)  # fmt: skip
-                jr[leaves] = lr
-                ji[leaves] = li
-                info["leaves"] += len(leaves)
-                info["leaf_pixel_pulses"] += int(np.sum(ranges[:, 1] - ranges[:, 0])) * re[0].size
-            if split:  # children 2i, 2i + 1 of split node i, all in one parallel region
-                kids = [kid for i in split for kid in level[i].children]
-                g = np.empty((len(kids), 2, TAPS), np.float32)
-                for c, kid in enumerate(kids):
-                    gc = half_sample_filter(kid.half * kid.dv)
-                    gc = gc * np.exp(-2j * np.pi * kid.centre * kid.dv * offsets)
-                    g[c, 0], g[c, 1] = gc.real, gc.imag
-                pre = np.zeros((len(split), first.nv, us.size), np.float32)
-                pim = np.zeros_like(pre)
-                _merge(pre, pim, below[0], below[1], kids[0].k0, kids[0].ratio, g)
-                jr[split] = pre
-                ji[split] = pim
-            below = (jr, ji)
-            done += 1
-            if progress is not None:
-                progress("backprojection", done, total)
-        jr, ji = below
-        rows_re = np.ascontiguousarray(jr[:, ::n_sub], np.float64)
-        rows_im = np.ascontiguousarray(ji[:, ::n_sub], np.float64)
-        ore = np.empty_like(rows_re)
-        oim = np.empty_like(rows_im)
-        _modulate(rows_re, rows_im, ore, oim, us, y[r0:r1], centre[0], centre[1], cz2, rref,
-                  quarter_scale, 1.0)  # fmt: skip
-        out[r0:r1, k_lo:k_hi] = ore[0] + 1j * oim[0]
+
+    def report() -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress("backprojection", done, len(depths) + 1)
+
+    cre, cim, g = _evaluate(depths, frame, tile_for, info, report)
+    out = np.zeros((y.size, x.size), np.complex128)
+    _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame)
+    report()
     return (out.T if transpose else out), info

@@ -1,0 +1,219 @@
+"""Compiled kernels of fast factorised backprojection (:mod:`.ffbp`).
+
+A tree level is one parallel region: its leaves (exact backprojection tiles, demodulated as
+they are written) and its merges (parents from the level below) are independent tasks of
+one ``prange``. On a shared 2-core machine each region ends in a barrier that waits for a
+descheduled thread, so the number of regions, not only the arithmetic, sets the time.
+
+Sub-images are ``(images, rows v, columns u)`` float32 planes ``re``, ``im``; image ``i``
+has its own row grid ``v0[i] + r dv[i]``, ``r < nv[i]``, and all share the columns ``us``.
+The demodulation is the carrier phase seen from the aperture centre ``c``,
+``exp(-i pi/2 quarter_scale (|c - rho| - rref))``, evaluated in float64.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ._simd import LANES, tile_pulse
+
+_FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
+# float64 minimax sine/cosine of pi r / 2 on |r| <= 1/2 (as in .backprojection).
+_S0, _S1, _S2, _S3, _S4, _S5 = (
+    1.57079632679489, -0.6459640975043288, 0.07969262615641214, -0.0046817525994714984,
+    0.00016042930460199835, -3.5564543255214174e-06,
+)  # fmt: skip
+_C0, _C1, _C2, _C3, _C4, _C5, _C6 = (
+    0.9999999999999951, -1.2337005501361604, 0.2536695079002106, -0.02086348074043811,
+    0.0009192599906072516, -2.5200275027694737e-05, 4.657112551982875e-07,
+)  # fmt: skip
+
+
+@numba.njit(fastmath=_FASTMATH, inline="always")
+def quarter_turns(t):  # pragma: no cover - compiled
+    """``(cos, sin)`` of ``pi t / 2``: ``t`` folded exactly to ``|t - k| <= 1/2``, float64."""
+    kq = np.rint(t)
+    x = t - kq
+    z = x * x
+    s = x * (_S0 + z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * _S5)))))
+    c = _C0 + z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
+    q = np.int64(kq)
+    swap = (q & 1) != 0
+    cs = s if swap else c
+    sn = c if swap else s
+    cs = -cs if ((q + 1) & 2) != 0 else cs
+    sn = -sn if (q & 2) != 0 else sn
+    return cs, sn
+
+
+@numba.njit(fastmath=_FASTMATH, inline="always")
+def _add_child(dre, dim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compiled
+    """Add parent row ``m`` of one child (planes ``cre``, ``cim``) to the row ``dre + 1j dim``.
+
+    Child row ``k0 + m / ratio`` sits at parent row ``m``. ``ratio == 1`` or ``m`` even:
+    that child row. Otherwise the half-sample interpolation
+    ``sum_t (g[0, t] + 1j g[1, t]) x[k0 + (m - 1)/2 + t - taps/2 + 1]``.
+    """
+    nu = dre.shape[0]
+    if ratio == 1 or m % 2 == 0:
+        mc = k0 + m if ratio == 1 else k0 + m // 2
+        for i in range(nu):
+            dre[i] += cre[mc, i]
+            dim[i] += cim[mc, i]
+        return
+    taps = g.shape[1]
+    b = k0 + (m - 1) // 2 - taps // 2 + 1
+    for t in range(taps):
+        gr = g[0, t]
+        gi = g[1, t]
+        xr = cre[b + t]
+        xi = cim[b + t]
+        for i in range(nu):
+            dre[i] += gr * xr[i] - gi * xi[i]
+            dim[i] += gr * xi[i] + gi * xr[i]
+
+
+@numba.njit(fastmath=_FASTMATH, inline="always")
+def _leaf_tile(
+    tab, j0, j1, ant_x, ant_y, ant_z2, ref, x0, dx, nx, y0, dy, r0, c0, nr, nc, idx_scale,
+    idx_offset, hi, quarter_scale, cu, cv, cz2, rref, ore, oim,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Pulses ``j0:j1`` on one tile (rows ``r0:r0 + nr``, columns ``c0:c0 + nc``), demodulated.
+
+    The per-pulse anchor arithmetic is that of ``backprojection._tile_kernel`` (float64
+    anchor, float32 pixels by :func:`~sarmotion.imaging._simd.tile_pulse`).
+    """
+    stride = tab.shape[1]
+    f32 = np.float32
+    si = f32(idx_scale)
+    sq = f32(quarter_scale)
+    ncp = (nc + LANES - 1) // LANES * LANES
+    rc = r0 + nr // 2
+    cc = c0 + nc // 2
+    xc = x0 + cc * dx
+    yc = y0 + rc * dy
+    acc_re = np.zeros(nr * ncp, np.float32)
+    acc_im = np.zeros(nr * ncp, np.float32)
+    nxv = np.empty(ncp, np.float32)
+    nyv = np.empty(nr, np.float32)
+    for j in range(j0, j1):
+        ddx = xc - ant_x[j]
+        ddy = yc - ant_y[j]
+        r_anchor = math.sqrt(ddx * ddx + ddy * ddy + ant_z2[j])
+        d0 = r_anchor - ref[j]
+        q0 = d0 * idx_scale + idx_offset
+        i0 = math.floor(q0)
+        t0 = d0 * quarter_scale
+        t0 -= 4.0 * np.rint(0.25 * t0)  # whole cycles, exact
+        inv = 1.0 / r_anchor
+        inv2 = inv * inv
+        bx = 2.0 * ddx
+        by = 2.0 * ddy
+        for k in range(ncp):
+            u = (c0 + k - cc) * dx
+            nxv[k] = u * (u + bx)
+        for r in range(nr):
+            v = (r0 + r - rc) * dy
+            nyv[r] = v * (v + by)
+        tile_pulse(
+            nxv, nyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp,
+            f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
+            f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
+            si, sq, f32(t0), hi,
+        )  # fmt: skip
+    for r in range(nr):
+        dv = y0 + (r0 + r) * dy - cv
+        c2 = dv * dv + cz2
+        for k in range(nc):
+            du = x0 + (c0 + k) * dx - cu
+            cs, sn = quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
+            a = acc_re[r * ncp + k]
+            b = acc_im[r * ncp + k]
+            ore[r0 + r, c0 + k] = a * cs + b * sn
+            oim[r0 + r, c0 + k] = b * cs - a * sn
+
+
+@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+def level(
+    re, im, tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale,
+    idx_offset, n_up, quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim,
+    k0, ratio, g,
+):  # pragma: no cover - compiled  # fmt: skip
+    """One tree level: leaves ``0..L-1`` and parents ``L..L+P-1`` of ``re``, ``im``, in place.
+
+    Leaf ``i < L = starts.size`` is the backprojection of pulses ``starts[i]:stops[i]``
+    (table ``tab``, antennas ``ant_*``, reference ranges ``ref``) on rows
+    ``v0[i] + r dv[i]``, ``r < nv[i]``, and columns ``x0 + k dx``, demodulated; one task per
+    ``tile_rows x tile_cols`` tile. Parent ``L + p`` (``p < P = kids.shape[0]``) is the sum of
+    children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
+    ``g[child]``) resampled to its rows (:func:`_add_child`); one task per row.
+    """
+    n_leaves = starts.size
+    nx = re.shape[2]
+    n_tx = (nx + tile_cols - 1) // tile_cols
+    n_ty = (re.shape[1] + tile_rows - 1) // tile_rows
+    n_leaf_tasks = n_leaves * n_ty * n_tx
+    n_rows = re.shape[1]
+    hi = np.float32(n_up)
+    for task in numba.prange(n_leaf_tasks + kids.shape[0] * n_rows):
+        if task < n_leaf_tasks:
+            i = task // (n_ty * n_tx)
+            tile = task % (n_ty * n_tx)
+            r0 = (tile // n_tx) * tile_rows
+            if r0 >= nv[i]:
+                continue
+            c0 = (tile % n_tx) * tile_cols
+            nr = min(nv[i], r0 + tile_rows) - r0
+            nc = min(nx, c0 + tile_cols) - c0
+            _leaf_tile(
+                tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, nx, v0[i], dv[i],
+                r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv, cz2, rref,
+                re[i], im[i],
+            )  # fmt: skip
+        else:
+            p = (task - n_leaf_tasks) // n_rows
+            m = (task - n_leaf_tasks) % n_rows
+            q = n_leaves + p
+            if m >= nv[q]:
+                continue
+            dre = re[q, m]
+            dim = im[q, m]
+            for k in range(nx):
+                dre[k] = 0.0
+                dim[k] = 0.0
+            for c in (kids[p, 0], kids[p, 1]):
+                _add_child(dre, dim, m, cre[c], cim[c], k0, ratio, g[c])
+
+
+@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+def root_rows(
+    out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, us, ys, cu, cv, cz2,
+    rref, quarter_scale,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Image rows from the roots' children, remodulated, into ``out`` (complex128).
+
+    Image row ``r`` (at ``v = ys[r]``) is row ``row_local[r] n_sub[s]`` of the root of strip
+    ``s = row_strip[r]``: the sum of its children ``kids[s]`` (``-1``: none) of the planes
+    ``cre``, ``cim``, with ``k0[s]``, ``ratio[s]`` and filters ``g`` as in
+    :func:`_add_child`; ``out[r, k_lo + k] = J exp(+i pi/2 quarter_scale (|c - rho| - rref))``.
+    """
+    nu = us.size
+    for r in numba.prange(ys.size):
+        s = row_strip[r]
+        m = row_local[r] * n_sub[s]
+        dre = np.zeros(nu, np.float32)
+        dim = np.zeros(nu, np.float32)
+        for c in (kids[s, 0], kids[s, 1]):
+            if c >= 0:
+                _add_child(dre, dim, m, cre[c], cim[c], k0[s], ratio[s], g[c])
+        dv = ys[r] - cv
+        c2 = dv * dv + cz2
+        for k in range(nu):
+            du = us[k] - cu
+            cs, sn = quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
+            a = np.float64(dre[k])
+            b = np.float64(dim[k])
+            out[r, k_lo + k] = complex(a * cs - b * sn, a * sn + b * cs)
