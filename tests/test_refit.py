@@ -70,8 +70,10 @@ def test_refit_restores_the_amplitude_and_keeps_the_speed_on_a_real_degree(gotch
     The fit on ``S`` sees 15-40 % of the mover's amplitude (RPCA moves the rest into
     ``L``); the refit on the data minus a stationary estimate made without the mover
     sees it whole: within 20 % of the truth. Its cross-range speed is within 0.1 m/s of
-    the truth (about three times the benchmark's RMSE on real degrees) and no worse
-    than the fit on ``S`` by more than 0.05 m/s; range speed within 0.01 m/s.
+    the truth (about twice the benchmark's RMSE on real degrees) and no worse than the
+    fit on ``S`` by more than 0.05 m/s; range speed within 0.01 m/s. Measured: amplitude
+    0.19 / 0.41 of the truth on ``S``, 0.97 / 0.99 refitted (degrees 0 / 2); cross-range
+    speed error 0.095 / 0.001 m/s on ``S``, 0.013 / 0.021 refitted.
     """
     clutter = read_gotcha(gotcha_files[degree : degree + 1])
     geom = clutter.geometry
