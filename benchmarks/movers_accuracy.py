@@ -473,7 +473,8 @@ def regime_lines(reg: dict) -> list[str]:
             + (f"{a['p_d']:.2f} / {b['p_d']:.2f}" if r["movers"] else "-")
             + f" | {a['false_per_scene']:.2f} / {b['false_per_scene']:.2f} | "
             + (
-                f"{a['rmse'][1]:.3f} ({a['detected']}) / {b['rmse'][1]:.3f} ({b['detected']})"
+                f"{f([a['rmse'][1]], 3)} ({a['detected']}) / "
+                f"{f([b['rmse'][1]], 3)} ({b['detected']})"
                 if r["movers"]
                 else "-"
             )
@@ -502,8 +503,8 @@ def regime_lines(reg: dict) -> list[str]:
             lines.append(
                 f"| {name} | {o['n']} | {f(o['rmse'][:2], 4)} / {o['rmse'][2]:.4f} | "
                 f"{f(o['rmse_refit'][:2], 4)} / {o['rmse_refit'][2]:.4f} | {o['common_n']} | "
-                f"{o['common'][1]:.3f} | {r['common']['analysis'][1]:.3f} | "
-                f"{r['common']['baseline'][1]:.3f} |"
+                f"{f([o['common'][1]], 3)} | {f([r['common']['analysis'][1]], 3)} | "
+                f"{f([r['common']['baseline'][1]], 3)} |"
             )
     return lines
 
