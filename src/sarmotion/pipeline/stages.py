@@ -149,10 +149,10 @@ def estimate_movers(
     all fits are refined jointly (``options.joint_rounds``), and, given the preliminary
     ``image``, re-fitted on the data minus a stationary estimate made without them
     (:func:`~sarmotion.pipeline.refit.refit_movers_on_data`); the noise level around each
-    is measured on what they leave as the matched filter sees it (:func:`_local_noise`),
-    and each gets its
-    Cramér–Rao bound and, for comparison and the paper's figures, ``g_perp``
-    (``eq:OBJ2``) at its range speed and position. A wide aperture's estimates are then
+    is measured on what they leave of the data of the last fit as the matched filter
+    sees it (:func:`_local_noise`), and each gets its Cramér–Rao bound and, for
+    comparison and the paper's figures, ``g_perp`` (``eq:OBJ2``) at its range speed and
+    position. A wide aperture's estimates are then
     focused on all pulses. Each mover's own traces are extracted from the residual
     (:func:`extract_mover`) in turn. Returns the fits and the final residual.
     """
