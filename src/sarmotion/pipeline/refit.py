@@ -29,7 +29,14 @@ RPCA: cross-range-speed RMSE 0.046 m/s against 0.051 on ``S`` (28 movers: point 
 0.007 against 0.057, slow movers 0.018 against 0.034, pairs 0.011 against 0.039, real
 degrees 0.061 against 0.060), 0.041 against 0.065 on the 4 the no-separation baseline
 also found (0.067 for the baseline); on the scenes separated by the combined method,
-whose ``S`` holds the movers whole, within 0.02 m/s of the fit on ``S`` per mover (19).
+whose ``S`` holds the movers whole, within 0.025 m/s of the fit on ``S`` per mover (19).
+Cost, on 2 shared cores (load average 6-9): 0.4-9.5 s per scene with movers (mean 2.5 s
+on the 16 such seed-11 scenes separated by the combined method, whose separation took 4.0
+s on average; 2.0 s on the 16 separated by RPCA, 1.1 s); in the same process,
+``estimate_movers`` with the refit against without it (medians of 3) on the 16 scenes with
+injected movers of ``--quick --seed 11``: +0.58 s per scene on average (-0.2 to +2.3 s;
+the refit runs only where movers were found), for 6.7 s of preliminary image,
+separation and movers.
 Positions in m, speeds in m/s.
 """
 
