@@ -33,7 +33,7 @@ whose ``S`` holds the movers whole, within 0.025 m/s of the fit on ``S`` per mov
 Cost, on 2 shared cores (load average 6-9): 0.4-9.5 s per scene with movers (mean 2.5 s
 on the 16 such seed-11 scenes separated by the combined method, whose separation took 4.0
 s on average; 2.0 s on the 16 separated by RPCA, 1.1 s); in the same process,
-``estimate_movers`` with the refit against without it (medians of 3) on the 16 scenes with
+``estimate_movers`` with the refit against without it (medians of 3) on the 15 scenes with
 injected movers of ``--quick --seed 11``: +0.58 s per scene on average (-0.2 to +2.3 s;
 the refit runs only where movers were found), for 6.7 s of preliminary image,
 separation and movers.
