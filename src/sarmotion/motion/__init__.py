@@ -51,6 +51,7 @@ from .likelihood import (
     noise_variance,
     point_model,
     refine_jointly,
+    refit_movers,
 )
 from .location import MoverLocation, locate_mover
 from .phase_space import TrajectoryEstimate, estimate_trajectory, trajectory_error
@@ -82,6 +83,7 @@ __all__ = [
     "point_mover_bound",
     "range_gradients",
     "refine_jointly",
+    "refit_movers",
     "stationary_explanation",
     "threshold_db",
     "ApertureFit",

@@ -68,6 +68,7 @@ __all__ = [
     "fit_point_mover",
     "point_model",
     "refine_jointly",
+    "refit_movers",
     "noise_variance",
     "matched_filter_noise_variance",
 ]
@@ -407,3 +408,38 @@ def matched_filter_noise_variance(
     mf = MatchedFilter(traces, data)
     level = float(np.median(np.abs(mf.responses(pos, vel)) ** 2) / np.log(2.0))
     return level * mf.norm / traces.n_pulses / traces.n_samples
+
+
+def refit_movers(
+    traces: Traces, data: ArrayLike, fits: Sequence[PointFit], *, rounds: int = 1
+) -> list[PointFit]:
+    """Re-fit every mover locally on ``data`` minus the other movers' models.
+
+    Unlike :func:`refine_jointly` a single mover is re-fitted too: ``data`` is not the
+    one the fits were made on (e.g. the traces with a new stationary estimate removed,
+    :mod:`sarmotion.pipeline.refit`). The other movers' models use the amplitudes of
+    ``fits``; each re-fitted mover's amplitude is the matched filter on ``data`` at its
+    new parameters. ``rounds`` sweeps (the alternating maximisation of the joint
+    likelihood).
+    """
+    d = np.asarray(data)
+    out = list(fits)
+    models = [point_model(traces, f.position_m, f.velocity_mps, f.amplitude) for f in out]
+    for _ in range(int(rounds)):
+        for k, f in enumerate(out):
+            others = sum((m for j, m in enumerate(models) if j != k), np.zeros_like(d))
+            mf = MatchedFilter(traces, d - others)
+            pos, ur, up, value = _local_fit(
+                traces, mf, f.position_m, f.range_speed_mps, f.cross_range_speed_mps
+            )
+            vel = ground_velocity(ur, up, traces.geometry)
+            out[k] = replace(
+                f,
+                position_m=pos,
+                range_speed_mps=ur,
+                cross_range_speed_mps=up,
+                velocity_mps=vel,
+                amplitude=value / traces.n_pulses,
+            )
+            models[k] = point_model(traces, pos, vel, out[k].amplitude)
+    return out

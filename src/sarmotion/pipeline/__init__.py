@@ -4,6 +4,8 @@
   frozen, validated object;
 - :mod:`~sarmotion.pipeline.stages` — the stages: preliminary image, range speeds, movers
   one at a time, trajectories, images, stationary targets;
+- :mod:`~sarmotion.pipeline.refit` — the movers' final fit on the data minus a stationary
+  estimate made without them;
 - :mod:`~sarmotion.pipeline.analyze` — :func:`analyze`, the stages in order;
 - :mod:`~sarmotion.pipeline.results` — :class:`AnalysisResult` and its parts;
 - :mod:`~sarmotion.pipeline.truth` — comparison with the true scene of a simulation.

@@ -113,7 +113,7 @@ def analyze(
         detection = find_range_speeds(sub, sep.moving[central], opts)
     with _timed(timings, "movers"):
         fits, residual = estimate_movers(
-            traces, sep.moving, detection, opts, central=central, progress=progress
+            traces, sep.moving, detection, opts, central=central, image=prelim, progress=progress
         )
     with _timed(timings, "trajectories"):
         trajs = (

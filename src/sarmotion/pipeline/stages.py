@@ -43,6 +43,7 @@ from ..motion import (
 )
 from ..separation import Separation, aligned_constant_part
 from .options import AnalysisOptions
+from .refit import refit_movers_on_data, with_refit_history
 from .results import MoverEvidence, MoverResult, StationaryTarget
 
 __all__ = [
@@ -139,16 +140,19 @@ def estimate_movers(
     options: AnalysisOptions,
     *,
     central: slice,
+    image: Image | None = None,
     progress: ProgressCallback | None = None,
 ) -> tuple[list[MoverFit], NDArray[np.complex128]]:
     """Maximum-likelihood movers, jointly refined, with their bounds; then extracted.
 
     On the central sub-aperture: each candidate is fitted (:func:`_fit_candidates`),
-    all fits are refined jointly (``options.joint_rounds``), the noise level around each
-    is measured on what they leave as the matched filter sees it (:func:`_local_noise`),
-    and each gets its
-    Cramér–Rao bound and, for comparison and the paper's figures, ``g_perp``
-    (``eq:OBJ2``) at its range speed and position. A wide aperture's estimates are then
+    all fits are refined jointly (``options.joint_rounds``), and, given the preliminary
+    ``image``, re-fitted on the data minus a stationary estimate made without them
+    (:func:`~sarmotion.pipeline.refit.refit_movers_on_data`); the noise level around each
+    is measured on what they leave of the data of the last fit as the matched filter
+    sees it (:func:`_local_noise`), and each gets its Cramér–Rao bound and, for
+    comparison and the paper's figures, ``g_perp`` (``eq:OBJ2``) at its range speed and
+    position. A wide aperture's estimates are then
     focused on all pulses. Each mover's own traces are extracted from the residual
     (:func:`extract_mover`) in turn. Returns the fits and the final residual.
     """
@@ -156,13 +160,19 @@ def estimate_movers(
     moving_sub = np.asarray(moving)[central]
     found = _fit_candidates(sub, moving_sub, detection, options, progress)
     fits = refine_jointly(sub, moving_sub, [f for f, _ in found], rounds=options.joint_rounds)
+    on_s, data_sub = fits, moving_sub
+    if image is not None and fits:
+        threshold = options.separation.candidate_threshold_db
+        fits, data_sub = refit_movers_on_data(sub, image, fits, threshold_db=threshold)
     models = [point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in fits]
-    left = moving_sub - sum(models, np.zeros(sub.shape, dtype=complex))
+    left = data_sub - sum(models, np.zeros(sub.shape, dtype=complex))
     residual = np.array(moving, dtype=np.complex128)
     out: list[MoverFit] = []
     for k, (fit, (_, evidence)) in enumerate(zip(fits, found, strict=True)):
         others = sum((m for j, m in enumerate(models) if j != k), np.zeros(sub.shape, complex))
         est = _estimate(sub, moving_sub - others, fit, detection, evidence, options)
+        if fit is not on_s[k]:
+            est = with_refit_history(est, on_s[k], fit)
         family = family_direction(sub, est.position_m, est.velocity_mps)
         if central != slice(0, traces.n_pulses):
             est = _on_whole_aperture(traces, residual, est, central)
