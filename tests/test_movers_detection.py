@@ -42,9 +42,10 @@ def _movers_stages(traces, method, size_m=None):
     opts = opts.resolved(traces)
     central = central_sub_aperture(traces, opts.sub_aperture_deg)
     sub = traces.select_pulses(central.start, central.stop)
-    sep = separate(traces, preliminary_image(traces, opts), opts.separation)
+    prelim = preliminary_image(traces, opts)
+    sep = separate(traces, prelim, opts.separation)
     detection = find_range_speeds(sub, sep.moving[central], opts)
-    fits, _ = estimate_movers(traces, sep.moving, detection, opts, central=central)
+    fits, _ = estimate_movers(traces, sep.moving, detection, opts, central=central, image=prelim)
     return sub, sep.moving[central], detection, fits
 
 
@@ -243,16 +244,44 @@ def test_injected_movers_found_when_their_peak_stands_8db(gotcha_files, degree):
 
 
 # ------------------------------------------------------------------ point clutter
+def _white_noise_bound(sub, truth, noise_variance_t):
+    """Cramér–Rao standard deviations (x, u, u_perp) of ``truth`` in white noise alone.
+
+    ``noise_variance_t`` is the per-sample variance of the simulated noise in fast time;
+    the phase history's is ``n_samples`` times it.
+    """
+    geom = sub.geometry
+    grads = range_gradients(
+        sub.positions_m,
+        sub.slow_times_s,
+        truth.position_m,
+        truth.velocity_mps,
+        range_direction=resolution(sub).range_direction,
+        range_basis_mps=ground_velocity(1, 0, geom),
+        cross_basis_mps=ground_velocity(0, 1, geom),
+    )
+    J = fisher_information(
+        grads,
+        sub.frequencies_hz,
+        sub.radar.spectral_weights(),
+        amplitude=abs(truth.reflectivity),
+        noise_variance=sub.n_samples * noise_variance_t,
+    )
+    return np.sqrt(np.diag(np.linalg.inv(J)))[:3]
+
+
 @pytest.fixture(scope="module")
 def clutter_draws():
     """30 seeded scenes of 15 point targets at 20 dB SNR with one mover (50 m image).
 
     Returns the errors (x m, u and u_perp m/s; on the truth's family member at the fit's
-    cross range) and the bounds the analysis reported, shape (30, 3) each.
+    cross range), the standard errors the analysis reported and the Cramér–Rao bound of
+    the truth in the simulated white noise alone (the bound at the data's SNR), shape
+    (30, 3) each.
     """
     base = simulate(random_scene(n_stationary=1, rng=0)).traces
     geom = base.geometry
-    errs, bounds = [], []
+    errs, reported, white = [], [], []
     for seed in range(7200, 7230):
         rng = np.random.default_rng(seed)
         u = rng.uniform(2.0, 8.0) * rng.choice([-1, 1])
@@ -261,39 +290,51 @@ def clutter_draws():
             velocity_mps=ground_velocity(u, rng.uniform(-8, 8), geom),
         )
         scene = random_scene(n_stationary=15, rng=rng)
-        traces = inject(simulate(scene, snr_db=20.0, rng=rng).traces, [truth])
+        noisy = simulate(scene, snr_db=20.0, rng=rng).traces
+        noise = noisy.data - simulate(scene).traces.data
+        traces = inject(noisy, [truth])
         sub, _, _, fits = _movers_stages(traces, "combined", size_m=50.0)
         assert len(fits) == 1, (seed, [f.fit.range_speed_mps for f in fits])
         errs.append(_family_errors(sub, fits[0].fit, truth))
         b = fits[0].bound
-        bounds.append([b.range_position_m, b.range_speed_mps, b.cross_range_speed_mps])
-    return np.array(errs), np.array(bounds)
+        reported.append([b.range_position_m, b.range_speed_mps, b.cross_range_speed_mps])
+        white.append(_white_noise_bound(sub, truth, float(np.mean(np.abs(noise) ** 2))))
+    return np.array(errs), np.array(reported), np.array(white)
+
+
+def _rms(a):
+    return np.sqrt(np.mean(np.square(a), axis=0))
 
 
 @pytest.mark.slow
-def test_cross_range_speed_within_the_bound_in_point_clutter_at_20db(clutter_draws):
-    """RMSE of the cross-range speed within 1.5 RMS bounds; at most 1 in 30 beyond 3.
+def test_speeds_within_the_bound_in_point_clutter_at_20db(clutter_draws):
+    """Range and cross-range speed: RMSE within 1.5 white-noise bounds, at most 1 in 30
+    beyond 3 bounds (a wrong lobe is tens of bounds).
 
-    Measured: RMSE 3.0e-3 m/s against an RMS bound of 2.2e-3 (1.34).
+    Measured, with the refit on the data minus the stationary estimate made without the
+    mover: RMSE / RMS bound 1.28 (range speed) and 1.30 (cross-range speed), one draw
+    beyond 3 bounds in each; the fit on the separated traces alone had range speed at
+    2.4 bounds (two draws beyond 3: 8.8 and 3.2). Range position is not bound-limited
+    here: 2.06 bounds, six beyond 3.
     """
-    errs, bounds = clutter_draws
-    rmse = np.sqrt(np.mean(errs[:, 2] ** 2))
-    assert rmse <= 1.5 * np.sqrt(np.mean(bounds[:, 2] ** 2)), (rmse, bounds[:, 2])
-    assert np.sum(np.abs(errs[:, 2]) > 3 * bounds[:, 2]) <= 1
+    errs, _, white = clutter_draws
+    for k in (1, 2):
+        assert _rms(errs[:, k]) <= 1.5 * _rms(white[:, k]), (k, _rms(errs[:, k]), white[:, k])
+        assert np.sum(np.abs(errs[:, k]) > 3 * white[:, k]) <= 1, (k, errs[:, k] / white[:, k])
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="measured: range-speed RMSE 1.6e-5 m/s is 2.4 RMS bounds (6.9e-6): the residue "
-    "of the stationary targets biases the Doppler beyond the white-noise bound",
-)
-def test_range_speed_within_the_bound_in_point_clutter_at_20db(clutter_draws):
-    """RMSE of the range speed within 1.5 RMS bounds; at most 1 in 30 beyond 3 bounds."""
-    errs, bounds = clutter_draws
-    rmse = np.sqrt(np.mean(errs[:, 1] ** 2))
-    assert rmse <= 1.5 * np.sqrt(np.mean(bounds[:, 1] ** 2)), (rmse, bounds[:, 1])
-    assert np.sum(np.abs(errs[:, 1]) > 3 * bounds[:, 1]) <= 1
+def test_reported_standard_errors_cover_the_errors_in_point_clutter(clutter_draws):
+    """The standard errors in results.json are not too small: RMSE within 1.5 of them.
+
+    They use the interference the matched filter sees after the fit (white noise plus
+    what is left of the clutter), so they exceed the white-noise bound. Measured: RMSE /
+    RMS reported 1.09 (range position), 0.70 (range speed), 0.69 (cross-range speed);
+    reported / white-noise bound, median 1.8.
+    """
+    errs, reported, white = clutter_draws
+    assert np.all(_rms(errs) <= 1.5 * _rms(reported)), _rms(errs) / _rms(reported)
+    assert np.all(reported >= white * 0.99)  # interference only adds to the noise
 
 
 def test_matched_filter_and_model_agree():
