@@ -68,6 +68,32 @@ def _family_errors(sub, fit, truth):
     )
 
 
+def _white_noise_bound(sub, truth, noise_variance_t):
+    """Cramér–Rao standard deviations (x, u, u_perp) of ``truth`` in white noise alone.
+
+    ``noise_variance_t`` is the per-sample variance of the simulated noise in fast time;
+    the phase history's is ``n_samples`` times it.
+    """
+    geom = sub.geometry
+    grads = range_gradients(
+        sub.positions_m,
+        sub.slow_times_s,
+        truth.position_m,
+        truth.velocity_mps,
+        range_direction=resolution(sub).range_direction,
+        range_basis_mps=ground_velocity(1, 0, geom),
+        cross_basis_mps=ground_velocity(0, 1, geom),
+    )
+    J = fisher_information(
+        grads,
+        sub.frequencies_hz,
+        sub.radar.spectral_weights(),
+        amplitude=abs(truth.reflectivity),
+        noise_variance=sub.n_samples * noise_variance_t,
+    )
+    return np.sqrt(np.diag(np.linalg.inv(J)))[:3]
+
+
 # ------------------------------------------------------------------ pure functions
 def test_fisher_matrix_is_the_closed_form_of_the_model():
     """The phase-eliminated Fisher matrix equals the one of numeric model derivatives."""
@@ -118,23 +144,7 @@ def test_bound_is_reached_by_the_fit_in_white_noise():
     clean = inject(base.with_data(np.zeros(base.shape, complex)), [truth])
     n, k = clean.shape
     var = n / 10**2.0  # sigma_t^2 for A^2 sum w / sigma_P^2 = 100 (rect W = 1)
-    grads = range_gradients(
-        clean.positions_m,
-        clean.slow_times_s,
-        truth.position_m,
-        truth.velocity_mps,
-        range_direction=resolution(clean).range_direction,
-        range_basis_mps=ground_velocity(1, 0, geom),
-        cross_basis_mps=ground_velocity(0, 1, geom),
-    )
-    J = fisher_information(
-        grads,
-        clean.frequencies_hz,
-        clean.radar.spectral_weights(),
-        amplitude=1.0,
-        noise_variance=k * var,
-    )
-    sd = np.sqrt(np.diag(np.linalg.inv(J)))[:3]
+    sd = _white_noise_bound(clean, truth, var)
     rng = np.random.default_rng(7000)
     errs = []
     for _ in range(30):
@@ -244,32 +254,6 @@ def test_injected_movers_found_when_their_peak_stands_8db(gotcha_files, degree):
 
 
 # ------------------------------------------------------------------ point clutter
-def _white_noise_bound(sub, truth, noise_variance_t):
-    """Cramér–Rao standard deviations (x, u, u_perp) of ``truth`` in white noise alone.
-
-    ``noise_variance_t`` is the per-sample variance of the simulated noise in fast time;
-    the phase history's is ``n_samples`` times it.
-    """
-    geom = sub.geometry
-    grads = range_gradients(
-        sub.positions_m,
-        sub.slow_times_s,
-        truth.position_m,
-        truth.velocity_mps,
-        range_direction=resolution(sub).range_direction,
-        range_basis_mps=ground_velocity(1, 0, geom),
-        cross_basis_mps=ground_velocity(0, 1, geom),
-    )
-    J = fisher_information(
-        grads,
-        sub.frequencies_hz,
-        sub.radar.spectral_weights(),
-        amplitude=abs(truth.reflectivity),
-        noise_variance=sub.n_samples * noise_variance_t,
-    )
-    return np.sqrt(np.diag(np.linalg.inv(J)))[:3]
-
-
 @pytest.fixture(scope="module")
 def clutter_draws():
     """30 seeded scenes of 15 point targets at 20 dB SNR with one mover (50 m image).

@@ -329,31 +329,12 @@ def refine_jointly(
     """Re-fit every mover locally on ``data`` minus the other movers' models, ``rounds`` times.
 
     The alternating (coordinate-wise) maximisation of the joint likelihood of several
-    point movers; one mover is returned unchanged.
+    point movers (:func:`refit_movers` on the data the fits were made on); one mover is
+    returned unchanged.
     """
-    d = np.asarray(data)
-    out = list(fits)
-    if len(out) < 2:
-        return out
-    models = [point_model(traces, f.position_m, f.velocity_mps, f.amplitude) for f in out]
-    for _ in range(int(rounds)):
-        for k, f in enumerate(out):
-            others = sum((m for j, m in enumerate(models) if j != k), np.zeros_like(models[k]))
-            mf = MatchedFilter(traces, d - others)
-            pos, ur, up, value = _local_fit(
-                traces, mf, f.position_m, f.range_speed_mps, f.cross_range_speed_mps
-            )
-            vel = ground_velocity(ur, up, traces.geometry)
-            out[k] = replace(
-                f,
-                position_m=pos,
-                range_speed_mps=ur,
-                cross_range_speed_mps=up,
-                velocity_mps=vel,
-                amplitude=value / traces.n_pulses,
-            )
-            models[k] = point_model(traces, pos, vel, out[k].amplitude)
-    return out
+    if len(fits) < 2:
+        return list(fits)
+    return refit_movers(traces, data, fits, rounds=rounds)
 
 
 def noise_variance(residual: ArrayLike) -> float:
