@@ -13,11 +13,11 @@ import importlib
 import logging
 import signal
 import sys
+import textwrap
 import threading
 from collections.abc import Iterator, Sequence
 
 import click
-from click.utils import make_default_short_help
 
 from .. import __version__
 
@@ -109,7 +109,7 @@ class _LazyGroup(click.Group):
         """The command list with the sentences of :data:`COMMANDS` (no import)."""
         names = self.list_commands(ctx)
         limit = formatter.width - 6 - max(len(n) for n in names)
-        rows = [(n, make_default_short_help(COMMANDS[n][1], limit)) for n in names]
+        rows = [(n, textwrap.shorten(COMMANDS[n][1], limit, placeholder="...")) for n in names]
         with formatter.section("Commands"):
             formatter.write_dl(rows)
 

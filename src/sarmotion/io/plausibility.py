@@ -52,7 +52,8 @@ def check_envelope(
     path: Path | str, field: str, positions_m: NDArray[np.float64], *, lenient: bool
 ) -> None:
     """Antenna above the ground plane and 10 m to 1000 km from the scene centre."""
-    rng = np.linalg.norm(positions_m, axis=1)
+    with np.errstate(over="ignore"):  # a corrupted coordinate near 1e308: inf, refused
+        rng = np.linalg.norm(positions_m, axis=1)
     lo, hi = RANGE_ENVELOPE_M
     bad = np.flatnonzero((rng < lo) | (rng > hi) | (positions_m[:, 2] <= 0.0))
     if bad.size:
@@ -72,7 +73,8 @@ def check_track(
     """Steps between pulses in ``(0, MAX_STEP]`` spacings; second differences ``<= MAX_BEND``."""
     if positions_m.shape[0] < 2:
         return
-    steps = np.linalg.norm(np.diff(positions_m, axis=0), axis=1)
+    with np.errstate(over="ignore", invalid="ignore"):  # inf or nan steps are refused
+        steps = np.linalg.norm(np.diff(positions_m, axis=0), axis=1)
     spacing = float(np.median(steps))
     bad = np.flatnonzero((steps == 0.0) | (steps > MAX_STEP * spacing))
     if spacing == 0.0 or bad.size:
