@@ -200,5 +200,5 @@ def test_mutated_gotcha_files_are_refused_or_read_correctly(original, tmp_path, 
 def test_fuzz_ran_every_mutant():
     """Runs after the fuzz test in file order: all mutants were tried, some refused."""
     if not STATS:
-        pytest.skip("the fuzz test did not run in this session")
+        pytest.skip("the fuzz test did not run in this pytest run")
     assert_every_mutant_ran(STATS, N_MUTANTS)
