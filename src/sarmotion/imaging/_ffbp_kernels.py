@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-from ._simd import LANES, tile_pulse
+from ._simd import LANES, tile_pulses
 
 _FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
 # float64 minimax sine/cosine of pi r / 2 on |r| <= 1/2 (as in .backprojection).
@@ -83,13 +83,9 @@ def _leaf_tile(
 ):  # pragma: no cover - compiled  # fmt: skip
     """Pulses ``j0:j1`` on one tile (rows ``r0:r0 + nr``, columns ``c0:c0 + nc``), demodulated.
 
-    The per-pulse anchor arithmetic is that of ``backprojection._tile_kernel`` (float64
-    anchor, float32 pixels by :func:`~sarmotion.imaging._simd.tile_pulse`).
+    The pulses are added as by exact backprojection
+    (:func:`~sarmotion.imaging._simd.tile_pulses`: float64 anchor, float32 pixels).
     """
-    stride = tab.shape[1]
-    f32 = np.float32
-    si = f32(idx_scale)
-    sq = f32(quarter_scale)
     ncp = (nc + LANES - 1) // LANES * LANES
     rc = r0 + nr // 2
     cc = c0 + nc // 2
@@ -97,33 +93,10 @@ def _leaf_tile(
     yc = y0 + rc * dy
     acc_re = np.zeros(nr * ncp, np.float32)
     acc_im = np.zeros(nr * ncp, np.float32)
-    nxv = np.empty(ncp, np.float32)
-    nyv = np.empty(nr, np.float32)
-    for j in range(j0, j1):
-        ddx = xc - ant_x[j]
-        ddy = yc - ant_y[j]
-        r_anchor = math.sqrt(ddx * ddx + ddy * ddy + ant_z2[j])
-        d0 = r_anchor - ref[j]
-        q0 = d0 * idx_scale + idx_offset
-        i0 = math.floor(q0)
-        t0 = d0 * quarter_scale
-        t0 -= 4.0 * np.rint(0.25 * t0)  # whole cycles, exact
-        inv = 1.0 / r_anchor
-        inv2 = inv * inv
-        bx = 2.0 * ddx
-        by = 2.0 * ddy
-        for k in range(ncp):
-            u = (c0 + k - cc) * dx
-            nxv[k] = u * (u + bx)
-        for r in range(nr):
-            v = (r0 + r - rc) * dy
-            nyv[r] = v * (v + by)
-        tile_pulse(
-            nxv, nyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp,
-            f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
-            f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
-            si, sq, f32(t0), hi,
-        )  # fmt: skip
+    tile_pulses(
+        tab, j0, j1, ant_x, ant_y, ant_z2, ref, xc, yc, dx, dy, c0, cc, r0, rc, nr, ncp,
+        idx_scale, idx_offset, hi, quarter_scale, acc_re, acc_im,
+    )  # fmt: skip
     for r in range(nr):
         dv = y0 + (r0 + r) * dy - cv
         c2 = dv * dv + cz2

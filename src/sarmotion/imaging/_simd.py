@@ -30,13 +30,16 @@ holds.
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from llvmlite import binding as llvm
 from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-__all__ = ["LANES", "tile_pulse"]
+__all__ = ["LANES", "tile_pulse", "tile_pulses"]
 
 #: Pixels per SIMD step; tile rows are padded to a multiple of it.
 LANES = 16
@@ -211,3 +214,49 @@ def tile_pulse(
         return context.get_dummy_value()
 
     return sig, codegen
+
+
+@numba.njit(inline="always")
+def tile_pulses(
+    tab, j0, j1, ant_x, ant_y, ant_z2, ref, xc, yc, dx, dy, c0, cc, r0, rc, nr, ncp,
+    idx_scale, idx_offset, hi, quarter_scale, acc_re, acc_im,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Add pulses ``j0:j1`` to one tile's float32 accumulators (``nr x ncp``, row-major).
+
+    Per pulse, the anchor quantities at the tile's centre pixel ``(cc, rc)`` (at ``xc,
+    yc``, m) are float64: its range, the fractional sample index and the phase reduced to
+    whole cycles; the pixels' offsets from it, ``u (u + 2 dx_a)`` along columns and
+    ``v (v + 2 dy_a)`` along rows, go to :func:`tile_pulse` in float32 with the series
+    coefficients of the range. Shared by exact backprojection and the FFBP leaves.
+    """
+    stride = tab.shape[1]
+    f32 = np.float32
+    si = f32(idx_scale)
+    sq = f32(quarter_scale)
+    nxv = np.empty(ncp, np.float32)
+    nyv = np.empty(nr, np.float32)
+    for j in range(j0, j1):
+        ddx = xc - ant_x[j]
+        ddy = yc - ant_y[j]
+        r_anchor = math.sqrt(ddx * ddx + ddy * ddy + ant_z2[j])
+        d0 = r_anchor - ref[j]
+        q0 = d0 * idx_scale + idx_offset
+        i0 = math.floor(q0)
+        t0 = d0 * quarter_scale
+        t0 -= 4.0 * np.rint(0.25 * t0)  # whole cycles, exact
+        inv = 1.0 / r_anchor
+        inv2 = inv * inv
+        bx = 2.0 * ddx
+        by = 2.0 * ddy
+        for k in range(ncp):
+            u = (c0 + k - cc) * dx
+            nxv[k] = u * (u + bx)
+        for r in range(nr):
+            v = (r0 + r - rc) * dy
+            nyv[r] = v * (v + by)
+        tile_pulse(
+            nxv, nyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp,
+            f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
+            f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
+            si, sq, f32(t0), hi,
+        )  # fmt: skip

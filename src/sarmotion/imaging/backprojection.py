@@ -58,7 +58,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core import C, ProgressCallback, Radar, Traces, Trajectory, to_fast_time, to_frequency
 from ..core.geometry import _as_velocity
-from ._simd import LANES, tile_pulse
+from ._simd import LANES, tile_pulses
 from .grid import Image, ImageGrid
 
 __all__ = ["backproject", "backproject_phase_history", "backproject_points"]
@@ -564,11 +564,7 @@ def _tile_kernel(
     """
     n_tx = (nx + tile_cols - 1) // tile_cols
     n_tiles = (ty1 - ty0) * n_tx
-    stride = tab.shape[1]
-    f32 = np.float32
-    hi = f32(n_up)
-    si = f32(idx_scale)
-    sq = f32(quarter_scale)
+    hi = np.float32(n_up)
     for task in numba.prange(starts.size * n_tiles):
         item = task // n_tiles
         tile = task % n_tiles
@@ -584,33 +580,10 @@ def _tile_kernel(
         yc = y0 + rc * dy
         acc_re = np.zeros(nr * ncp, np.float32)
         acc_im = np.zeros(nr * ncp, np.float32)
-        nxv = np.empty(ncp, np.float32)
-        nyv = np.empty(nr, np.float32)
-        for j in range(starts[item], stops[item]):
-            ddx = xc - ant_x[j]
-            ddy = yc - ant_y[j]
-            r_anchor = math.sqrt(ddx * ddx + ddy * ddy + ant_z2[j])
-            d0 = r_anchor - ref[j]
-            q0 = d0 * idx_scale + idx_offset
-            i0 = math.floor(q0)
-            t0 = d0 * quarter_scale
-            t0 -= 4.0 * np.rint(0.25 * t0)  # whole cycles, exact
-            inv = 1.0 / r_anchor
-            inv2 = inv * inv
-            bx = 2.0 * ddx
-            by = 2.0 * ddy
-            for k in range(ncp):
-                u = (c0 + k - cc) * dx
-                nxv[k] = u * (u + bx)
-            for r in range(nr):
-                v = (r0 + r - rc) * dy
-                nyv[r] = v * (v + by)
-            tile_pulse(
-                nxv, nyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp,
-                f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
-                f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
-                si, sq, f32(t0), hi,
-            )  # fmt: skip
+        tile_pulses(
+            tab, starts[item], stops[item], ant_x, ant_y, ant_z2, ref, xc, yc, dx, dy, c0, cc,
+            r0, rc, nr, ncp, idx_scale, idx_offset, hi, quarter_scale, acc_re, acc_im,
+        )  # fmt: skip
         for r in range(nr):
             for k in range(nc):
                 out_re[item, r0 + r, c0 + k] += acc_re[r * ncp + k]
