@@ -13,21 +13,14 @@ distribution.
 import numpy as np
 import pytest
 
+from analysis_stages import detect
 from sarmotion.io import read_gotcha
-from sarmotion.motion import NULL_TAIL, central_sub_aperture
-from sarmotion.pipeline import AnalysisOptions
-from sarmotion.pipeline.stages import find_range_speeds, preliminary_image
-from sarmotion.separation import SeparationOptions, separate
+from sarmotion.motion import NULL_TAIL
 from sarmotion.simulation import random_scene, simulate
 
 
 def _null_statistics(traces, method: str) -> np.ndarray:
-    opts = AnalysisOptions(separation=SeparationOptions(method=method), trajectory=False)
-    opts = opts.resolved(traces)
-    central = central_sub_aperture(traces, opts.sub_aperture_deg)
-    sub = traces.select_pulses(central.start, central.stop)
-    sep = separate(traces, preliminary_image(traces, opts), opts.separation)
-    st = find_range_speeds(sub, sep.moving[central], opts).statistics
+    st = detect(traces, method).detection.statistics
     return st.statistic_db[np.abs(st.speeds_mps) >= 1.1]
 
 

@@ -10,15 +10,15 @@ bound (cross-range coordinate held) is defined.
 import numpy as np
 import pytest
 
-from sarmotion.core import C, cross_range_speed, ground_velocity, range_speed
+from analysis_stages import detect
+from analysis_stages import family_errors as _family_errors
+from sarmotion.core import C, ground_velocity, range_speed
 from sarmotion.imaging import resolution
 from sarmotion.io import read_gotcha
 from sarmotion.motion import (
     NULL_TAIL,
     MatchedFilter,
-    central_sub_aperture,
     detect_range_speeds,
-    family_member,
     fisher_information,
     fit_point_mover,
     local_statistic,
@@ -28,44 +28,13 @@ from sarmotion.motion import (
     range_gradients,
     threshold_db,
 )
-from sarmotion.pipeline import AnalysisOptions
-from sarmotion.pipeline.stages import estimate_movers, find_range_speeds, preliminary_image
-from sarmotion.separation import SeparationOptions, separate
 from sarmotion.simulation import PointTarget, inject, random_scene, simulate
 
 
 def _movers_stages(traces, method, size_m=None):
     """The analysis's separation, detection and estimation stages (default options)."""
-    opts = AnalysisOptions(
-        separation=SeparationOptions(method=method), trajectory=False, image_size_m=size_m
-    )
-    opts = opts.resolved(traces)
-    central = central_sub_aperture(traces, opts.sub_aperture_deg)
-    sub = traces.select_pulses(central.start, central.stop)
-    prelim = preliminary_image(traces, opts)
-    sep = separate(traces, prelim, opts.separation)
-    detection = find_range_speeds(sub, sep.moving[central], opts)
-    fits, _ = estimate_movers(traces, sep.moving, detection, opts, central=central, image=prelim)
-    return sub, sep.moving[central], detection, fits
-
-
-def _family_errors(sub, fit, truth):
-    """(range position, range speed, cross-range speed) errors on a common cross range.
-
-    The truth is slid along its own (exact) family to the fit's cross-range coordinate,
-    where the fit's bound is defined (cross-range coordinate held).
-    """
-    geom = sub.geometry
-    cells = resolution(sub)
-    dy = float((fit.position_m[:2] - truth.position_m[:2]) @ cells.cross_range_direction)
-    p, v, _ = family_member(sub, truth.position_m, truth.velocity_mps, dy)
-    return np.array(
-        [
-            float((fit.position_m[:2] - p[:2]) @ cells.range_direction),
-            range_speed(fit.velocity_mps, geom) - range_speed(v, geom),
-            cross_range_speed(fit.velocity_mps, geom) - cross_range_speed(v, geom),
-        ]
-    )
+    d = detect(traces, method, size_m)
+    return d.sub, d.moving_sub, d.detection, d.movers()
 
 
 def _white_noise_bound(sub, truth, noise_variance_t):

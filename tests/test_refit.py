@@ -8,16 +8,14 @@ cross-range family at the fit's cross-range coordinate (tests/test_movers_detect
 import numpy as np
 import pytest
 
+from analysis_stages import detect
+from analysis_stages import family_errors as _family_errors
 from sarmotion.core import C, cross_range_speed, ground_velocity, range_speed
 from sarmotion.imaging import resolution
 from sarmotion.io import read_gotcha
-from sarmotion.motion import PointFit, central_sub_aperture
-from sarmotion.pipeline import AnalysisOptions
+from sarmotion.motion import PointFit
 from sarmotion.pipeline.refit import candidates_near_movers
-from sarmotion.pipeline.stages import estimate_movers, find_range_speeds, preliminary_image
-from sarmotion.separation import SeparationOptions, separate
 from sarmotion.simulation import PointTarget, inject, random_scene, simulate
-from test_movers_detection import _family_errors
 
 
 def _fit(position_m, velocity_mps, geom):
@@ -48,17 +46,8 @@ def test_candidates_near_a_mover_are_those_its_trace_crosses():
 
 
 def _stages(traces, image_too):
-    opts = AnalysisOptions(separation=SeparationOptions(method="rpca"), trajectory=False)
-    opts = opts.resolved(traces)
-    central = central_sub_aperture(traces, opts.sub_aperture_deg)
-    sub = traces.select_pulses(central.start, central.stop)
-    prelim = preliminary_image(traces, opts)
-    sep = separate(traces, prelim, opts.separation)
-    detection = find_range_speeds(sub, sep.moving[central], opts)
-    fits, _ = estimate_movers(
-        traces, sep.moving, detection, opts, central=central, image=prelim if image_too else None
-    )
-    return sub, fits
+    d = detect(traces, "rpca")
+    return d.sub, d.movers(refit=image_too)
 
 
 @pytest.mark.gotcha
