@@ -23,7 +23,7 @@ For every mutant the reader must
 * never accept a sample more than 1000 times the original peak.
 
 The strategy is seeded (``@seed``) and runs 500 mutants per file. Measured: 1000 mutants
-in about 20 s; simulated 405-407 refused, GOTCHA 391-395 (three runs), no accepted
+in about 10 s; simulated 405-411 refused, GOTCHA 391-397 (five runs), no accepted
 mutant with a geometry error or a bright sample (``-s`` prints the counts). Read with
 ``lenient=True`` instead, the simulated file's mutants include 28 accepted geometry
 corruptions (TxPos, RcvPos, SRPPos) and 115 bright samples: the checks can fail. Times

@@ -411,7 +411,7 @@ def _bright_sample(root, signals, pvps):
     [
         (_antenna_off_track, r"TxPos/RcvPos \(mid-point\), pulse 9: the antenna is 0.2 m", True),
         (_srp_outlier, r"PVP SRPPos, vector 4: the SRP of this vector alone", True),
-        (_time_gap, r"PVP TxTime, pulse 6: 0.0\d+ s after pulse 5", True),
+        (_time_gap, r"PVP TxTime, pulse 6: a step of 0.0\d+ s from pulse 5", True),
         (_iarp_disagrees, r"IARP: ECF and LLH are 5 m apart", False),
         (_bright_sample, r"signal, pulse 3, frequency index 5: magnitude", True),
     ],

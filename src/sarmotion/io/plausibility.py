@@ -75,16 +75,8 @@ def check_track(
         return
     with np.errstate(over="ignore", invalid="ignore"):  # inf or nan steps are refused
         steps = np.linalg.norm(np.diff(positions_m, axis=0), axis=1)
-    spacing = float(np.median(steps))
-    bad = np.flatnonzero((steps == 0.0) | (steps > MAX_STEP * spacing))
-    if spacing == 0.0 or bad.size:
-        j = int(bad[0]) + 1 if bad.size else 1
-        violation(
-            f"{path}: {field}, pulse {j}: a step of {steps[j - 1]:.4g} m from pulse {j - 1} "
-            f"against a median spacing of {spacing:.4g} m (rule: the track moves by more "
-            f"than 0 and at most {MAX_STEP:g} spacings per pulse)",
-            lenient=lenient,
-        )
+    spacing = _check_steps(path, field, steps, "m", "the track moves", lenient=lenient)
+    if spacing is None:
         return
     if positions_m.shape[0] < 3:
         return
@@ -122,14 +114,23 @@ def check_times(
     """Slow times increase by more than 0 and at most ``MAX_STEP`` median intervals per pulse."""
     if times_s.shape[0] < 2:
         return
-    steps = np.diff(times_s)
-    interval = float(np.median(steps))
-    bad = np.flatnonzero(~(steps > 0.0) | (steps > MAX_STEP * interval))
-    if bad.size or not interval > 0.0:
-        j = int(bad[0]) + 1 if bad.size else 1
-        violation(
-            f"{path}: {field}, pulse {j}: {steps[j - 1]:.6g} s after pulse {j - 1} against a "
-            f"median interval of {interval:.6g} s (rule: times increase by more than 0 and at "
-            f"most {MAX_STEP:g} intervals per pulse)",
-            lenient=lenient,
-        )
+    _check_steps(path, field, np.diff(times_s), "s", "times increase", lenient=lenient)
+
+
+def _check_steps(
+    path: Path | str, field: str, steps: NDArray[np.float64], unit: str, what: str, *,
+    lenient: bool,
+) -> float | None:  # fmt: skip
+    """Steps in ``(0, MAX_STEP]`` median steps: the median, or None after a violation."""
+    median = float(np.median(steps))
+    bad = np.flatnonzero(~(steps > 0.0) | (steps > MAX_STEP * median))
+    if not bad.size and median > 0.0:
+        return median
+    j = int(bad[0]) + 1 if bad.size else 1
+    violation(
+        f"{path}: {field}, pulse {j}: a step of {steps[j - 1]:.6g} {unit} from pulse {j - 1} "
+        f"against a median of {median:.6g} {unit} (rule: {what} by more than 0 and at most "
+        f"{MAX_STEP:g} median steps per pulse)",
+        lenient=lenient,
+    )
+    return None
