@@ -431,6 +431,9 @@ def test_implausible_files_are_refused_in_one_line(
         one_line_error(path, match, lenient=True)
 
 
-def test_plausibility_accepts_the_written_and_gotcha_shaped_files(good, sim_traces):
-    """The rules pass on a file as written (fixed SRP, uniform PRF): nothing refused."""
+def test_plausibility_accepts_a_file_as_written(good, sim_traces):
+    """The rules pass on a file as written (fixed SRP, uniform PRF): nothing refused.
+
+    (The GOTCHA round trip above reads 4 real degrees written as CPHD through the same
+    rules.)"""
     assert read_cphd(good).shape == sim_traces.shape
