@@ -59,7 +59,7 @@ from ..core import (
 )
 from ..core.spectral import phased_row_sums
 from ..imaging import resolution
-from ._aligned import _Aligner, _columns, _g_reduce, _refine_max
+from ._aligned import _Aligner, _columns, _refine_max
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
 
 __all__ = [
@@ -277,7 +277,7 @@ def fit_point_mover(
     al = _Aligner(tr, tr.reference_point_m)
 
     def g(u: float) -> float:
-        return float(al.map_chunks(range_direction_velocity(u, tr.geometry)[None], _g_reduce)[0])
+        return float(al.g_values(range_direction_velocity(u, tr.geometry)[None])[0])
 
     u0, _ = _refine_max(g, float(range_speed_mps), 0.5 * res_u, 1e-3)
     lo, hi = cross_speed_range_mps

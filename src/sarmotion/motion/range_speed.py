@@ -15,7 +15,6 @@ from ..core import Traces, as_point
 from ._aligned import (
     _Aligner,
     _check_traces,
-    _g_reduce,
     _range_trials,
     _refine_max,
     _speeds,
@@ -78,7 +77,7 @@ def range_speed_objective(
         else _finite(cross_range_speed_mps, "cross_range_speed_mps")
     )
     aligner = _Aligner(tr, rho)
-    return aligner.map_chunks(_range_trials(u, tr.geometry, up), _g_reduce)
+    return aligner.g_values(_range_trials(u, tr.geometry, up))
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -207,11 +206,11 @@ def estimate_range_speeds(
     grid = lo + step * np.arange(n_grid)
     aligner = _Aligner(tr, rho)
     geom = tr.geometry
-    curve = aligner.map_chunks(_range_trials(grid, geom, None), _g_reduce)
+    curve = aligner.g_values(_range_trials(grid, geom, None))
     floor = float(np.median(curve))
 
     def g_at(u: float) -> float:
-        return float(aligner.map_chunks(_range_trials(np.array([u]), geom, None), _g_reduce)[0])
+        return float(aligner.g_values(_range_trials(np.array([u]), geom, None))[0])
 
     interior = np.arange(1, n_grid - 1)
     is_max = (curve[interior] >= curve[interior - 1]) & (curve[interior] > curve[interior + 1])

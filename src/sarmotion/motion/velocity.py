@@ -76,7 +76,6 @@ from ..imaging import (
 from ._aligned import (
     _Aligner,
     _check_traces,
-    _g_reduce,
     _range_trials,
     _refine_max,
 )
@@ -335,6 +334,6 @@ def _g_scalar(
 
     def g(u: float) -> float:
         vel = _range_trials(np.array([u]), geom, cross_range_speed)
-        return float(aligner.map_chunks(vel, _g_reduce)[0])
+        return float(aligner.g_values(vel)[0])
 
     return g
