@@ -126,8 +126,9 @@ def _delay_phase(delays, freqs, out):  # pragma: no cover - compiled
             x = t - q
             z = x * x
             s = x * (_S[0] + z * (_S[1] + z * (_S[2] + z * (_S[3] + z * (_S[4] + z * _S[5])))))
-            co = _C[0] + z * (_C[1] + z * (_C[2] + z * (_C[3] + z * (_C[4] + z * (_C[5]
-                                                                         + z * _C[6])))))
+            co = _C[0] + z * (
+                _C[1] + z * (_C[2] + z * (_C[3] + z * (_C[4] + z * (_C[5] + z * _C[6]))))
+            )
             qi = np.int64(q)
             swap = (qi & 1) != 0
             cs = s if swap else co

@@ -488,8 +488,16 @@ def _check_solver(solver: str, rank: int | None) -> None:
 
 
 def _solve(
-    m: NDArray[np.inexact], *, solver: str, rank: int | None, eta: float, tol: float,
-    max_iter: int, mu: float | None, rho: float, svd: str,
+    m: NDArray[np.inexact],
+    *,
+    solver: str,
+    rank: int | None,
+    eta: float,
+    tol: float,
+    max_iter: int,
+    mu: float | None,
+    rho: float,
+    svd: str,
 ) -> tuple[NDArray, NDArray, int, bool, NDArray[np.float64], int]:
     """One matrix by the chosen solver: ``(L, S, n_iter, converged, residuals, rank)``."""
     if solver == "ialm":
