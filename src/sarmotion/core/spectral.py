@@ -224,6 +224,77 @@ class FrequencyPlanes:
             self.re[:, start:stop], self.im[:, start:stop], d, float(f_first), float(f_step)
         )
 
+    def sums_and_derivatives(
+        self, delays: ArrayLike, f_first: float, f_step: float
+    ) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128]]:
+        """Row sums ``A_j(d_j)`` and their first two derivatives in the delay.
+
+        ``A_j(d) = sum_k values[j, k] exp(2i pi f_k d)``; returns ``A_j``,
+        ``dA_j/dd = sum_k (2i pi f_k) values[j, k] exp(...)`` (per s) and
+        ``d2A_j/dd2 = -sum_k (2 pi f_k)^2 values[j, k] exp(...)`` (per s^2), each of
+        shape (n_rows,), in one pass over the planes (the phasors as in :meth:`sums`).
+        """
+        d = np.ascontiguousarray(delays, dtype=np.float64)
+        if d.shape != (self.shape[0],):
+            raise ValueError(f"delays must have shape ({self.shape[0]},), got {d.shape}")
+        out = np.empty((3, self.shape[0]), dtype=np.complex128)
+        _plane_sums_derivatives(self.re, self.im, d, float(f_first), float(f_step), out)
+        return out[0], out[1], out[2]
+
+
+@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+def _plane_sums_derivatives(re, im, delays, f_first, f_step, out):  # pragma: no cover
+    """:func:`_plane_sums` with the ``f``- and ``f^2``-weighted sums (derivatives in delay).
+
+    The weights are taken about the band centre ``f_c``: with ``f = f_c + e``,
+    ``sum f^m x = sum (f_c + e)^m x``, expanded so that every accumulator stays of the
+    order of the plain sum.
+    """
+    n_freq, n_rows = re.shape
+    f_c = f_first + 0.5 * f_step * (n_freq - 1)
+    acc = np.zeros((6, n_rows))
+    w_r = np.empty(n_rows)
+    w_i = np.empty(n_rows)
+    r_r = np.empty(n_rows)
+    r_i = np.empty(n_rows)
+    for j in range(n_rows):
+        st = delays[j] * f_step
+        r = unit_phasor(st - math.floor(st))
+        r_r[j] = r.real
+        r_i[j] = r.imag
+    for k0 in range(0, n_freq, 32):
+        for j in range(n_rows):
+            c = delays[j] * (f_first + f_step * k0)
+            w = unit_phasor(c - math.floor(c))
+            w_r[j] = w.real
+            w_i[j] = w.imag
+        for k in range(k0, min(k0 + 32, n_freq)):
+            e1 = f_first + f_step * k - f_c
+            e2 = e1 * e1
+            for j in range(n_rows):
+                a = re[k, j]
+                b = im[k, j]
+                x = w_r[j]
+                y = w_i[j]
+                tr = a * x - b * y
+                ti = a * y + b * x
+                acc[0, j] += tr
+                acc[1, j] += ti
+                acc[2, j] += e1 * tr
+                acc[3, j] += e1 * ti
+                acc[4, j] += e2 * tr
+                acc[5, j] += e2 * ti
+                w_r[j] = x * r_r[j] - y * r_i[j]
+                w_i[j] = x * r_i[j] + y * r_r[j]
+    two_pi = 2.0 * math.pi
+    for j in range(n_rows):
+        s0 = complex(acc[0, j], acc[1, j])
+        s1 = complex(acc[2, j], acc[3, j])
+        s2 = complex(acc[4, j], acc[5, j])
+        out[0, j] = s0
+        out[1, j] = 1j * two_pi * (f_c * s0 + s1)
+        out[2, j] = -(two_pi**2) * (f_c * f_c * s0 + 2.0 * f_c * s1 + s2)
+
 
 @numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _plane_sums(re, im, delays, f_first, f_step):  # pragma: no cover - compiled

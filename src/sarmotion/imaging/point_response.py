@@ -16,9 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize
 
-from ..core import Traces, as_point, delta_tau, target_positions
+from ..core import C, Traces, as_point, delta_tau, target_positions, travel_time
 from ..core.spectral import FrequencyPlanes, phased_row_sums
 
 __all__ = ["point_response", "pulse_responses", "refine_location"]
@@ -135,9 +134,25 @@ def refine_location(
     phase_history: ArrayLike | None = None,
     step_m: tuple[float, float] = (0.2, 0.5),
     tol_m: float = 1e-3,
-    max_iter: int = 200,
+    max_iter: int = 50,
 ) -> tuple[NDArray[np.float64], complex]:
-    """Refine a location by maximising ``|I(rho)|`` (Nelder-Mead from ``point_m``).
+    """Refine a location by maximising ``|I(rho)|^2`` (safeguarded Newton from ``point_m``).
+
+    ``I`` and its gradient and Hessian in the ground position come in one pass over the
+    phase history: ``I = (1/K) sum_j A_j(d_j)`` with ``A_j`` pulse ``j``'s sum over
+    frequencies at its differential delay ``d_j(rho)``, so ``grad I = (1/K) sum_j A_j'
+    grad d_j`` and ``hess I = (1/K) sum_j (A_j'' grad d_j grad d_j^T + A_j' hess d_j)``
+    (:meth:`~sarmotion.core.spectral.FrequencyPlanes.sums_and_derivatives`). Each step is
+    the Newton step of ``|I|^2`` when its Hessian is negative definite, else the gradient
+    direction, cut to a trust radius (first ``min(step_m)``, doubled after a full step
+    that gained, quartered after a step that did not); it stops when a step gaining
+    ``|I|^2`` is shorter than ``tol_m``, or the radius falls below it. Near the peak the
+    steps shrink quadratically, so the last accepted location is within ``~tol_m^2 /
+    (resolution)`` of the maximum. On the 67 refinements of Scene 1's analysis: median 4,
+    mean 5.7 evaluations of ``I`` and its derivatives (each 1.8x one of ``I``: 60 against
+    34 us on 117 x 424),
+    where a Nelder-Mead search to the same ``tol_m`` took about 70 of ``I``; the
+    locations agree with it to 3e-5 m, ``|I|`` higher by 1e-10 to 1e-9 of itself.
 
     Parameters
     ----------
@@ -147,19 +162,19 @@ def refine_location(
         Starting location (m), e.g. a pixel peak.
     velocity_mps : (2,) array_like, optional
         Compensated ground velocity (m/s).
-    phase_history : array_like, optional
-        Precomputed ``traces.phase_history()``.
+    phase_history : array_like or FrequencyPlanes, optional
+        Precomputed ``traces.phase_history()`` (or its planes).
     step_m : (float, float)
-        Initial simplex steps in x and y (m), about half a resolution cell.
+        Largest first step (m): the smaller of the two, about half a resolution cell.
     tol_m : float
         Location tolerance (m).
     max_iter : int
-        Iteration cap.
+        Iteration cap (evaluations of ``I`` and its derivatives).
 
     Returns
     -------
     position : (3,) ndarray
-        Refined location (m).
+        Refined location (m); ``point_m`` itself if no step gained.
     value : complex
         ``I`` at that location.
     """
@@ -167,26 +182,65 @@ def refine_location(
     if not isinstance(P, FrequencyPlanes):
         P = FrequencyPlanes(P)  # many sums of the same rows: frequency-major, 3x faster
     p0 = as_point(point_m, name="point_m")
+    ant = traces.positions_m
+    s = traces.slow_times_s
+    shift = np.zeros((len(s), 3))
+    if velocity_mps is not None:
+        vel = np.asarray(velocity_mps, dtype=np.float64)
+        shift[:, :2] = s[:, None] * vel[None, :2]
+    ref = travel_time(ant, traces.reference_point_m)
+    f0 = float(traces.frequencies_hz[0])
+    df = float(traces.radar.frequency_step_hz)
+    scale = 1.0 / traces.n_samples
 
-    def cost(q: NDArray[np.float64]) -> float:
-        pt = np.array([q[0], q[1], p0[2]])
-        return -float(
-            np.abs(point_response(traces, pt, velocity_mps=velocity_mps, phase_history=P)[0])
-        )
+    def evaluate(xy: NDArray[np.float64]):
+        """``|I|^2``, its gradient (per m) and Hessian (per m^2), and ``I``."""
+        diff = ant - (np.array([xy[0], xy[1], p0[2]]) + shift)
+        r = np.sqrt(np.einsum("jk,jk->j", diff, diff))
+        e = diff[:, :2] / r[:, None]
+        d = 2.0 * r / C - ref
+        grad_d = -(2.0 / C) * e  # (n, 2), s per m
+        a0, a1, a2 = P.sums_and_derivatives(d, f0, df)
+        value = a0.sum() * scale
+        g = (a1 @ grad_d) * scale  # (2,)
+        eye = np.eye(2)[None]
+        hess_d = (2.0 / C) * (eye - e[:, :, None] * e[:, None, :]) / r[:, None, None]
+        h = (
+            np.einsum("j,ja,jb->ab", a2, grad_d, grad_d) + np.einsum("j,jab->ab", a1, hess_d)
+        ) * scale
+        f = abs(value) ** 2
+        grad = 2.0 * np.real(np.conj(value) * g)
+        hess = 2.0 * np.real(np.outer(g, np.conj(g)) + np.conj(value) * h)
+        return f, grad, 0.5 * (hess + hess.T), value
 
-    simplex = np.array([p0[:2], p0[:2] + [step_m[0], 0.0], p0[:2] + [0.0, step_m[1]]])
-    start = cost(p0[:2])
-    res = minimize(
-        cost,
-        p0[:2],
-        method="Nelder-Mead",
-        options={
-            "xatol": tol_m,
-            "fatol": 1e-9 * abs(start),
-            "maxiter": max_iter,
-            "initial_simplex": simplex,
-        },
-    )
-    best = np.array([res.x[0], res.x[1], p0[2]]) if res.fun <= start else p0
-    value = point_response(traces, best, velocity_mps=velocity_mps, phase_history=P)[0]
-    return best, complex(value)
+    x = p0[:2].copy()
+    f, grad, hess, value = evaluate(x)
+    start_value = value
+    radius = float(min(step_m))
+    for _ in range(max_iter):
+        try:
+            np.linalg.cholesky(-hess)
+            step = np.linalg.solve(-hess, grad)
+        except np.linalg.LinAlgError:
+            norm = np.linalg.norm(grad)
+            if norm == 0.0:
+                break
+            step = grad * (radius / norm)
+        length = float(np.linalg.norm(step))
+        if length > radius:
+            step *= radius / length
+            length = radius
+        f_new, grad_new, hess_new, value_new = evaluate(x + step)
+        if f_new > f:
+            x, f, grad, hess, value = x + step, f_new, grad_new, hess_new, value_new
+            if length < tol_m:
+                break
+            if length >= radius:
+                radius *= 2.0
+        else:
+            radius = 0.25 * length
+            if radius < tol_m:
+                break
+    if value is start_value:
+        return p0, complex(start_value)
+    return np.array([x[0], x[1], p0[2]]), complex(value)
