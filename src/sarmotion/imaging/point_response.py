@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import C, Traces, as_point, delta_tau, target_positions, travel_time
+from ..core import Traces, as_point, delta_tau, target_positions, travel_time
+from ..core.ascent import ResponseDerivatives, newton_ascent
 from ..core.spectral import FrequencyPlanes, phased_row_sums
 
 __all__ = ["point_response", "pulse_responses", "refine_location"]
@@ -183,64 +184,26 @@ def refine_location(
         P = FrequencyPlanes(P)  # many sums of the same rows: frequency-major, 3x faster
     p0 = as_point(point_m, name="point_m")
     ant = traces.positions_m
-    s = traces.slow_times_s
-    shift = np.zeros((len(s), 3))
+    shift = np.zeros((traces.n_pulses, 3))
     if velocity_mps is not None:
         vel = np.asarray(velocity_mps, dtype=np.float64)
-        shift[:, :2] = s[:, None] * vel[None, :2]
-    ref = travel_time(ant, traces.reference_point_m)
-    f0 = float(traces.frequencies_hz[0])
-    df = float(traces.radar.frequency_step_hz)
-    scale = 1.0 / traces.n_samples
+        shift[:, :2] = traces.slow_times_s[:, None] * vel[None, :2]
+    response = ResponseDerivatives(
+        P,
+        ant,
+        travel_time(ant, traces.reference_point_m),
+        float(traces.frequencies_hz[0]),
+        float(traces.radar.frequency_step_hz),
+        1.0 / traces.n_samples,
+    )
+    jacobian = np.broadcast_to(np.eye(3)[:, :2], (traces.n_pulses, 3, 2))
 
     def evaluate(xy: NDArray[np.float64]):
-        """``|I|^2``, its gradient (per m) and Hessian (per m^2), and ``I``."""
-        diff = ant - (np.array([xy[0], xy[1], p0[2]]) + shift)
-        r = np.sqrt(np.einsum("jk,jk->j", diff, diff))
-        e = diff[:, :2] / r[:, None]
-        d = 2.0 * r / C - ref
-        grad_d = -(2.0 / C) * e  # (n, 2), s per m
-        a0, a1, a2 = P.sums_and_derivatives(d, f0, df)
-        value = a0.sum() * scale
-        g = (a1 @ grad_d) * scale  # (2,)
-        eye = np.eye(2)[None]
-        hess_d = (2.0 / C) * (eye - e[:, :, None] * e[:, None, :]) / r[:, None, None]
-        h = (
-            np.einsum("j,ja,jb->ab", a2, grad_d, grad_d) + np.einsum("j,jab->ab", a1, hess_d)
-        ) * scale
-        f = abs(value) ** 2
-        grad = 2.0 * np.real(np.conj(value) * g)
-        hess = 2.0 * np.real(np.outer(g, np.conj(g)) + np.conj(value) * h)
-        return f, grad, 0.5 * (hess + hess.T), value
+        return response(np.array([xy[0], xy[1], p0[2]]) + shift, jacobian)
 
-    x = p0[:2].copy()
-    f, grad, hess, value = evaluate(x)
-    start_value = value
-    radius = float(min(step_m))
-    for _ in range(max_iter):
-        try:
-            np.linalg.cholesky(-hess)
-            step = np.linalg.solve(-hess, grad)
-        except np.linalg.LinAlgError:
-            norm = np.linalg.norm(grad)
-            if norm == 0.0:
-                break
-            step = grad * (radius / norm)
-        length = float(np.linalg.norm(step))
-        if length > radius:
-            step *= radius / length
-            length = radius
-        f_new, grad_new, hess_new, value_new = evaluate(x + step)
-        if f_new > f:
-            x, f, grad, hess, value = x + step, f_new, grad_new, hess_new, value_new
-            if length < tol_m:
-                break
-            if length >= radius:
-                radius *= 2.0
-        else:
-            radius = 0.25 * length
-            if radius < tol_m:
-                break
-    if value is start_value:
-        return p0, complex(start_value)
-    return np.array([x[0], x[1], p0[2]]), complex(value)
+    xy, value, moved, _ = newton_ascent(
+        evaluate, p0[:2], radius=float(min(step_m)), tol=tol_m, max_iter=max_iter
+    )
+    if not moved:
+        return p0, complex(value)
+    return np.array([xy[0], xy[1], p0[2]]), complex(value)
