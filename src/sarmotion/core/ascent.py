@@ -53,6 +53,9 @@ class ResponseDerivatives:
         First frequency of the rows and frequency step (Hz).
     weight : float
         ``w``: the scale of the sum (e.g. ``1 / n_samples``).
+    rows : slice
+        The pulses summed (a contiguous slice of the planes' rows); ``antenna_m`` and
+        ``reference_delays_s`` are those of these pulses.
     """
 
     def __init__(
@@ -63,7 +66,9 @@ class ResponseDerivatives:
         f_first_hz: float,
         f_step_hz: float,
         weight: float,
+        rows: slice = slice(None),
     ) -> None:
+        self.rows = rows
         self.planes = planes
         self.antenna = np.asarray(antenna_m, dtype=np.float64)
         self.reference = np.asarray(reference_delays_s, dtype=np.float64)
@@ -92,7 +97,7 @@ class ResponseDerivatives:
         r = np.sqrt(np.einsum("jk,jk->j", diff, diff))
         e = diff / r[:, None]
         d = 2.0 * r / C - self.reference
-        a0, a1, a2 = self.planes.sums_and_derivatives(d, self.f_first, self.f_step)
+        a0, a1, a2 = self.planes.sums_and_derivatives(d, self.f_first, self.f_step, self.rows)
         grad_d = -(2.0 / C) * np.einsum("jk,jkp->jp", e, jacobians)  # (n, p)
         jj = np.einsum("jkp,jkq->jpq", jacobians, jacobians)
         ej = np.einsum("jk,jkp->jp", e, jacobians)

@@ -225,20 +225,25 @@ class FrequencyPlanes:
         )
 
     def sums_and_derivatives(
-        self, delays: ArrayLike, f_first: float, f_step: float
+        self, delays: ArrayLike, f_first: float, f_step: float, rows: slice = slice(None)
     ) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128]]:
         """Row sums ``A_j(d_j)`` and their first two derivatives in the delay.
 
         ``A_j(d) = sum_k values[j, k] exp(2i pi f_k d)``; returns ``A_j``,
         ``dA_j/dd = sum_k (2i pi f_k) values[j, k] exp(...)`` (per s) and
         ``d2A_j/dd2 = -sum_k (2 pi f_k)^2 values[j, k] exp(...)`` (per s^2), each of
-        shape (n_rows,), in one pass over the planes (the phasors as in :meth:`sums`).
+        shape (n_rows,), in one pass over the planes (the phasors as in :meth:`sums`);
+        only the rows ``rows`` (a contiguous slice) when given.
         """
+        start, stop, step = rows.indices(self.shape[0])
+        if step != 1:
+            raise ValueError(f"rows must be a contiguous slice, got {rows!r}")
         d = np.ascontiguousarray(delays, dtype=np.float64)
-        if d.shape != (self.shape[0],):
-            raise ValueError(f"delays must have shape ({self.shape[0]},), got {d.shape}")
-        out = np.empty((3, self.shape[0]), dtype=np.complex128)
-        _plane_sums_derivatives(self.re, self.im, d, float(f_first), float(f_step), out)
+        if d.shape != (stop - start,):
+            raise ValueError(f"delays must have shape ({stop - start},), got {d.shape}")
+        out = np.empty((3, stop - start), dtype=np.complex128)
+        re, im = self.re[:, start:stop], self.im[:, start:stop]
+        _plane_sums_derivatives(re, im, d, float(f_first), float(f_step), out)
         return out[0], out[1], out[2]
 
 
