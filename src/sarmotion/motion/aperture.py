@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, minimize
 
 from ..core import C, Traces, as_point, target_positions, travel_time
 from ..core.ascent import ResponseDerivatives, newton_ascent
@@ -190,7 +190,7 @@ def refine_on_aperture(
     *,
     central: slice,
     phase_history: ArrayLike | None = None,
-    max_iter: int = 100,
+    max_iter: int = 1000,
 ) -> ApertureFit:
     """Focus a sub-aperture estimate of a mover on the whole aperture.
 
@@ -202,8 +202,9 @@ def refine_on_aperture(
     a window of pulses that doubles from ``central`` itself to the whole aperture
     (at each width: the cross-range speed on a grid of half the width's
     resolution ``lambda L / (8 V T^2)`` over +-2 resolutions of ``central``, then
-    a Newton ascent (:func:`sarmotion.core.ascent.newton_ascent`) in units of about a
-    quarter cycle of phase over the width).
+    a Nelder-Mead in steps of about a quarter cycle of phase over the width, to 1/20 of
+    them, then a Newton ascent (:func:`sarmotion.core.ascent.newton_ascent`) in the same
+    units).
     Each width's estimate is within the next one's capture range: a cross-range speed
     error of 0.2 m/s is most of a cycle of quadratic phase over 4 degrees, and a single
     4-degree search from a 1-degree estimate was measured to stop at 0.36 of the focus
@@ -225,7 +226,7 @@ def refine_on_aperture(
     phase_history : array_like, optional
         ``traces.phase_history()`` if already computed.
     max_iter : int
-        Cap on the ascent's evaluations per width.
+        Cap on the simplex's iterations and on the ascent's evaluations, per width.
 
     Returns
     -------
@@ -267,8 +268,27 @@ def refine_on_aperture(
         res_w = res_c * ((stop - start) / (window.stop - window.start)) ** 2
         grid = q[2] + np.arange(-2.0 * res_c, 2.0 * res_c + 1e-9, 0.5 * res_w)
         values = [cost(np.r_[q[:2], g], window) for g in grid]
-        if min(values) < cost(q, window):
+        before = cost(q, window)
+        if min(values) < before:
             q = np.r_[q[:2], grid[int(np.argmin(values))]]
+            before = min(values)
+        # the lobe by a loose simplex, then the Newton ascent on it (as the matched
+        # filter's local fit, motion.likelihood._local_fit: from a start off the lobe's
+        # concave part the gradient alone can follow a ridge to a lower maximum)
+        res = minimize(
+            lambda z, unit, pulses: cost(z * unit, pulses),
+            q / steps,
+            args=(steps, window),
+            method="Nelder-Mead",
+            options={
+                "initial_simplex": np.vstack([q / steps, q / steps + np.eye(3)]),
+                "xatol": 0.05,
+                "fatol": 1e-6 * abs(before),
+                "maxiter": max_iter,
+            },
+        )
+        if res.fun <= before:
+            q = res.x * steps
         q, _, _, _ = newton_ascent(
             _window_response(traces, P, p0, v0, e_r, e_c, window),
             q,
