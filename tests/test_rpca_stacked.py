@@ -199,3 +199,20 @@ def test_stacked_windows_on_a_gotcha_degree_are_the_plain_ialm(gotcha_files):
         assert mover_trace_coverage(res.sparse, data, [mv]) == mover_trace_coverage(
             want, data, [mv]
         )
+
+
+def test_stacks_of_windows_are_bounded_and_agree(monkeypatch):
+    """Windows beyond ``_STACK_WINDOWS`` go in further stacks: the result is the same as
+    with one stack (the windows are independent), to rounding (1e-15 measured)."""
+    import importlib
+
+    mod = importlib.import_module("sarmotion.separation.rpca")
+    rng = np.random.default_rng(44)
+    low, sparse = low_rank_plus_sparse(rng, 60, 300, rank=3)
+    one = windowed_rpca(low + sparse, window=40, tol=1e-7)
+    assert len(one.windows) > 4
+    monkeypatch.setattr(mod, "_STACK_WINDOWS", 4)
+    chunked = windowed_rpca(low + sparse, window=40, tol=1e-7)
+    assert chunked.window_n_iter == one.window_n_iter
+    assert rel(chunked.sparse, one.sparse) <= 1e-12
+    assert rel(chunked.low_rank, one.low_rank) <= 1e-12
