@@ -65,7 +65,7 @@ def test_gram_threshold_is_singular_value_thresholding(complex_):
 
     A stack of 117 x 64 matrices with condition numbers 1 to 1e3 and thresholds from
     below the smallest to above the largest singular value; double precision, so the
-    two agree to ``m eps (sigma_max / tau)^2`` (<= 1e-9 here; 1e-13 to 1e-11 measured).
+    two agree to ``m eps sigma_max / tau`` relative to ``sigma_max`` (<= 1e-9 here).
     """
     rng = np.random.default_rng(40)
     mats, taus = [], []
@@ -88,13 +88,35 @@ def test_gram_threshold_is_singular_value_thresholding(complex_):
         assert np.linalg.norm(low[i] - want) <= 1e-9 * np.linalg.norm(a[i], 2)
 
 
+def test_gram_threshold_error_grows_as_sigma_max_over_tau_not_its_square():
+    """The module's error bound ``m eps sigma_max / tau`` (relative to ``sigma_max``) on
+    the hard case: singular values from ``tau / 100`` to ``sigma_max`` with 16 of them
+    within 0.1 % of ``tau``, ``sigma_max / tau`` from 1e2 to 1e6 (measured 16-70 times
+    below the bound; the squared ratio would allow up to 1e-2 at 1e6)."""
+    rng = np.random.default_rng(45)
+    n, m = 117, 64
+    eps = np.finfo(float).eps
+    for ratio in (1e2, 1e4, 1e6):
+        tau = 1.0 / ratio
+        u, _ = np.linalg.qr(rng.standard_normal((n, m)) + 1j * rng.standard_normal((n, m)))
+        v, _ = np.linalg.qr(rng.standard_normal((m, m)) + 1j * rng.standard_normal((m, m)))
+        near = tau * (1 + 1e-3 * rng.standard_normal(16))
+        s = np.sort(np.concatenate([np.geomspace(1.0, tau / 100, m - 16), near]))[::-1]
+        a = (u * s) @ v.conj().T
+        low, rank, gram = gram_threshold(a[None], np.array([tau]))
+        want, r = singular_value_threshold(a, tau)
+        assert gram[0]
+        assert abs(int(rank[0]) - r) <= 1  # a value within rounding of tau may go either way
+        assert np.linalg.norm(low[0] - want) <= m * eps * ratio
+
+
 def test_gram_threshold_falls_back_to_gesdd_when_the_gram_matrix_is_too_coarse():
-    """``m eps (sigma_max / tau)^2`` above the allowance: that matrix is thresholded by
+    """``m eps sigma_max / tau`` above the allowance: that matrix is thresholded by
     gesdd, the others stay on the Gram route, and all equal the SVD formula."""
     rng = np.random.default_rng(41)
     a = rng.standard_normal((3, 50, 20)) + 1j * rng.standard_normal((3, 50, 20))
     tau = np.array([0.5, 1e-9, 2.0]) * np.linalg.norm(a, 2, axis=(1, 2))
-    low, rank, gram = gram_threshold(a, tau, max_ratio2=1e-7)
+    low, rank, gram = gram_threshold(a, tau, max_error=1e-7)
     assert gram.tolist() == [True, False, True]
     for i in range(3):
         want, r = singular_value_threshold(a[i], tau[i])

@@ -21,22 +21,29 @@ measured 0.67 against 1.11 ms per 117 x 64 complex window (one BLAS thread), and
 batched elementwise steps save most of the per-call overhead of the rest of the
 iteration.
 
-Accuracy and the rule that guards it. Forming ``G`` squares the condition number: the
-computed eigenvalues carry absolute errors of order ``m eps sigma_max^2``. ``f`` has
-Lipschitz constant ``1 / (2 tau^2)`` in ``w``, so the thresholded matrix is off by about
-``||D_tau(A)|| * m eps (sigma_max / tau)^2 / 2`` (a Lipschitz matrix function moves by
-at most its constant times the perturbation, in the Frobenius norm). Singular values far
-below ``tau`` only need to stay below it, which the same bound ensures. The Gram route
-is therefore used for a window only while::
+Accuracy and the rule that guards it. The computed eigen-decomposition is exact for
+a Gram matrix perturbed by ``E`` with ``||E|| ~ m eps sigma_max^2`` (backward stability
+of the product and of ``heevd``). The thresholded matrix moves by the Daleckii-Krein
+sum ``A V (f^[1] o (V^H E V)) V^H``, whose entries carry ``sigma_i f^[1](w_i, w_j)``
+(``f^[1]`` the divided difference of ``f``); that factor is at most about ``1 / tau``
+whatever the two eigenvalues (``1 / sigma_i`` when ``sigma_i`` is large, ``sigma_i /
+(2 tau^2) ~ 1 / (2 tau)`` at the threshold, smaller below it). So::
 
-    m eps (sigma_max / tau)^2 <= _GRAM_ACCURACY * tol,
+    ||D_tau(A)_Gram - D_tau(A)|| <~ m eps sigma_max^2 / tau,
 
-which keeps the thresholding error a hundred times below the stopping tolerance; a
-window past that point (``tau`` small against ``sigma_max``, late iterations at small
-``tol``) is thresholded by ``gesdd`` as before. At ``tol = 1e-5`` this allows
-``sigma_max / tau`` up to about 2,700 (IALM's ``1 / tau = mu`` grows 1.5x per
-iteration from ``1.25 / ||M||_2``: about 17 iterations; GOTCHA windows stop after
-13-15), at ``tol = 1e-7`` up to about 270 (about 12 iterations, then ``gesdd``).
+relative to ``sigma_max`` that is ``m eps sigma_max / tau``: the condition number is
+not squared where it matters. Measured on 117 x 64 complex matrices with singular values
+from ``tau / 100`` to ``sigma_max`` and 16 of them clustered at ``tau``: 2e-14, 2e-13,
+3e-12, 3e-11, 9e-10 of ``sigma_max`` for ``sigma_max / tau`` = 1e2 ... 1e6, 16-70 times
+below the bound. The Gram route is used for a window while::
+
+    m eps sigma_max / tau <= _GRAM_ACCURACY * tol,
+
+keeping the thresholding error a hundred times below the stopping tolerance; past that
+(``tau`` tiny against ``sigma_max``) the window is thresholded by ``gesdd``. With
+``m = 64``: ``sigma_max / tau`` up to 7e6 at ``tol = 1e-5`` (IALM's ``1 / tau = mu``
+starts at ``1.25 / ||M||_2`` and grows 1.5x per iteration: about 37 iterations;
+GOTCHA windows stop after 13-15), 7e4 at ``tol = 1e-7`` (about 26 iterations).
 
 Where the time goes, and its floor
 ----------------------------------
@@ -49,7 +56,7 @@ takes 0.155-0.175 s against 0.28 s for the plain IALM (1.6-1.8x), of which 0.09 
 ``heevd`` alone: an exact thresholding per iteration along the IALM's own path cannot
 go below about 0.12 s (2.3x). Tried and not kept: single precision (``cgesdd`` and
 complex64 ``heevd`` are no faster at this size, and a complex64 Gram matrix misses the
-accuracy rule above by seven orders of magnitude); QR then a small SVD (the batched QR
+accuracy rule above by orders of magnitude); QR then a small SVD (the batched QR
 alone costs 0.38 ms); a warm-started Newton-Schulz polar factor (diverges: the previous
 inverse square root does not commute with the new Gram matrix); the thresholding split
 over two threads (0.92-1.25x, depending on the other core's load).
@@ -74,7 +81,7 @@ _MU_BAR_FACTOR = 1e7
 
 
 def gram_threshold(
-    a: NDArray[np.inexact], tau: NDArray[np.float64], *, max_ratio2: float = np.inf
+    a: NDArray[np.inexact], tau: NDArray[np.float64], *, max_error: float = np.inf
 ) -> tuple[NDArray[np.inexact], NDArray[np.int_], NDArray[np.bool_]]:
     """Singular value thresholding ``D_tau`` of a stack of tall matrices via their Gram matrices.
 
@@ -84,9 +91,10 @@ def gram_threshold(
         Stack of real or complex matrices with ``n >= m``.
     tau : (k,) ndarray
         Threshold of each matrix, > 0, in the units of ``a``.
-    max_ratio2 : float
-        Matrices with ``m eps (sigma_max / tau)^2 > max_ratio2`` (too ill-conditioned
-        for the Gram route, see the module notes) are thresholded by ``gesdd`` instead.
+    max_error : float
+        Matrices with ``m eps sigma_max / tau > max_error`` (the bound of the Gram
+        route's error relative to ``sigma_max``, see the module notes) are thresholded
+        by ``gesdd`` instead.
 
     Returns
     -------
@@ -106,7 +114,7 @@ def gram_threshold(
     sigma = np.sqrt(w)
     t = tau[:, None]
     eps = np.finfo(w.dtype).eps
-    gram = m * eps * (sigma[:, -1] / tau) ** 2 <= max_ratio2
+    gram = m * eps * (sigma[:, -1] / tau) <= max_error
     with np.errstate(divide="ignore", invalid="ignore"):
         f = np.where(sigma > t, 1.0 - t / sigma, 0.0)
     rank = np.count_nonzero(sigma > t, axis=1)
@@ -199,11 +207,11 @@ def stacked_ialm(
         sa = np.empty_like(ma)
         xa = np.empty_like(ma)
         fro = norm_fro[active]
-        max_ratio2 = _GRAM_ACCURACY * tol
+        max_error = _GRAM_ACCURACY * tol
         n_gram = n_svd = 0
         for it in range(1, max_iter + 1):
             _sparse_step(ma, y, la, 1.0 / mu, eta / mu, sa, xa)
-            la, ra, gram = gram_threshold(xa, 1.0 / mu, max_ratio2=max_ratio2)
+            la, ra, gram = gram_threshold(xa, 1.0 / mu, max_error=max_error)
             n_gram += int(gram.sum())
             n_svd += int(gram.size - gram.sum())
             res = np.sqrt(_dual_step(ma, la, sa, y, mu)) / fro

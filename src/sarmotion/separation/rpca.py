@@ -954,7 +954,7 @@ def windowed_rpca(
     by :func:`sarmotion.separation._stacked_ialm.stacked_ialm`: the same IALM iterates
     and stopping rule per window, computed on the ``(n_windows, n_pulses, window)``
     stack, with the singular value thresholding taken from the eigen-decomposition of
-    each window's Gram matrix (exact to ``window eps (sigma_max / tau)^2``, kept below
+    each window's Gram matrix (exact to ``window eps sigma_max / tau``, kept below
     ``tol / 100`` by falling back to ``gesdd``). On the four GOTCHA degrees with two
     injected movers (117 x 424, windows of 64, ``eta`` x 2, ``tol = 1e-5``) it gives the
     per-window iterations and ``S`` of the textbook full-SVD IALM to 3e-14 (relative),
