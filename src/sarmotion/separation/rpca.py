@@ -959,8 +959,9 @@ def windowed_rpca(
     injected movers (117 x 424, windows of 64, ``eta`` x 2, ``tol = 1e-5``) it gives the
     per-window iterations and ``S`` of the textbook full-SVD IALM to 3e-14 (relative),
     hence the same clutter left in ``S`` and mover coverage, 1.6-1.7x faster than it
-    with one BLAS thread (2.8-4.2x against it with OpenBLAS's default two threads, on a
-    shared machine); the floor of this path is in that module's notes.
+    with one BLAS thread (2.8-28x against it on OpenBLAS's default two threads, a
+    spread due to those threads on a busy 2-core machine); the floor of this path is in
+    that module's notes.
 
     Principal component pursuit's minimiser on those windows has a full-rank ``L``
     (``sigma_min / sigma_max`` 0.016-0.15 in every window), as has IALM's last iterate;
