@@ -59,7 +59,11 @@ complex64 ``heevd`` are no faster at this size, and a complex64 Gram matrix miss
 accuracy rule above by orders of magnitude); QR then a small SVD (the batched QR
 alone costs 0.38 ms); a warm-started Newton-Schulz polar factor (diverges: the previous
 inverse square root does not commute with the new Gram matrix); the thresholding split
-over two threads (0.92-1.25x, depending on the other core's load).
+over two threads (0.92-1.25x, depending on the other core's load). The two
+elementwise kernels are compiled (numba, cached on disk): 0.05 ms per window and
+iteration against about 0.2 ms for the same steps in NumPy (25 ms per degree), at a
+one-off cost in a fresh process of 0.15 s to load them, plus 0.25 s to import numba
+where nothing else (the backprojection) has imported it yet.
 """
 
 from __future__ import annotations
