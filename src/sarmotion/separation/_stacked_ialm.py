@@ -43,7 +43,7 @@ keeping the thresholding error a hundred times below the stopping tolerance; pas
 (``tau`` tiny against ``sigma_max``) the window is thresholded by ``gesdd``. With
 ``m = 64``: ``sigma_max / tau`` up to 7e6 at ``tol = 1e-5`` (IALM's ``1 / tau = mu``
 starts at ``1.25 / ||M||_2`` and grows 1.5x per iteration: about 37 iterations;
-GOTCHA windows stop after 13-15), 7e4 at ``tol = 1e-7`` (about 26 iterations).
+GOTCHA windows stop after 13-15), 7e4 at ``tol = 1e-7`` (about 27 iterations).
 
 Where the time goes, and its floor
 ----------------------------------
@@ -52,7 +52,7 @@ AMD EPYC, OpenBLAS, one BLAS thread): the windows take 179-183 iterations in all
 same with the plain full-SVD IALM. Per window and iteration, ``heevd`` of the 64 x 64
 Gram matrix costs 0.50 ms, the Gram matrix and the two products 0.19 ms, the two fused
 elementwise kernels 0.05 ms; ``gesdd`` of the window costs 1.11 ms. The whole degree
-takes 0.155-0.175 s against 0.28 s for the plain IALM (1.6-1.8x), of which 0.09 s is
+takes 0.16-0.18 s against 0.28-0.30 s for the plain IALM (1.6-1.8x), of which 0.09 s is
 ``heevd`` alone: an exact thresholding per iteration along the IALM's own path cannot
 go below about 0.12 s (2.3x). Tried and not kept: single precision (``cgesdd`` and
 complex64 ``heevd`` are no faster at this size, and a complex64 Gram matrix misses the
