@@ -3,8 +3,9 @@
 - :mod:`~sarmotion.separation.transforms` — travel-time transformations ``T_+``, ``T_-``
   (``eq:TT+``, ``eq:TTu+``) and the annihilation filters ``Q`` (``eq:OP1``, ``eq:OP2``);
 - :mod:`~sarmotion.separation.rpca` — complex robust PCA (principal component pursuit,
-  IALM), whole or windowed in fast time; ``solver="accaltproj"`` selects the accelerated
-  alternating projections of :mod:`~sarmotion.separation.accaltproj` (fixed rank);
+  IALM), whole or windowed in fast time (the windows solved together by
+  ``_stacked_ialm``); ``solver="accaltproj"`` selects the accelerated alternating
+  projections of :mod:`~sarmotion.separation.accaltproj` (fixed rank);
 - the methods: :mod:`~sarmotion.separation.annihilation`,
   :mod:`~sarmotion.separation.rpca_separation`, :mod:`~sarmotion.separation.combined`,
   behind one dispatcher :func:`separate` (:mod:`~sarmotion.separation.dispatch`);
