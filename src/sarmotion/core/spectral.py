@@ -247,6 +247,16 @@ class FrequencyPlanes:
         return out[0], out[1], out[2]
 
 
+@numba.njit(cache=True, inline="always")
+def _unit_phasors(delays, frequency, out_re, out_im):  # pragma: no cover - compiled
+    """``exp(2i pi frequency delays[j])`` per row, cycles reduced exactly (:func:`unit_phasor`)."""
+    for j in range(delays.size):
+        c = delays[j] * frequency
+        w = unit_phasor(c - math.floor(c))
+        out_re[j] = w.real
+        out_im[j] = w.imag
+
+
 @numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _plane_sums_derivatives(re, im, delays, f_first, f_step, out):  # pragma: no cover
     """:func:`_plane_sums` with the ``f``- and ``f^2``-weighted sums (derivatives in delay).
@@ -262,17 +272,9 @@ def _plane_sums_derivatives(re, im, delays, f_first, f_step, out):  # pragma: no
     w_i = np.empty(n_rows)
     r_r = np.empty(n_rows)
     r_i = np.empty(n_rows)
-    for j in range(n_rows):
-        st = delays[j] * f_step
-        r = unit_phasor(st - math.floor(st))
-        r_r[j] = r.real
-        r_i[j] = r.imag
+    _unit_phasors(delays, f_step, r_r, r_i)
     for k0 in range(0, n_freq, 32):
-        for j in range(n_rows):
-            c = delays[j] * (f_first + f_step * k0)
-            w = unit_phasor(c - math.floor(c))
-            w_r[j] = w.real
-            w_i[j] = w.imag
+        _unit_phasors(delays, f_first + f_step * k0, w_r, w_i)
         for k in range(k0, min(k0 + 32, n_freq)):
             e1 = f_first + f_step * k - f_c
             e2 = e1 * e1
@@ -315,17 +317,9 @@ def _plane_sums(re, im, delays, f_first, f_step):  # pragma: no cover - compiled
     w_i = np.empty(n_rows)
     r_r = np.empty(n_rows)
     r_i = np.empty(n_rows)
-    for j in range(n_rows):
-        st = delays[j] * f_step
-        r = unit_phasor(st - math.floor(st))
-        r_r[j] = r.real
-        r_i[j] = r.imag
+    _unit_phasors(delays, f_step, r_r, r_i)
     for k0 in range(0, n_freq, 32):
-        for j in range(n_rows):
-            c = delays[j] * (f_first + f_step * k0)
-            w = unit_phasor(c - math.floor(c))
-            w_r[j] = w.real
-            w_i[j] = w.imag
+        _unit_phasors(delays, f_first + f_step * k0, w_r, w_i)
         for k in range(k0, min(k0 + 32, n_freq)):
             for j in range(n_rows):
                 a = re[k, j]
