@@ -164,14 +164,15 @@ def level(
 @numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
 def root_rows(
     out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, us, ys, cu, cv, cz2,
-    rref, quarter_scale,
+    rref, quarter_scale, remodulate=True,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Image rows from the roots' children, remodulated, into ``out`` (complex128).
 
     Image row ``r`` (at ``v = ys[r]``) is row ``row_local[r] n_sub[s]`` of the root of strip
     ``s = row_strip[r]``: the sum of its children ``kids[s]`` (``-1``: none) of the planes
     ``cre``, ``cim``, with ``k0[s]``, ``ratio[s]`` and filters ``g`` as in
-    :func:`_add_child`; ``out[r, k_lo + k] = J exp(+i pi/2 quarter_scale (|c - rho| - rref))``.
+    :func:`_add_child`; ``out[r, k_lo + k] = J exp(+i pi/2 quarter_scale (|c - rho| - rref))``,
+    or ``J`` itself when ``remodulate`` is false.
     """
     nu = us.size
     for r in numba.prange(ys.size):
@@ -182,6 +183,10 @@ def root_rows(
         for c in (kids[s, 0], kids[s, 1]):
             if c >= 0:
                 _add_child(dre, dim, m, cre[c], cim[c], k0[s], ratio[s], g[c])
+        if not remodulate:
+            for k in range(nu):
+                out[r, k_lo + k] = complex(dre[k], dim[k])
+            continue
         dv = ys[r] - cv
         c2 = dv * dv + cz2
         for k in range(nu):
@@ -190,3 +195,70 @@ def root_rows(
             a = np.float64(dre[k])
             b = np.float64(dim[k])
             out[r, k_lo + k] = complex(a * cs - b * sn, a * sn + b * cs)
+
+
+@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+def resample(
+    out, src, u0, du, v0, dv, xs, ys, ox, oy, cos_t, sin_t, wu_table, wv_table, cx, cy, cz2,
+    rref, quarter_scale,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Interpolate the demodulated image ``src`` onto the grid ``xs`` x ``ys``, remodulated.
+
+    ``src[i, k]`` (complex64) is ``J`` at ``u = u0 + k du``, ``v = v0 + i dv`` of the frame
+    ``u = cos_t (x - ox) + sin_t (y - oy)``, ``v = -sin_t (x - ox) + cos_t (y - oy)``.
+    ``wu_table``, ``wv_table`` ``(P + 1, T)``: the ``T``-tap filter for a position ``p / P``
+    samples past tap ``T/2 - 1``, linearly interpolated between the ``P + 1`` phases. Pixels
+    whose taps leave ``src`` are 0. ``out[r, k] = J exp(+i pi/2 quarter_scale (|c - rho| -
+    rref))`` (complex128), the demodulation of :mod:`.ffbp` undone.
+    """
+    n_phase = wu_table.shape[0] - 1
+    taps = wu_table.shape[1]
+    half = taps // 2 - 1
+    nv, nu = src.shape
+    for r in numba.prange(ys.size):
+        wu = np.empty(taps, np.float32)
+        wv = np.empty(taps, np.float32)
+        acc_re = np.empty(taps, np.float32)
+        acc_im = np.empty(taps, np.float32)
+        ddy = ys[r] - oy
+        cdy = ys[r] - cy
+        c2 = cdy * cdy + cz2
+        for k in range(xs.size):
+            ddx = xs[k] - ox
+            fu = (cos_t * ddx + sin_t * ddy - u0) / du
+            fv = (-sin_t * ddx + cos_t * ddy - v0) / dv
+            iu = int(math.floor(fu))
+            iv = int(math.floor(fv))
+            bu = iu - half
+            bv = iv - half
+            if bu < 0 or bv < 0 or bu + taps > nu or bv + taps > nv:
+                out[r, k] = 0.0
+                continue
+            pu = (fu - iu) * n_phase
+            pv = (fv - iv) * n_phase
+            ju = min(int(pu), n_phase - 1)
+            jv = min(int(pv), n_phase - 1)
+            au = np.float32(pu - ju)
+            av = np.float32(pv - jv)
+            for t in range(taps):
+                wu[t] = wu_table[ju, t] + au * (wu_table[ju + 1, t] - wu_table[ju, t])
+                wv[t] = wv_table[jv, t] + av * (wv_table[jv + 1, t] - wv_table[jv, t])
+                acc_re[t] = 0.0
+                acc_im[t] = 0.0
+            for a in range(taps):
+                w = wv[a]
+                row = src[bv + a]
+                for t in range(taps):
+                    z = row[bu + t]
+                    acc_re[t] += w * z.real
+                    acc_im[t] += w * z.imag
+            sr = np.float32(0.0)
+            si = np.float32(0.0)
+            for t in range(taps):
+                sr += wu[t] * acc_re[t]
+                si += wu[t] * acc_im[t]
+            cdx = xs[k] - cx
+            cs, sn = quarter_turns((math.sqrt(cdx * cdx + c2) - rref) * quarter_scale)
+            a64 = np.float64(sr)
+            b64 = np.float64(si)
+            out[r, k] = complex(a64 * cs - b64 * sn, a64 * sn + b64 * cs)

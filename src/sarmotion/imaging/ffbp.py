@@ -274,7 +274,9 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
     return cre, cim, g
 
 
-def _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame: dict) -> None:
+def _image_rows(
+    out, k_lo, plans, bounds, substitutes, cre, cim, g, frame: dict, remodulate: bool = True
+) -> None:
     """Write the image rows into ``out``: row ``r`` of strip ``s`` is root row ``r n_sub[s]``.
 
     The root rows are the roots' children (planes ``cre``, ``cim`` of depth 1, filters
@@ -297,7 +299,7 @@ def _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame: dict)
     row_local = (np.arange(ny) - bounds[row_strip]).astype(np.int64)
     _kernels.root_rows(
         out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, frame["us"],
-        frame["y"], *frame["centre"], frame["constants"][2],
+        frame["y"], *frame["centre"], frame["constants"][2], remodulate,
     )  # fmt: skip
 
 
@@ -392,10 +394,15 @@ def ffbp_values(
 ) -> tuple[NDArray[np.complex128] | None, dict]:
     """FFBP image on the axis-aligned grid ``x_m`` x ``y_m``; returns ``(values, info)``.
 
-    ``values`` is ``None`` when the factorisation would cost more than 70 % of exact
-    backprojection on the same columns: when the look direction is far (more than ~10
-    degrees) from both grid axes, the range band leaks into the cross-range axis and the
-    leaves must be nearly as long as the aperture.
+    Two paths, the first that saves work (costs at most 70 % of exact backprojection):
+
+    - ``"axis-aligned"``: the factorisation on the grid's own columns (module docstring);
+      it pays off when the look direction is within a few degrees of a grid axis;
+    - ``"rotated"``: the same factorisation on a grid turned to the look direction, then
+      resampled onto the requested pixels (:func:`_rotated_values`), at any look direction.
+
+    ``values`` is ``None`` when neither would save work (small images): the caller runs
+    exact backprojection.
 
     Parameters
     ----------
@@ -421,27 +428,60 @@ def ffbp_values(
     alpha : float
         Oversampling of each sub-image's band, > 1.
     progress : callable, optional
-        ``progress("backprojection", done, total)`` per tree level.
+        ``progress("backprojection", done, total)`` per tree level (and the resampling).
 
     Returns
     -------
     values : (ny, nx) complex ndarray or None
     info : dict
-        ``levels``, ``leaves``, ``leaf_pixel_pulses``, ``columns`` used, ``strips``.
+        ``path`` (``"axis-aligned"``, ``"rotated"`` or ``"exact"``), ``levels``,
+        ``leaves``, ``leaf_pixel_pulses``, ``columns`` used, ``strips``; the rotated path
+        adds ``rotation_deg``, ``rotated_grid`` (rows, columns factorised) and
+        ``resample_taps``; ``"exact"`` adds ``fallback``.
     """
     x = np.asarray(x_m, np.float64)
     y = np.asarray(y_m, np.float64)
     pos = np.asarray(positions, np.float64)
+    rho_o = np.asarray(reference_point_m, np.float64)
+    kw = dict(constants=constants, n_up=n_up, carrier_hz=carrier_hz,
+              bandwidth_hz=bandwidth_hz, tile_for=tile_for, alpha=alpha)  # fmt: skip
+    budget = 0.7 * pos.shape[0]  # pixel-pulses per pixel of exact on the same pixels
+    values, info = _aligned_values(table_values, pos, ref_ranges, rho_o, x, y,
+                                   budget=budget, progress=progress, **kw)  # fmt: skip
+    if values is not None:
+        return values, info
+    values, info = _rotated_values(table_values, pos, ref_ranges, rho_o, x, y,
+                                   budget=budget, progress=progress, **kw)  # fmt: skip
+    if values is not None:
+        return values, info
+    return None, {"path": "exact", "fallback": "exact (the factorisation would not save work here)"}
+
+
+def _aligned_values(
+    table_values, pos, ref_ranges, rho_o, x, y, *, constants, n_up, carrier_hz, bandwidth_hz,
+    tile_for, alpha, budget, progress, demodulated=False, max_cost=None,
+):  # fmt: skip
+    """The factorisation on the grid's own columns (the ``"axis-aligned"`` path).
+
+    ``None`` as values when it would cost more than ``budget`` pixel-pulses per pixel of
+    the used columns (or ``max_cost`` pixel-pulses, when given). With ``demodulated``, the values are ``J`` (complex64, not
+    remodulated) on the used columns only, ``info["first_column"]`` the first one's index.
+    """
     look = np.array([x.mean(), y.mean()]) - pos.mean(axis=0)[:2]
     transpose = abs(look[1]) > abs(look[0])
-    rho_o = np.asarray(reference_point_m, np.float64)
     if transpose:  # u = y, v = x: swap the coordinates of everything
+        if demodulated:
+            raise ValueError("a demodulated image is formed in a frame looking along x")
         pos = np.ascontiguousarray(pos[:, [1, 0, 2]])
         rho_o = rho_o[[1, 0, 2]]
         x, y = y, x
-    info: dict = {"levels": 0, "leaves": 0, "leaf_pixel_pulses": 0, "columns": 0}
+    info: dict = {"path": "axis-aligned", "levels": 0, "leaves": 0, "leaf_pixel_pulses": 0,
+                  "columns": 0}  # fmt: skip
     cols = _active_columns(pos, ref_ranges, x, y, constants, n_up)
     if cols.size == 0:
+        if demodulated:
+            info["first_column"] = 0
+            return np.zeros((y.size, 0), np.complex64), info
         out = np.zeros((y.size, x.size), np.complex128)
         return (out.T if transpose else out), info
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
@@ -449,8 +489,9 @@ def ffbp_values(
     f_lo = carrier_hz - 0.5 * bandwidth_hz
     f_hi = carrier_hz + 0.5 * bandwidth_hz
     c_best, bounds, plans = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz, alpha)
-    if c_best > 0.7 * pos.shape[0] * y.size * us.size:
-        return None, {"fallback": "exact (the factorisation would not save work here)"}
+    info["cost_pixel_pulses"] = float(c_best)
+    if c_best > (budget * y.size * us.size if max_cost is None else max_cost):
+        return None, info
     centre = pos.mean(axis=0)
     frame = {
         "table": table_values,
@@ -477,7 +518,143 @@ def ffbp_values(
             progress("backprojection", done, len(depths) + 1)
 
     cre, cim, g = _evaluate(depths, frame, tile_for, info, report)
+    if demodulated:
+        out = np.zeros((y.size, us.size), np.complex64)
+        _image_rows(out, 0, plans, bounds, substitutes, cre, cim, g, frame, remodulate=False)
+        info["first_column"] = k_lo
+        report()
+        return out, info
     out = np.zeros((y.size, x.size), np.complex128)
     _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame)
     report()
     return (out.T if transpose else out), info
+
+
+# ==================================================================== rotated path
+#: Taps per axis of the filter that resamples the rotated image onto the requested pixels.
+RESAMPLE_TAPS = 8
+#: Oversampling of the demodulated image's band on the rotated grid (both axes).
+RESAMPLE_OVERSAMPLING = 2.0
+#: Phases of the tabulated resampling filters (linearly interpolated between).
+_RESAMPLE_PHASES = 256
+#: Cost of a resampled pixel in pixel-pulses (measured; see :func:`_rotated_values`).
+_RESAMPLE_COST = 16.0
+_FRACTIONAL: dict[tuple[float, int], NDArray[np.float32]] = {}
+
+
+def fractional_filters(band: float, taps: int | None = None) -> NDArray[np.float32]:
+    """Real least-squares interpolation filters at ``P + 1`` fractional positions.
+
+    Row ``p`` holds ``g`` with ``sum_t g[t] exp(2i pi f (t - T/2 + 1 - p/P)) ~= 1`` for
+    ``|f| <= band``: the value ``p / P`` samples past tap ``T/2 - 1`` of a signal whose
+    band is ``[-band, band]`` (cycles per sample, ``< 1/2``); least squares on 101
+    frequencies, ``P =`` :data:`_RESAMPLE_PHASES`, ``band`` rounded up to 1/200, cached.
+
+    Parameters
+    ----------
+    band : float
+        Half-width of the band (cycles per sample).
+    taps : int, optional
+        Even number of taps ``T``; default :data:`RESAMPLE_TAPS`.
+
+    Returns
+    -------
+    (P + 1, T) float32 ndarray
+    """
+    taps = RESAMPLE_TAPS if taps is None else int(taps)
+    key = (math.ceil(band * 200.0) / 200.0, taps)
+    table = _FRACTIONAL.get(key)
+    if table is None:
+        f = np.linspace(-key[0], key[0], 101)
+        rhs = np.concatenate([np.ones(f.size), np.zeros(f.size)])
+        table = np.empty((_RESAMPLE_PHASES + 1, taps), np.float32)
+        for p in range(_RESAMPLE_PHASES + 1):
+            offsets = np.arange(taps) - (taps // 2 - 1) - p / _RESAMPLE_PHASES
+            a = np.exp(2j * np.pi * np.outer(f, offsets))
+            table[p] = np.linalg.lstsq(np.vstack([a.real, a.imag]), rhs, rcond=None)[0]
+        _FRACTIONAL[key] = table
+    return table
+
+
+def _rotated_values(
+    table_values, pos, ref_ranges, rho_o, x, y, *, constants, n_up, carrier_hz, bandwidth_hz,
+    tile_for, alpha, budget, progress,
+):  # fmt: skip
+    """The ``"rotated"`` path: factorise on a grid turned to the look direction, resample.
+
+    Frame: ``u`` along the look direction from the aperture centre ``c`` to the grid
+    centre ``o``, ``v`` across it, origin ``o``; the antennas and ``rho_o`` are turned with
+    the grid (ranges, hence the backprojection sum and the demodulation, do not change).
+    The demodulated image ``J`` has, over the grid's footprint, a band ``[lo_u, hi_u]`` x
+    ``[lo_v, hi_v]`` (:func:`_pulse_bands` on the grid's corners, edge midpoints and
+    centre); the rotated grid samples it at :data:`RESAMPLE_OVERSAMPLING` times those
+    widths, covers the footprint with the filter's reach, and is factorised along ``v``
+    (the axis-aligned path, demodulated, on the columns the fast-time window reaches).
+    Every requested pixel is then ``J`` interpolated by a :data:`RESAMPLE_TAPS` x
+    :data:`RESAMPLE_TAPS` separable least-squares filter (:func:`fractional_filters`),
+    remodulated. Error budget: the factorisation's error on the rotated grid plus the
+    resampling's (the two add in power, being independent).
+    """
+    n_pulses = pos.shape[0]
+    centre = pos.mean(axis=0)
+    ox, oy = float(x.mean()), float(y.mean())
+    theta = math.atan2(oy - centre[1], ox - centre[0])
+    ct, st = math.cos(theta), math.sin(theta)
+
+    def turn(px, py):
+        return ct * (px - ox) + st * (py - oy), -st * (px - ox) + ct * (py - oy)
+
+    pos_r = np.column_stack([*turn(pos[:, 0], pos[:, 1]), pos[:, 2]])
+    rho_r = np.array([*turn(rho_o[0], rho_o[1]), rho_o[2]])
+    px = np.array([x[0], x.mean(), x[-1]])
+    py = np.array([y[0], y.mean(), y[-1]])
+    pu, pv = turn(*np.meshgrid(px, py))
+    probes = np.column_stack([pu.ravel(), pv.ravel()])
+    f_lo = carrier_hz - 0.5 * bandwidth_hz
+    f_hi = carrier_hz + 0.5 * bandwidth_hz
+    c_r = pos_r.mean(axis=0)
+    lo_v, hi_v = _pulse_bands(pos_r, f_lo, f_hi, carrier_hz, c_r, probes)
+    lo_u, hi_u = _pulse_bands(pos_r[:, [1, 0, 2]], f_lo, f_hi, carrier_hz, c_r[[1, 0, 2]],
+                              probes[:, ::-1])  # fmt: skip
+    lo_u, hi_u, lo_v, hi_v = lo_u.min(), hi_u.max(), lo_v.min(), hi_v.max()
+    du = 1.0 / (RESAMPLE_OVERSAMPLING * (hi_u - lo_u))
+    dv = 1.0 / (RESAMPLE_OVERSAMPLING * (hi_v - lo_v))
+    reach = RESAMPLE_TAPS // 2 + 1
+    u0 = pu.min() - reach * du
+    v0 = pv.min() - reach * dv
+    us = u0 + du * np.arange(math.ceil((pu.max() + reach * du - u0) / du) + 1)
+    vs = v0 + dv * np.arange(math.ceil((pv.max() + reach * dv - v0) / dv) + 1)
+    # Work of the resampling, in pixel-pulses, counted against the factorisation's budget.
+    n_pixels = x.size * y.size
+    left = budget * n_pixels - _RESAMPLE_COST * n_pixels
+    total = [1]
+
+    def inner_progress(stage, done, n):
+        total[0] = n + 1
+        if progress is not None:
+            progress(stage, done, n + 1)
+
+    j, info = _aligned_values(
+        table_values, pos_r, ref_ranges, rho_r, us, vs, constants=constants, n_up=n_up,
+        carrier_hz=carrier_hz, bandwidth_hz=bandwidth_hz, tile_for=tile_for, alpha=alpha,
+        budget=budget, progress=inner_progress, demodulated=True, max_cost=max(left, 0.0),
+    )  # fmt: skip
+    if j is None:
+        return None, info
+    info.update(path="rotated", rotation_deg=math.degrees(theta),
+                rotated_grid=(int(vs.size), int(j.shape[1])), resample_taps=RESAMPLE_TAPS)  # fmt: skip
+    k_lo = info.pop("first_column")
+    wu = fractional_filters(max(abs(lo_u), abs(hi_u)) * du)
+    wv = fractional_filters(max(abs(lo_v), abs(hi_v)) * dv)
+    out = np.zeros((y.size, x.size), np.complex128)
+    if j.shape[1] >= RESAMPLE_TAPS:
+        quarter_scale = float(constants[2])
+        _kernels.resample(
+            out, j, float(us[k_lo]), du, float(vs[0]), dv, x, y, ox, oy, ct, st, wu, wv,
+            float(centre[0]), float(centre[1]), float(centre[2] ** 2),
+            float(np.linalg.norm(centre - rho_o)), quarter_scale,
+        )  # fmt: skip
+    if progress is not None:
+        progress("backprojection", total[0], total[0])
+    info["levels"] += 1
+    return out, info
