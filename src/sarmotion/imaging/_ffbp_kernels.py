@@ -262,3 +262,28 @@ def resample(
             a64 = np.float64(sr)
             b64 = np.float64(si)
             out[r, k] = complex(a64 * cs - b64 * sn, a64 * sn + b64 * cs)
+
+
+@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+def window_edges(xs, ys, px, py, pz2, ref, d_lo, d_hi, margin):  # pragma: no cover - compiled
+    """``(ny, nx)`` mask of the pixels near an end of the fast-time window.
+
+    Pixel ``(r, k)`` is marked when ``[min_j d_j - margin, max_j d_j + margin]`` holds
+    ``d_lo`` or ``d_hi``, ``d_j = |p_j - rho| - ref[j]`` over the given antennas ``p_j``
+    (``pz2`` their squared heights).
+    """
+    mask = np.zeros((ys.size, xs.size), np.bool_)
+    for r in numba.prange(ys.size):
+        for k in range(xs.size):
+            lo = np.inf
+            hi = -np.inf
+            for j in range(px.size):
+                dx = xs[k] - px[j]
+                dy = ys[r] - py[j]
+                d = math.sqrt(dx * dx + dy * dy + pz2[j]) - ref[j]
+                lo = min(lo, d)
+                hi = max(hi, d)
+            lo -= margin
+            hi += margin
+            mask[r, k] = (lo <= d_lo <= hi) or (lo <= d_hi <= hi)
+    return mask
