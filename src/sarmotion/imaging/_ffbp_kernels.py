@@ -206,18 +206,21 @@ def resample(
 
     ``src[i, k]`` (complex64) is ``J`` at ``u = u0 + k du``, ``v = v0 + i dv`` of the frame
     ``u = cos_t (x - ox) + sin_t (y - oy)``, ``v = -sin_t (x - ox) + cos_t (y - oy)``.
-    ``wu_table``, ``wv_table`` ``(P + 1, T)``: the ``T``-tap filter for a position ``p / P``
-    samples past tap ``T/2 - 1``, linearly interpolated between the ``P + 1`` phases. Pixels
+    ``wu_table``, ``wv_table`` ``(P + 1, T)`` (``T`` of each its own): the ``T``-tap filter
+    for a position ``p / P`` samples past tap ``T/2 - 1``, linearly interpolated between
+    the ``P + 1`` phases. Pixels
     whose taps leave ``src`` are 0. ``out[r, k] = J exp(+i pi/2 quarter_scale (|c - rho| -
     rref))`` (complex128), the demodulation of :mod:`.ffbp` undone.
     """
     n_phase = wu_table.shape[0] - 1
     taps = wu_table.shape[1]
+    taps_v = wv_table.shape[1]
     half = taps // 2 - 1
+    half_v = taps_v // 2 - 1
     nv, nu = src.shape
     for r in numba.prange(ys.size):
         wu = np.empty(taps, np.float32)
-        wv = np.empty(taps, np.float32)
+        wv = np.empty(taps_v, np.float32)
         acc_re = np.empty(taps, np.float32)
         acc_im = np.empty(taps, np.float32)
         ddy = ys[r] - oy
@@ -230,8 +233,8 @@ def resample(
             iu = int(math.floor(fu))
             iv = int(math.floor(fv))
             bu = iu - half
-            bv = iv - half
-            if bu < 0 or bv < 0 or bu + taps > nu or bv + taps > nv:
+            bv = iv - half_v
+            if bu < 0 or bv < 0 or bu + taps > nu or bv + taps_v > nv:
                 out[r, k] = 0.0
                 continue
             pu = (fu - iu) * n_phase
@@ -242,10 +245,11 @@ def resample(
             av = np.float32(pv - jv)
             for t in range(taps):
                 wu[t] = wu_table[ju, t] + au * (wu_table[ju + 1, t] - wu_table[ju, t])
-                wv[t] = wv_table[jv, t] + av * (wv_table[jv + 1, t] - wv_table[jv, t])
                 acc_re[t] = 0.0
                 acc_im[t] = 0.0
-            for a in range(taps):
+            for t in range(taps_v):
+                wv[t] = wv_table[jv, t] + av * (wv_table[jv + 1, t] - wv_table[jv, t])
+            for a in range(taps_v):
                 w = wv[a]
                 row = src[bv + a]
                 for t in range(taps):

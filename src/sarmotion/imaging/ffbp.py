@@ -537,8 +537,13 @@ def _aligned_values(
 
 
 # ==================================================================== rotated path
-#: Taps per axis of the filter that resamples the rotated image onto the requested pixels.
-RESAMPLE_TAPS = 8
+#: Taps per axis (``u``, ``v``) of the filter that resamples the rotated image onto the
+#: requested pixels (the ``v`` band is oversampled more, see below).
+RESAMPLE_TAPS = (8, 6)
+#: Pulses spread on the aperture that find the edge zone.
+N_EDGE_PULSES = 5
+#: Edge-zone margin, in ``u`` samples (see :func:`_window_edge_blocks`).
+EDGE_MARGIN = 2.0
 #: Oversampling of the demodulated image's band on the rotated grid along ``u`` (range),
 #: and along ``v`` in multiples of ``alpha``: 2.05 alpha makes the root one image row per
 #: row (``n`` = 1) with its children at the coarsest spacing their band allows. GOTCHA
@@ -566,13 +571,13 @@ def fractional_filters(band: float, taps: int | None = None) -> NDArray[np.float
     band : float
         Half-width of the band (cycles per sample).
     taps : int, optional
-        Even number of taps ``T``; default :data:`RESAMPLE_TAPS`.
+        Even number of taps ``T``; default ``RESAMPLE_TAPS[0]``.
 
     Returns
     -------
     (P + 1, T) float32 ndarray
     """
-    taps = RESAMPLE_TAPS if taps is None else int(taps)
+    taps = RESAMPLE_TAPS[0] if taps is None else int(taps)
     key = (math.ceil(band * 200.0) / 200.0, taps)
     table = _FRACTIONAL.get(key)
     if table is None:
@@ -630,15 +635,14 @@ def _rotated_values(
     lo_u, hi_u, lo_v, hi_v = lo_u.min(), hi_u.max(), lo_v.min(), hi_v.max()
     du = 1.0 / (RESAMPLE_OVERSAMPLING[0] * (hi_u - lo_u))
     dv = 1.0 / (RESAMPLE_OVERSAMPLING[1] * alpha * (hi_v - lo_v))
-    reach = RESAMPLE_TAPS // 2 + 1
+    reach = max(RESAMPLE_TAPS) // 2 + 1
     u0 = pu.min() - reach * du
     v0 = pv.min() - reach * dv
     us = u0 + du * np.arange(math.ceil((pu.max() + reach * du - u0) / du) + 1)
     vs = v0 + dv * np.arange(math.ceil((pv.max() + reach * dv - v0) / dv) + 1)
     # Work of the resampling, in pixel-pulses, counted against the factorisation's budget.
     n_pixels = x.size * y.size
-    edges = _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up,
-                                (RESAMPLE_TAPS // 2 + 1) * max(du, dv))  # fmt: skip
+    edges = _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, EDGE_MARGIN * du)
     n_edge = sum((r.stop - r.start) * (c.stop - c.start) for r, c in edges)
     left = (budget - _RESAMPLE_COST) * n_pixels - n_pulses * n_edge
     total = [1]
@@ -657,11 +661,12 @@ def _rotated_values(
         return None, info
     info.update(path="rotated", rotation_deg=math.degrees(theta),
                 rotated_grid=(int(vs.size), int(j.shape[1])), resample_taps=RESAMPLE_TAPS)  # fmt: skip
+    info["spacing_m"] = (du, dv)
     k_lo = info.pop("first_column")
-    wu = fractional_filters(max(abs(lo_u), abs(hi_u)) * du)
-    wv = fractional_filters(max(abs(lo_v), abs(hi_v)) * dv)
+    wu = fractional_filters(max(abs(lo_u), abs(hi_u)) * du, RESAMPLE_TAPS[0])
+    wv = fractional_filters(max(abs(lo_v), abs(hi_v)) * dv, RESAMPLE_TAPS[1])
     out = np.zeros((y.size, x.size), np.complex128)
-    if j.shape[1] >= RESAMPLE_TAPS:
+    if j.shape[1] >= RESAMPLE_TAPS[0]:
         quarter_scale = float(constants[2])
         _kernels.resample(
             out, j, float(us[k_lo]), du, float(vs[0]), dv, x, y, ox, oy, ct, st, wu, wv,
@@ -690,7 +695,7 @@ def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32
     idx_scale, idx_offset, _ = constants
     d_lo = (1.0 - idx_offset) / idx_scale
     d_hi = (n_up - idx_offset) / idx_scale
-    js = np.unique(np.linspace(0, pos.shape[0] - 1, 9).round().astype(int))
+    js = np.unique(np.linspace(0, pos.shape[0] - 1, N_EDGE_PULSES).round().astype(int))
     mask = _kernels.window_edges(
         x, y, np.ascontiguousarray(pos[js, 0]), np.ascontiguousarray(pos[js, 1]),
         np.ascontiguousarray(pos[js, 2] ** 2), np.ascontiguousarray(ref_ranges[js], np.float64),
