@@ -197,10 +197,53 @@ def root_rows(
             out[r, k_lo + k] = complex(a * cs - b * sn, a * sn + b * cs)
 
 
+@numba.njit(fastmath=_FASTMATH, inline="always")
+def _resample_pixel(
+    src, fu, fv, wu_table, wv_table, wu, wv, acc_re, acc_im
+):  # pragma: no cover - compiled  # fmt: skip
+    """``(re, im, ok)``: ``J`` at the fractional source position ``(fv, fu)`` (rows,
+    columns) in float32; ``ok`` is false (and the value 0) when the taps leave ``src``."""
+    n_phase = wu_table.shape[0] - 1
+    taps = wu_table.shape[1]
+    taps_v = wv_table.shape[1]
+    nv, nu = src.shape
+    iu = int(math.floor(fu))
+    iv = int(math.floor(fv))
+    bu = iu - (taps // 2 - 1)
+    bv = iv - (taps_v // 2 - 1)
+    if bu < 0 or bv < 0 or bu + taps > nu or bv + taps_v > nv:
+        return np.float32(0.0), np.float32(0.0), False
+    pu = (fu - iu) * n_phase
+    pv = (fv - iv) * n_phase
+    ju = min(int(pu), n_phase - 1)
+    jv = min(int(pv), n_phase - 1)
+    au = np.float32(pu - ju)
+    av = np.float32(pv - jv)
+    for t in range(taps):
+        wu[t] = wu_table[ju, t] + au * (wu_table[ju + 1, t] - wu_table[ju, t])
+        acc_re[t] = 0.0
+        acc_im[t] = 0.0
+    for t in range(taps_v):
+        wv[t] = wv_table[jv, t] + av * (wv_table[jv + 1, t] - wv_table[jv, t])
+    for a in range(taps_v):
+        w = wv[a]
+        row = src[bv + a]
+        for t in range(taps):
+            z = row[bu + t]
+            acc_re[t] += w * z.real
+            acc_im[t] += w * z.imag
+    sr = np.float32(0.0)
+    si = np.float32(0.0)
+    for t in range(taps):
+        sr += wu[t] * acc_re[t]
+        si += wu[t] * acc_im[t]
+    return sr, si, True
+
+
 @numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
 def resample(
     out, src, u0, du, v0, dv, xs, ys, ox, oy, cos_t, sin_t, wu_table, wv_table, cx, cy, cz2,
-    rref, quarter_scale,
+    rref, quarter_scale, block=16,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Interpolate the demodulated image ``src`` onto the grid ``xs`` x ``ys``, remodulated.
 
@@ -208,64 +251,39 @@ def resample(
     ``u = cos_t (x - ox) + sin_t (y - oy)``, ``v = -sin_t (x - ox) + cos_t (y - oy)``.
     ``wu_table``, ``wv_table`` ``(P + 1, T)`` (``T`` of each its own): the ``T``-tap filter
     for a position ``p / P`` samples past tap ``T/2 - 1``, linearly interpolated between
-    the ``P + 1`` phases. Pixels
-    whose taps leave ``src`` are 0. ``out[r, k] = J exp(+i pi/2 quarter_scale (|c - rho| -
-    rref))`` (complex128), the demodulation of :mod:`.ffbp` undone.
+    the ``P + 1`` phases. Pixels whose taps leave ``src`` are 0. ``out[r, k] = J exp(+i
+    pi/2 quarter_scale (|c - rho| - rref))`` (complex128), the demodulation of :mod:`.ffbp`
+    undone. Pixels are visited in ``block`` x ``block`` squares, so that neighbouring rows
+    find the source rows they read in the cache (2048^2 at 45 degrees: 0.098 s, 0.124 s
+    row by row).
     """
-    n_phase = wu_table.shape[0] - 1
     taps = wu_table.shape[1]
-    taps_v = wv_table.shape[1]
-    half = taps // 2 - 1
-    half_v = taps_v // 2 - 1
-    nv, nu = src.shape
-    for r in numba.prange(ys.size):
+    n_rb = (ys.size + block - 1) // block
+    n_kb = (xs.size + block - 1) // block
+    for rb in numba.prange(n_rb):
         wu = np.empty(taps, np.float32)
-        wv = np.empty(taps_v, np.float32)
+        wv = np.empty(wv_table.shape[1], np.float32)
         acc_re = np.empty(taps, np.float32)
         acc_im = np.empty(taps, np.float32)
-        ddy = ys[r] - oy
-        cdy = ys[r] - cy
-        c2 = cdy * cdy + cz2
-        for k in range(xs.size):
-            ddx = xs[k] - ox
-            fu = (cos_t * ddx + sin_t * ddy - u0) / du
-            fv = (-sin_t * ddx + cos_t * ddy - v0) / dv
-            iu = int(math.floor(fu))
-            iv = int(math.floor(fv))
-            bu = iu - half
-            bv = iv - half_v
-            if bu < 0 or bv < 0 or bu + taps > nu or bv + taps_v > nv:
-                out[r, k] = 0.0
-                continue
-            pu = (fu - iu) * n_phase
-            pv = (fv - iv) * n_phase
-            ju = min(int(pu), n_phase - 1)
-            jv = min(int(pv), n_phase - 1)
-            au = np.float32(pu - ju)
-            av = np.float32(pv - jv)
-            for t in range(taps):
-                wu[t] = wu_table[ju, t] + au * (wu_table[ju + 1, t] - wu_table[ju, t])
-                acc_re[t] = 0.0
-                acc_im[t] = 0.0
-            for t in range(taps_v):
-                wv[t] = wv_table[jv, t] + av * (wv_table[jv + 1, t] - wv_table[jv, t])
-            for a in range(taps_v):
-                w = wv[a]
-                row = src[bv + a]
-                for t in range(taps):
-                    z = row[bu + t]
-                    acc_re[t] += w * z.real
-                    acc_im[t] += w * z.imag
-            sr = np.float32(0.0)
-            si = np.float32(0.0)
-            for t in range(taps):
-                sr += wu[t] * acc_re[t]
-                si += wu[t] * acc_im[t]
-            cdx = xs[k] - cx
-            cs, sn = quarter_turns((math.sqrt(cdx * cdx + c2) - rref) * quarter_scale)
-            a64 = np.float64(sr)
-            b64 = np.float64(si)
-            out[r, k] = complex(a64 * cs - b64 * sn, a64 * sn + b64 * cs)
+        for kb in range(n_kb):
+            for r in range(rb * block, min((rb + 1) * block, ys.size)):
+                ddy = ys[r] - oy
+                cdy = ys[r] - cy
+                c2 = cdy * cdy + cz2
+                for k in range(kb * block, min((kb + 1) * block, xs.size)):
+                    ddx = xs[k] - ox
+                    fu = (cos_t * ddx + sin_t * ddy - u0) / du
+                    fv = (-sin_t * ddx + cos_t * ddy - v0) / dv
+                    sr, si, ok = _resample_pixel(src, fu, fv, wu_table, wv_table, wu, wv,
+                                                 acc_re, acc_im)  # fmt: skip
+                    if not ok:
+                        out[r, k] = 0.0
+                        continue
+                    cdx = xs[k] - cx
+                    cs, sn = quarter_turns((math.sqrt(cdx * cdx + c2) - rref) * quarter_scale)
+                    a64 = np.float64(sr)
+                    b64 = np.float64(si)
+                    out[r, k] = complex(a64 * cs - b64 * sn, a64 * sn + b64 * cs)
 
 
 @numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
