@@ -201,8 +201,11 @@ def root_rows(
 def _resample_pixel(
     src, fu, fv, wu_table, wv_table, wu, wv, acc_re, acc_im
 ):  # pragma: no cover - compiled  # fmt: skip
-    """``(re, im, ok)``: ``J`` at the fractional source position ``(fv, fu)`` (rows,
-    columns) in float32; ``ok`` is false (and the value 0) when the taps leave ``src``."""
+    """``(re, im, ok)``: ``J`` at the fractional source position ``(fv, fu)``, float32.
+
+    ``fv``, ``fu`` in rows and columns of ``src``; ``ok`` is false (and the value 0) when
+    the taps leave ``src``. ``wu``, ``wv``, ``acc_re``, ``acc_im``: scratch arrays.
+    """
     n_phase = wu_table.shape[0] - 1
     taps = wu_table.shape[1]
     taps_v = wv_table.shape[1]

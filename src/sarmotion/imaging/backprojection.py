@@ -717,7 +717,8 @@ def _run_ffbp(
     """Fast factorised backprojection (:mod:`.ffbp`).
 
     Exact backprojection when the float32 kernel is out of bounds for this geometry or the
-    factorisation would not save work.
+    factorisation would not save work. The float32 kernel on sub-grids (``exact_for``)
+    computes the pixels the rotated path cannot resample.
     """
     from .ffbp import ffbp_values
 
