@@ -485,12 +485,12 @@ def ffbp_values(
 
 def _aligned_values(
     table_values, pos, ref_ranges, rho_o, x, y, *, constants, n_up, carrier_hz, bandwidth_hz,
-    tile_for, alpha, budget, progress, demodulated=False, max_cost=None,
+    tile_for, alpha, budget, progress, demodulated=False, admit=None,
 ):  # fmt: skip
     """The factorisation on the grid's own columns (the ``"axis-aligned"`` path).
 
     ``None`` as values when it would cost more than ``budget`` pixel-pulses per pixel of
-    the used columns (or ``max_cost`` pixel-pulses, when given). With ``demodulated``, the
+    the used columns (or when ``admit(cost)`` is false, when given). With ``demodulated``, the
     values are ``J`` (complex64, not remodulated) on the used columns only,
     ``info["first_column"]`` the first one's index.
     """
@@ -517,7 +517,7 @@ def _aligned_values(
     f_hi = carrier_hz + 0.5 * bandwidth_hz
     c_best, bounds, plans = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz, alpha)
     info["cost_pixel_pulses"] = float(c_best)
-    if c_best > (budget * y.size * us.size if max_cost is None else max_cost):
+    if not (c_best <= budget * y.size * us.size if admit is None else admit(c_best)):
         return None, info
     centre = pos.mean(axis=0)
     frame = {
@@ -675,10 +675,17 @@ def _rotated_values(
     vs = v0 + dv * np.arange(math.ceil((pv.max() + reach * dv - v0) / dv) + 1)
     # Work of the resampling, in pixel-pulses, counted against the factorisation's budget.
     n_pixels = x.size * y.size
-    edges = _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, EDGE_MARGIN * du)
-    n_edge = sum((r.stop - r.start) * (c.stop - c.start) for r, c in edges)
-    left = ((_ROTATED_BUDGET * n_pulses - _RESAMPLE_COST) * n_pixels
-            - _EDGE_COST * n_pulses * n_edge) / _TREE_COST  # fmt: skip
+    edges: list = []
+
+    def admit(cost: float) -> bool:
+        """The time model; the edge zone is looked for only if the rest fits."""
+        left = (_ROTATED_BUDGET * n_pulses - _RESAMPLE_COST) * n_pixels - _TREE_COST * cost
+        if left < 0.0:
+            return False
+        edges.extend(_window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, EDGE_MARGIN * du))
+        n_edge = sum((r.stop - r.start) * (c.stop - c.start) for r, c in edges)
+        return _EDGE_COST * n_pulses * n_edge <= left
+
     total = [1]
 
     def inner_progress(stage, done, n):
@@ -689,7 +696,7 @@ def _rotated_values(
     j, info = _aligned_values(
         table_values, pos_r, ref_ranges, rho_r, us, vs, constants=constants, n_up=n_up,
         carrier_hz=carrier_hz, bandwidth_hz=bandwidth_hz, tile_for=tile_for, alpha=alpha,
-        budget=budget, progress=inner_progress, demodulated=True, max_cost=max(left, 0.0),
+        budget=budget, progress=inner_progress, demodulated=True, admit=admit,
     )  # fmt: skip
     if j is None:
         return None, info
@@ -713,7 +720,7 @@ def _rotated_values(
     if progress is not None:
         progress("backprojection", total[0], total[0])
     info["levels"] += 1
-    info["exact_pixels"] = int(n_edge)
+    info["exact_pixels"] = sum((r.stop - r.start) * (c.stop - c.start) for r, c in edges)
     return out, info
 
 
