@@ -717,7 +717,8 @@ def _run_ffbp(
     """Fast factorised backprojection (:mod:`.ffbp`).
 
     Exact backprojection when the float32 kernel is out of bounds for this geometry or the
-    factorisation would not save work.
+    factorisation would not save work. The float32 kernel on sub-grids (``exact_for``)
+    computes the pixels the rotated path cannot resample.
     """
     from .ffbp import ffbp_values
 
@@ -731,11 +732,19 @@ def _run_ffbp(
     def tile_for(pos: NDArray, u: NDArray, v: NDArray) -> tuple[int, int]:
         return _tile_shape(pos, u, v, quarter_scale) or _TILES[-1]
 
+    def exact_for(x: NDArray, y: NDArray) -> NDArray[np.complex128]:
+        re, im = _backproject_f32(
+            table.values, st.eff_positions, st.ref_ranges, np.ascontiguousarray(x),
+            np.ascontiguousarray(y), constants, table.n_up, tile_for(st.eff_positions, x, y),
+            None, 1,
+        )  # fmt: skip
+        return re[0] + 1j * im[0]
+
     values, info = ffbp_values(
         table.values, st.eff_positions, st.ref_ranges, traces.reference_point_m,
         np.asarray(grid.x_m), np.asarray(grid.y_m), constants=constants, n_up=table.n_up,
         carrier_hz=st.carrier_hz, bandwidth_hz=float(traces.radar.bandwidth_hz),
-        tile_for=tile_for, alpha=alpha, progress=progress,
+        tile_for=tile_for, alpha=alpha, progress=progress, exact_for=exact_for,
     )  # fmt: skip
     if values is None:
         values, variant = _run_numba(st, traces, grid, progress)
