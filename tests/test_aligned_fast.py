@@ -95,3 +95,15 @@ def test_second_differences_and_columns_match_the_transform(aligner):
     scale = np.abs(ds2).max()
     assert np.max(np.abs(seen["fft"] - ds2)) <= 1e-6 * scale
     assert np.max(np.abs(seen["cols"] - ds2[..., cols])) <= 1e-6 * scale
+
+
+def test_g_without_a_table_above_the_memory_cap(aligner, monkeypatch):
+    """Above the table cap ``g_values`` transforms each trial (the exact values)."""
+    import sarmotion.motion._aligned as aligned
+
+    vel = _range_trials(np.linspace(-20.0, 20.0, 7), aligner.traces.geometry, None)
+    fresh = _Aligner(aligner.traces, aligner.traces.reference_point_m)
+    monkeypatch.setattr(aligned, "_MAX_TABLE_BYTES", fresh.table_bytes() - 1)
+    got = fresh.g_values(vel)
+    assert fresh._table is None
+    np.testing.assert_array_equal(got, fresh.map_chunks(vel, _g_reduce))

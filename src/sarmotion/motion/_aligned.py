@@ -41,6 +41,13 @@ _OVERSAMPLE = 2
 _SHIFT_PHASES = 16
 
 
+#: Largest shift table (bytes) :meth:`_Aligner.g_values` builds; building it briefly
+#: needs about three times as much. Above (long or finely sampled pulses: 469 GOTCHA
+#: pulses of 424 samples take 54 MB, 1000 pulses of 2048 samples 557 MB) ``g`` is formed
+#: by one transform per trial in 1 MB chunks, as :meth:`_Aligner.map_chunks` does.
+_MAX_TABLE_BYTES = 1 << 27
+
+
 # =============================================================== validation
 def _check_traces(traces: object) -> Traces:
     if not isinstance(traces, Traces):
@@ -139,13 +146,21 @@ class _Aligner:
         (:meth:`shift_table`); a trial reads each pulse's trace at its shift by linear
         interpolation between the two nearest phases (compiled, trials over the
         threads). Error: at most 1.2e-3 of each trace's peak modulus (see
-        :data:`_SHIFT_PHASES`); the fast-time samples are those of the transform.
+        :data:`_SHIFT_PHASES`); the fast-time samples are those of the transform. A
+        table larger than :data:`_MAX_TABLE_BYTES` is not built: ``g`` then comes from
+        one transform per trial (the exact values, in bounded memory).
         """
+        if self._table is None and self.table_bytes() > _MAX_TABLE_BYTES:
+            return self.map_chunks(velocities, _g_reduce)
         table = self.shift_table()
         shifts = np.ascontiguousarray(self.delays(velocities) / self.sample_s)
         out = np.empty(velocities.shape[0])
         _shifted_sum_abs_max(table, shifts, out)
         return out
+
+    def table_bytes(self) -> int:
+        """Size of :meth:`shift_table` (bytes)."""
+        return self.traces.n_pulses * (_SHIFT_PHASES + 1) * self.n_fft * 8
 
     def shift_table(self) -> NDArray[np.complex64]:
         """Band-limited traces at sub-sample shifts, shape (n, P + 1, M), complex64.
