@@ -5,6 +5,8 @@
 - :mod:`~sarmotion.core.geometry` — :class:`Trajectory`, look geometry, travel times and
   velocity components;
 - :mod:`~sarmotion.core.spectral` — fast time and frequency, exact delays;
+- :mod:`~sarmotion.core.ascent` — Newton ascent of exact point responses (analytic
+  derivatives), for location and velocity fits;
 - :mod:`~sarmotion.core.traces` — :class:`Traces`, the data ``(n_pulses, n_samples)``;
 - :mod:`~sarmotion.core.progress` — the progress-callback convention.
 """
