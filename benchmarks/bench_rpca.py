@@ -41,9 +41,15 @@ def make_matrix(n: int, m: int, *, rank: int = 5, density: float = 0.05, seed: i
     return low, sparse
 
 
-def reference_ialm(m: np.ndarray, *, tol: float = TOL, max_iter: int = 1000):
-    """Textbook inexact ALM (Lin, Chen & Ma 2010, Alg. 5), full SVD every iteration."""
-    eta = 1.0 / np.sqrt(max(m.shape))
+def reference_ialm(
+    m: np.ndarray, *, eta: float | None = None, tol: float = TOL, max_iter: int = 1000
+):
+    """Textbook inexact ALM (Lin, Chen & Ma 2010, Alg. 5), full SVD every iteration.
+
+    ``eta`` defaults to ``1 / sqrt(max(m.shape))``. Returns ``(L, S, iterations,
+    converged)``.
+    """
+    eta = 1.0 / np.sqrt(max(m.shape)) if eta is None else eta
     norm_two = np.linalg.norm(m, 2)
     y = m / max(norm_two, np.abs(m).max() / eta)
     mu = 1.25 / norm_two
@@ -256,7 +262,7 @@ def _same_run(fn_new, fn_ref, *, repeats: int = 5) -> dict:
 def test_gotcha_windows(benchmark, solver, degree):
     """Windowed RPCA of one GOTCHA degree with two injected movers (the separation test's
     case: windows of 64, ``eta`` x 2, ``tol = 1e-5``) against the plain full-SVD IALM
-    (:func:`reference_ialm_eta` per window) in the same run: median seconds of both
+    (:func:`reference_ialm` per window) in the same run: median seconds of both
     (the plain one with one BLAS thread and with the default threads), their median
     ratio, and for both the clutter left in ``S`` (dB of the clutter energy) and the
     movers' trace coverage. ``solver="ialm"`` is the stacked IALM of
@@ -281,7 +287,7 @@ def test_gotcha_windows(benchmark, solver, degree):
     def plain():
         s = np.zeros_like(mc)
         for i, (a, b) in enumerate(bounds):
-            s[:, a:b] += weights[i, a:b] * reference_ialm_eta(mc[:, a:b], eta=eta, tol=1e-5)[1]
+            s[:, a:b] += weights[i, a:b] * reference_ialm(mc[:, a:b], eta=eta, tol=1e-5)[1]
         return s
 
     res = _run(benchmark, new)
@@ -380,7 +386,7 @@ def test_gotcha_minimiser(benchmark, degree):
         return out
 
     def plain():
-        return [reference_ialm_eta(x, eta=eta, tol=1e-5) for x in blocks]
+        return [reference_ialm(x, eta=eta, tol=1e-5)[:3] for x in blocks]
 
     def apg():
         with threadpool_limits(limits=1, user_api="blas"):  # as the library's solvers
@@ -418,7 +424,7 @@ def test_gotcha_minimiser(benchmark, degree):
 def test_gotcha_four_degrees_as_analyze(benchmark):
     """The analysis's case: the 4 GOTCHA degrees with two injected movers as one window
     (``choose_window`` picks the whole 424 samples), ``eta`` x 2, ``tol = 1e-4``; seconds,
-    iterations, rank of ``L`` and clutter left against :func:`reference_ialm_eta` (double
+    iterations, rank of ``L`` and clutter left against :func:`reference_ialm` (double
     precision, full SVDs) in the same run, as in :func:`test_gotcha_windows`."""
     from sarmotion.separation import default_eta
 
@@ -431,7 +437,7 @@ def test_gotcha_four_degrees_as_analyze(benchmark):
         return rpca(m, eta=eta, tol=1e-4)
 
     def plain():
-        return reference_ialm_eta(mc, eta=eta, tol=1e-4)
+        return reference_ialm(mc, eta=eta, tol=1e-4)[:3]
 
     res = _run(benchmark, new)
     _, sparse_ref, it_ref = plain()
@@ -445,26 +451,3 @@ def test_gotcha_four_degrees_as_analyze(benchmark):
             "reference_clutter_left_db": _clutter_left_db(sparse_ref, m, clutter.data),
         }
     )
-
-
-def reference_ialm_eta(m: np.ndarray, *, eta: float, tol: float = TOL, max_iter: int = 1000):
-    """:func:`reference_ialm` with a given ``eta``."""
-    norm_two = np.linalg.norm(m, 2)
-    y = m / max(norm_two, np.abs(m).max() / eta)
-    mu = 1.25 / norm_two
-    mu_bar = mu * 1e7
-    norm_fro = np.linalg.norm(m)
-    low = np.zeros_like(m)
-    for k in range(1, max_iter + 1):
-        t = m - low + y / mu
-        mag = np.abs(t)
-        sparse = t * np.maximum(mag - eta / mu, 0) / np.where(mag > 0, mag, 1)
-        u, s, vh = np.linalg.svd(m - sparse + y / mu, full_matrices=False)
-        r = int(np.sum(s > 1 / mu))
-        low = (u[:, :r] * (s[:r] - 1 / mu)) @ vh[:r]
-        z = m - low - sparse
-        y = y + mu * z
-        mu = min(mu * 1.5, mu_bar)
-        if np.linalg.norm(z) / norm_fro <= tol:
-            return low, sparse, k
-    return low, sparse, max_iter

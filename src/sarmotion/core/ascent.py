@@ -111,6 +111,41 @@ class ResponseDerivatives:
         hess = 2.0 * np.real(np.outer(g, np.conj(g)) + np.conj(value) * h)
         return f, grad, 0.5 * (hess + hess.T), value
 
+    def on_track(
+        self,
+        slow_times_s: NDArray[np.float64],
+        position_m: NDArray[np.float64],
+        velocity_mps: NDArray[np.float64],
+        position_direction: NDArray[np.float64],
+        velocity_directions: tuple[NDArray[np.float64], NDArray[np.float64]],
+    ) -> Callable[[NDArray[np.float64]], Evaluation]:
+        """``q -> self(rho(q), J)`` for a straight track moved by three parameters.
+
+        ``rho_j(q) = position + q[0] e + s_j (velocity + q[1] a + q[2] b)`` with ``e =
+        position_direction`` (m per unit of ``q[0]``) and ``(a, b) = velocity_directions``
+        (m/s per unit of ``q[1]``, ``q[2]``); ground vectors of 2 or 3 components (``z``
+        held). ``slow_times_s`` are those of the summed pulses.
+        """
+        s = np.asarray(slow_times_s, dtype=np.float64)
+
+        def ground(v: NDArray[np.float64]) -> NDArray[np.float64]:
+            v = np.asarray(v, dtype=np.float64)
+            return np.r_[v[:2], 0.0] if v.size == 2 else v
+
+        p0 = np.asarray(position_m, dtype=np.float64)
+        v0, e = ground(velocity_mps), ground(position_direction)
+        a, b = (ground(d) for d in velocity_directions)
+        jacobian = np.empty((s.size, 3, 3))
+        jacobian[:, :, 0] = e[None, :]
+        jacobian[:, :, 1] = s[:, None] * a[None, :]
+        jacobian[:, :, 2] = s[:, None] * b[None, :]
+
+        def evaluate(q: NDArray[np.float64]) -> Evaluation:
+            where = (p0 + q[0] * e)[None, :] + s[:, None] * (v0 + q[1] * a + q[2] * b)[None, :]
+            return self(where, jacobian)
+
+        return evaluate
+
 
 def newton_ascent(
     evaluate: Callable[[NDArray[np.float64]], Evaluation],

@@ -18,35 +18,10 @@ import math
 import numba
 import numpy as np
 
+from ..core.spectral import quarter_turns
 from ._simd import LANES, tile_pulses
 
 _FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
-# float64 minimax sine/cosine of pi r / 2 on |r| <= 1/2 (as in .backprojection).
-_S0, _S1, _S2, _S3, _S4, _S5 = (
-    1.57079632679489, -0.6459640975043288, 0.07969262615641214, -0.0046817525994714984,
-    0.00016042930460199835, -3.5564543255214174e-06,
-)  # fmt: skip
-_C0, _C1, _C2, _C3, _C4, _C5, _C6 = (
-    0.9999999999999951, -1.2337005501361604, 0.2536695079002106, -0.02086348074043811,
-    0.0009192599906072516, -2.5200275027694737e-05, 4.657112551982875e-07,
-)  # fmt: skip
-
-
-@numba.njit(fastmath=_FASTMATH, inline="always")
-def quarter_turns(t):  # pragma: no cover - compiled
-    """``(cos, sin)`` of ``pi t / 2``: ``t`` folded exactly to ``|t - k| <= 1/2``, float64."""
-    kq = np.rint(t)
-    x = t - kq
-    z = x * x
-    s = x * (_S0 + z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * _S5)))))
-    c = _C0 + z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-    q = np.int64(kq)
-    swap = (q & 1) != 0
-    cs = s if swap else c
-    sn = c if swap else s
-    cs = -cs if ((q + 1) & 2) != 0 else cs
-    sn = -sn if (q & 2) != 0 else sn
-    return cs, sn
 
 
 @numba.njit(fastmath=_FASTMATH, inline="always")

@@ -58,6 +58,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core import C, ProgressCallback, Radar, Traces, Trajectory, to_fast_time, to_frequency
 from ..core.geometry import _as_velocity
+from ..core.spectral import quarter_turns
 from ._simd import LANES, tile_pulses
 from .grid import Image, ImageGrid
 
@@ -202,40 +203,11 @@ def _accumulate_numpy(
 #   C (vectorised): accumulate sample * exp(i phi).
 # The phase phi = 2 pi (2 nu_o / c) d, d = |r - s u - rho| - |r - rho_o|, is reduced exactly
 # to quarter cycles, t = 4 (2 nu_o / c) d, k = rint(t), r = t - k in [-1/2, 1/2] (exact:
-# Sterbenz), so exp(i phi) = i^k exp(i pi r / 2); the two polynomials below (minimax on
-# |r| <= 1/2) give cos and sin of pi r / 2 within 6e-15 and vectorise (no libm calls).
+# Sterbenz), so exp(i phi) = i^k exp(i pi r / 2); two polynomials (minimax on
+# |r| <= 1/2, sarmotion.core.spectral.quarter_turns) give cos and sin of pi r / 2 within
+# 1e-14 and vectorise (no libm calls).
 # fastmath: contract (FMA), no reassociation: the order of the reduction is kept.
 _FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
-
-
-_S0, _S1, _S2, _S3, _S4, _S5 = (
-    1.57079632679489,
-    -0.6459640975043288,
-    0.07969262615641214,
-    -0.0046817525994714984,
-    0.00016042930460199835,
-    -3.5564543255214174e-06,
-)
-
-
-_C0, _C1, _C2, _C3, _C4, _C5, _C6 = (
-    0.9999999999999951,
-    -1.2337005501361604,
-    0.2536695079002106,
-    -0.02086348074043811,
-    0.0009192599906072516,
-    -2.5200275027694737e-05,
-    4.657112551982875e-07,
-)
-
-
-@numba.njit(fastmath=_FASTMATH, cache=True)
-def _sincos_quarter(r: float) -> tuple[float, float]:
-    """``(cos(pi r / 2), sin(pi r / 2))`` for ``|r| <= 1/2``, error < 6e-15."""
-    z = r * r
-    s = r * (_S0 + z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * _S5)))))
-    c = _C0 + z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-    return c, s
 
 
 @numba.njit(fastmath=_FASTMATH, cache=True)
@@ -264,15 +236,7 @@ def _row_geometry(
         fq = np.floor(q)
         obuf[k] = base + 2 * int(fq)
         wbuf[k] = q - fq
-        t = d * quarter_scale
-        kq = np.rint(t)
-        c, s = _sincos_quarter(t - kq)
-        quadrant = int(kq) & 3
-        swap = (quadrant & 1) == 1
-        cs = s if swap else c
-        sn = c if swap else s
-        cbuf[k] = -cs if (quadrant == 1 or quadrant == 2) else cs
-        sbuf[k] = -sn if quadrant >= 2 else sn
+        cbuf[k], sbuf[k] = quarter_turns(d * quarter_scale)
 
 
 @numba.njit(fastmath=_FASTMATH, cache=True)

@@ -133,7 +133,7 @@ def refine_location(
     *,
     velocity_mps: ArrayLike | None = None,
     phase_history: ArrayLike | None = None,
-    step_m: tuple[float, float] = (0.2, 0.5),
+    step_m: float = 0.2,
     tol_m: float = 1e-3,
     max_iter: int = 50,
 ) -> tuple[NDArray[np.float64], complex]:
@@ -145,7 +145,7 @@ def refine_location(
     grad d_j`` and ``hess I = (1/K) sum_j (A_j'' grad d_j grad d_j^T + A_j' hess d_j)``
     (:meth:`~sarmotion.core.spectral.FrequencyPlanes.sums_and_derivatives`). Each step is
     the Newton step of ``|I|^2`` when its Hessian is negative definite, else the gradient
-    direction, cut to a trust radius (first ``min(step_m)``, doubled after a full step
+    direction, cut to a trust radius (first ``step_m``, doubled after a full step
     that gained, quartered after a step that did not); it stops when a step gaining
     ``|I|^2`` is shorter than ``tol_m``, or the radius falls below it. Near the peak the
     steps shrink quadratically, so the last accepted location is within ``~tol_m^2 /
@@ -165,8 +165,8 @@ def refine_location(
         Compensated ground velocity (m/s).
     phase_history : array_like or FrequencyPlanes, optional
         Precomputed ``traces.phase_history()`` (or its planes).
-    step_m : (float, float)
-        Largest first step (m): the smaller of the two, about half a resolution cell.
+    step_m : float
+        First trust radius (m), about half a range resolution cell.
     tol_m : float
         Location tolerance (m).
     max_iter : int
@@ -202,7 +202,7 @@ def refine_location(
         return response(np.array([xy[0], xy[1], p0[2]]) + shift, jacobian)
 
     xy, value, moved, _ = newton_ascent(
-        evaluate, p0[:2], radius=float(min(step_m)), tol=tol_m, max_iter=max_iter
+        evaluate, p0[:2], radius=float(step_m), tol=tol_m, max_iter=max_iter
     )
     if not moved:
         return p0, complex(value)

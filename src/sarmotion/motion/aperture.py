@@ -320,11 +320,6 @@ def _window_response(
     """
     ant = traces.positions_m[window]
     s = traces.slow_times_s[window]
-    er3, ec3 = np.r_[e_r, 0.0], np.r_[e_c, 0.0]
-    jacobian = np.empty((s.size, 3, 3))
-    jacobian[:, :, 0] = er3[None, :]
-    jacobian[:, :, 1] = s[:, None] * er3[None, :]
-    jacobian[:, :, 2] = s[:, None] * ec3[None, :]
     response = ResponseDerivatives(
         planes,
         ant,
@@ -334,10 +329,4 @@ def _window_response(
         1.0 / traces.n_samples,
         rows=window,
     )
-    v3 = np.r_[v0, 0.0]
-
-    def evaluate(q: NDArray[np.float64]):
-        where = (p0 + q[0] * er3)[None, :] + s[:, None] * (v3 + q[1] * er3 + q[2] * ec3)[None, :]
-        return response(where, jacobian)
-
-    return evaluate
+    return response.on_track(s, p0, v0, e_r, (e_r, e_c))

@@ -281,7 +281,7 @@ def stationary_explanation(
         u, _ = speed_at(dy)
         dy -= u / slope
     _, member = speed_at(dy)
-    best, stat = refine_location(tr, member, velocity_mps=None, step_m=(0.05, 0.3))
+    best, stat = refine_location(tr, member, velocity_mps=None, step_m=0.05)
     cross = resolution(tr).cross_range_direction
     reach = abs(float((best[:2] - tr.reference_point_m[:2]) @ cross))
     gain = 20.0 * np.log10(max(abs(value), 1e-300) / max(abs(stat), 1e-300))

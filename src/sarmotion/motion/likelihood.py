@@ -269,16 +269,7 @@ def _local_fit(
         },
     )
     q1 = res.x if res.fun <= start else q0
-    jacobian = np.empty((s.size, 3, 3))
-    jacobian[:, :, 0] = e_r[None, :]
-    jacobian[:, :, 1] = s[:, None] * g_r[None, :]
-    jacobian[:, :, 2] = s[:, None] * g_p[None, :]
-    response = mf.response_derivatives()
-
-    def evaluate(q: NDArray[np.float64]):
-        where = (position_m + q[0] * e_r)[None, :] + s[:, None] * (v0 + q[1] * g_r + q[2] * g_p)
-        return response(where, jacobian)
-
+    evaluate = mf.response_derivatives().on_track(s, position_m, v0, e_r, (g_r, g_p))
     q, value, _, _ = newton_ascent(
         evaluate, q1, radius=1.0, tol=1e-3, max_iter=100, scale=_LOCAL_UNITS
     )

@@ -218,7 +218,7 @@ def locate_mover(
     e_r, e_c = _image_axes(geom)
     if focused:
         pos, value = refine_location(
-            tr, brightest, velocity_mps=vel, phase_history=ph, step_m=(0.5 * step, 0.5 * step)
+            tr, brightest, velocity_mps=vel, phase_history=ph, step_m=0.5 * step
         )
         return MoverLocation(
             position_m=pos,
