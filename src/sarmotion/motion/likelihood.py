@@ -324,7 +324,14 @@ def fit_point_mover(
     x = -0.5 * C * delay / np.cos(cells.elevation_rad)  # ground-range offset of the trace
     start = tr.reference_point_m + x * np.r_[cells.range_direction, 0.0]
     mf = MatchedFilter(tr, d)
-    pos, ur, up, value = _local_fit(tr, mf, start, u0 + du, up)
+    # Local maxima one Doppler resolution apart in range speed trade it against metres
+    # per second of cross-range speed (one degree of aperture): the local fit from the
+    # search's range speed and from one resolution either side, the largest |I| kept.
+    doppler_mps = C / (
+        2.0 * tr.radar.carrier_hz * tr.n_pulses * np.median(np.diff(tr.slow_times_s))
+    )
+    fits = [_local_fit(tr, mf, start, u0 + du + k * doppler_mps, up) for k in (0, -1, 1)]
+    pos, ur, up, value = max(fits, key=lambda f: abs(f[3]))
     return PointFit(
         position_m=pos,
         range_speed_mps=ur,
