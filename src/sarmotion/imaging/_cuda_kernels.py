@@ -1,0 +1,160 @@
+"""numba.cuda kernel of exact backprojection (:mod:`sarmotion.imaging.cuda`).
+
+Importing this module imports :mod:`numba.cuda`; :mod:`sarmotion.imaging.cuda` does it
+only when a CUDA image is asked for. numba-cuda 0.30 refers to ``np.row_stack``, which
+numpy 2.5 removed: where it is missing it is aliased to :func:`numpy.vstack` (the same
+function; numpy deprecated the name in 2.0) before :mod:`numba.cuda` is imported.
+
+The kernel is written for the hardware and for numba's CUDA simulator
+(``NUMBA_ENABLE_CUDASIM=1``), which runs it as Python on the CPU: only ``math``
+functions, ``cuda.shared``/``cuda.local`` arrays and float32/float64 scalars.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+if not hasattr(np, "row_stack"):  # numpy >= 2.5 removed the alias numba-cuda 0.30 uses
+    np.row_stack = np.vstack
+
+from numba import cuda, float32, float64, int32  # noqa: E402
+
+__all__ = ["BLOCK", "PULSE_CHUNK", "backprojection_kernel"]
+
+#: Threads per block (x along image columns, y along groups of rows).
+BLOCK = (32, 8)
+#: Pulses staged in shared memory at once (4 float64 each: 4 KiB).
+PULSE_CHUNK = 128
+
+_TWO = np.float32(2.0)
+_THREE = np.float32(3.0)
+_ONE = np.float32(1.0)
+_HALF32 = np.float32(0.5)
+_TWO_PI = np.float32(2.0 * np.pi)
+_ZERO = np.float32(0.0)
+
+_KERNELS: dict[int, object] = {}
+
+
+def backprojection_kernel(rows_per_thread: int):
+    """The kernel for ``rows_per_thread`` pixels per thread (compiled on first launch).
+
+    Launch as ``kernel[grid, BLOCK](table, ant, xs, ys, idx_scale, idx_offset,
+    cycles_per_m, out)``:
+
+    - ``table`` (n_pulses, n_table + 1, 4) float32: per pulse and table position ``m``,
+      ``(Re V, Im V, Re D, Im D)`` of the band-limited trace ``V`` and its derivative
+      ``D = h dV/dt`` (``h`` the table step), entry ``n_table`` repeating entry 0 (one
+      period of the trace);
+    - ``ant`` (n_pulses, 4) float64: antenna ``x``, ``y``, ``z**2`` and the reference range
+      ``|r - rho_o|`` (m);
+    - ``xs`` (nx,), ``ys`` (ny,) float64: the pixel ``(iy, ix)`` is ``(xs[ix], ys[iy], 0)`` (m);
+    - ``idx_scale`` table steps per metre of ``d = |r - rho| - |r - rho_o|``,
+      ``idx_offset`` the table position of ``d = 0``, ``cycles_per_m = 2 nu_o / c``;
+    - ``out`` (ny, nx, 2) float32, written (not accumulated).
+
+    Each thread sums, over all pulses, ``rows_per_thread`` pixels of one column, rows
+    ``P g .. P g + P - 1``. Per pulse it computes in float64 the range ``R_a`` to an
+    anchor at the middle of its pixels, the table position and the carrier phase there
+    (reduced exactly to ``[-1/2, 1/2]`` cycle), then per pixel the range offset in float32,
+    ``R - R_a = N / (R_a + sqrt(R_a**2 + N))``, ``N = e (e + 2 (y_a - y_r))`` with ``e`` the
+    pixel's offset from the anchor along ``y`` (no cancellation: ``N`` is formed from the
+    offset, never as a difference of two ranges).
+    """
+    kernel = _KERNELS.get(rows_per_thread)
+    if kernel is None:
+        kernel = _make_kernel(int(rows_per_thread))
+        _KERNELS[rows_per_thread] = kernel
+    return kernel
+
+
+def _make_kernel(P: int):  # noqa: N803 - the paper-style name of the count
+    bx, by = BLOCK
+    nthreads = bx * by
+    chunk = PULSE_CHUNK
+
+    @cuda.jit(fastmath=True)
+    def kernel(table, ant, xs, ys, idx_scale, idx_offset, cycles_per_m, out):
+        sh = cuda.shared.array((PULSE_CHUNK, 4), float64)
+        acc_re = cuda.local.array(P, float32)
+        acc_im = cuda.local.array(P, float32)
+        offs = cuda.local.array(P, float32)
+        tx = cuda.threadIdx.x
+        ty = cuda.threadIdx.y
+        tid = ty * bx + tx
+        nx = xs.size
+        ny = ys.size
+        ix = cuda.blockIdx.x * bx + tx
+        iy0 = (cuda.blockIdx.y * by + ty) * P
+        x = xs[min(ix, nx - 1)]
+        ya = 0.5 * (ys[min(iy0, ny - 1)] + ys[min(iy0 + P - 1, ny - 1)])
+        for p in range(P):
+            acc_re[p] = _ZERO
+            acc_im[p] = _ZERO
+            offs[p] = float32(ys[min(iy0 + p, ny - 1)] - ya)
+        scale32 = float32(idx_scale)
+        k_hi = float32(cycles_per_m)
+        k_lo = float32(cycles_per_m - float64(k_hi))
+        n_table = table.shape[1] - 1
+        n_pulses = ant.shape[0]
+        for c0 in range(0, n_pulses, chunk):
+            n = min(chunk, n_pulses - c0)
+            cuda.syncthreads()
+            for t in range(tid, 4 * n, nthreads):
+                sh[t // 4, t % 4] = ant[c0 + t // 4, t % 4]
+            cuda.syncthreads()
+            for jj in range(n):
+                j = c0 + jj
+                wx = x - sh[jj, 0]
+                wy = ya - sh[jj, 1]
+                r2 = wx * wx + wy * wy + sh[jj, 2]
+                ra = math.sqrt(r2)
+                d0 = ra - sh[jj, 3]
+                q0 = d0 * idx_scale + idx_offset
+                q0 = min(max(q0, -1.0e6), 1.0e6)  # far outside the table: stays out
+                fl0 = math.floor(q0)
+                i0 = int32(fl0)
+                f0 = float32(q0 - fl0)
+                c = d0 * cycles_per_m
+                c0f = float32(c - math.floor(c + 0.5))
+                raf = float32(ra)
+                r2f = float32(r2)
+                wyf = float32(wy)
+                for p in range(P):
+                    if P == 1:
+                        dd = _ZERO
+                    else:
+                        e = offs[p]
+                        nn = e * (e + _TWO * wyf)
+                        dd = nn / (raf + math.sqrt(r2f + nn))
+                    q = f0 + dd * scale32
+                    fq = math.floor(q)
+                    i = i0 + int32(fq)
+                    if i >= 0 and i < n_table:
+                        u = float32(q - fq)
+                        v = _ONE - u
+                        u2 = u * u
+                        h01 = u2 * (_THREE - _TWO * u)
+                        h00 = _ONE - h01
+                        h10 = u * v * v
+                        h11 = -u2 * v
+                        vr = (h00 * table[j, i, 0] + h10 * table[j, i, 2]
+                              + h01 * table[j, i + 1, 0] + h11 * table[j, i + 1, 2])  # fmt: skip
+                        vi = (h00 * table[j, i, 1] + h10 * table[j, i, 3]
+                              + h01 * table[j, i + 1, 1] + h11 * table[j, i + 1, 3])  # fmt: skip
+                        cyc = c0f + dd * k_hi + dd * k_lo
+                        cyc = cyc - math.floor(cyc + _HALF32)
+                        ang = _TWO_PI * cyc
+                        cs = math.cos(ang)
+                        sn = math.sin(ang)
+                        acc_re[p] += vr * cs - vi * sn
+                        acc_im[p] += vr * sn + vi * cs
+        for p in range(P):
+            iy = iy0 + p
+            if ix < nx and iy < ny:
+                out[iy, ix, 0] = acc_re[p]
+                out[iy, ix, 1] = acc_im[p]
+
+    return kernel

@@ -1,0 +1,306 @@
+"""Exact backprojection on an NVIDIA GPU (numba.cuda): :func:`backproject_cuda`.
+
+The same sum as :func:`sarmotion.imaging.backproject` (``eq:image``, ``eq:imagecompu``),
+
+    I(rho) = sum_j D_j(dtau_j) exp(+i omega_o dtau_j),
+    dtau_j = 2 (|r(s_j) - s_j u - rho| - |r(s_j) - rho_o|) / c,
+
+with ``D_j`` the band-limited trace of pulse ``j``: the trigonometric interpolant of its
+samples, ``D(t) = (1/n) sum_k P_k exp(2i pi (k - n//2) df t)``
+(:mod:`sarmotion.core.spectral`). Its exact value is :func:`~sarmotion.imaging.point_response`.
+
+Method
+------
+Per pulse, a table holds ``D`` and its derivative ``h D'`` on ``U n`` points of step
+``h = dt / U`` over one period of ``D`` (``U = upsample``; both exact, by zero-padding the
+spectrum, then rounded to float32). ``D`` at a delay is the cubic Hermite interpolant of
+the two table points around it. The table covers ``[-n/2, n/2) dt``, the fast-time
+window; a delay outside it contributes 0 (as on the CPU).
+
+Geometry: each GPU thread sums ``P`` pixels of one image column (``P`` in 1, 2, 4, chosen
+below). Per pulse the range to an anchor at the middle of the ``P`` pixels, its table
+position and its carrier phase (reduced exactly to ``[-1/2, 1/2]`` cycle) are computed in
+float64; each pixel's range offset from the anchor, ``N / (R_a + sqrt(R_a^2 + N))`` with
+``N = e (e + 2 (y_a - y_r))`` (``e`` its offset along ``y``, ``|e| <= (P-1) dy / 2``),
+in float32, as are the interpolation, the phasor (``sin``/``cos`` of a reduced angle)
+and the sum over pulses.
+
+Error bound
+-----------
+Per pulse term, relative to ``max |D_j|`` (the error of the image is the sum of these
+terms' errors over pulses; for clutter they add incoherently, like the terms):
+
+- interpolation: ``D`` holds frequencies ``|f| <= 1 / (2 dt)``, so by Bernstein's
+  inequality ``|D''''| <= (pi / dt)^4 max |D|``, and the cubic Hermite remainder
+  ``|D - H| <= max |D''''| h^4 tau^2 (1 - tau)^2 / 4! <= (pi / U)^4 / 384`` per real
+  component: ``eps_H = sqrt(2) (pi / U)^4 / 384`` (``U = 8``: 9e-5, -81 dB, at the band
+  edge half-way between table points; averaged over a flat band and over ``tau`` the
+  error power is ``(pi / U)^8 / (9 * 576 * 630)``, -98 dB for ``U = 8``);
+- phase: the float32 range offset is within ``8 u |e|`` of exact (``u = 2^-24``: six
+  float32 operations, each correctly rounded to ``u`` or approximate to ``2 u``), the
+  phase rounding within ``2 u (2 nu_o / c) |e|`` cycles, so
+  ``eps_phi = 2 pi (2 nu_o / c) 10 u (P - 1) dy / 2`` rad; ``P`` is the largest of
+  4, 2, 1 with ``eps_phi <= 1e-4`` (-80 dB); the float64 anchor contributes
+  ``2 pi (2 nu_o / c) 4 eps_64 R`` (< 1e-9 rad at 10 km);
+- ``sin``/``cos`` of an angle in ``[-pi, pi]`` (CUDA's fast intrinsics): ``2^-21.4``;
+  float32 table values and position: ``~u``;
+- accumulation over ``J`` pulses in float32: ``J u`` of the sum of the terms' moduli at
+  worst, ``sqrt(J) u`` typically.
+
+So the signal-to-error ratio against the exact sum is at least
+``-20 log10(eps_H + eps_phi + 2^-21.4 + J u)`` for a single coherent point and of the
+same order for clutter (the terms and their errors both add incoherently).
+
+Requirements
+------------
+The ``gpu`` extra (``pip install sarmotion[gpu]``: numba-cuda) and an NVIDIA GPU. numba's
+CUDA simulator (``NUMBA_ENABLE_CUDASIM=1`` before numba is imported) runs the same
+kernel on the CPU, slowly (the tests use it). numba-cuda 0.30 refers to ``np.row_stack``,
+which numpy 2.5 removed: :mod:`._cuda_kernels` aliases it to :func:`numpy.vstack` where it
+is missing, before importing :mod:`numba.cuda` (no version pin needed).
+
+All quantities are SI: metres, seconds, hertz, m/s.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+import zlib
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core import C, ProgressCallback, Traces, to_fast_time, to_frequency
+from ..core.geometry import _as_velocity
+from .grid import Image, ImageGrid
+
+__all__ = ["available", "backproject_cuda", "hermite_table"]
+
+#: The one-line error when no GPU path can run.
+NEEDS = "device='cuda' needs the sarmotion[gpu] extra and an NVIDIA GPU"
+
+#: Largest float32 phase error bound accepted when grouping pixels per thread (rad):
+#: -80 dB.
+_MAX_PHASE_ERROR_RAD = 1e-4
+
+#: float32 unit roundoff.
+_U32 = 2.0**-24
+
+#: Pulses per block of the table's FFTs (bounds the complex128 temporaries).
+_FFT_BLOCK = 64
+
+
+def _cuda() -> Any:
+    """numba.cuda, imported on first use; RuntimeError (one line) when unusable."""
+    try:
+        from . import _cuda_kernels  # noqa: F401 - imports numba.cuda with the numpy alias
+        from numba import cuda
+    except Exception as err:  # ImportError, or numba-cuda failing at import
+        raise RuntimeError(f"{NEEDS} ({type(err).__name__}: {err})".splitlines()[0]) from err
+    return cuda
+
+
+def available() -> bool:
+    """Whether :func:`backproject_cuda` can run: numba.cuda imports and finds a GPU.
+
+    True under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``).
+    """
+    try:
+        return bool(_cuda().is_available())
+    except Exception:
+        return False
+
+
+def hermite_table(data: ArrayLike, upsample: int) -> NDArray[np.float32]:
+    """Trace values and derivatives on ``upsample`` points per sample, one period.
+
+    Parameters
+    ----------
+    data : (n_pulses, n) array_like
+        Complex baseband traces, ``t = 0`` at index ``n // 2``, sample interval ``dt``.
+    upsample : int
+        Table points per sample ``U`` (>= 1).
+
+    Returns
+    -------
+    (n_pulses, U n + 1, 4) ndarray
+        float32 ``(Re V, Im V, Re D, Im D)`` at ``t_m = (m - U n // 2) h``, ``h = dt / U``:
+        ``V = D(t_m)`` and ``D = h D'(t_m)`` of the band-limited trace; entry ``U n`` is
+        entry 0 (the trace has period ``n dt``).
+    """
+    d = np.asarray(data)
+    m, n = d.shape
+    big = upsample * n
+    start = big // 2 - n // 2
+    ramp = 2j * np.pi * (np.arange(n) - n // 2) / big  # h d/dt on bin k
+    out = np.empty((m, big + 1, 4), dtype=np.float32)
+    for j0 in range(0, m, _FFT_BLOCK):
+        j1 = min(j0 + _FFT_BLOCK, m)
+        spec = to_frequency(np.asarray(d[j0:j1], np.complex128))
+        pad = np.zeros((j1 - j0, big), dtype=np.complex128)
+        pad[:, start : start + n] = spec
+        v = to_fast_time(pad) * upsample
+        pad[:, start : start + n] = spec * ramp
+        dv = to_fast_time(pad) * upsample
+        out[j0:j1, :big, 0] = v.real
+        out[j0:j1, :big, 1] = v.imag
+        out[j0:j1, :big, 2] = dv.real
+        out[j0:j1, :big, 3] = dv.imag
+    out[:, big] = out[:, 0]
+    return out
+
+
+def rows_per_thread(carrier_hz: float, spacing_y_m: float) -> int:
+    """Pixels per GPU thread: the largest of 4, 2, 1 whose phase bound is <= 1e-4 rad.
+
+    The bound (module docstring) is ``2 pi (2 nu_o / c) 10 u (P - 1) dy / 2``.
+    """
+    per_m = 2.0 * math.pi * (2.0 * carrier_hz / C) * 10.0 * _U32
+    for p in (4, 2):
+        if per_m * 0.5 * (p - 1) * spacing_y_m <= _MAX_PHASE_ERROR_RAD:
+            return p
+    return 1
+
+
+class _DeviceTables:
+    """The device table of the last traces imaged (one entry).
+
+    Reused while the same traces object (checked by identity and the CRC-32 of its data)
+    is imaged at the same ``upsample``: other grids and velocities need no new table.
+    """
+
+    def __init__(self) -> None:
+        self._key: tuple | None = None
+        self._ref: weakref.ref | None = None
+        self._table: Any = None
+
+    def get(self, cuda: Any, traces: Traces, upsample: int) -> Any:
+        data = np.ascontiguousarray(traces.data)
+        key = (id(traces), upsample, zlib.crc32(memoryview(data).cast("B")))
+        if self._key == key and self._ref is not None and self._ref() is traces:
+            return self._table
+        self._table = None  # free the old one first
+        self._table = cuda.to_device(hermite_table(data, upsample))
+        self._key = key
+        self._ref = weakref.ref(traces)
+        return self._table
+
+    def clear(self) -> None:
+        self._key = self._ref = self._table = None
+
+
+_TABLES = _DeviceTables()
+
+
+def backproject_cuda(
+    traces: Traces,
+    grid: ImageGrid,
+    *,
+    velocity_mps: ArrayLike | None = None,
+    upsample: int = 8,
+    kernel: str = "numba",
+    method: str = "exact",
+    ffbp_oversampling: float = 1.4,
+    progress: ProgressCallback | None = None,
+    pixels_per_thread: int | None = None,
+) -> Image:
+    """Backprojection image ``eq:image`` (``eq:imagecompu`` with a velocity) on the GPU.
+
+    The keywords of :func:`sarmotion.imaging.backproject`; the module docstring gives the
+    method and its error bound (>= 80 dB against the exact sum at ``upsample = 8``).
+
+    Parameters
+    ----------
+    traces : Traces
+        Range-compressed baseband traces with their geometry.
+    grid : ImageGrid
+        Image points on the ground ``z = 0``.
+    velocity_mps : (2,) array_like, optional
+        Ground velocity ``u`` (m/s) to compensate.
+    upsample : int
+        Table points per trace sample (1 to 64); the interpolation error bound falls as
+        ``upsample**-4``.
+    kernel : {"numba"}
+        Accepted for the CPU signature: the GPU kernel is numba.cuda.
+    method : {"exact"}
+        Only the exact sum has a GPU kernel.
+    ffbp_oversampling : float
+        Accepted for the CPU signature; unused.
+    progress : callable, optional
+        Called once, ``progress("backprojection", 1, 1)``, when the image is done.
+    pixels_per_thread : {1, 2, 4}, optional
+        Pixels summed per GPU thread; default from the phase bound
+        (:func:`rows_per_thread`).
+
+    Returns
+    -------
+    Image
+        Complex128 image, shape ``grid.shape``; ``metadata["kernel_variant"]`` is
+        ``"cuda-hermite"``.
+
+    Raises
+    ------
+    RuntimeError
+        Without numba-cuda or a GPU (one line).
+    """
+    if not isinstance(traces, Traces):
+        raise TypeError(f"traces must be a Traces object, got {type(traces).__name__}")
+    if not isinstance(grid, ImageGrid):
+        raise TypeError(f"grid must be an ImageGrid, got {type(grid).__name__}")
+    if isinstance(upsample, bool) or not isinstance(upsample, (int, np.integer)):
+        raise TypeError(f"upsample must be an integer, got {type(upsample).__name__}")
+    if not 1 <= int(upsample) <= 64:
+        raise ValueError(f"upsample must be between 1 and 64, got {upsample}")
+    if kernel != "numba":
+        raise ValueError(f"device='cuda' runs the numba.cuda kernel: kernel must be 'numba', got {kernel!r}")
+    if method != "exact":
+        raise ValueError(f"device='cuda' has the exact method only, got method={method!r}")
+    if pixels_per_thread is not None and pixels_per_thread not in (1, 2, 4):
+        raise ValueError(f"pixels_per_thread must be 1, 2 or 4, got {pixels_per_thread!r}")
+    u = np.zeros(3) if velocity_mps is None else _as_velocity(velocity_mps, name="velocity_mps")
+    if u[2] != 0.0:
+        raise ValueError(f"velocity_mps must be a ground velocity (uz = 0), got {u}")
+    cuda = _cuda()
+    if not cuda.is_available():
+        raise RuntimeError(f"{NEEDS} (no CUDA device found)")
+    from . import _cuda_kernels as kern
+
+    upsample = int(upsample)
+    carrier = float(traces.radar.carrier_hz)
+    pos = traces.positions_m - traces.slow_times_s[:, None] * u[None, :]
+    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m[None, :], axis=1)
+    ant = np.ascontiguousarray(np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, ref], axis=1))
+    table = _TABLES.get(cuda, traces, upsample)
+    n_table = upsample * traces.n_samples
+    h = float(traces.radar.sample_interval_s) / upsample
+    ny, nx = grid.shape
+    x, y = np.asarray(grid.x_m), np.asarray(grid.y_m)
+    dy = (float(y[-1]) - float(y[0])) / (ny - 1)
+    p = pixels_per_thread or rows_per_thread(carrier, dy)
+    bx, by = kern.BLOCK
+    blocks = (-(-nx // bx), -(-ny // (by * p)))
+    out = cuda.device_array((ny, nx, 2), dtype=np.float32)
+    kern.backprojection_kernel(p)[blocks, kern.BLOCK](
+        table, cuda.to_device(ant), cuda.to_device(np.ascontiguousarray(x)),
+        cuda.to_device(np.ascontiguousarray(y)), 2.0 / (C * h), float(n_table // 2), 2.0 * carrier / C, out,
+    )  # fmt: skip
+    res = out.copy_to_host()
+    values = res[..., 0].astype(np.float64) + 1j * res[..., 1].astype(np.float64)
+    if progress is not None:
+        progress("backprojection", 1, 1)
+    meta = {
+        "algorithm": "backprojection",
+        "equation": "eq:image" if velocity_mps is None else "eq:imagecompu",
+        "kernel": "numba",
+        "kernel_variant": "cuda-hermite",
+        "method": "exact",
+        "device": "cuda",
+        "pixels_per_thread": p,
+        "upsample": upsample,
+        "n_pulses": traces.n_pulses,
+        "reference_point_m": traces.reference_point_m.tolist(),
+        "carrier_hz": carrier,
+    }
+    return Image(values=values, grid=grid, velocity_mps=u[:2], metadata=meta)
