@@ -17,14 +17,15 @@ import math
 import numpy as np
 
 if not hasattr(np, "row_stack"):  # numpy >= 2.5 removed the alias numba-cuda 0.30 uses
-    np.row_stack = np.vstack
+    np.row_stack = np.vstack  # noqa: NPY201 - restores the removed name, on purpose
 
-from numba import cuda, float32, float64, int32  # noqa: E402
+from numba import config, cuda, float32, float64, int32, uint64  # noqa: E402
 
-__all__ = ["BLOCK", "PULSE_CHUNK", "backprojection_kernel"]
+__all__ = ["BLOCK_X", "PULSE_CHUNK", "backprojection_kernel"]
 
-#: Threads per block (x along image columns, y along groups of rows).
-BLOCK = (32, 8)
+#: Threads per block along image columns (one warp: neighbouring pixels of a row, whose
+#: table positions are close, share cache lines).
+BLOCK_X = 32
 #: Pulses staged in shared memory at once (4 float64 each: 4 KiB).
 PULSE_CHUNK = 128
 
@@ -35,25 +36,48 @@ _HALF32 = np.float32(0.5)
 _TWO_PI = np.float32(2.0 * np.pi)
 _ZERO = np.float32(0.0)
 
-_KERNELS: dict[int, object] = {}
+_KERNELS: dict[tuple[int, int, bool], object] = {}
+
+_LOW32 = np.uint64(0xFFFFFFFF)
+_SHIFT32 = np.uint64(32)
+
+if config.ENABLE_CUDASIM:
+
+    @cuda.jit(device=True)
+    def _split(word):  # pragma: no cover - the simulator's stand-in
+        """The complex64 ``(re, im)`` whose bits are the uint64 ``word``."""
+        z = np.array(word, dtype=np.uint64).view(np.complex64)[()]
+        return float32(z.real), float32(z.imag)
+
+else:  # pragma: no cover - needs a GPU
+    from numba.cuda import libdevice
+
+    @cuda.jit(device=True, inline=True)
+    def _split(word):
+        """The complex64 ``(re, im)`` whose bits are the uint64 ``word`` (no arithmetic)."""
+        lo = int32(word & _LOW32)
+        hi = int32(word >> _SHIFT32)
+        return libdevice.int_as_float(lo), libdevice.int_as_float(hi)
 
 
-def backprojection_kernel(rows_per_thread: int):
+def backprojection_kernel(rows_per_thread: int, block_rows: int, packed: bool = True):
     """The kernel for ``rows_per_thread`` pixels per thread (compiled on first launch).
 
-    Launch as ``kernel[grid, BLOCK](table, ant, xs, ys, idx_scale, idx_offset,
-    cycles_per_m, out)``:
+    Launch with ``(BLOCK_X, block_rows)`` threads per block, as
+    ``kernel[blocks, (BLOCK_X, block_rows)](table, n_table, ant, xs, ys, idx_scale,
+    idx_offset, cycles_per_m, out)``:
 
-    - ``table`` (n_pulses, n_table + 1, 4) float32: per pulse and table position ``m``,
-      ``(Re V, Im V, Re D, Im D)`` of the band-limited trace ``V`` and its derivative
-      ``D = h dV/dt`` (``h`` the table step), entry ``n_table`` repeating entry 0 (one
-      period of the trace);
+    - ``table``, flat, per pulse ``n_table + 1`` table positions ``m`` holding the
+      band-limited trace ``V`` and its derivative ``D = h dV/dt`` (``h`` the table step),
+      position ``n_table`` repeating position 0 (one period of the trace). ``packed``:
+      uint64, the bits of complex64 ``V, D`` (two 8-byte loads per position); else
+      float32 ``Re V, Im V, Re D, Im D``;
     - ``ant`` (n_pulses, 4) float64: antenna ``x``, ``y``, ``z**2`` and the reference range
       ``|r - rho_o|`` (m);
     - ``xs`` (nx,), ``ys`` (ny,) float64: the pixel ``(iy, ix)`` is ``(xs[ix], ys[iy], 0)`` (m);
     - ``idx_scale`` table steps per metre of ``d = |r - rho| - |r - rho_o|``,
       ``idx_offset`` the table position of ``d = 0``, ``cycles_per_m = 2 nu_o / c``;
-    - ``out`` (ny, nx, 2) float32, written (not accumulated).
+    - ``out`` (ny, nx, 2) float64, written (not accumulated).
 
     Each thread sums, over all pulses, ``rows_per_thread`` pixels of one column, rows
     ``P g .. P g + P - 1``. Per pulse it computes in float64 the range ``R_a`` to an
@@ -63,20 +87,22 @@ def backprojection_kernel(rows_per_thread: int):
     pixel's offset from the anchor along ``y`` (no cancellation: ``N`` is formed from the
     offset, never as a difference of two ranges).
     """
-    kernel = _KERNELS.get(rows_per_thread)
+    key = (int(rows_per_thread), int(block_rows), bool(packed))
+    kernel = _KERNELS.get(key)
     if kernel is None:
-        kernel = _make_kernel(int(rows_per_thread))
-        _KERNELS[rows_per_thread] = kernel
+        kernel = _make_kernel(*key)
+        _KERNELS[key] = kernel
     return kernel
 
 
-def _make_kernel(P: int):  # noqa: N803 - the paper-style name of the count
-    bx, by = BLOCK
+def _make_kernel(P: int, by: int, packed: bool):  # noqa: N803 - the paper-style name
+    bx = BLOCK_X
     nthreads = bx * by
     chunk = PULSE_CHUNK
+    words = 2 if packed else 4  # table words per position
 
     @cuda.jit(fastmath=True)
-    def kernel(table, ant, xs, ys, idx_scale, idx_offset, cycles_per_m, out):
+    def kernel(table, n_table, ant, xs, ys, idx_scale, idx_offset, cycles_per_m, out):
         sh = cuda.shared.array((PULSE_CHUNK, 4), float64)
         acc_re = cuda.local.array(P, float32)
         acc_im = cuda.local.array(P, float32)
@@ -97,7 +123,7 @@ def _make_kernel(P: int):  # noqa: N803 - the paper-style name of the count
         scale32 = float32(idx_scale)
         k_hi = float32(cycles_per_m)
         k_lo = float32(cycles_per_m - float64(k_hi))
-        n_table = table.shape[1] - 1
+        stride = uint64(words * (n_table + 1))
         n_pulses = ant.shape[0]
         for c0 in range(0, n_pulses, chunk):
             n = min(chunk, n_pulses - c0)
@@ -106,12 +132,13 @@ def _make_kernel(P: int):  # noqa: N803 - the paper-style name of the count
                 sh[t // 4, t % 4] = ant[c0 + t // 4, t % 4]
             cuda.syncthreads()
             for jj in range(n):
-                j = c0 + jj
-                wx = x - sh[jj, 0]
-                wy = ya - sh[jj, 1]
-                r2 = wx * wx + wy * wy + sh[jj, 2]
+                base = uint64(c0 + jj) * stride
+                jr = uint64(jj)
+                wx = x - sh[jr, 0]
+                wy = ya - sh[jr, 1]
+                r2 = wx * wx + wy * wy + sh[jr, 2]
                 ra = math.sqrt(r2)
-                d0 = ra - sh[jj, 3]
+                d0 = ra - sh[jr, 3]
                 q0 = d0 * idx_scale + idx_offset
                 q0 = min(max(q0, -1.0e6), 1.0e6)  # far outside the table: stays out
                 fl0 = math.floor(q0)
@@ -140,10 +167,19 @@ def _make_kernel(P: int):  # noqa: N803 - the paper-style name of the count
                         h00 = _ONE - h01
                         h10 = u * v * v
                         h11 = -u2 * v
-                        vr = (h00 * table[j, i, 0] + h10 * table[j, i, 2]
-                              + h01 * table[j, i + 1, 0] + h11 * table[j, i + 1, 2])  # fmt: skip
-                        vi = (h00 * table[j, i, 1] + h10 * table[j, i, 3]
-                              + h01 * table[j, i + 1, 1] + h11 * table[j, i + 1, 3])  # fmt: skip
+                        o = base + uint64(words * i)
+                        if packed:
+                            a_re, a_im = _split(table[o])
+                            b_re, b_im = _split(table[o + uint64(1)])
+                            c_re, c_im = _split(table[o + uint64(2)])
+                            d_re, d_im = _split(table[o + uint64(3)])
+                            vr = h00 * a_re + h10 * b_re + h01 * c_re + h11 * d_re
+                            vi = h00 * a_im + h10 * b_im + h01 * c_im + h11 * d_im
+                        else:
+                            vr = h00 * table[o] + h10 * table[o + uint64(2)]
+                            vr += h01 * table[o + uint64(4)] + h11 * table[o + uint64(6)]
+                            vi = h00 * table[o + uint64(1)] + h10 * table[o + uint64(3)]
+                            vi += h01 * table[o + uint64(5)] + h11 * table[o + uint64(7)]
                         cyc = c0f + dd * k_hi + dd * k_lo
                         cyc = cyc - math.floor(cyc + _HALF32)
                         ang = _TWO_PI * cyc

@@ -17,39 +17,42 @@ spectrum, then rounded to float32). ``D`` at a delay is the cubic Hermite interp
 the two table points around it. The table covers ``[-n/2, n/2) dt``, the fast-time
 window; a delay outside it contributes 0 (as on the CPU).
 
-Geometry: each GPU thread sums ``P`` pixels of one image column (``P`` in 1, 2, 4, chosen
-below). Per pulse the range to an anchor at the middle of the ``P`` pixels, its table
-position and its carrier phase (reduced exactly to ``[-1/2, 1/2]`` cycle) are computed in
-float64; each pixel's range offset from the anchor, ``N / (R_a + sqrt(R_a^2 + N))`` with
-``N = e (e + 2 (y_a - y_r))`` (``e`` its offset along ``y``, ``|e| <= (P-1) dy / 2``),
-in float32, as are the interpolation, the phasor (``sin``/``cos`` of a reduced angle)
-and the sum over pulses.
+Geometry: each GPU thread sums ``P`` pixels of one image column (``P`` in 1, 2, 4, 8: the
+most that keeps the phase bound below and half the GPU's resident threads busy,
+:func:`rows_per_thread`). Per pulse the range ``R_a`` to an anchor at the middle of the
+``P`` pixels, its table position and its carrier phase (reduced exactly to
+``[-1/2, 1/2]`` cycle) are computed in float64; each pixel's range offset from the
+anchor, ``N / (R_a + sqrt(R_a^2 + N))`` with ``N = e (e + 2 (y_a - y_r))`` (``e`` its
+offset along ``y``, ``|e| <= (P - 1) dy / 2``), in float32, as are the interpolation,
+the phasor (``sin``/``cos`` of a reduced angle) and the sum over pulses.
 
 Error bound
 -----------
-Per pulse term, relative to ``max |D_j|`` (the error of the image is the sum of these
-terms' errors over pulses; for clutter they add incoherently, like the terms):
+Each pixel's error is at most ``eps * sum_j max_t |D_j(t)|`` (:func:`error_bound`),
+``eps`` the sum of the per-term errors relative to ``max |D_j|``:
 
 - interpolation: ``D`` holds frequencies ``|f| <= 1 / (2 dt)``, so by Bernstein's
-  inequality ``|D''''| <= (pi / dt)^4 max |D|``, and the cubic Hermite remainder
-  ``|D - H| <= max |D''''| h^4 tau^2 (1 - tau)^2 / 4! <= (pi / U)^4 / 384`` per real
-  component: ``eps_H = sqrt(2) (pi / U)^4 / 384`` (``U = 8``: 9e-5, -81 dB, at the band
-  edge half-way between table points; averaged over a flat band and over ``tau`` the
-  error power is ``(pi / U)^8 / (9 * 576 * 630)``, -98 dB for ``U = 8``);
-- phase: the float32 range offset is within ``8 u |e|`` of exact (``u = 2^-24``: six
-  float32 operations, each correctly rounded to ``u`` or approximate to ``2 u``), the
-  phase rounding within ``2 u (2 nu_o / c) |e|`` cycles, so
-  ``eps_phi = 2 pi (2 nu_o / c) 10 u (P - 1) dy / 2`` rad; ``P`` is the largest of
-  4, 2, 1 with ``eps_phi <= 1e-4`` (-80 dB); the float64 anchor contributes
-  ``2 pi (2 nu_o / c) 4 eps_64 R`` (< 1e-9 rad at 10 km);
-- ``sin``/``cos`` of an angle in ``[-pi, pi]`` (CUDA's fast intrinsics): ``2^-21.4``;
-  float32 table values and position: ``~u``;
-- accumulation over ``J`` pulses in float32: ``J u`` of the sum of the terms' moduli at
-  worst, ``sqrt(J) u`` typically.
+  inequality ``|D''''| <= (pi / dt)^4 max |D|``, and the cubic Hermite remainder is
+  ``|D - H| <= max |D''''| h^4 tau^2 (1 - tau)^2 / 4! <= (pi / U)^4 / 384 max |D|`` per
+  real component: ``eps_H = sqrt(2) (pi / U)^4 / 384`` (``U = 8``: 9.1e-5, -81 dB;
+  reached only at the band edge half-way between table points: averaged over a flat
+  band and over ``tau``, the error power is ``(pi / U)^8 / (9 * 576 * 630)`` of the
+  signal's, -98 dB for ``U = 8``);
+- phase: the float32 range offset is within ``8 u |e|`` of exact (``u = 2^-24``; six
+  float32 operations, each rounded to ``u`` or, fast-math division and square root,
+  ``2 u``), the phase sum rounds within ``2 u (2 nu_o / c) |e|`` cycles, so
+  ``eps_phi = 2 pi (2 nu_o / c) 10 u (P - 1) dy / 2`` rad, and ``P`` is at most the
+  largest value with ``eps_phi <= 1e-4`` rad (-80 dB; 4 at 0.25 m spacing, 8 at 0.1 m,
+  X band). The float64 anchor adds ``2 pi (2 nu_o / c) 4 eps_64 R`` rad (1e-9 at
+  ``R = 10`` km);
+- ``sin``/``cos`` of a reduced angle in ``[-pi, pi]`` (PTX ``sin.approx``,
+  ``cos.approx``): ``2^-20.5``; float32 table values and table position: ``~u`` each
+  (within the next term);
+- the float32 sum over ``J`` pulses: ``J u``.
 
-So the signal-to-error ratio against the exact sum is at least
-``-20 log10(eps_H + eps_phi + 2^-21.4 + J u)`` for a single coherent point and of the
-same order for clutter (the terms and their errors both add incoherently).
+The bound holds pixel by pixel. For clutter, where terms and errors both add
+incoherently, the signal-to-error ratio is set by the typical per-term error (the
+averaged ``eps_H``, ``eps_phi / sqrt(3)``, ``sqrt(J) u``): above 90 dB at ``U = 8``.
 
 Requirements
 ------------
@@ -76,7 +79,7 @@ from ..core import C, ProgressCallback, Traces, to_fast_time, to_frequency
 from ..core.geometry import _as_velocity
 from .grid import Image, ImageGrid
 
-__all__ = ["available", "backproject_cuda", "hermite_table"]
+__all__ = ["available", "backproject_cuda", "error_bound", "hermite_table", "rows_per_thread"]
 
 #: The one-line error when no GPU path can run.
 NEEDS = "device='cuda' needs the sarmotion[gpu] extra and an NVIDIA GPU"
@@ -84,6 +87,12 @@ NEEDS = "device='cuda' needs the sarmotion[gpu] extra and an NVIDIA GPU"
 #: Largest float32 phase error bound accepted when grouping pixels per thread (rad):
 #: -80 dB.
 _MAX_PHASE_ERROR_RAD = 1e-4
+
+#: Thread rows per block (the block is 32 columns by this many rows of threads).
+BLOCK_ROWS = 8
+
+#: Pixels per thread considered, most first.
+_ROWS_PER_THREAD = (8, 4, 2)
 
 #: float32 unit roundoff.
 _U32 = 2.0**-24
@@ -95,8 +104,9 @@ _FFT_BLOCK = 64
 def _cuda() -> Any:
     """numba.cuda, imported on first use; RuntimeError (one line) when unusable."""
     try:
-        from . import _cuda_kernels  # noqa: F401 - imports numba.cuda with the numpy alias
         from numba import cuda
+
+        from . import _cuda_kernels  # noqa: F401 - imports numba.cuda with the numpy alias
     except Exception as err:  # ImportError, or numba-cuda failing at import
         raise RuntimeError(f"{NEEDS} ({type(err).__name__}: {err})".splitlines()[0]) from err
     return cuda
@@ -152,16 +162,86 @@ def hermite_table(data: ArrayLike, upsample: int) -> NDArray[np.float32]:
     return out
 
 
-def rows_per_thread(carrier_hz: float, spacing_y_m: float) -> int:
-    """Pixels per GPU thread: the largest of 4, 2, 1 whose phase bound is <= 1e-4 rad.
+def rows_per_thread(
+    carrier_hz: float, spacing_y_m: float, n_pixels: int = 0, min_threads: int = 0
+) -> int:
+    """Pixels per GPU thread ``P``: the largest of 8, 4, 2 that keeps both rules, else 1.
 
-    The bound (module docstring) is ``2 pi (2 nu_o / c) 10 u (P - 1) dy / 2``.
+    - accuracy: the float32 phase bound (module docstring),
+      ``2 pi (2 nu_o / c) 10 u (P - 1) dy / 2 <= 1e-4`` rad;
+    - occupancy: at least ``min_threads`` threads, ``n_pixels / P >= min_threads``
+      (more pixels per thread share one float64 anchor per pulse, but too few threads
+      leave multiprocessors idle).
+
+    Parameters
+    ----------
+    carrier_hz : float
+        Carrier ``nu_o`` (Hz).
+    spacing_y_m : float
+        Pixel spacing along ``y`` (m), the direction of a thread's pixels.
+    n_pixels : int
+        Pixels of the image.
+    min_threads : int
+        Threads wanted at least (:func:`_min_threads`: half the device's resident threads).
     """
     per_m = 2.0 * math.pi * (2.0 * carrier_hz / C) * 10.0 * _U32
-    for p in (4, 2):
-        if per_m * 0.5 * (p - 1) * spacing_y_m <= _MAX_PHASE_ERROR_RAD:
+    for p in _ROWS_PER_THREAD:
+        if per_m * 0.5 * (p - 1) * spacing_y_m <= _MAX_PHASE_ERROR_RAD and (
+            n_pixels >= p * min_threads
+        ):
             return p
     return 1
+
+
+def error_bound(
+    upsample: int,
+    carrier_hz: float,
+    spacing_y_m: float,
+    rows_per_thread: int,
+    n_pulses: int,
+    range_m: float = 1e5,
+) -> float:
+    """Worst-case error of one pixel over ``sum_j max_t |D_j(t)|`` (module docstring).
+
+    ``eps_H + eps_phi + eps_trig + J u``: cubic Hermite interpolation
+    ``sqrt(2) (pi / U)^4 / 384``; float32 range offsets and phase
+    ``2 pi (2 nu_o / c) (10 u (P - 1) dy / 2 + 4 eps_64 R)``; ``sin``/``cos``
+    ``2^-20.5`` (PTX ``sin.approx``/``cos.approx``); float32 accumulation ``J u``.
+
+    Parameters
+    ----------
+    upsample : int
+        Table points per trace sample ``U``.
+    carrier_hz : float
+        Carrier ``nu_o`` (Hz).
+    spacing_y_m : float
+        Pixel spacing along ``y`` (m).
+    rows_per_thread : int
+        Pixels per thread ``P``.
+    n_pulses : int
+        Pulses ``J``.
+    range_m : float
+        Largest antenna-to-pixel range ``R`` (m).
+
+    Returns
+    -------
+    float
+        ``|I_gpu(rho) - I(rho)| / sum_j max_t |D_j(t)|`` at most.
+    """
+    hermite = math.sqrt(2.0) * (math.pi / upsample) ** 4 / 384.0
+    per_m = 2.0 * math.pi * (2.0 * carrier_hz / C)
+    phase = per_m * (10.0 * _U32 * 0.5 * (rows_per_thread - 1) * spacing_y_m
+                     + 4.0 * 2.0**-53 * range_m)  # fmt: skip
+    return hermite + phase + 2.0**-20.5 + n_pulses * _U32
+
+
+def _min_threads(cuda: Any) -> int:
+    """Half the threads the current device holds at once (0 when it does not say)."""
+    try:
+        dev = cuda.get_current_device()
+        return int(dev.MULTIPROCESSOR_COUNT) * int(dev.MAX_THREADS_PER_MULTIPROCESSOR) // 2
+    except Exception:  # the simulator's device has no attributes
+        return 0
 
 
 class _DeviceTables:
@@ -182,7 +262,7 @@ class _DeviceTables:
         if self._key == key and self._ref is not None and self._ref() is traces:
             return self._table
         self._table = None  # free the old one first
-        self._table = cuda.to_device(hermite_table(data, upsample))
+        self._table = cuda.to_device(hermite_table(data, upsample).view(np.uint64).reshape(-1))
         self._key = key
         self._ref = weakref.ref(traces)
         return self._table
@@ -192,6 +272,41 @@ class _DeviceTables:
 
 
 _TABLES = _DeviceTables()
+
+
+def _image_on_device(
+    cuda: Any,
+    traces: Traces,
+    grid: ImageGrid,
+    u: NDArray[np.float64],
+    upsample: int,
+    pixels_per_thread: int | None = None,
+    block_rows: int = BLOCK_ROWS,
+    packed: bool = True,
+) -> tuple[Any, int]:
+    """Launch the kernel; returns the image as a (ny, nx, 2) float64 device array and P."""
+    from . import _cuda_kernels as kern
+
+    carrier = float(traces.radar.carrier_hz)
+    pos = traces.positions_m - traces.slow_times_s[:, None] * u[None, :]
+    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m[None, :], axis=1)
+    ant = np.ascontiguousarray(np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, ref], axis=1))
+    table = _TABLES.get(cuda, traces, upsample)
+    n_table = upsample * traces.n_samples
+    h = float(traces.radar.sample_interval_s) / upsample
+    ny, nx = grid.shape
+    x, y = np.ascontiguousarray(grid.x_m), np.ascontiguousarray(grid.y_m)
+    dy = (float(y[-1]) - float(y[0])) / (ny - 1)
+    p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
+    blocks = (-(-nx // kern.BLOCK_X), -(-ny // (block_rows * p)))
+    out = cuda.device_array((ny, nx, 2), dtype=np.float64)
+    if not packed:
+        table = table.view(np.float32)
+    kern.backprojection_kernel(p, block_rows, packed)[blocks, (kern.BLOCK_X, block_rows)](
+        table, n_table, cuda.to_device(ant), cuda.to_device(x), cuda.to_device(y), 2.0 / (C * h),
+        float(n_table // 2), 2.0 * carrier / C, out,
+    )  # fmt: skip
+    return out, p
 
 
 def backproject_cuda(
@@ -230,8 +345,8 @@ def backproject_cuda(
         Accepted for the CPU signature; unused.
     progress : callable, optional
         Called once, ``progress("backprojection", 1, 1)``, when the image is done.
-    pixels_per_thread : {1, 2, 4}, optional
-        Pixels summed per GPU thread; default from the phase bound
+    pixels_per_thread : {1, 2, 4, 8}, optional
+        Pixels summed per GPU thread; default from the phase bound and the image size
         (:func:`rows_per_thread`).
 
     Returns
@@ -254,42 +369,24 @@ def backproject_cuda(
     if not 1 <= int(upsample) <= 64:
         raise ValueError(f"upsample must be between 1 and 64, got {upsample}")
     if kernel != "numba":
-        raise ValueError(f"device='cuda' runs the numba.cuda kernel: kernel must be 'numba', got {kernel!r}")
+        raise ValueError(
+            f"device='cuda' runs the numba.cuda kernel: kernel must be 'numba', got {kernel!r}"
+        )
     if method != "exact":
         raise ValueError(f"device='cuda' has the exact method only, got method={method!r}")
-    if pixels_per_thread is not None and pixels_per_thread not in (1, 2, 4):
-        raise ValueError(f"pixels_per_thread must be 1, 2 or 4, got {pixels_per_thread!r}")
+    if pixels_per_thread is not None and pixels_per_thread not in (1, 2, 4, 8):
+        raise ValueError(f"pixels_per_thread must be 1, 2, 4 or 8, got {pixels_per_thread!r}")
     u = np.zeros(3) if velocity_mps is None else _as_velocity(velocity_mps, name="velocity_mps")
     if u[2] != 0.0:
         raise ValueError(f"velocity_mps must be a ground velocity (uz = 0), got {u}")
     cuda = _cuda()
     if not cuda.is_available():
         raise RuntimeError(f"{NEEDS} (no CUDA device found)")
-    from . import _cuda_kernels as kern
-
-    upsample = int(upsample)
-    carrier = float(traces.radar.carrier_hz)
-    pos = traces.positions_m - traces.slow_times_s[:, None] * u[None, :]
-    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m[None, :], axis=1)
-    ant = np.ascontiguousarray(np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, ref], axis=1))
-    table = _TABLES.get(cuda, traces, upsample)
-    n_table = upsample * traces.n_samples
-    h = float(traces.radar.sample_interval_s) / upsample
-    ny, nx = grid.shape
-    x, y = np.asarray(grid.x_m), np.asarray(grid.y_m)
-    dy = (float(y[-1]) - float(y[0])) / (ny - 1)
-    p = pixels_per_thread or rows_per_thread(carrier, dy)
-    bx, by = kern.BLOCK
-    blocks = (-(-nx // bx), -(-ny // (by * p)))
-    out = cuda.device_array((ny, nx, 2), dtype=np.float32)
-    kern.backprojection_kernel(p)[blocks, kern.BLOCK](
-        table, cuda.to_device(ant), cuda.to_device(np.ascontiguousarray(x)),
-        cuda.to_device(np.ascontiguousarray(y)), 2.0 / (C * h), float(n_table // 2), 2.0 * carrier / C, out,
-    )  # fmt: skip
-    res = out.copy_to_host()
-    values = res[..., 0].astype(np.float64) + 1j * res[..., 1].astype(np.float64)
+    out, p = _image_on_device(cuda, traces, grid, u, int(upsample), pixels_per_thread)
+    values = out.copy_to_host().view(np.complex128)[..., 0]
     if progress is not None:
         progress("backprojection", 1, 1)
+    carrier = float(traces.radar.carrier_hz)
     meta = {
         "algorithm": "backprojection",
         "equation": "eq:image" if velocity_mps is None else "eq:imagecompu",
@@ -298,7 +395,7 @@ def backproject_cuda(
         "method": "exact",
         "device": "cuda",
         "pixels_per_thread": p,
-        "upsample": upsample,
+        "upsample": int(upsample),
         "n_pulses": traces.n_pulses,
         "reference_point_m": traces.reference_point_m.tolist(),
         "carrier_hz": carrier,
