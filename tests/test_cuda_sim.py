@@ -1,0 +1,229 @@
+"""The CUDA backprojection kernel under numba's CUDA simulator, without a GPU.
+
+The simulator (``NUMBA_ENABLE_CUDASIM=1``) runs the kernel's Python source thread by
+thread on the CPU. It must be chosen before :mod:`numba.cuda` is first imported, so the
+kernel runs in a subprocess (this file run as a script) on tiny problems; the tests
+compare its images with the exact sum (:func:`~sarmotion.imaging.point_response`, float64,
+no interpolation) and with the CPU's :func:`~sarmotion.imaging.backproject`:
+
+- every pixel within the stated bound, ``|I_gpu - I| <= eps sum_j max_t |D_j(t)|``
+  (:func:`~sarmotion.imaging.cuda.error_bound`; ``max_t |D_j| <= sum_k |P_jk| / n``);
+- a signal-to-error ratio of at least 80 dB (the accuracy the GPU path promises), on
+  simulated scenes seen at 0, 30 and 45 degrees, with and without motion compensation,
+  and on the first GOTCHA pulses;
+- zero, like the CPU's image, where every delay falls outside the fast-time window.
+
+In this process (no simulator): the trace table against the trigonometric interpolant,
+the pixels-per-thread rule, and the one-line error when no GPU can run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import gotcha_directory
+from sarmotion.core import C
+from sarmotion.imaging.cuda import NEEDS, available, hermite_table, rows_per_thread
+
+#: The accuracy the GPU path promises against the exact sum (signal-to-error, dB).
+MIN_SER_DB = 80.0
+
+# Cases run under the simulator: (name, look azimuth (deg), pixel spacing (m), pixels per
+# thread (None: the default rule), velocity (m/s) or None).
+SIM_CASES = [
+    ("look0", 0.0, 0.25, None, None),
+    ("look30", 30.0, 0.1, None, None),
+    ("look45_p2", 45.0, 0.1, 2, None),
+    ("look45", 45.0, 0.1, None, None),
+    ("look30_moving", 30.0, 0.25, None, (6.0, 2.0)),
+]
+
+
+# ============================================================ the simulator side (script)
+def _ser_db(ref, x):
+    err = float(np.linalg.norm(x - ref))
+    return math.inf if err == 0 else 20.0 * math.log10(float(np.linalg.norm(ref)) / err)
+
+
+def _case(traces, grid, pixels_per_thread, velocity, name):
+    from sarmotion.imaging import point_response
+    from sarmotion.imaging.cuda import backproject_cuda, error_bound
+
+    img = backproject_cuda(traces, grid, velocity_mps=velocity, pixels_per_thread=pixels_per_thread)
+    p = img.metadata["pixels_per_thread"]
+    gx, gy = np.meshgrid(grid.x_m, grid.y_m)
+    pts = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
+    exact = point_response(traces, pts, velocity_mps=velocity).reshape(grid.shape)
+    spectrum = traces.phase_history()
+    sup = float(np.sum(np.abs(spectrum))) / traces.n_samples  # sum_j max_t |D_j(t)|
+    r_max = float(np.max(np.linalg.norm(traces.positions_m, axis=1))) + 1e3
+    eps = error_bound(
+        8, traces.radar.carrier_hz, grid.spacing_m[1], p, traces.n_pulses, range_m=r_max
+    )
+    return {
+        "name": name,
+        "pixels_per_thread": p,
+        "max_error": float(np.max(np.abs(img.values - exact))),
+        "bound": eps * sup,
+        "ser_db": _ser_db(exact, img.values),
+        "signal": float(np.max(np.abs(exact))),
+    }
+
+
+def _simulated(look_deg, seed, extent_m):
+    """Eight pulses of six points and a mover in a square of ``extent_m``, 20 dB SNR."""
+    from sarmotion.core import Trajectory
+    from sarmotion.simulation import random_scene, simulate
+
+    mover = [((0.2 * extent_m, -0.2 * extent_m), (6.0, 2.0))]
+    scene = random_scene(n_stationary=6, extent_m=extent_m, movers=mover, rng=seed)
+    trajectory = Trajectory.circular(centre_azimuth_deg=look_deg, n_pulses=8)
+    return simulate(scene, trajectory=trajectory, snr_db=20.0, rng=seed).traces
+
+
+def run_simulator(out: Path, gotcha_dir: str | None) -> None:
+    """Run every case under the simulator; write the results as JSON to ``out``."""
+    assert os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
+    from sarmotion.imaging import ImageGrid, backproject
+
+    results = []
+    for k, (name, look, spacing, p, velocity) in enumerate(SIM_CASES):
+        grid = ImageGrid.square(size_m=12 * spacing, spacing_m=spacing)
+        traces = _simulated(look, seed=5100 + k, extent_m=10 * spacing)  # targets in the grid
+        results.append(_case(traces, grid, p, velocity, name))
+    # Outside the fast-time window (+-51 m of slant range, ~+-72 m of ground range).
+    traces = _simulated(0.0, seed=5200, extent_m=4.0)
+    far = ImageGrid.from_extent(x_range_m=(90.0, 120.0), y_range_m=(-6.0, 6.0), spacing_m=2.0)
+    from sarmotion.imaging.cuda import backproject_cuda
+
+    outside = {
+        "name": "outside",
+        "gpu_max": float(np.max(np.abs(backproject_cuda(traces, far).values))),
+        "cpu_max": float(np.max(np.abs(backproject(traces, far).values))),
+    }
+    if gotcha_dir is not None:
+        from sarmotion.io import read_gotcha
+
+        files = sorted(Path(gotcha_dir).glob("data_3dsar_pass1_az00*_HH.mat"))
+        traces = read_gotcha(files).select_pulses(0, 8)
+        grid = ImageGrid.square(centre_m=(3.0, -2.0), size_m=1.6, spacing_m=0.1)
+        results.append(_case(traces, grid, None, None, "gotcha"))
+        results.append(_case(traces, grid, 1, None, "gotcha_p1"))  # the float64 path alone
+    out.write_text(json.dumps({"cases": results, "outside": outside}))
+
+
+# ================================================================== the tests (pytest)
+def _simulate_in_subprocess(tmp_path: Path, gotcha_dir: Path | None) -> dict:
+    out = tmp_path / "cuda_sim.json"
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    args = [sys.executable, __file__, str(out)] + ([str(gotcha_dir)] if gotcha_dir else [])
+    proc = subprocess.run(args, env=env, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(out.read_text())
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory) -> dict:
+    return _simulate_in_subprocess(tmp_path_factory.mktemp("cuda_sim"), gotcha_directory())
+
+
+def _case_named(simulated, name, request):
+    if name.startswith("gotcha"):
+        request.getfixturevalue("gotcha_dir")  # skips, or fails in CI, without the data
+    return {c["name"]: c for c in simulated["cases"]}[name]
+
+
+CASE_NAMES = [c[0] for c in SIM_CASES] + ["gotcha", "gotcha_p1"]
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_every_pixel_within_the_stated_bound(simulated, name, request):
+    case = _case_named(simulated, name, request)
+    assert case["signal"] > 0
+    assert case["max_error"] <= case["bound"], case
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_signal_to_error_against_the_exact_sum(simulated, name, request):
+    case = _case_named(simulated, name, request)
+    assert case["ser_db"] >= MIN_SER_DB, case
+
+
+def test_the_cases_cover_every_pixels_per_thread(simulated):
+    used = {c["name"]: c["pixels_per_thread"] for c in simulated["cases"]}
+    assert used["look0"] == 4 and used["look30"] == 8 and used["look45_p2"] == 2
+
+
+def test_zero_outside_the_fast_time_window_like_the_cpu(simulated):
+    out = simulated["outside"]
+    assert out["gpu_max"] == 0.0
+    assert out["cpu_max"] == 0.0
+
+
+# ------------------------------------------------------------------ without the simulator
+def test_table_holds_the_band_limited_trace_and_its_derivative():
+    rng = np.random.default_rng(77)
+    n, upsample = 24, 4
+    data = rng.standard_normal((3, n)) + 1j * rng.standard_normal((3, n))
+    table = hermite_table(data, upsample)
+    big = upsample * n
+    assert table.shape == (3, big + 1, 4)
+    np.testing.assert_array_equal(table[:, big], table[:, 0])
+    # D(t) = (1/n) sum_k P_k exp(2i pi (k - n//2) t / (n dt)), t = (m - big//2) dt / U.
+    spec = np.fft.fftshift(np.fft.fft(np.fft.ifftshift(data, axes=-1), axis=-1), axes=-1)
+    freq = np.arange(n) - n // 2
+    m = np.arange(big)
+    phase = np.exp(2j * np.pi * np.outer(m - big // 2, freq) / big)  # (big, n)
+    value = spec @ phase.T / n
+    slope = spec @ (phase * (2j * np.pi * freq / big)).T / n
+    scale = np.max(np.abs(value))
+    got_v = table[:, :big, 0] + 1j * table[:, :big, 1]
+    got_d = table[:, :big, 2] + 1j * table[:, :big, 3]
+    # float32 storage: half an ulp of the largest value, 2^-24 relative.
+    assert np.max(np.abs(got_v - value)) <= 2.0**-23 * scale
+    assert np.max(np.abs(got_d - slope)) <= 2.0**-23 * np.max(np.abs(slope))
+    # the samples at the original instants are the data themselves
+    np.testing.assert_allclose(got_v[:, big // 2 - upsample * (n // 2) :: upsample], data,
+                               atol=2.0**-22 * scale)  # fmt: skip
+
+
+@pytest.mark.parametrize("carrier_hz", [1.0e9, 9.6e9, 35e9])
+@pytest.mark.parametrize("spacing_m", [0.01, 0.1, 0.25, 0.5, 2.0])
+def test_pixels_per_thread_keep_the_phase_bound(carrier_hz, spacing_m):
+    per_m = 2 * math.pi * (2 * carrier_hz / C) * 10 * 2.0**-24
+    p = rows_per_thread(carrier_hz, spacing_m)
+    assert p in (1, 2, 4, 8)
+    if p > 1:
+        assert per_m * (p - 1) / 2 * spacing_m <= 1e-4
+    if p < 8:  # the next larger count breaks the bound
+        assert per_m * (2 * p - 1) / 2 * spacing_m > 1e-4
+    # occupancy: fewer pixels per thread when the image is small
+    q = rows_per_thread(carrier_hz, spacing_m, n_pixels=1000, min_threads=400)
+    assert q <= min(p, 2)
+
+
+def test_no_gpu_gives_one_line():
+    from sarmotion.imaging import ImageGrid
+    from sarmotion.imaging.cuda import backproject_cuda
+    from sarmotion.simulation import load_scene, simulate
+
+    if available():
+        pytest.skip("a CUDA device (or the simulator) is present")
+    traces = simulate(load_scene("scene1")).traces
+    with pytest.raises(RuntimeError) as err:
+        backproject_cuda(traces, ImageGrid.square(size_m=4.0, spacing_m=1.0))
+    message = str(err.value)
+    assert message.startswith(NEEDS)
+    assert "\n" not in message
+
+
+if __name__ == "__main__":
+    run_simulator(Path(sys.argv[1]), sys.argv[2] if len(sys.argv) > 2 else None)
