@@ -19,6 +19,7 @@ the pixels-per-thread rule, and the one-line error when no GPU can run.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import os
@@ -109,6 +110,19 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
         "gpu_max": float(np.max(np.abs(backproject_cuda(traces, far).values))),
         "cpu_max": float(np.max(np.abs(backproject(traces, far).values))),
     }
+    # The command line with --device cuda, against the exact sum of the same inputs.
+    from sarmotion.cli.main import run
+    from sarmotion.imaging import point_response
+    from sarmotion.io import load_image, read_inputs
+
+    cli_out = out.parent / "cli"
+    code = run(["image", "hyperbola", "--out", str(cli_out), "--device", "cuda", "--size",
+                "2.4", "--spacing", "0.2"])  # fmt: skip
+    image = load_image(cli_out / "image.h5")
+    gx, gy = np.meshgrid(image["x_m"], image["y_m"])
+    traces, _ = read_inputs(["hyperbola"])
+    exact = point_response(traces, np.stack([gx.ravel(), gy.ravel(), 0 * gx.ravel()], axis=1))
+    cli = {"code": code, "ser_db": _ser_db(exact.reshape(gx.shape), image["values"])}
     if gotcha_dir is not None:
         from sarmotion.io import read_gotcha
 
@@ -117,7 +131,7 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
         grid = ImageGrid.square(centre_m=(3.0, -2.0), size_m=1.6, spacing_m=0.1)
         results.append(_case(traces, grid, None, None, "gotcha"))
         results.append(_case(traces, grid, 1, None, "gotcha_p1"))  # the float64 path alone
-    out.write_text(json.dumps({"cases": results, "outside": outside}))
+    out.write_text(json.dumps({"cases": results, "outside": outside, "cli": cli}))
 
 
 # ================================================================== the tests (pytest)
@@ -132,6 +146,8 @@ def _simulate_in_subprocess(tmp_path: Path, gotcha_dir: Path | None) -> dict:
 
 @pytest.fixture(scope="module")
 def simulated(tmp_path_factory) -> dict:
+    if importlib.util.find_spec("numba.cuda") is None:
+        pytest.skip("numba.cuda is absent (numba without CUDA support and no numba-cuda)")
     return _simulate_in_subprocess(tmp_path_factory.mktemp("cuda_sim"), gotcha_directory())
 
 
@@ -160,6 +176,12 @@ def test_signal_to_error_against_the_exact_sum(simulated, name, request):
 def test_the_cases_cover_every_pixels_per_thread(simulated):
     used = {c["name"]: c["pixels_per_thread"] for c in simulated["cases"]}
     assert used["look0"] == 4 and used["look30"] == 8 and used["look45_p2"] == 2
+
+
+def test_command_line_device_cuda(simulated):
+    cli = simulated["cli"]
+    assert cli["code"] == 0
+    assert cli["ser_db"] >= MIN_SER_DB
 
 
 def test_zero_outside_the_fast_time_window_like_the_cpu(simulated):
@@ -223,6 +245,19 @@ def test_no_gpu_gives_one_line():
     message = str(err.value)
     assert message.startswith(NEEDS)
     assert "\n" not in message
+
+
+def test_command_line_without_gpu_one_line_exit_2(tmp_path, capsys):
+    from sarmotion.cli.main import EXIT_BAD_INPUT, run
+
+    if available():
+        pytest.skip("a CUDA device (or the simulator) is present")
+    out = tmp_path / "img"
+    code = run(["image", "hyperbola", "--out", str(out), "--device", "cuda"])
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT
+    assert err.count("\n") == 1 and NEEDS in err
+    assert not out.exists()
 
 
 if __name__ == "__main__":

@@ -79,6 +79,14 @@ __all__ = ["image"]
 @lenient_option
 @click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
 @click.option(
+    "--device",
+    type=click.Choice(["cpu", "cuda"]),
+    default="cpu",
+    show_default=True,
+    help="Where to backproject: 'cuda' runs the exact sum on an NVIDIA GPU (the "
+    "sarmotion[gpu] extra).",
+)
+@click.option(
     "--dynamic-range",
     "dynamic_range_db",
     type=float,
@@ -100,6 +108,7 @@ def image(
     lenient: bool,
     autofocus: bool,
     dynamic_range_db: float,
+    device: str,
     force: bool,
 ) -> None:
     """Backprojection image of INPUTS: a scene, native traces or GOTCHA .mat files.
@@ -108,6 +117,11 @@ def image(
     Writes OUT/image.png (dB, peak-normalised), OUT/image.h5 (complex image with its axes)
     and OUT/peaks.json (the brightest points).
     """
+    if device == "cuda":
+        from ..imaging.cuda import NEEDS, available
+
+        if not available():
+            raise InputError(f"--device cuda: {NEEDS}")
     check_out(out, force=force, names=OUTPUTS)
     given = {
         flag
@@ -136,7 +150,12 @@ def image(
     traces, _ = read_inputs(inputs, speed_mps=speed_mps, autofocus=autofocus, lenient=lenient)
     t0 = time.perf_counter()
     with Progress(enabled=ctx.obj["progress"]) as bar:
-        img = backproject(traces, grid, velocity_mps=velocity, progress=bar)
+        if device == "cuda":
+            from ..imaging.cuda import backproject_cuda
+
+            img = backproject_cuda(traces, grid, velocity_mps=velocity, progress=bar)
+        else:
+            img = backproject(traces, grid, velocity_mps=velocity, progress=bar)
     elapsed = time.perf_counter() - t0
     peaks = img.peaks(5, min_separation_m=3.0)
     with staged_directory(out) as stage:
