@@ -103,16 +103,16 @@ def _median_time(fn, repeats: int) -> tuple[float, list[float]]:
     return statistics.median(times), times
 
 
-def _device_run(cuda, tr, grid, p, rows, packed, repeats):
+def _device_run(cuda, tr, grid, p, rows, repeats):
     """Median device time (s) of one image left on the GPU, and the image (host)."""
     u = np.zeros(3)
-    out, p = gpu._image_on_device(cuda, tr, grid, u, 8, p, rows, packed)  # warm: compile
+    out, p = gpu._image_on_device(cuda, tr, grid, u, 8, p, rows)  # warm: compile
     cuda.synchronize()
     times = []
     for _ in range(repeats):
         start, stop = cuda.event(), cuda.event()
         start.record()
-        out, p = gpu._image_on_device(cuda, tr, grid, u, 8, p, rows, packed)
+        out, p = gpu._image_on_device(cuda, tr, grid, u, 8, p, rows)
         stop.record()
         stop.synchronize()
         times.append(start.elapsed_time(stop) / 1e3)
@@ -137,13 +137,6 @@ def main(argv: list[str] | None = None) -> dict:
         help="pixels per thread to time besides the default",
     )
     ap.add_argument("--block-rows", type=int, nargs="*", default=[4, 8])
-    ap.add_argument(
-        "--float32-loads",
-        type=int,
-        nargs="*",
-        default=[4, 8],
-        help="pixels per thread to time with 4-byte table loads (block rows 8)",
-    )
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
 
@@ -198,19 +191,15 @@ def main(argv: list[str] | None = None) -> dict:
         t_exact = time.perf_counter() - t0
         entry: dict = {"n": n, "spacing_m": SIDE_M / n, "reference_pixels": k,
                        "exact_seconds": t_exact, "variants": []}  # fmt: skip
-        runs = [(p, rows, True) for p in args.variants for rows in args.block_rows]
-        runs += [(p, 8, False) for p in args.float32_loads]
-        for p, rows, packed in runs:
-            med, times, img, _ = _device_run(cuda, tr, grid, p, rows, packed, args.repeats)
-            v = {"pixels_per_thread": p, "block_rows": rows, "packed_loads": packed,
-                 "seconds_median": med,
+        for p, rows in [(p, rows) for p in args.variants for rows in args.block_rows]:
+            med, times, img, _ = _device_run(cuda, tr, grid, p, rows, args.repeats)
+            v = {"pixels_per_thread": p, "block_rows": rows, "seconds_median": med,
                  "seconds": times, "pixel_pulses_per_second": _rate(work, med),
                  "ser_db": _ser_db(exact, img[iy, ix])}  # fmt: skip
             entry["variants"].append(v)
-            print(f"  {n}^2 P={p} rows={rows} packed={packed}: "
-                  f"{_rate(work, med):.3g} pixel-pulses/s, "
+            print(f"  {n}^2 P={p} rows={rows}: {_rate(work, med):.3g} pixel-pulses/s, "
                   f"{v['ser_db']:.1f} dB", flush=True)  # fmt: skip
-        med, times, img, p = _device_run(cuda, tr, grid, None, gpu.BLOCK_ROWS, True, args.repeats)
+        med, times, img, p = _device_run(cuda, tr, grid, None, gpu.BLOCK_ROWS, args.repeats)
         entry["device"] = {"pixels_per_thread": p, "block_rows": gpu.BLOCK_ROWS,
                            "seconds_median": med, "seconds": times,
                            "pixel_pulses_per_second": _rate(work, med),

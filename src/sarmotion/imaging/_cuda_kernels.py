@@ -36,7 +36,7 @@ _HALF32 = np.float32(0.5)
 _TWO_PI = np.float32(2.0 * np.pi)
 _ZERO = np.float32(0.0)
 
-_KERNELS: dict[tuple[int, int, bool], object] = {}
+_KERNELS: dict[tuple[int, int], object] = {}
 
 _LOW32 = np.uint64(0xFFFFFFFF)
 _SHIFT32 = np.uint64(32)
@@ -60,18 +60,18 @@ else:  # pragma: no cover - needs a GPU
         return libdevice.int_as_float(lo), libdevice.int_as_float(hi)
 
 
-def backprojection_kernel(rows_per_thread: int, block_rows: int, packed: bool = True):
+def backprojection_kernel(rows_per_thread: int, block_rows: int):
     """The kernel for ``rows_per_thread`` pixels per thread (compiled on first launch).
 
     Launch with ``(BLOCK_X, block_rows)`` threads per block, as
     ``kernel[blocks, (BLOCK_X, block_rows)](table, n_table, ant, xs, ys, idx_scale,
     idx_offset, cycles_per_m, out)``:
 
-    - ``table``, flat, per pulse ``n_table + 1`` table positions ``m`` holding the
-      band-limited trace ``V`` and its derivative ``D = h dV/dt`` (``h`` the table step),
-      position ``n_table`` repeating position 0 (one period of the trace). ``packed``:
-      uint64, the bits of complex64 ``V, D`` (two 8-byte loads per position); else
-      float32 ``Re V, Im V, Re D, Im D``;
+    - ``table`` uint64, flat: per pulse ``n_table + 1`` table positions ``m``, each two
+      words holding the bits of the complex64 band-limited trace ``V`` and of its
+      derivative ``D = h dV/dt`` (``h`` the table step; position ``n_table`` repeats
+      position 0: one period of the trace). A pixel reads four 8-byte words, the two
+      positions around its delay (half the load instructions of float32 words);
     - ``ant`` (n_pulses, 4) float64: antenna ``x``, ``y``, ``z**2`` and the reference range
       ``|r - rho_o|`` (m);
     - ``xs`` (nx,), ``ys`` (ny,) float64: the pixel ``(iy, ix)`` is ``(xs[ix], ys[iy], 0)`` (m);
@@ -87,7 +87,7 @@ def backprojection_kernel(rows_per_thread: int, block_rows: int, packed: bool = 
     pixel's offset from the anchor along ``y`` (no cancellation: ``N`` is formed from the
     offset, never as a difference of two ranges).
     """
-    key = (int(rows_per_thread), int(block_rows), bool(packed))
+    key = (int(rows_per_thread), int(block_rows))
     kernel = _KERNELS.get(key)
     if kernel is None:
         kernel = _make_kernel(*key)
@@ -95,11 +95,11 @@ def backprojection_kernel(rows_per_thread: int, block_rows: int, packed: bool = 
     return kernel
 
 
-def _make_kernel(P: int, by: int, packed: bool):  # noqa: N803 - the paper-style name
+def _make_kernel(P: int, by: int):  # noqa: N803 - the paper-style name
     bx = BLOCK_X
     nthreads = bx * by
     chunk = PULSE_CHUNK
-    words = 2 if packed else 4  # table words per position
+    words = 2  # table words per position
 
     @cuda.jit(fastmath=True)
     def kernel(table, n_table, ant, xs, ys, idx_scale, idx_offset, cycles_per_m, out):
@@ -168,18 +168,12 @@ def _make_kernel(P: int, by: int, packed: bool):  # noqa: N803 - the paper-style
                         h10 = u * v * v
                         h11 = -u2 * v
                         o = base + uint64(words * i)
-                        if packed:
-                            a_re, a_im = _split(table[o])
-                            b_re, b_im = _split(table[o + uint64(1)])
-                            c_re, c_im = _split(table[o + uint64(2)])
-                            d_re, d_im = _split(table[o + uint64(3)])
-                            vr = h00 * a_re + h10 * b_re + h01 * c_re + h11 * d_re
-                            vi = h00 * a_im + h10 * b_im + h01 * c_im + h11 * d_im
-                        else:
-                            vr = h00 * table[o] + h10 * table[o + uint64(2)]
-                            vr += h01 * table[o + uint64(4)] + h11 * table[o + uint64(6)]
-                            vi = h00 * table[o + uint64(1)] + h10 * table[o + uint64(3)]
-                            vi += h01 * table[o + uint64(5)] + h11 * table[o + uint64(7)]
+                        a_re, a_im = _split(table[o])
+                        b_re, b_im = _split(table[o + uint64(1)])
+                        c_re, c_im = _split(table[o + uint64(2)])
+                        d_re, d_im = _split(table[o + uint64(3)])
+                        vr = h00 * a_re + h10 * b_re + h01 * c_re + h11 * d_re
+                        vi = h00 * a_im + h10 * b_im + h01 * c_im + h11 * d_im
                         cyc = c0f + dd * k_hi + dd * k_lo
                         cyc = cyc - math.floor(cyc + _HALF32)
                         ang = _TWO_PI * cyc

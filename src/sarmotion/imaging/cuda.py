@@ -282,7 +282,6 @@ def _image_on_device(
     upsample: int,
     pixels_per_thread: int | None = None,
     block_rows: int = BLOCK_ROWS,
-    packed: bool = True,
 ) -> tuple[Any, int]:
     """Launch the kernel; returns the image as a (ny, nx, 2) float64 device array and P."""
     from . import _cuda_kernels as kern
@@ -300,9 +299,7 @@ def _image_on_device(
     p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
     blocks = (-(-nx // kern.BLOCK_X), -(-ny // (block_rows * p)))
     out = cuda.device_array((ny, nx, 2), dtype=np.float64)
-    if not packed:
-        table = table.view(np.float32)
-    kern.backprojection_kernel(p, block_rows, packed)[blocks, (kern.BLOCK_X, block_rows)](
+    kern.backprojection_kernel(p, block_rows)[blocks, (kern.BLOCK_X, block_rows)](
         table, n_table, cuda.to_device(ant), cuda.to_device(x), cuda.to_device(y), 2.0 / (C * h),
         float(n_table // 2), 2.0 * carrier / C, out,
     )  # fmt: skip
