@@ -110,6 +110,12 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
         "gpu_max": float(np.max(np.abs(backproject_cuda(traces, far).values))),
         "cpu_max": float(np.max(np.abs(backproject(traces, far).values))),
     }
+    # Traces changed in place after a first image: the second image uses the new data.
+    traces = _simulated(30.0, seed=5300, extent_m=2.0)
+    grid = ImageGrid.square(size_m=2.4, spacing_m=0.2)
+    backproject_cuda(traces, grid)
+    traces.data[: traces.n_pulses // 2] *= -2.0j
+    changed = _case(traces, grid, None, None, "changed_in_place")
     # The command line with --device cuda, against the exact sum of the same inputs.
     from sarmotion.cli.main import run
     from sarmotion.imaging import point_response
@@ -131,6 +137,7 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
         grid = ImageGrid.square(centre_m=(3.0, -2.0), size_m=1.6, spacing_m=0.1)
         results.append(_case(traces, grid, None, None, "gotcha"))
         results.append(_case(traces, grid, 1, None, "gotcha_p1"))  # the float64 path alone
+    results.append(changed)
     out.write_text(json.dumps({"cases": results, "outside": outside, "cli": cli}))
 
 
@@ -157,7 +164,7 @@ def _case_named(simulated, name, request):
     return {c["name"]: c for c in simulated["cases"]}[name]
 
 
-CASE_NAMES = [c[0] for c in SIM_CASES] + ["gotcha", "gotcha_p1"]
+CASE_NAMES = [c[0] for c in SIM_CASES] + ["changed_in_place", "gotcha", "gotcha_p1"]
 
 
 @pytest.mark.parametrize("name", CASE_NAMES)

@@ -247,28 +247,41 @@ def _min_threads(cuda: Any) -> int:
 class _DeviceTables:
     """The device table of the last traces imaged (one entry).
 
-    Reused while the same traces object (checked by identity and the CRC-32 of its data)
-    is imaged at the same ``upsample``: other grids and velocities need no new table.
+    Reused while the same traces object (by identity) is imaged at the same ``upsample``:
+    other grids and velocities need no new table. Its data may have been changed in
+    place since: the CRC-32 of the data tells, computed while the kernel runs (it reads
+    every byte of the traces, as long as the kernel of a small image takes), and the
+    image is then made again from a new table.
     """
 
     def __init__(self) -> None:
         self._key: tuple | None = None
         self._ref: weakref.ref | None = None
+        self._crc: int | None = None
         self._table: Any = None
 
-    def get(self, cuda: Any, traces: Traces, upsample: int) -> Any:
-        data = np.ascontiguousarray(traces.data)
-        key = (id(traces), upsample, zlib.crc32(memoryview(data).cast("B")))
-        if self._key == key and self._ref is not None and self._ref() is traces:
-            return self._table
-        self._table = None  # free the old one first
-        self._table = cuda.to_device(hermite_table(data, upsample).view(np.uint64).reshape(-1))
-        self._key = key
+    def cached(self, traces: Traces, upsample: int) -> Any:
+        """The table of this traces object if there is one, unverified; else None."""
+        if self._key == (id(traces), upsample) and self._ref is not None:
+            if self._ref() is traces:
+                return self._table
+        return None
+
+    def verify(self, data: NDArray) -> bool:
+        """Whether ``data`` still has the CRC-32 the cached table was built from."""
+        return zlib.crc32(memoryview(data).cast("B")) == self._crc
+
+    def build(self, cuda: Any, traces: Traces, data: NDArray, upsample: int) -> Any:
+        self.clear()  # free the old table first
+        table = hermite_table(data, upsample).view(np.uint64).reshape(-1)
+        self._table = cuda.to_device(table)
+        self._crc = zlib.crc32(memoryview(data).cast("B"))
+        self._key = (id(traces), upsample)
         self._ref = weakref.ref(traces)
         return self._table
 
     def clear(self) -> None:
-        self._key = self._ref = self._table = None
+        self._key = self._ref = self._crc = self._table = None
 
 
 _TABLES = _DeviceTables()
@@ -290,7 +303,11 @@ def _image_on_device(
     pos = traces.positions_m - traces.slow_times_s[:, None] * u[None, :]
     ref = np.linalg.norm(traces.positions_m - traces.reference_point_m[None, :], axis=1)
     ant = np.ascontiguousarray(np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, ref], axis=1))
-    table = _TABLES.get(cuda, traces, upsample)
+    data = np.ascontiguousarray(traces.data)
+    table = _TABLES.cached(traces, upsample)
+    verify = table is not None
+    if table is None:
+        table = _TABLES.build(cuda, traces, data, upsample)
     n_table = upsample * traces.n_samples
     h = float(traces.radar.sample_interval_s) / upsample
     ny, nx = grid.shape
@@ -299,10 +316,12 @@ def _image_on_device(
     p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
     blocks = (-(-nx // kern.BLOCK_X), -(-ny // (block_rows * p)))
     out = cuda.device_array((ny, nx, 2), dtype=np.float64)
-    kern.backprojection_kernel(p, block_rows)[blocks, (kern.BLOCK_X, block_rows)](
-        table, n_table, cuda.to_device(ant), cuda.to_device(x), cuda.to_device(y), 2.0 / (C * h),
-        float(n_table // 2), 2.0 * carrier / C, out,
-    )  # fmt: skip
+    kernel = kern.backprojection_kernel(p, block_rows)[blocks, (kern.BLOCK_X, block_rows)]
+    args = (n_table, cuda.to_device(ant), cuda.to_device(x), cuda.to_device(y), 2.0 / (C * h),
+            float(n_table // 2), 2.0 * carrier / C, out)  # fmt: skip
+    kernel(table, *args)  # asynchronous: the check below runs while the GPU works
+    if verify and not _TABLES.verify(data):  # data changed in place: new table, again
+        kernel(_TABLES.build(cuda, traces, data, upsample), *args)
     return out, p
 
 
