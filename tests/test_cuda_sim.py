@@ -239,6 +239,37 @@ def test_pixels_per_thread_keep_the_phase_bound(carrier_hz, spacing_m):
     assert q <= min(p, 2)
 
 
+def test_numpy_alias_is_in_place_before_numba_cuda_is_imported():
+    # numpy 2.5 has no np.row_stack, which numba-cuda 0.30 uses at import: remove it and
+    # record whether it is back when numba.cuda is first imported.
+    code = """
+import importlib.abc, sys
+import numpy as np
+vars(np).pop("row_stack", None)
+served = getattr(np, "__getattr__", None)
+def hide(name):  # numpy 2.x serves the deprecated name from its module __getattr__
+    if name == "row_stack" or served is None:
+        raise AttributeError(name)
+    return served(name)
+np.__getattr__ = hide
+np.__all__ = [n for n in np.__all__ if n != "row_stack"]
+assert not hasattr(np, "row_stack")
+seen = []
+class Watch(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name == "numba.cuda":
+            seen.append(hasattr(np, "row_stack"))
+sys.meta_path.insert(0, Watch())
+from sarmotion.imaging import cuda
+cuda.available()
+print(seen)
+"""
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.strip() == "[True]"
+
+
 def test_no_gpu_gives_one_line():
     from sarmotion.imaging import ImageGrid
     from sarmotion.imaging.cuda import backproject_cuda

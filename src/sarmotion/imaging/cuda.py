@@ -103,10 +103,8 @@ _FFT_BLOCK = 64
 
 def _cuda() -> Any:
     """numba.cuda, imported on first use; RuntimeError (one line) when unusable."""
-    try:
-        from numba import cuda
-
-        from . import _cuda_kernels  # noqa: F401 - imports numba.cuda with the numpy alias
+    try:  # numba.cuda through _cuda_kernels only: the numpy alias comes first there
+        from ._cuda_kernels import cuda
     except Exception as err:  # ImportError, or numba-cuda failing at import
         raise RuntimeError(f"{NEEDS} ({type(err).__name__}: {err})".splitlines()[0]) from err
     return cuda
