@@ -6,8 +6,10 @@ numpy 2.5 removed: where it is missing it is aliased to :func:`numpy.vstack` (th
 function; numpy deprecated the name in 2.0) before :mod:`numba.cuda` is imported.
 
 The kernel is written for the hardware and for numba's CUDA simulator
-(``NUMBA_ENABLE_CUDASIM=1``), which runs it as Python on the CPU: only ``math``
-functions, ``cuda.shared``/``cuda.local`` arrays and float32/float64 scalars.
+(``NUMBA_ENABLE_CUDASIM=1``), which runs it as Python on the CPU: ``math`` functions,
+``cuda.shared``/``cuda.local`` arrays and float32/float64 scalars, and one device
+function, the split of a table word into two float32 (libdevice bit casts on the GPU, a
+numpy view under the simulator).
 """
 
 from __future__ import annotations
