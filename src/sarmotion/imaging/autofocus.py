@@ -1,0 +1,429 @@
+"""Phase-gradient autofocus (PGA) of the phase history: a slow-time phase error per pulse.
+
+Model
+-----
+A residual platform-motion error that is the same for every point of the scene is a
+phase ``phi(s)`` per pulse: the traces are ``D_r(s, t) exp(i phi(s))``. PGA estimates
+``phi`` from the image and corrects the traces, ``D_r(s, t) exp(-i phi(s))``, so that
+everything downstream (separation, motion estimation, images) uses corrected data.
+
+The image PGA works on
+----------------------
+PGA needs an image in which a slow-time phase error is a convolution along one image
+axis. It is formed here by backprojection (:func:`~sarmotion.imaging.backproject`) on a
+grid whose axes are the look's ground-range direction ``e_r`` and cross-range direction
+``e_c`` (:func:`~sarmotion.imaging.resolution`) at the scene centre ``rho_c``; the
+traces' geometry is rotated and translated so that this grid is axis-aligned (distances,
+hence the image, are unchanged). With ``rho = rho_c + x e_r + y e_c``, a point target
+``rho_t = rho_c + x_t e_r + y_t e_c`` of amplitude ``a`` contributes to pixel ``rho``,
+through pulse ``j`` (``eq:image``),
+
+    a p(dtau_j(rho) - dtau_j(rho_t)) exp(i omega_o (dtau_j(rho) - dtau_j(rho_t))) exp(i phi_j).
+
+On the range line ``x = x_t`` near the target, ``dtau_j(rho) - dtau_j(rho_t) = -(2/c)
+(m_j . e_c) (y - y_t) + O((y - y_t)^2 / L)``, ``m_j`` the unit vector from the target to
+the antenna: the envelope ``p`` stays at its peak (the delay change is ``|y - y_t|``
+times the angle subtended by the aperture, a small fraction of a range cell over a few
+cross-range cells) and the image along the line is
+
+    I(y) = a sum_j exp(i phi_j) exp(i kappa_j (y - y_t)),   kappa_j = -2 k_o (m_j . e_c),
+
+``k_o = omega_o / c``. When the pulses are evenly spaced in look angle (small aperture:
+``kappa_j`` linear in ``j``) this is the Fourier series of ``exp(i phi)``: the phase
+error convolves every range line with the same kernel, its transform. Conversely the
+per-pulse phase history of the target is recovered by the transform back,
+
+    G_j = sum_{|y - y_t| <= W/2} I(y) exp(-i kappa_j (y - y_t)) ~ a exp(i phi_j),
+
+smoothed over pulses by the window's transform. ``kappa_j`` is evaluated exactly at each
+line's peak (it drifts by the angle the scene subtends, ~1 % across 100 m at 10 km, which
+over a 10 m window is a fraction of a radian at the aperture edges).
+
+Iteration
+---------
+Each iteration: (1) image the current traces; (2) keep the range lines whose brightest
+pixel is ``min_contrast_db`` above the line's median intensity (at most ``max_lines``,
+brightest first) and centre-shift each on its peak (sub-pixel, by a parabola through
+``|I|``); (3) window: the width is 1.5 times the -10 dB width of the centre-shifted
+intensity averaged over the lines, at most ``shrink`` times the previous window and at
+least ``min_window_cells`` cross-range cells; (4) transform back (``G`` above) and
+estimate the phase gradient with the maximum-likelihood kernel
+``dphi_j = arg sum_n conj(G_{n,j}) G_{n,j+1}`` (Jakowatz et al., *Spotlight-Mode SAR*,
+1996, sect. 4.4; the phase-difference estimator); (5) integrate, remove the mean and the
+least-squares linear term in slow time (a linear phase only shifts the image; PGA cannot
+observe it), and correct the traces. It stops when the RMS of an iteration's correction
+is below ``tol_rad`` (a residual RMS ``sigma`` lowers the peak power by the factor
+``exp(-sigma^2)``: 0.05 rad is 0.01 dB), or after ``max_iter`` iterations.
+
+When the assumptions hold
+-------------------------
+- The error is one phase per pulse, the same at every point of the scene: true for an
+  uncompensated line-of-sight motion when the scene subtends a small angle from the
+  platform (its range and angle variation across the scene is negligible); a range-
+  dependent or space-variant error is not modelled.
+- Small aperture: the look angle varies little, so ``kappa_j`` is nearly linear in
+  ``j``, the range envelope of a target stays within its range cell across a window, and
+  one cross-range axis describes the whole aperture (at 4 degrees the keystone of the
+  polar support spreads ``kappa_j`` by the fractional bandwidth, which the exact
+  ``kappa_j`` here absorbs at the centre frequency only).
+- The image holds dominant point-like scatterers in many range lines, above the clutter
+  in the window: their phase histories are the signal, clutter the noise. A scene with
+  no bright scatterer is refused.
+
+For a mover, :func:`focus_mover` runs the same iteration on the motion-compensated image
+``eq:imagecompu`` around it: the error it estimates includes what the velocity estimate
+leaves unfocused, so it is meant for the mover's own traces.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import positive as _positive
+from ..core import C, Traces, Trajectory, as_point
+from ..core.geometry import _as_velocity
+from .backprojection import backproject
+from .grid import Image, ImageGrid, default_scene_size_m
+from .peaks import parabolic_peak
+from .resolution import resolution
+
+__all__ = ["AutofocusResult", "apply_phase_correction", "focus_mover", "pga"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class AutofocusResult:
+    """Result of :func:`pga`.
+
+    Attributes
+    ----------
+    traces : Traces
+        The corrected traces ``D_r(s, t) exp(-i phi(s))``.
+    phase_error_rad : (n_pulses,) ndarray
+        The estimated phase error ``phi(s)`` (rad), mean and linear term removed.
+    n_iter : int
+        Iterations run.
+    converged : bool
+        Whether the last correction's RMS fell below ``tol_rad``.
+    rms_history_rad : (n_iter,) ndarray
+        RMS of each iteration's correction (rad).
+    window_history_m : (n_iter,) ndarray
+        Cross-range window width of each iteration (m).
+    lines_history : (n_iter,) ndarray
+        Number of range lines used in each iteration.
+    tol_rad : float
+        The stopping tolerance (rad).
+    image : Image or None
+        :func:`focus_mover`: the mover's compensated image from the corrected traces.
+    """
+
+    traces: Traces
+    phase_error_rad: NDArray[np.float64]
+    n_iter: int
+    converged: bool
+    rms_history_rad: NDArray[np.float64]
+    window_history_m: NDArray[np.float64]
+    lines_history: NDArray[np.int64]
+    tol_rad: float
+    image: Image | None = field(default=None)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (phase error per pulse in rad)."""
+        return {
+            "method": "pga",
+            "n_iter": self.n_iter,
+            "converged": self.converged,
+            "tol_rad": self.tol_rad,
+            "rms_history_rad": self.rms_history_rad.tolist(),
+            "window_history_m": self.window_history_m.tolist(),
+            "lines_history": self.lines_history.tolist(),
+            "phase_error_rms_rad": float(np.sqrt(np.mean(self.phase_error_rad**2))),
+            "phase_error_rad": self.phase_error_rad.tolist(),
+            "slow_times_s": self.traces.slow_times_s.tolist(),
+        }
+
+
+def apply_phase_correction(traces: Traces, phase_rad: ArrayLike) -> Traces:
+    """Traces times ``exp(-i phase(s))``, one phase per pulse (rad).
+
+    Parameters
+    ----------
+    traces : Traces
+        The data.
+    phase_rad : (n_pulses,) array_like
+        Phase error per pulse (rad) to remove.
+    """
+    phi = np.asarray(phase_rad, dtype=np.float64)
+    if phi.shape != (traces.n_pulses,) or not np.all(np.isfinite(phi)):
+        raise ValueError(
+            f"phase_rad must be finite with shape ({traces.n_pulses},), got {phi.shape}"
+        )
+    data = traces.data * np.exp(-1j * phi)[:, None].astype(np.complex128)
+    return traces.with_data(data.astype(traces.data.dtype, copy=False))
+
+
+def _rotated(traces: Traces, centre: NDArray[np.float64], rot: NDArray[np.float64]) -> Traces:
+    """The traces with ground coordinates ``rot @ (xy - centre)`` (distances unchanged)."""
+    pos = traces.positions_m.copy()
+    pos[:, :2] = (pos[:, :2] - centre[None, :2]) @ rot.T
+    ref = traces.reference_point_m.copy()
+    ref[:2] = rot @ (ref[:2] - centre[:2])
+    return Traces(
+        data=traces.data,
+        trajectory=Trajectory(positions_m=pos, slow_times_s=traces.slow_times_s),
+        radar=traces.radar,
+        reference_point_m=ref,
+        metadata=traces.metadata,
+    )
+
+
+def _kappa(
+    traces: Traces, point: NDArray[np.float64], velocity: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``kappa_j = -2 k_o (m_j . e_y)`` (rad/m) at ``point`` in the rotated frame."""
+    where = point[None, :] + traces.slow_times_s[:, None] * velocity[None, :]
+    m = traces.positions_m - where
+    m /= np.linalg.norm(m, axis=1)[:, None]
+    k_o = 2.0 * np.pi * traces.radar.carrier_hz / C
+    return -2.0 * k_o * m[:, 1]
+
+
+def _remove_linear(phi: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``phi`` minus its least-squares line in ``s`` (mean and slope)."""
+    a = np.stack([np.ones_like(s), s - s.mean()], axis=1)
+    coef, *_ = np.linalg.lstsq(a, phi, rcond=None)
+    return phi - a @ coef
+
+
+def _window_width(power: NDArray[np.float64], peaks: NDArray[np.int64]) -> int:
+    """1.5 times the -10 dB width (pixels) of the centre-shifted mean intensity."""
+    n = power.shape[1]
+    shifted = np.stack([np.roll(p, n // 2 - k) for p, k in zip(power, peaks, strict=True)])
+    avg = shifted.mean(axis=0)
+    above = avg >= 0.1 * avg[n // 2]
+    lo = n // 2
+    while lo > 0 and above[lo - 1]:
+        lo -= 1
+    hi = n // 2
+    while hi < n - 1 and above[hi + 1]:
+        hi += 1
+    return int(math.ceil(1.5 * (hi - lo + 1)))
+
+
+def pga(
+    traces: Traces,
+    *,
+    centre_m: ArrayLike | None = None,
+    velocity_mps: ArrayLike | None = None,
+    size_m: float | None = None,
+    oversampling: float = 2.0,
+    max_iter: int = 10,
+    tol_rad: float = 0.05,
+    min_contrast_db: float = 20.0,
+    max_lines: int = 200,
+    min_window_cells: float = 8.0,
+    shrink: float = 0.8,
+) -> AutofocusResult:
+    """Phase-gradient autofocus of the traces (module docstring).
+
+    Parameters
+    ----------
+    traces : Traces
+        The data.
+    centre_m : (2,) or (3,) array_like, optional
+        Centre of the PGA image (m); default the reference point.
+    velocity_mps : (2,) array_like, optional
+        Compensated ground velocity (m/s) of the image (``eq:imagecompu``).
+    size_m : float, optional
+        Side of the square PGA image, along range and cross range (m); default
+        :func:`~sarmotion.imaging.default_scene_size_m`.
+    oversampling : float
+        Pixels per resolution cell along each axis (>= 1).
+    max_iter : int
+        Most iterations, ``1 <= max_iter <= n_pulses``.
+    tol_rad : float
+        Stop when the RMS of an iteration's correction is below this (rad).
+    min_contrast_db : float
+        A range line is used when its brightest pixel's intensity is this many dB above
+        the line's median (> 0).
+    max_lines : int
+        Most range lines used per iteration (the highest contrast first).
+    min_window_cells : float
+        Narrowest window (cross-range resolution cells, >= 2).
+    shrink : float
+        Largest ratio of a window to the previous one, ``0 < shrink <= 1``.
+
+    Returns
+    -------
+    AutofocusResult
+
+    Raises
+    ------
+    ValueError
+        Bad parameters, or no range line holds a bright scatterer.
+    """
+    if not isinstance(traces, Traces):
+        raise TypeError(f"traces must be a Traces object, got {type(traces).__name__}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)):
+        raise TypeError(f"max_iter must be an integer, got {type(max_iter).__name__}")
+    if not 1 <= max_iter <= traces.n_pulses:
+        raise ValueError(
+            f"max_iter must be between 1 and the number of pulses ({traces.n_pulses}), "
+            f"got {max_iter}"
+        )
+    tol = _positive(tol_rad, "tol_rad", unit="rad")
+    contrast = 10.0 ** (_positive(min_contrast_db, "min_contrast_db", unit="dB") / 10.0)
+    over = _positive(oversampling, "oversampling")
+    if over < 1.0:
+        raise ValueError(f"oversampling must be >= 1, got {oversampling!r}")
+    if not (isinstance(max_lines, (int, np.integer)) and max_lines >= 1):
+        raise ValueError(f"max_lines must be a positive integer, got {max_lines!r}")
+    if not (math.isfinite(min_window_cells) and min_window_cells >= 2):
+        raise ValueError(f"min_window_cells must be >= 2, got {min_window_cells!r}")
+    if not (math.isfinite(shrink) and 0 < shrink <= 1):
+        raise ValueError(f"shrink must be in (0, 1], got {shrink!r}")
+    centre = traces.reference_point_m if centre_m is None else as_point(centre_m, name="centre_m")
+    centre = np.array([centre[0], centre[1], 0.0])
+    vel = np.zeros(3) if velocity_mps is None else _as_velocity(velocity_mps, name="velocity_mps")
+    size = default_scene_size_m(traces) if size_m is None else _positive(size_m, "size_m", unit="m")
+
+    res = resolution(traces, point_m=centre)
+    rot = np.stack([res.range_direction, res.cross_range_direction])  # rows: e_r, e_c
+    vel_rot = np.array([*(rot @ vel[:2]), 0.0])
+    dx = res.ground_range_m / over
+    dy = res.cross_range_m / over
+    nx = max(8, int(round(size / dx)))
+    ny = max(16, int(round(size / dy)))
+    grid = ImageGrid(
+        x_m=(np.arange(nx) - nx // 2) * dx, y_m=(np.arange(ny) - ny // 2) * dy
+    )
+    min_window = int(math.ceil(min_window_cells * over))
+    s = traces.slow_times_s
+
+    work = _rotated(traces, centre, rot)
+    phi_total = np.zeros(traces.n_pulses)
+    rms_hist: list[float] = []
+    win_hist: list[float] = []
+    line_hist: list[int] = []
+    window = ny
+    converged = False
+    for _ in range(max_iter):
+        img = backproject(
+            work, grid, velocity_mps=None if velocity_mps is None else vel_rot[:2]
+        )
+        lines = img.values.T  # (n_range_lines, n_cross): one row per range line
+        power = np.abs(lines) ** 2
+        peak_idx = np.argmax(power, axis=1)
+        peak_pow = power[np.arange(power.shape[0]), peak_idx]
+        median = np.median(power, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(median > 0, peak_pow / np.where(median > 0, median, 1.0), np.inf)
+        ratio[peak_pow == 0] = 0.0
+        chosen = np.nonzero(ratio >= contrast)[0]
+        if chosen.size == 0:
+            raise ValueError(
+                f"no bright scatterer for PGA: no range line of the image has a peak "
+                f"{min_contrast_db:g} dB above its median"
+            )
+        chosen = chosen[np.argsort(-peak_pow[chosen], kind="stable")][:max_lines]
+        window = max(min_window, min(_window_width(power[chosen], peak_idx[chosen]),
+                                     int(shrink * window), ny))  # fmt: skip
+        mags = np.abs(img.values)
+        g = np.empty((chosen.size, traces.n_pulses), dtype=np.complex128)
+        half = window // 2
+        offsets = np.arange(-half, half + 1)
+        for row, n in enumerate(chosen):
+            k = int(peak_idx[n])
+            fy, _ = parabolic_peak(mags, k, int(n))  # sub-pixel peak along y
+            y_hat = grid.y_m[0] + fy * dy
+            idx = (k + offsets) % ny  # centre shift (circular, as on a Fourier axis)
+            dist = grid.y_m[0] + (k + offsets) * dy - y_hat
+            point = np.array([grid.x_m[n], y_hat, 0.0])
+            kappa = _kappa(work, point, vel_rot)
+            g[row] = np.exp(-1j * np.outer(kappa, dist)) @ lines[n, idx]
+        dphi = np.angle(np.sum(np.conj(g[:, :-1]) * g[:, 1:], axis=0))
+        phi = _remove_linear(np.concatenate([[0.0], np.cumsum(dphi)]), s)
+        phi_total += phi
+        work = apply_phase_correction(work, phi)
+        rms = float(np.sqrt(np.mean(phi**2)))
+        rms_hist.append(rms)
+        win_hist.append(window * dy)
+        line_hist.append(int(chosen.size))
+        if rms < tol:
+            converged = True
+            break
+    phi_total = _remove_linear(phi_total, s)
+    meta = {
+        "autofocus": "pga",
+        "pga_iterations": len(rms_hist),
+        "pga_converged": converged,
+        "pga_phase_error_rms_rad": float(np.sqrt(np.mean(phi_total**2))),
+    }
+    corrected = apply_phase_correction(traces, phi_total)
+    corrected = corrected.with_data(corrected.data, **meta)
+    return AutofocusResult(
+        traces=corrected,
+        phase_error_rad=phi_total,
+        n_iter=len(rms_hist),
+        converged=converged,
+        rms_history_rad=np.array(rms_hist),
+        window_history_m=np.array(win_hist),
+        lines_history=np.array(line_hist, dtype=np.int64),
+        tol_rad=tol,
+    )
+
+
+def focus_mover(
+    traces: Traces,
+    position_m: ArrayLike,
+    velocity_mps: ArrayLike,
+    *,
+    grid: ImageGrid | None = None,
+    size_m: float = 20.0,
+    **options,
+) -> AutofocusResult:
+    """PGA on a mover's motion-compensated image, and that image refocused.
+
+    Parameters
+    ----------
+    traces : Traces
+        The mover's traces (e.g. the moving part of a separation).
+    position_m : (2,) or (3,) array_like
+        The mover's position at ``s = 0`` (m): the centre of the PGA image.
+    velocity_mps : (2,) array_like
+        Its ground velocity (m/s), compensated (``eq:imagecompu``).
+    grid : ImageGrid, optional
+        Grid of the returned image; default a ``size_m`` square around ``position_m``
+        with quarter-cell pixels.
+    size_m : float
+        Side of the PGA image (m).
+    **options
+        Passed to :func:`pga` (``max_iter``, ``tol_rad``, ...).
+
+    Returns
+    -------
+    AutofocusResult
+        With :attr:`~AutofocusResult.image` the compensated image of the corrected
+        traces on ``grid``.
+    """
+    p = as_point(position_m, name="position_m")
+    result = pga(traces, centre_m=p, velocity_mps=velocity_mps, size_m=size_m, **options)
+    if grid is None:
+        res = resolution(traces, point_m=p)
+        step = 0.25 * min(res.ground_range_m, res.cross_range_m)
+        grid = ImageGrid.square(centre_m=p[:2], size_m=size_m, spacing_m=step)
+    img = backproject(result.traces, grid, velocity_mps=velocity_mps)
+    return AutofocusResult(
+        traces=result.traces,
+        phase_error_rad=result.phase_error_rad,
+        n_iter=result.n_iter,
+        converged=result.converged,
+        rms_history_rad=result.rms_history_rad,
+        window_history_m=result.window_history_m,
+        lines_history=result.lines_history,
+        tol_rad=result.tol_rad,
+        image=img,
+    )
