@@ -1,0 +1,211 @@
+"""Phase-gradient autofocus: known phase errors recovered on GOTCHA and on simulated scenes."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sarmotion.core import C
+from sarmotion.imaging import resolution
+from sarmotion.imaging.autofocus import apply_phase_correction, focus_mover, pga
+from sarmotion.imaging.quality import point_quality
+from sarmotion.io import read_gotcha, results_document
+from sarmotion.pipeline import AnalysisOptions, analyze
+from sarmotion.simulation import PointTarget, Scene, load_scene, simulate
+
+# The two calibration reflectors of pass 1 (brightest points of the 4-degree image).
+REFLECTORS = [(-15.6, 21.6), (-27.8, 38.8)]
+
+#: Peak power falls by exp(-sigma^2) for a residual phase error of RMS sigma (Marechal):
+#: the 0.5 dB peak criterion allows sigma = sqrt(ln(10^0.05)) = 0.34 rad.
+MAX_RESIDUAL_RAD = float(np.sqrt(np.log(10**0.05)))
+
+
+def injected_error(traces, seed):
+    """Quadratic of +-pi..+-4pi at the aperture edges plus random cubic and quartic terms.
+
+    No linear term: a linear phase only shifts the image, which no autofocus observes.
+    """
+    rng = np.random.default_rng(seed)
+    s = traces.slow_times_s
+    x = s / np.abs(s).max()
+    quad = rng.uniform(np.pi, 4 * np.pi) * rng.choice([-1.0, 1.0]) * x**2
+    return quad + np.polynomial.legendre.legval(x, [0, 0, 0, rng.normal(0, 1.5), rng.normal(0, 1)])
+
+
+def without_line(phi, s):
+    a = np.stack([np.ones_like(s), s], axis=1)
+    return phi - a @ np.linalg.lstsq(a, phi, rcond=None)[0]
+
+
+def reflector_figures(traces):
+    out = []
+    for p in REFLECTORS:
+        q = point_quality(traces, p)
+        out.append(
+            (
+                20 * np.log10(q.amplitude),
+                q.range.irw_m,
+                q.cross_range.irw_m,
+                q.range.pslr_db,
+                q.cross_range.pslr_db,
+            )
+        )
+    return np.array(out)
+
+
+@pytest.fixture(scope="module")
+def four_degrees(gotcha_files):
+    return read_gotcha(gotcha_files)
+
+
+@pytest.fixture(scope="module")
+def reference_figures(four_degrees):
+    return reflector_figures(four_degrees)
+
+
+def check_same_focus(figures, reference):
+    np.testing.assert_allclose(figures[:, 0], reference[:, 0], atol=0.5)  # peak, dB
+    np.testing.assert_allclose(figures[:, 1:3], reference[:, 1:3], rtol=0.05)  # IRW
+    np.testing.assert_allclose(figures[:, 3:5], reference[:, 3:5], atol=1.0)  # PSLR, dB
+
+
+@pytest.mark.gotcha
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [101, 202])
+def test_pga_recovers_injected_errors_on_gotcha(four_degrees, reference_figures, seed):
+    tr = four_degrees
+    phi = injected_error(tr, seed)
+    bad = apply_phase_correction(tr, -phi)  # data * exp(+i phi)
+    spoilt = reflector_figures(bad)
+    # The injected error does defocus the reflectors (else the test proves nothing).
+    assert np.all(spoilt[:, 0] < reference_figures[:, 0] - 3.0)
+    result = pga(bad)
+    assert result.converged and result.n_iter == len(result.rms_history_rad)
+    assert np.all(np.diff(result.window_history_m) <= 1e-9)  # the window only shrinks
+    check_same_focus(reflector_figures(result.traces), reference_figures)
+    residual = without_line(result.phase_error_rad - phi, tr.slow_times_s)
+    assert np.sqrt(np.mean(residual**2)) < MAX_RESIDUAL_RAD
+
+
+@pytest.mark.gotcha
+@pytest.mark.slow
+def test_pga_leaves_focused_data_alone(four_degrees, reference_figures):
+    result = pga(four_degrees)
+    assert np.sqrt(np.mean(result.phase_error_rad**2)) < MAX_RESIDUAL_RAD
+    check_same_focus(reflector_figures(result.traces), reference_figures)
+
+
+def point_scene(targets, aperture_deg=1.0):
+    return Scene(
+        name="pga",
+        targets=tuple(PointTarget(position_m=p) for p in targets),
+        reference_point_m=(0.0, 0.0, 0.0),
+        trajectory_spec={"kind": "circular", "aperture_deg": aperture_deg},
+    )
+
+
+def test_pga_on_simulated_points_recovers_the_error():
+    rng = np.random.default_rng(3)
+    tr = simulate(point_scene(rng.uniform(-20, 20, size=(8, 2))), snr_db=10.0, rng=4).traces
+    phi = injected_error(tr, 5)
+    result = pga(apply_phase_correction(tr, -phi))
+    residual = without_line(result.phase_error_rad - phi, tr.slow_times_s)
+    assert np.sqrt(np.mean(residual**2)) < MAX_RESIDUAL_RAD
+    # Correcting with the estimate and re-estimating finds (nearly) nothing left.
+    again = pga(result.traces, max_iter=1)
+    assert again.rms_history_rad[0] < 0.1 * np.sqrt(np.mean(without_line(phi, tr.slow_times_s) ** 2))
+
+
+def test_focus_mover_refocuses_a_defocused_mover():
+    scene = Scene(
+        name="mover",
+        targets=(PointTarget(position_m=(2.0, -3.0), velocity_mps=(4.0, 3.0)),),
+        reference_point_m=(0.0, 0.0, 0.0),
+        trajectory_spec={"kind": "circular", "aperture_deg": 1.0},
+    )
+    tr = simulate(scene, snr_db=10.0, rng=1).traces
+    phi = injected_error(tr, 9)
+    bad = apply_phase_correction(tr, -phi)
+    good = focus_mover(tr, (2.0, -3.0), (4.0, 3.0), max_iter=1)
+    fixed = focus_mover(bad, (2.0, -3.0), (4.0, 3.0))
+    peak_good = np.abs(good.image.values).max()
+    assert np.abs(fixed.image.values).max() > 10 ** (-0.5 / 20) * peak_good
+    residual = without_line(fixed.phase_error_rad - phi, tr.slow_times_s)
+    assert np.sqrt(np.mean(residual**2)) < MAX_RESIDUAL_RAD
+
+
+def test_no_bright_scatterer_is_refused():
+    tr = simulate(point_scene([(3.0, 4.0)])).traces
+    noise = np.random.default_rng(0).standard_normal(tr.data.shape) * (1 + 1j)
+    with pytest.raises(ValueError, match="no bright scatterer"):
+        pga(tr.with_data(noise))
+    with pytest.raises(ValueError, match="no bright scatterer"):
+        pga(tr.with_data(np.zeros_like(tr.data)))
+
+
+def test_more_iterations_than_pulses_is_refused():
+    tr = simulate(point_scene([(3.0, 4.0)])).traces
+    with pytest.raises(ValueError, match="max_iter must be between 1 and the number of pulses"):
+        pga(tr, max_iter=tr.n_pulses + 1)
+
+
+def quadratic_speed_bias(residual, traces, mover):
+    """Cross-range-speed change of a mover for a residual phase (rad) per pulse.
+
+    The quadratic phase of a mover's echo is ``-2 k_o (V - u_c)^2 s^2 / (2 L)``, so a
+    quadratic residual ``c (s / S)^2`` (``S`` the half aperture time) reads as
+    ``du_c = c L / (2 k_o (V - u_c) S^2)``.
+    """
+    s = traces.slow_times_s
+    half = np.abs(s).max()
+    c2 = np.polynomial.polynomial.polyfit(s / half, residual, 2)[2]
+    geo = traces.geometry
+    k_o = 2 * np.pi * traces.radar.carrier_hz / C
+    v_rel = geo.speed_mps - mover["cross_range_speed_mps"]
+    return abs(c2) * geo.range_m / (2 * k_o * abs(v_rel) * half**2)
+
+
+@pytest.mark.slow
+def test_pga_restores_scene1_separation_and_movers():
+    sim = simulate(load_scene("scene1"), snr_db=20.0, rng=21)
+    tr = sim.traces
+    phi = injected_error(tr, 31)
+    result = pga(apply_phase_correction(tr, -phi))
+    # PGA returns the error up to a line: a common cross-range shift. The reference run
+    # is the uncorrupted data with that same shift, which no autofocus can undo.
+    d = result.phase_error_rad - phi
+    line = d - without_line(d, tr.slow_times_s)
+    residual = d - line
+    assert np.sqrt(np.mean(residual**2)) < MAX_RESIDUAL_RAD
+    opts = AnalysisOptions(trajectory=False)
+    ref = analyze(apply_phase_correction(tr, line), opts)
+    got = analyze(result.traces, opts)
+    ref_doc, got_doc = results_document(ref), results_document(got)
+    assert len(got_doc["movers"]) == len(ref_doc["movers"]) == 2
+    for a in ref_doc["movers"]:
+        b = min(got_doc["movers"], key=lambda m: np.hypot(*np.subtract(m["position_m"], a["position_m"])))
+        se = a["standard_errors"]
+        res = resolution(tr, point_m=a["position_m"])
+        dpos = np.subtract(b["position_m"], a["position_m"])
+        # Range position and range speed: within 3 standard errors of both runs.
+        for key, delta in (
+            ("range_position_m", abs(dpos @ res.range_direction)),
+            ("range_speed_mps", abs(b["range_speed_mps"] - a["range_speed_mps"])),
+        ):
+            sigma = np.hypot(se[key], b["standard_errors"][key])
+            assert delta < 3 * sigma, (key, delta, sigma)
+        # Cross-range speed: 3 standard errors plus what the residual's quadratic term
+        # moves it by (the residual is PGA's own error, stated above).
+        sigma = np.hypot(se["cross_range_speed_mps"], b["standard_errors"]["cross_range_speed_mps"])
+        bias = quadratic_speed_bias(residual, tr, a)
+        delta = abs(b["cross_range_speed_mps"] - a["cross_range_speed_mps"])
+        assert delta < 3 * sigma + bias, (delta, sigma, bias)
+    # Separation: the moving part is as close to the truth as without the error, within
+    # the share of the echo energy the residual phase error moves, 1 - exp(-sigma^2 / 2).
+    truth = sim.moving * np.exp(-1j * line)[:, None]
+    err_ref = np.linalg.norm(ref.separation.moving - truth) / np.linalg.norm(truth)
+    err_got = np.linalg.norm(got.separation.moving - truth) / np.linalg.norm(truth)
+    assert err_got < err_ref + 2 * np.sqrt(np.mean(residual**2))
