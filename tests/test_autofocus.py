@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
@@ -116,7 +114,9 @@ def test_pga_on_simulated_points_recovers_the_error():
     assert np.sqrt(np.mean(residual**2)) < MAX_RESIDUAL_RAD
     # Correcting with the estimate and re-estimating finds (nearly) nothing left.
     again = pga(result.traces, max_iter=1)
-    assert again.rms_history_rad[0] < 0.1 * np.sqrt(np.mean(without_line(phi, tr.slow_times_s) ** 2))
+    assert again.rms_history_rad[0] < 0.1 * np.sqrt(
+        np.mean(without_line(phi, tr.slow_times_s) ** 2)
+    )
 
 
 def test_focus_mover_refocuses_a_defocused_mover():
@@ -186,7 +186,10 @@ def test_pga_restores_scene1_separation_and_movers():
     ref_doc, got_doc = results_document(ref), results_document(got)
     assert len(got_doc["movers"]) == len(ref_doc["movers"]) == 2
     for a in ref_doc["movers"]:
-        b = min(got_doc["movers"], key=lambda m: np.hypot(*np.subtract(m["position_m"], a["position_m"])))
+        b = min(
+            got_doc["movers"],
+            key=lambda m: np.hypot(*np.subtract(m["position_m"], a["position_m"])),
+        )
         se = a["standard_errors"]
         res = resolution(tr, point_m=a["position_m"])
         dpos = np.subtract(b["position_m"], a["position_m"])

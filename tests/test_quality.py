@@ -66,3 +66,17 @@ def test_cut_without_nulls_is_refused():
     x = np.linspace(-1, 1, 101)
     with pytest.raises(ValueError, match="no null"):
         cut_quality(x, np.exp(-(x**2)))
+
+
+def test_gaussian_pulse_range_width():
+    # Radar(pulse="gaussian"): |p| = exp(-B^2 t^2 / 2), IRW 2 sqrt(ln 2) cells, no sidelobes.
+    from sarmotion.core import Radar
+
+    scene = point_scene(1.0)
+    scene = Scene(
+        name="g", targets=scene.targets, reference_point_m=(0.0, 0.0, 0.0),
+        trajectory_spec=scene.trajectory_spec, radar=Radar(pulse="gaussian"),
+    )  # fmt: skip
+    q = point_quality(simulate(scene).traces, (3.0, -2.0), n_cells=6)
+    assert q.range.irw_m == pytest.approx(q.range_theory.irw_m, rel=0.02)
+    assert q.to_dict()["range"]["pslr_theory_db"] is None

@@ -7,11 +7,12 @@ from pathlib import Path
 
 import click
 
-from ..io import read_inputs, results_document, staged_directory, write_json
+from ..io import results_document, staged_directory, write_json
 from ..pipeline import AnalysisOptions, compare_with_truth
 from ..pipeline import analyze as run_analysis
 from ..report.html import write_report
 from ..separation import SeparationOptions
+from .autofocus import PGA_ITERATIONS, autofocus_options, read_focused
 from .common import (
     Progress,
     as_flags,
@@ -31,6 +32,7 @@ OUTPUTS = (
     "images.png",
     "movers.png",
     "trajectories.png",
+    "autofocus.png",
 )
 
 __all__ = ["analyze", "demo"]
@@ -70,26 +72,35 @@ def run_analyze(
     snr_db: float | None = None,
     seed: int = 0,
     progress: bool = False,
-    autofocus: bool = False,
+    autofocus: str | bool | None = None,
+    pga_iterations: int = PGA_ITERATIONS,
     lenient: bool = False,
     force: bool = False,
 ) -> None:
-    """Analyse ``inputs`` and write ``out``/results.json, report.html and its figures."""
+    """Analyse ``inputs`` and write ``out``/results.json, report.html and its figures.
+
+    ``autofocus``: ``"gotcha"`` (or ``True``) applies GOTCHA's stored corrections,
+    ``"pga"`` phase-gradient autofocus (its phase error goes in the document and report).
+    """
     check_out(out, force=force, names=OUTPUTS)
-    with as_flags(speed_mps="--speed", snr_db="--snr-db"):
-        traces, sim = read_inputs(
-            inputs,
-            speed_mps=speed_mps,
-            snr_db=snr_db,
-            seed=seed,
-            autofocus=autofocus,
-            lenient=lenient,
-        )
+    if autofocus is True:
+        autofocus = "gotcha"
+    traces, sim, focus = read_focused(
+        inputs,
+        autofocus=autofocus or None,
+        pga_iterations=pga_iterations,
+        speed_mps=speed_mps,
+        snr_db=snr_db,
+        seed=seed,
+        lenient=lenient,
+    )
     with Progress(enabled=progress) as bar:
         result = run_analysis(traces, options, progress=bar)
     truth = compare_with_truth(result, sim.scene) if sim is not None else None
     doc = results_document(result, truth=truth)
     doc["inputs"] = list(inputs)
+    if focus is not None:
+        doc["autofocus"] = focus.to_dict()
     with staged_directory(out) as stage:
         write_json(stage / "results.json", doc)
         write_report(
@@ -135,7 +146,7 @@ def run_analyze(
 )
 @speed_option
 @lenient_option
-@click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
+@autofocus_options
 @click.option(
     "--size",
     "size_m",
@@ -176,7 +187,8 @@ def analyze(
     seed: int,
     force: bool,
     lenient: bool,
-    autofocus: bool,
+    autofocus: str | None,
+    pga_iterations: int,
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
@@ -194,6 +206,7 @@ def analyze(
         seed=seed,
         progress=ctx.obj["progress"],
         autofocus=autofocus,
+        pga_iterations=pga_iterations,
         lenient=lenient,
         force=force,
     )

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import click
 
-from ..io import read_inputs, save_traces, staged_directory, write_cphd, write_gotcha
+from ..io import save_traces, staged_directory, write_cphd, write_gotcha
+from .autofocus import autofocus_options, read_focused
 from .common import (
     InputError,
-    as_flags,
     check_out,
     force_option,
     lenient_option,
@@ -58,7 +58,7 @@ __all__ = ["convert"]
 )
 @speed_option
 @lenient_option
-@click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
+@autofocus_options
 @noise_options
 def convert(
     inputs: tuple[str, ...],
@@ -69,7 +69,8 @@ def convert(
     origin_llh: tuple[float, float, float] | None,
     speed_mps: float,
     lenient: bool,
-    autofocus: bool,
+    autofocus: str | None,
+    pga_iterations: int,
     snr_db: float | None,
     seed: int,
     force: bool,
@@ -87,17 +88,17 @@ def convert(
     if origin_llh is not None and to != "cphd":
         raise InputError("--origin applies to --to cphd only")
     check_out(out, force=force, patterns=("*.mat",) if to == "gotcha" else ())
-    with as_flags(speed_mps="--speed", snr_db="--snr-db", channel="--channel", vectors="--vectors"):
-        traces, _ = read_inputs(
-            inputs,
-            speed_mps=speed_mps,
-            autofocus=autofocus,
-            snr_db=snr_db,
-            seed=seed,
-            channel=channel,
-            vectors=vectors,
-            lenient=lenient,
-        )
+    traces, _, _ = read_focused(
+        inputs,
+        autofocus=autofocus,
+        pga_iterations=pga_iterations,
+        speed_mps=speed_mps,
+        snr_db=snr_db,
+        seed=seed,
+        channel=channel,
+        vectors=vectors,
+        lenient=lenient,
+    )
     if to == "gotcha":
         with staged_directory(out) as stage:
             files = write_gotcha(traces, stage)

@@ -9,8 +9,11 @@ import click
 import numpy as np
 
 from ..imaging import backproject
-from ..io import read_inputs, save_image, staged_directory, write_json
+from ..imaging.quality import point_quality
+from ..io import save_image, staged_directory, write_json
+from ..report.autofocus import phase_error_figure
 from ..report.plotting import image_figure, save_figure
+from .autofocus import autofocus_options, read_focused
 from .common import (
     InputError,
     Progress,
@@ -23,7 +26,7 @@ from .common import (
     square_grid,
 )
 
-OUTPUTS = ("image.png", "image.h5", "peaks.json")
+OUTPUTS = ("image.png", "image.h5", "peaks.json", "autofocus.png")
 
 #: Largest ground speed (m/s) accepted by --velocity: beyond any ground vehicle or aircraft
 #: on a runway, and far beyond the speeds a few degrees of aperture can resolve.
@@ -77,7 +80,7 @@ __all__ = ["image"]
 )
 @speed_option
 @lenient_option
-@click.option("--autofocus", is_flag=True, help="Apply the GOTCHA files' autofocus corrections.")
+@autofocus_options
 @click.option(
     "--device",
     type=click.Choice(["cpu", "cuda"]),
@@ -106,7 +109,8 @@ def image(
     grid_extent: tuple[float, float, float, float] | None,
     speed_mps: float,
     lenient: bool,
-    autofocus: bool,
+    autofocus: str | None,
+    pga_iterations: int,
     dynamic_range_db: float,
     device: str,
     force: bool,
@@ -147,7 +151,13 @@ def image(
         grid = square_grid(size_m, spacing_m, centre)
     else:
         grid = extent_grid(grid_extent, spacing_m)
-    traces, _ = read_inputs(inputs, speed_mps=speed_mps, autofocus=autofocus, lenient=lenient)
+    traces, _, focus = read_focused(
+        inputs,
+        autofocus=autofocus,
+        pga_iterations=pga_iterations,
+        speed_mps=speed_mps,
+        lenient=lenient,
+    )
     t0 = time.perf_counter()
     with Progress(enabled=ctx.obj["progress"]) as bar:
         if device == "cuda":
@@ -158,6 +168,7 @@ def image(
             img = backproject(traces, grid, velocity_mps=velocity, progress=bar)
     elapsed = time.perf_counter() - t0
     peaks = img.peaks(5, min_separation_m=3.0)
+    quality = [_quality(traces, (x, y), velocity) for x, y, v in peaks if abs(v) > 0]
     with staged_directory(out) as stage:
         names = ", ".join(Path(i).name for i in inputs)
         title = f"backprojection image of {names}"
@@ -169,6 +180,16 @@ def image(
             [(title, img.values)], x_m=grid.x_m, y_m=grid.y_m, dynamic_range_db=dynamic_range_db
         )
         save_figure(fig, stage / "image.png")
+        if focus is not None:
+            save_figure(
+                phase_error_figure(
+                    traces.slow_times_s,
+                    focus.phase_error_rad,
+                    focus.rms_history_rad,
+                    tol_rad=focus.tol_rad,
+                ),
+                stage / "autofocus.png",
+            )
         save_image(
             stage / "image.h5",
             img.values,
@@ -182,10 +203,16 @@ def image(
             {
                 "schema": "sarmotion.peaks/1",
                 "peaks": [
-                    {"position_m": [x, y], "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2]))}
-                    for x, y, v in peaks
-                    if abs(v) > 0
+                    {
+                        "position_m": [x, y],
+                        "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2])),
+                        "quality": q,
+                    }
+                    for (x, y, v), q in zip(
+                        [p for p in peaks if abs(p[2]) > 0], quality, strict=True
+                    )
                 ],
+                "autofocus": None if focus is None else focus.to_dict(),
                 "seconds": elapsed,
                 "pixel_pulses_per_second": grid.shape[0]
                 * grid.shape[1]
@@ -198,4 +225,13 @@ def image(
         where = f"brightest point at ({x:.2f}, {y:.2f}) m"
     else:
         where = "the image is zero: no echo falls on this grid"
-    click.echo(f"wrote {out}/image.png, image.h5, peaks.json; {where}; {elapsed:.2f} s")
+    extra = ", autofocus.png" if focus is not None else ""
+    click.echo(f"wrote {out}/image.png, image.h5, peaks.json{extra}; {where}; {elapsed:.2f} s")
+
+
+def _quality(traces, point, velocity) -> dict:
+    """Point-target quality of a peak (:func:`point_quality`), or why it has none."""
+    try:
+        return point_quality(traces, point, velocity_mps=velocity).to_dict()
+    except ValueError as exc:
+        return {"error": str(exc)}

@@ -310,9 +310,7 @@ def pga(
     dy = res.cross_range_m / over
     nx = max(8, int(round(size / dx)))
     ny = max(16, int(round(size / dy)))
-    grid = ImageGrid(
-        x_m=(np.arange(nx) - nx // 2) * dx, y_m=(np.arange(ny) - ny // 2) * dy
-    )
+    grid = ImageGrid(x_m=(np.arange(nx) - nx // 2) * dx, y_m=(np.arange(ny) - ny // 2) * dy)
     min_window = int(math.ceil(min_window_cells * over))
     s = traces.slow_times_s
 
@@ -324,9 +322,7 @@ def pga(
     window = ny
     converged = False
     for _ in range(max_iter):
-        img = backproject(
-            work, grid, velocity_mps=None if velocity_mps is None else vel_rot[:2]
-        )
+        img = backproject(work, grid, velocity_mps=None if velocity_mps is None else vel_rot[:2])
         lines = img.values.T  # (n_range_lines, n_cross): one row per range line
         power = np.abs(lines) ** 2
         peak_idx = np.argmax(power, axis=1)

@@ -51,6 +51,7 @@ __all__ = [
     "SINC_IRW_FACTOR",
     "SINC_PSLR_DB",
     "cut_quality",
+    "gaussian_quality",
     "point_quality",
     "sinc_islr_db",
     "sinc_quality",
@@ -76,6 +77,21 @@ def sinc_islr_db(n_cells: float) -> float:
 
     main = integral(1.0)
     return 10.0 * math.log10((integral(n) - main) / main)
+
+
+def gaussian_quality(cell_m: float) -> CutQuality:
+    """Theoretical quality of the pulse ``exp(-B^2 t^2 / 2)`` of ``Radar(pulse="gaussian")``.
+
+    The power ``exp(-B^2 t^2)`` is one half at ``B t = sqrt(ln 2)``: an IRW of
+    ``2 sqrt(ln 2) / B`` in time, ``2 sqrt(ln 2) cell`` along the cut with ``cell`` the
+    resolution cell ``c / (2B)`` projected on it. No sidelobes: PSLR and ISLR ``-inf``.
+    """
+    return CutQuality(
+        irw_m=2.0 * math.sqrt(math.log(2.0)) * float(cell_m),
+        pslr_db=-math.inf,
+        islr_db=-math.inf,
+        offset_m=0.0,
+    )
 
 
 def sinc_quality(cell_m: float, *, n_cells: float = 10.0) -> CutQuality:
@@ -198,7 +214,7 @@ class PointQuality:
         """JSON-ready figures (m, dB)."""
 
         def cut(q: CutQuality, t: CutQuality) -> dict:
-            return {
+            pairs = {
                 "irw_m": q.irw_m,
                 "irw_theory_m": t.irw_m,
                 "pslr_db": q.pslr_db,
@@ -206,6 +222,7 @@ class PointQuality:
                 "islr_db": q.islr_db,
                 "islr_theory_db": t.islr_db,
             }
+            return {k: (v if math.isfinite(v) else None) for k, v in pairs.items()}
 
         return {
             "position_m": [float(v) for v in self.position_m[:2]],
@@ -267,13 +284,19 @@ def point_quality(
         line[:, :2] = p[None, :2] + ell[:, None] * direction[None, :]
         prof = point_response(traces, line, velocity_mps=velocity_mps, phase_history=ph)
         figures.append(cut_quality(ell, prof))
-    amplitude = float(np.abs(point_response(traces, p, velocity_mps=velocity_mps, phase_history=ph))[0])
+    amplitude = float(
+        np.abs(point_response(traces, p, velocity_mps=velocity_mps, phase_history=ph))[0]
+    )
     return PointQuality(
         position_m=p,
         amplitude=amplitude,
         range=figures[0],
         cross_range=figures[1],
-        range_theory=sinc_quality(res.ground_range_m, n_cells=n_cells),
+        range_theory=(
+            gaussian_quality(res.ground_range_m)
+            if traces.radar.pulse == "gaussian"
+            else sinc_quality(res.ground_range_m, n_cells=n_cells)
+        ),
         cross_range_theory=sinc_quality(res.cross_range_m, n_cells=n_cells),
         range_direction=res.range_direction,
         cross_range_direction=res.cross_range_direction,

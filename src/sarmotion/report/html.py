@@ -329,7 +329,10 @@ def write_report(
     if "truth" in doc:
         truth = {"truth": doc["truth"], "errors": [m.get("errors") for m in doc["movers"]]}
     sections: dict[str, list[str]] = {}
-    for section, caption, fig, name in _figures(result, truth):
+    figures = _figures(result, truth)
+    if doc.get("autofocus"):
+        figures.append(_autofocus_figure(doc["autofocus"]))
+    for section, caption, fig, name in figures:
         b64 = base64.b64encode(_png(fig, out / name)).decode("ascii")
         sections.setdefault(section, []).append(
             f'<img alt="{html.escape(caption)}" src="data:image/png;base64,{b64}">'
@@ -340,7 +343,7 @@ def write_report(
         f"<section><h2>Acquisition</h2>{_acquisition_html(doc, inputs)}</section>",
         f"<section><h2>Moving targets</h2>{movers}</section>",
     ]
-    for name in ("Traces", "Motion estimation", "Images", "Trajectories"):
+    for name in ("Autofocus", "Traces", "Motion estimation", "Images", "Trajectories"):
         if name in sections:
             parts.append(f"<section><h2>{name}</h2>{''.join(sections[name])}</section>")
     parts.append(f"<section><h2>Stationary targets</h2>{_stationary_html(doc)}</section>")
@@ -353,6 +356,26 @@ def write_report(
     path = out / "report.html"
     path.write_text(_page(title, doc, parts), encoding="utf-8")
     return path
+
+
+def _autofocus_figure(focus: dict[str, Any]) -> tuple[str, str, Figure, str]:
+    """The phase-gradient autofocus section: estimated phase error and convergence."""
+    from .autofocus import phase_error_figure
+
+    fig = phase_error_figure(
+        focus["slow_times_s"],
+        focus["phase_error_rad"],
+        focus["rms_history_rad"],
+        tol_rad=focus["tol_rad"],
+    )
+    state = "converged" if focus["converged"] else "stopped at the iteration cap"
+    caption = (
+        f"Phase-gradient autofocus of the phase history: the estimated phase error per "
+        f"pulse (mean and linear term removed; RMS {focus['phase_error_rms_rad']:.3g} rad), "
+        f"removed from the traces before the analysis; {focus['n_iter']} iteration(s), "
+        f"{state} (tolerance {focus['tol_rad']:g} rad)."
+    )
+    return ("Autofocus", caption, fig, "autofocus.png")
 
 
 def _figures(

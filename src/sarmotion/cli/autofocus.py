@@ -1,0 +1,75 @@
+"""The ``--autofocus`` option shared by ``image``, ``analyze`` and ``convert``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import click
+
+from ..core import Traces
+from ..imaging.autofocus import AutofocusResult, pga
+from ..io import read_inputs
+from ..simulation import Simulation
+from .common import InputError, as_flags
+
+__all__ = ["autofocus_options", "read_focused"]
+
+#: Default most PGA iterations.
+PGA_ITERATIONS = 10
+
+
+def autofocus_options(func: Callable[..., Any]) -> Any:
+    """``--autofocus [gotcha|pga]`` and ``--pga-iterations``.
+
+    A bare ``--autofocus`` means ``gotcha`` (the flag's earlier meaning); it takes the
+    next word as its value, so write it after the inputs or before another option.
+    """
+    func = click.option(
+        "--pga-iterations",
+        type=int,
+        default=PGA_ITERATIONS,
+        show_default=True,
+        help="--autofocus pga: most iterations (1 to the number of pulses).",
+    )(func)
+    return click.option(
+        "--autofocus",
+        type=click.Choice(["gotcha", "pga"]),
+        is_flag=False,
+        flag_value="gotcha",
+        default=None,
+        help="Focus correction: gotcha (the GOTCHA files' stored corrections; also a bare "
+        "--autofocus) or pga (phase-gradient autofocus of the phase history, any input).",
+    )(func)
+
+
+def read_focused(
+    inputs: Sequence[str],
+    *,
+    autofocus: str | None,
+    pga_iterations: int = PGA_ITERATIONS,
+    **read_options: Any,
+) -> tuple[Traces, Simulation | None, AutofocusResult | None]:
+    """:func:`~sarmotion.io.read_inputs`, then the requested focus correction.
+
+    Returns
+    -------
+    (Traces, Simulation or None, AutofocusResult or None)
+        The (corrected) traces, the simulation of a scene, and the PGA result.
+    """
+    if pga_iterations < 1:
+        raise InputError(f"--pga-iterations must be >= 1, got {pga_iterations}")
+    with as_flags(speed_mps="--speed", snr_db="--snr-db", channel="--channel", vectors="--vectors"):
+        traces, sim = read_inputs(inputs, autofocus=autofocus == "gotcha", **read_options)
+    if autofocus != "pga":
+        return traces, sim, None
+    if pga_iterations > traces.n_pulses:
+        raise InputError(
+            f"--pga-iterations must be at most the number of pulses ({traces.n_pulses}), "
+            f"got {pga_iterations}"
+        )
+    try:
+        result = pga(traces, max_iter=pga_iterations)
+    except ValueError as exc:
+        raise InputError(f"--autofocus pga: {exc}") from None
+    return result.traces, sim, result
