@@ -10,7 +10,8 @@ import numpy as np
 
 from ..imaging import backproject
 from ..imaging.quality import point_quality
-from ..io import save_image, staged_directory, write_json
+from ..io import DataError, save_image, staged_directory, write_json
+from ..io.sicd import check_sicd_grid, write_sicd
 from ..report.autofocus import phase_error_figure
 from ..report.plotting import image_figure, save_figure
 from .autofocus import autofocus_options, read_focused
@@ -90,6 +91,22 @@ __all__ = ["image"]
     "sarmotion[gpu] extra).",
 )
 @click.option(
+    "--sicd",
+    "sicd_path",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Also write the complex image as a SICD 1.4.0 NITF file (passes sarkit's checker).",
+)
+@click.option(
+    "--origin",
+    "origin_llh",
+    nargs=3,
+    type=float,
+    default=None,
+    metavar="LAT LON HAE",
+    help="--sicd: geodetic position (deg, deg, m) of the origin of the scene frame; default 0 0 0.",
+)
+@click.option(
     "--dynamic-range",
     "dynamic_range_db",
     type=float,
@@ -111,6 +128,8 @@ def image(
     lenient: bool,
     autofocus: str | None,
     pga_iterations: int,
+    sicd_path: Path | None,
+    origin_llh: tuple[float, float, float] | None,
     dynamic_range_db: float,
     device: str,
     force: bool,
@@ -127,6 +146,18 @@ def image(
         if not available():
             raise InputError(f"--device cuda: {NEEDS}")
     check_out(out, force=force, names=OUTPUTS)
+    if sicd_path is not None:
+        try:
+            check_out(sicd_path, force=force)
+        except InputError as exc:
+            raise InputError(str(exc).replace("--out", "--sicd", 1)) from None
+        if sicd_path.resolve().parent == out.resolve() and sicd_path.name in OUTPUTS:
+            raise InputError(f"--sicd {sicd_path} would replace an output of --out")
+    if origin_llh is not None:
+        if sicd_path is None:
+            raise InputError("--origin applies to --sicd only")
+        if not (np.all(np.isfinite(origin_llh)) and abs(origin_llh[0]) <= 90):
+            raise InputError(f"--origin must be LAT LON HAE with |LAT| <= 90, got {origin_llh}")
     given = {
         flag
         for name, flag in (("size_m", "--size"), ("centre", "--centre"))
@@ -158,6 +189,11 @@ def image(
         speed_mps=speed_mps,
         lenient=lenient,
     )
+    if sicd_path is not None:
+        try:
+            check_sicd_grid(grid.x_m, grid.y_m, traces)
+        except DataError as exc:
+            raise InputError(f"--sicd: {exc}; choose a finer --spacing") from None
     t0 = time.perf_counter()
     with Progress(enabled=ctx.obj["progress"]) as bar:
         if device == "cuda":
@@ -220,12 +256,22 @@ def image(
                 / elapsed,
             },
         )
+        if sicd_path is not None:
+            write_sicd(
+                sicd_path,
+                img.values,
+                x_m=grid.x_m,
+                y_m=grid.y_m,
+                traces=traces,
+                origin_llh=origin_llh or (0.0, 0.0, 0.0),
+            )
     if peaks and abs(peaks[0][2]) > 0:
         x, y, _ = peaks[0]
         where = f"brightest point at ({x:.2f}, {y:.2f}) m"
     else:
         where = "the image is zero: no echo falls on this grid"
     extra = ", autofocus.png" if focus is not None else ""
+    extra += f" and {sicd_path}" if sicd_path is not None else ""
     click.echo(f"wrote {out}/image.png, image.h5, peaks.json{extra}; {where}; {elapsed:.2f} s")
 
 
