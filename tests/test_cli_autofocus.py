@@ -62,7 +62,9 @@ def test_pga_without_a_bright_scatterer(tmp_path, capsys):
 @pytest.mark.slow
 def test_analyze_with_pga_reports_the_phase_error(tmp_path):
     out = tmp_path / "a"
-    assert run(["analyze", "scene1", "--out", str(out), "--no-trajectory", "--autofocus", "pga"]) == 0
+    assert (
+        run(["analyze", "scene1", "--out", str(out), "--no-trajectory", "--autofocus", "pga"]) == 0
+    )
     doc = json.loads((out / "results.json").read_text())
     assert doc["autofocus"]["method"] == "pga"
     assert (out / "autofocus.png").exists()

@@ -7,13 +7,15 @@ from pathlib import Path
 
 import click
 
-from ..io import results_document, staged_directory, write_json
+from ..io import DataError, results_document, staged_directory, write_json
+from ..io.sicd import write_sicd
 from ..pipeline import AnalysisOptions, compare_with_truth
 from ..pipeline import analyze as run_analysis
 from ..report.html import write_report
 from ..separation import SeparationOptions
 from .autofocus import PGA_ITERATIONS, autofocus_options, read_focused
 from .common import (
+    InputError,
     Progress,
     as_flags,
     check_out,
@@ -33,6 +35,7 @@ OUTPUTS = (
     "movers.png",
     "trajectories.png",
     "autofocus.png",
+    "stationary.nitf",
 )
 
 __all__ = ["analyze", "demo"]
@@ -76,13 +79,17 @@ def run_analyze(
     pga_iterations: int = PGA_ITERATIONS,
     lenient: bool = False,
     force: bool = False,
+    sicd: bool = False,
 ) -> None:
     """Analyse ``inputs`` and write ``out``/results.json, report.html and its figures.
+
+    With ``sicd``, also the stationary image as ``stationary.nitf`` and each mover's
+    compensated image as ``mover-K.nitf`` (SICD, :func:`~sarmotion.io.sicd.write_sicd`).
 
     ``autofocus``: ``"gotcha"`` (or ``True``) applies GOTCHA's stored corrections,
     ``"pga"`` phase-gradient autofocus (its phase error goes in the document and report).
     """
-    check_out(out, force=force, names=OUTPUTS)
+    check_out(out, force=force, names=OUTPUTS, patterns=("mover-*.nitf",) if sicd else ())
     if autofocus is True:
         autofocus = "gotcha"
     traces, sim, focus = read_focused(
@@ -110,6 +117,8 @@ def run_analyze(
             title=f"sarmotion analysis: {', '.join(Path(i).name for i in inputs)}",
             inputs=inputs,
         )
+        if sicd:
+            _write_sicd_images(result, stage)
     click.echo(
         f"wrote {out}/results.json, report.html and figures: {len(result.movers)} mover(s), "
         f"{len(result.stationary)} stationary target(s), {result.timings_s['total']:.1f} s"
@@ -121,6 +130,26 @@ def run_analyze(
             f"  mover {k + 1}: position ({x:.2f}, {y:.2f}) m, velocity ({ux:.2f}, {uy:.2f}) "
             f"m/s, range speed {m['range_speed_mps']:.2f} m/s"
         )
+
+
+def _write_sicd_images(result, stage: Path) -> None:
+    """The stationary image and each mover's compensated image as SICD files."""
+    images = [("stationary.nitf", result.stationary_image, None)]
+    images += [
+        (f"mover-{k + 1}.nitf", m.image, m.velocity_mps) for k, m in enumerate(result.movers)
+    ]
+    for name, img, velocity in images:
+        try:
+            write_sicd(
+                stage / name,
+                img.values,
+                x_m=img.grid.x_m,
+                y_m=img.grid.y_m,
+                traces=result.traces,
+                velocity_mps=velocity,
+            )
+        except DataError as exc:
+            raise InputError(f"--sicd {name}: {exc}") from None
 
 
 @click.command()
@@ -170,6 +199,12 @@ def run_analyze(
     help="Azimuth span (degrees, > 0) the movers are estimated on; a wider aperture is "
     "analysed on its central sub-aperture and each mover then focused on all pulses.",
 )
+@click.option(
+    "--sicd",
+    is_flag=True,
+    help="Also write the stationary image and each mover's image as SICD files "
+    "(OUT/stationary.nitf, OUT/mover-K.nitf).",
+)
 @noise_options
 @click.pass_context
 def analyze(
@@ -189,6 +224,7 @@ def analyze(
     lenient: bool,
     autofocus: str | None,
     pga_iterations: int,
+    sicd: bool,
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
@@ -209,6 +245,7 @@ def analyze(
         pga_iterations=pga_iterations,
         lenient=lenient,
         force=force,
+        sicd=sicd,
     )
 
 

@@ -134,7 +134,14 @@ def _check_axes(values: ArrayLike, x_m: ArrayLike, y_m: ArrayLike) -> tuple[NDAr
 class _Geometry:
     """Everything the XML and the pixel map need, in the scene frame and ECF."""
 
-    def __init__(self, traces: Traces, x: NDArray, y: NDArray, origin_llh: NDArray) -> None:
+    def __init__(
+        self,
+        traces: Traces,
+        x: NDArray,
+        y: NDArray,
+        origin_llh: NDArray,
+        velocity: NDArray | None = None,
+    ) -> None:
         self.frame = _enu_frame(origin_llh)
         ix, iy = x.size // 2, y.size // 2
         self.scp_local = np.array([x[ix], y[iy], 0.0])
@@ -161,7 +168,8 @@ class _Geometry:
         )
         radar = traces.radar
         self.band = _band(radar)
-        self.positions = pos
+        # A compensated image sees the scene from r(s) - s u (eq:imagecompu).
+        self.positions = pos if velocity is None else pos - s[:, None] * velocity[None, :]
         lo, hi = self._support(self.scp_local)
         self.bw = hi - lo
         self.k_ctr = 0.5 * (lo + hi)
@@ -260,7 +268,9 @@ def _check_sampling(geo: _Geometry) -> None:
             )
 
 
-def check_sicd_grid(x_m: ArrayLike, y_m: ArrayLike, traces: Traces) -> None:
+def check_sicd_grid(
+    x_m: ArrayLike, y_m: ArrayLike, traces: Traces, *, velocity_mps: ArrayLike | None = None
+) -> None:
     """Raise :class:`DataError` when a grid's pixels cannot carry the image as SICD.
 
     The spectral support of the image (module docstring), drift included, must lie
@@ -269,7 +279,8 @@ def check_sicd_grid(x_m: ArrayLike, y_m: ArrayLike, traces: Traces) -> None:
     x = np.asarray(x_m, dtype=np.float64)
     y = np.asarray(y_m, dtype=np.float64)
     _check_axes(np.zeros((y.size, x.size)), x, y)
-    _check_sampling(_Geometry(traces, x, y, np.zeros(3)))
+    vel = None if velocity_mps is None else np.array([*np.asarray(velocity_mps)[:2], 0.0])
+    _check_sampling(_Geometry(traces, x, y, np.zeros(3), vel))
 
 
 def _poly_fit(t: NDArray, pos_ecf: NDArray) -> NDArray[np.float64]:
@@ -306,6 +317,7 @@ def _xml(traces: Traces, geo: _Geometry, header: dict[str, Any]) -> Any:
         "CollectType": "MONOSTATIC",
         "RadarMode": {"ModeType": "SPOTLIGHT"},
         "Classification": header["classification"],
+        "Parameter": [(k, v) for k, v in header["parameters"].items()],
     }
     root["ImageCreation"] = {
         "Application": f"sarmotion {__version__}",
@@ -404,6 +416,7 @@ def write_sicd(
     origin_llh: ArrayLike = (0.0, 0.0, 0.0),
     collection_start: _dt.datetime | str | None = None,
     classification: str = "UNCLASSIFIED",
+    velocity_mps: ArrayLike | None = None,
     overwrite: bool = True,
 ) -> Path:
     """Write a ground-grid image as a SICD 1.4.0 NITF file (module docstring).
@@ -424,6 +437,12 @@ def write_sicd(
         ``Timeline/CollectStart`` (UTC); default ``2000-01-01T00:00:00Z``.
     classification : str
         ``CollectionInfo/Classification``.
+    velocity_mps : (2,) array_like, optional
+        The ground velocity a mover's image compensates (``eq:imagecompu``): its
+        spectral support is that of the aperture ``r(s) - s u`` seen from the pixels;
+        the platform's own track stays in ``Position`` and ``SCPCOA``, and ``u`` goes
+        in ``CollectionInfo/Parameter[@name="sarmotion.velocity_mps"]`` (SICD has no
+        field for a compensated motion).
     overwrite : bool
         Replace an existing file (default); if False, raise FileExistsError.
 
@@ -442,7 +461,13 @@ def write_sicd(
     llh = np.asarray(origin_llh, dtype=np.float64)
     if llh.shape != (3,) or not np.all(np.isfinite(llh)) or abs(llh[0]) > 90:
         raise ValueError(f"origin_llh must be (lat_deg, lon_deg, hae_m), got {origin_llh!r}")
-    geo = _Geometry(traces, x, y, llh)
+    vel = None
+    if velocity_mps is not None:
+        u = np.asarray(velocity_mps, dtype=np.float64)
+        if u.shape != (2,) or not np.all(np.isfinite(u)):
+            raise ValueError(f"velocity_mps must be a finite (ux, uy) pair (m/s), got {u}")
+        vel = np.array([u[0], u[1], 0.0])
+    geo = _Geometry(traces, x, y, llh, vel)
     _check_sampling(geo)
     target = Path(path)
     meta_files = traces.metadata.get("files")
@@ -460,6 +485,9 @@ def write_sicd(
         "collection_start": _utc(collection_start),
         "now": _dt.datetime.now(_dt.UTC).replace(microsecond=0),
         "autofocus": "GLOBAL" if traces.metadata.get("autofocus") in ("pga", True) else "NO",
+        "parameters": {
+            "sarmotion.velocity_mps": "[0, 0]" if vel is None else f"[{vel[0]!r}, {vel[1]!r}]",
+        },
     }
     tree = _xml(traces, geo, header)
     sec = sksicd.NitfSecurityFields(clas="U")
