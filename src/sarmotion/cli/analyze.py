@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from ..imaging.quality import point_quality
 from ..io import DataError, results_document, staged_directory, write_json
 from ..io.sicd import write_sicd
 from ..pipeline import AnalysisOptions, compare_with_truth
@@ -106,6 +107,7 @@ def run_analyze(
     truth = compare_with_truth(result, sim.scene) if sim is not None else None
     doc = results_document(result, truth=truth)
     doc["inputs"] = list(inputs)
+    doc["point_quality"] = _stationary_quality(result)
     if focus is not None:
         doc["autofocus"] = focus.to_dict()
     with staged_directory(out) as stage:
@@ -130,6 +132,22 @@ def run_analyze(
             f"  mover {k + 1}: position ({x:.2f}, {y:.2f}) m, velocity ({ux:.2f}, {uy:.2f}) "
             f"m/s, range speed {m['range_speed_mps']:.2f} m/s"
         )
+
+
+#: Brightest stationary targets whose point-target quality the report lists.
+QUALITY_TARGETS = 3
+
+
+def _stationary_quality(result) -> list[dict]:
+    """IRW, PSLR and ISLR of the brightest stationary targets, on the stationary traces."""
+    stationary = result.traces.with_data(result.stationary_traces)
+    out = []
+    for target in result.stationary[:QUALITY_TARGETS]:
+        try:
+            out.append(point_quality(stationary, target.position_m).to_dict())
+        except ValueError as exc:
+            out.append({"position_m": list(target.position_m), "error": str(exc)})
+    return out
 
 
 def _write_sicd_images(result, stage: Path) -> None:

@@ -9,16 +9,28 @@
 - :mod:`~sarmotion.imaging.resolution` — the theoretical resolution cell and 3 dB widths;
 - :mod:`~sarmotion.imaging.peaks` — the one peak finder (non-maximum suppression);
 - :mod:`~sarmotion.imaging.point_response` — the exact point response from the phase
-  history, per pulse or summed, and locations refined on it.
+  history, per pulse or summed, and locations refined on it;
+- :mod:`~sarmotion.imaging.quality` — point-target quality (IRW, PSLR, ISLR) against
+  rect-spectrum theory;
+- :mod:`~sarmotion.imaging.autofocus` — phase-gradient autofocus of the phase history.
 """
 
+from .autofocus import AutofocusResult, apply_phase_correction, focus_mover, pga
 from .backprojection import backproject, backproject_phase_history, backproject_points
 from .grid import Image, ImageGrid, default_scene_size_m, scene_grid
 from .peaks import find_peaks, parabolic_peak
 from .point_response import point_response, pulse_responses, refine_location
+from .quality import PointQuality, cut_quality, point_quality
 from .resolution import Resolution, resolution, width_3db
 
 __all__ = [
+    "AutofocusResult",
+    "PointQuality",
+    "apply_phase_correction",
+    "cut_quality",
+    "focus_mover",
+    "pga",
+    "point_quality",
     "Image",
     "ImageGrid",
     "Resolution",

@@ -560,7 +560,46 @@ def _stationary_html(doc: dict[str, Any]) -> str:
         )
     if len(listed) > len(rows):
         text += f'<p class="note">... and {len(listed) - len(rows)} more in results.json.</p>'
+    if doc.get("point_quality"):
+        text += _quality_html(doc["point_quality"])
     return text
+
+
+def _quality_html(entries: list[dict[str, Any]]) -> str:
+    """Point-target quality of the brightest stationary targets, measured and theory."""
+    rows = []
+    for q in entries:
+        if "error" in q:
+            rows.append([_fmt(list(q["position_m"])), html.escape(q["error"])] + [""] * 5)
+            continue
+        r, c = q["range"], q["cross_range"]
+        rows.append(
+            [
+                _fmt(list(q["position_m"])),
+                f"{_fmt(r['irw_m'], 3)} / {_fmt(r['irw_theory_m'], 3)}",
+                f"{_fmt(c['irw_m'], 3)} / {_fmt(c['irw_theory_m'], 3)}",
+                f"{_fmt(r['pslr_db'], 1)} / {_fmt(r['pslr_theory_db'], 1)}",
+                f"{_fmt(c['pslr_db'], 1)} / {_fmt(c['pslr_theory_db'], 1)}",
+                f"{_fmt(r['islr_db'], 1)} / {_fmt(r['islr_theory_db'], 1)}",
+                f"{_fmt(c['islr_db'], 1)} / {_fmt(c['islr_theory_db'], 1)}",
+            ]
+        )
+    head = [
+        "position (m)",
+        "IRW range (m)",
+        "IRW cross range (m)",
+        "PSLR range (dB)",
+        "PSLR cross range (dB)",
+        "ISLR range (dB)",
+        "ISLR cross range (dB)",
+    ]
+    return (
+        "<h3>Point-target quality</h3>"
+        + _html_table(head, rows)
+        + '<p class="note">Measured / theory (flat spectrum of the data\'s bandwidth and '
+        "aperture) on cuts along range and cross range through the brightest stationary "
+        "targets of the stationary traces; ISLR over +-10 resolution cells.</p>"
+    )
 
 
 def _acquisition_html(doc: dict[str, Any], inputs: Sequence[str]) -> str:
