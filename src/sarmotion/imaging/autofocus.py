@@ -78,6 +78,13 @@ When the assumptions hold
   in the window: their phase histories are the signal, clutter the noise. A scene with
   no bright scatterer is refused.
 
+What is left matters downstream in proportion to its order: a residual linear term is a
+shift of the whole scene (unobservable, and removed); a residual quadratic
+``c (s / S)^2`` (``S`` the half aperture time) reads, for a mover, as a cross-range
+speed error ``c L / (2 k_o (V - u_c) S^2)`` (``V`` the platform speed), which at metres
+per second of cross-range-speed resolution per radian can exceed the Cramér–Rao bound
+of a bright mover; range position and range speed are not affected to first order.
+
 For a mover, :func:`focus_mover` runs the same iteration on the motion-compensated image
 ``eq:imagecompu`` around it: the error it estimates includes what the velocity estimate
 leaves unfocused, so it is meant for the mover's own traces.
