@@ -69,3 +69,12 @@ def test_analyze_with_pga_reports_the_phase_error(tmp_path):
     assert doc["autofocus"]["method"] == "pga"
     assert (out / "autofocus.png").exists()
     assert "Phase-gradient autofocus" in (out / "report.html").read_text()
+
+
+def test_convert_with_pga_writes_corrected_traces(tmp_path):
+    from sarmotion.io import load_traces
+
+    out = tmp_path / "t.h5"
+    assert run(["convert", "example1", "--to", "h5", "--out", str(out), "--autofocus", "pga"]) == 0
+    tr = load_traces(out)
+    assert tr.metadata["autofocus"] == "pga" and tr.metadata["pga_iterations"] >= 1

@@ -156,3 +156,14 @@ def test_analyze_writes_stationary_and_mover_sicds(tmp_path):
         r, c = np.unravel_index(np.argmax(np.abs(pixels)), pixels.shape)
         xyz = to_scene(tree, [r, c])
         assert np.hypot(*(xyz[:2] - mover["image_peak_m"])) < 0.25 * np.sqrt(2)
+
+
+def test_sarpy_reads_the_same_pixels(tmp_path):
+    sarpy_converter = pytest.importorskip("sarpy.io.complex.converter")
+    tr = small_traces()
+    grid = ImageGrid.square(centre_m=(0.0, 0.0), size_m=10.0, spacing_m=0.2)
+    img = backproject(tr, grid)
+    path = write_sicd(tmp_path / "s.nitf", img.values, x_m=grid.x_m, y_m=grid.y_m, traces=tr)
+    reader = sarpy_converter.open_complex(str(path))
+    pixels, _ = read_sicd(path)
+    np.testing.assert_array_equal(np.asarray(reader[:, :]), pixels)
