@@ -81,11 +81,14 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
 from .errors import DataError, staged_paths
+from .._limits import over_budget, phase_history_bytes
 from .native import _to_json
 from .plausibility import (
     MAX_BEND,
-    check_dynamic_range,
+    as_lenient,
     check_envelope,
+    check_signal,
+    check_speed,
     check_times,
     check_track,
     violation,
@@ -176,6 +179,9 @@ def _open(path: Path, fh: Any) -> Any:
         _check_block_sizes(path, kvp)
         fh.seek(0)
         reader = skcphd.Reader(fh)
+        _check_arrays(path, reader.metadata.xmltree.getroot(), kvp)
+    except RecursionError:
+        raise DataError(f"{path}: unreadable CPHD XML (nested too deeply)") from None
     except (ValueError, KeyError, UnicodeDecodeError, lxml.etree.XMLSyntaxError) as exc:
         if isinstance(exc, DataError):
             raise
@@ -207,6 +213,64 @@ def _check_block_sizes(path: Path, kvp: dict[str, str]) -> None:
             raise DataError(
                 f"{path}: truncated: {size} bytes, but the header puts the end of the "
                 f"{block.lower()} block at byte {offset + length}"
+            )
+
+
+#: Bytes per sample of each uncompressed signal array format.
+_SAMPLE_BYTES = {"CI2": 2, "CI4": 4, "CF8": 8}
+
+
+def _count(node: Any, where: str, path: Path, what: str) -> int:
+    text = _find(node, where)
+    try:
+        value = int(text or "")
+    except ValueError:
+        raise DataError(f"{path}: {what}: {where} must be a whole number, got {text!r}") from None
+    if value < 0:
+        raise DataError(f"{path}: {what}: {where} must be >= 0, got {value}")
+    return value
+
+
+def _check_arrays(path: Path, xml: Any, kvp: dict[str, str]) -> None:
+    """Each channel's signal and PVP arrays lie in their blocks, which they fill exactly.
+
+    For uncompressed signals, channel ``c`` holds ``NumVectors x NumSamples`` samples of
+    ``SignalArrayFormat`` from ``SignalArrayByteOffset`` and ``NumVectors x NumBytesPVP``
+    bytes of PVPs from ``PVPArrayByteOffset``; the blocks hold the arrays of every
+    channel and nothing else (NGA.STND.0068-1, "Data" and the file header). A NumVectors
+    or NumSamples that disagrees with the file is refused here, before any read.
+    """
+    if _find(xml, "Data/SignalCompressionID") is not None:
+        return  # refused by _check_collection
+    fmt = _find(xml, "Data/SignalArrayFormat")
+    if fmt not in _SAMPLE_BYTES:
+        raise DataError(f"{path}: Data/SignalArrayFormat {fmt!r} is not CI2, CI4 or CF8")
+    per_pvp = _count(xml, "Data/NumBytesPVP", path, "Data")
+    sizes = {"SIGNAL": int(kvp["SIGNAL_BLOCK_SIZE"]), "PVP": int(kvp["PVP_BLOCK_SIZE"])}
+    used = {"SIGNAL": 0, "PVP": 0}
+    for node in xml.findall("./{*}Data/{*}Channel"):
+        what = f"channel {_find(node, 'Identifier')!r}"
+        n_vectors = _count(node, "NumVectors", path, what)
+        n_samples = _count(node, "NumSamples", path, what)
+        for block, offset_key, nbytes in (
+            ("SIGNAL", "SignalArrayByteOffset", n_vectors * n_samples * _SAMPLE_BYTES[fmt]),
+            ("PVP", "PVPArrayByteOffset", n_vectors * per_pvp),
+        ):
+            offset = _count(node, offset_key, path, what)
+            if offset + nbytes > sizes[block]:
+                raise DataError(
+                    f"{path}: {what}: NumVectors {n_vectors} x NumSamples {n_samples} need "
+                    f"{block.lower()} bytes up to {offset + nbytes}, but the {block.lower()} "
+                    f"block holds {sizes[block]} (NumVectors or NumSamples disagree with "
+                    "the file)"
+                )
+            used[block] += nbytes
+    for block, size in sizes.items():
+        if used[block] != size:
+            raise DataError(
+                f"{path}: the channels' {block.lower()} arrays take {used[block]} bytes but "
+                f"the {block.lower()} block holds {size} (NumVectors or NumSamples disagree "
+                "with the file)"
             )
 
 
@@ -263,6 +327,11 @@ def _select_channel(xml: Any, channel: str | int | None, path: Path) -> tuple[st
         index = ids.index(str(channel))
     else:
         raise DataError(f"{path}: no channel {channel!r} (channels: {', '.join(ids)})")
+    if "'" in ids[index] or '"' in ids[index]:
+        raise DataError(
+            f"{path}: channel identifier {ids[index]!r} contains a quote, which the CPHD "
+            "library cannot look up"
+        )
     try:
         n_vectors = int(_find(nodes[index], "NumVectors") or "")
         n_samples = int(_find(nodes[index], "NumSamples") or "")
@@ -293,7 +362,11 @@ def _read_pvps(reader: Any, ch: str, start: int, stop: int, path: Path) -> NDArr
             f"{path}: not a usable CPHD file: no PVP {', '.join(missing)} "
             f"(needs {', '.join(_REQUIRED_PVPS)})"
         )
-    pvps = reader.read_pvps(ch, start_vector=start, stop_vector=stop)
+    try:
+        pvps = reader.read_pvps(ch, start_vector=start, stop_vector=stop)
+    except (RuntimeError, OSError, ValueError) as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise DataError(f"{path}: channel {ch}: PVPs cannot be read (truncated? {msg})") from None
     for name in _REQUIRED_PVPS + (("AmpSF",) if "AmpSF" in names else ()):
         bad = ~np.isfinite(np.asarray(pvps[name], dtype=np.float64))
         if np.any(bad):
@@ -335,7 +408,7 @@ def _stored_parameters(xml: Any, path: Path) -> dict[str, Any]:
         if name.startswith(_PARAMETER_PREFIX):
             try:
                 out[name[len(_PARAMETER_PREFIX) :]] = json.loads(node.text or "")
-            except ValueError:
+            except (ValueError, RecursionError):
                 raise DataError(f"{path}: ProductInfo parameter {name} is not valid JSON") from None
     return out
 
@@ -385,14 +458,28 @@ def _radar(pvps: NDArray[Any], n_samples: int, stored: Any, path: Path, ch: str)
         raise DataError(f"{path}: channel {ch}: unusable frequency band: {exc}") from None
 
 
+def _sgn(xml: Any, path: Path) -> str:
+    sgn = _text(xml, "Global/SGN", path).lstrip("+")
+    if sgn not in ("1", "-1"):
+        raise DataError(f"{path}: Global/SGN must be +1 or -1, got {sgn!r}")
+    return sgn
+
+
 def _signal(
     reader: Any, ch: str, start: int, stop: int, pvps: NDArray[Any], path: Path
 ) -> NDArray[np.complex128]:
-    """Vectors ``start:stop`` as complex128 ``(n_vectors, n_samples)``, AmpSF applied, SGN -1."""
-    sgn = _text(reader.metadata.xmltree.getroot(), "Global/SGN", path).lstrip("+")
-    if sgn not in ("1", "-1"):
-        raise DataError(f"{path}: Global/SGN must be +1 or -1, got {sgn!r}")
-    raw = reader.read_signal(ch, start_vector=start, stop_vector=stop)
+    """Vectors ``start:stop`` as complex128 ``(n_vectors, n_samples)``, AmpSF applied, SGN -1.
+
+    ``pvps`` are those of the same vectors.
+    """
+    sgn = _sgn(reader.metadata.xmltree.getroot(), path)
+    try:
+        raw = reader.read_signal(ch, start_vector=start, stop_vector=stop)
+    except (RuntimeError, OSError, ValueError) as exc:  # the file shrank since it was opened
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise DataError(
+            f"{path}: channel {ch}: vectors {start}:{stop} cannot be read (truncated? {msg})"
+        ) from None
     if raw.dtype.names:  # CI2 / CI4: integer real and imaginary parts
         data = raw["real"].astype(np.float64) + 1j * raw["imag"].astype(np.float64)
     else:
@@ -459,48 +546,98 @@ def read_cphd(
         NaN PVPs, NaN samples, frequency grids that differ between vectors, or a broken
         plausibility rule (module notes; unless ``lenient``).
     """
+    lenient = as_lenient(lenient)
     p = Path(path)
     if not p.is_file():
         raise DataError(f"{p}: file not found" if not p.exists() else f"{p}: not a file")
     with p.open("rb") as fh:
-        reader = _open(p, fh)
-        xml = reader.metadata.xmltree.getroot()
-        _check_collection(xml, p)
-        ch, n_vectors, n_samples = _select_channel(xml, channel, p)
-        start, stop = _vector_range(vectors, n_vectors, p)
-        pvps = _read_pvps(reader, ch, start, stop, p)
-        phase_history = _signal(reader, ch, start, stop, pvps, p)
-    frame, frame_name = _scene_frame(xml, p)
-    _check_plausible(p, ch, pvps, frame, phase_history, lenient=lenient)
-    stored = _stored_parameters(xml, p)
-    radar = _radar(pvps, n_samples, stored.get("radar"), p, ch)
-    trajectory, rho_o, phase = _geometry(
-        pvps, frame, reference_point_m, radar, f"{p}: channel {ch}"
-    )
-    if phase is not None:
-        phase_history *= phase
-    metadata = dict(stored.get("metadata") or {"source": "cphd"})
-    metadata["cphd"] = _provenance(xml, p, ch, (start, stop), n_vectors, frame_name, pvps)
-    logger.debug("read CPHD %s channel %s vectors %d:%d", p, ch, start, stop)
+        opened = _prepare(p, fh, channel, vectors, reference_point_m, None, lenient=lenient)
+        phase_history = _signal(opened.reader, opened.channel, *opened.span, opened.pvps, p)
+    check_signal(f"{p}: channel {opened.channel}", "signal", phase_history, lenient=lenient)
+    if opened.delays_s is not None:
+        phase_history *= delay_phase(opened.delays_s, opened.radar.frequencies_hz)
+    logger.debug("read CPHD %s channel %s vectors %d:%d", p, opened.channel, *opened.span)
     return Traces.from_phase_history(
         phase_history,
-        trajectory=trajectory,
+        trajectory=opened.trajectory,
+        radar=opened.radar,
+        reference_point_m=opened.reference_point_m,
+        metadata=opened.metadata,
+    )
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Prepared:
+    """A CPHD channel opened and checked, all but its signal read."""
+
+    reader: Any
+    channel: str
+    span: tuple[int, int]  # vectors start:stop of the channel
+    pvps: NDArray[Any]
+    radar: Radar
+    trajectory: Trajectory
+    reference_point_m: NDArray[np.float64]
+    delays_s: NDArray[np.float64] | None  # re-referencing delay per vector, or None
+    metadata: dict[str, Any]
+
+
+def _prepare(
+    p: Path,
+    fh: Any,
+    channel: str | int | None,
+    vectors: tuple[int, int] | None,
+    reference_point_m: ArrayLike | None,
+    block_vectors: int | None,
+    *,
+    lenient: bool,
+) -> _Prepared:
+    """Header, memory budget, PVPs and geometry rules of a channel, before its signal.
+
+    The budget counts the PVPs and the signal of ``block_vectors`` vectors (all
+    selected vectors when None), as stored and in its working copies.
+    """
+    reader = _open(p, fh)
+    xml = reader.metadata.xmltree.getroot()
+    _check_collection(xml, p)
+    ch, n_vectors, n_samples = _select_channel(xml, channel, p)
+    start, stop = _vector_range(vectors, n_vectors, p)
+    rows = stop - start if block_vectors is None else min(block_vectors, stop - start)
+    fmt = _find(xml, "Data/SignalArrayFormat") or "CF8"
+    pvp_bytes = (stop - start) * (_count(xml, "Data/NumBytesPVP", p, "Data") + 8 * 24)
+    signal_bytes = rows * n_samples * _SAMPLE_BYTES.get(fmt, 8)
+    reason = over_budget(
+        pvp_bytes + signal_bytes + phase_history_bytes(rows, n_samples),
+        f"channel {ch}: {rows} x {n_samples} samples of {fmt}, their working copies and "
+        f"the PVPs of {stop - start} vectors",
+    )
+    if reason:
+        raise DataError(f"{p}: {reason}")
+    pvps = _read_pvps(reader, ch, start, stop, p)
+    frame, frame_name = _scene_frame(xml, p)
+    _check_geometry(p, ch, pvps, frame, lenient=lenient)
+    _sgn(xml, p)
+    stored = _stored_parameters(xml, p)
+    radar = _radar(pvps, n_samples, stored.get("radar"), p, ch)
+    trajectory, rho_o, delays = _geometry(pvps, frame, reference_point_m, f"{p}: channel {ch}")
+    metadata = dict(stored.get("metadata") or {"source": "cphd"})
+    metadata["cphd"] = _provenance(xml, p, ch, (start, stop), n_vectors, frame_name, pvps)
+    return _Prepared(
+        reader=reader,
+        channel=ch,
+        span=(start, stop),
+        pvps=pvps,
         radar=radar,
+        trajectory=trajectory,
         reference_point_m=rho_o,
+        delays_s=delays,
         metadata=metadata,
     )
 
 
-def _check_plausible(
-    path: Path,
-    ch: str,
-    pvps: NDArray[Any],
-    frame: _Frame,
-    phase_history: NDArray[np.complex128],
-    *,
-    lenient: bool,
+def _check_geometry(
+    path: Path, ch: str, pvps: NDArray[Any], frame: _Frame, *, lenient: bool
 ) -> None:
-    """The plausibility rules of the module notes (vector indices within the selection)."""
+    """The geometry rules of the module notes (vector indices within the selection)."""
     where = f"{path}: channel {ch}"
     antenna = frame.to_local(0.5 * (np.asarray(pvps["TxPos"]) + np.asarray(pvps["RcvPos"])))
     srp = frame.to_local(np.asarray(pvps["SRPPos"], dtype=np.float64))
@@ -509,6 +646,7 @@ def _check_plausible(
     check_track(where, field, antenna, lenient=lenient)
     times = np.asarray(pvps["TxTime"], dtype=np.float64)
     check_times(where, "PVP TxTime", times, lenient=lenient)
+    check_speed(where, f"{field} and PVP TxTime", antenna, times, lenient=lenient)
     spacing = float(np.median(np.linalg.norm(np.diff(antenna, axis=0), axis=1)))
     j = _isolated_srp(srp, MAX_BEND * spacing)
     if j is not None:
@@ -519,7 +657,6 @@ def _check_plausible(
             f"of {spacing:.4g} m)",
             lenient=lenient,
         )
-    check_dynamic_range(where, "signal", np.abs(phase_history), lenient=lenient)
 
 
 def _isolated_srp(srp: NDArray[np.float64], tol_m: float) -> int | None:
@@ -547,12 +684,13 @@ def _isolated_srp(srp: NDArray[np.float64], tol_m: float) -> int | None:
 
 
 def _geometry(
-    pvps: NDArray[Any], frame: _Frame, reference_point_m: ArrayLike | None, radar: Radar, where: str
-) -> tuple[Trajectory, NDArray[np.float64], NDArray[np.complex128] | None]:
-    """Trajectory and reference point (scene frame), and the re-referencing phase if any.
+    pvps: NDArray[Any], frame: _Frame, reference_point_m: ArrayLike | None, where: str
+) -> tuple[Trajectory, NDArray[np.float64], NDArray[np.float64] | None]:
+    """Trajectory and reference point (scene frame), and the re-referencing delays if any.
 
-    The antenna is the mid-point of TxPos and RcvPos; the phase, ``(n_vectors, n_freq)``,
-    moves the reference of every vector from its SRP to one point ``rho_o``.
+    The antenna is the mid-point of TxPos and RcvPos; the delays ``(n_vectors,)`` (s)
+    move the reference of every vector from its SRP to one point ``rho_o``: the phase
+    history is multiplied by ``delay_phase(delays, f)``.
     """
     tx = np.asarray(pvps["TxPos"], dtype=np.float64)
     rx = np.asarray(pvps["RcvPos"], dtype=np.float64)
@@ -561,9 +699,9 @@ def _geometry(
         rho_o = frame.to_ecf(as_point(reference_point_m, name="reference_point_m"))
     else:
         rho_o = srp[srp.shape[0] // 2]
-    phase = None
+    delays = None
     if np.any(srp != rho_o):
-        phase = delay_phase(_toa(tx, rx, rho_o) - _toa(tx, rx, srp), radar.frequencies_hz)
+        delays = _toa(tx, rx, rho_o) - _toa(tx, rx, srp)
     t = np.asarray(pvps["TxTime"], dtype=np.float64)
     try:
         trajectory = Trajectory(
@@ -571,7 +709,7 @@ def _geometry(
         )
     except ValueError as exc:
         raise DataError(f"{where}: unusable antenna positions or times: {exc}") from None
-    return trajectory, frame.to_local(rho_o), phase
+    return trajectory, frame.to_local(rho_o), delays
 
 
 def _provenance(

@@ -110,8 +110,17 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import positive
 from ..core import C, Radar, Traces, Trajectory, as_point
 from .errors import DataError, staged_paths
-from .matv5 import MatStructureError, check_mat_v5
-from .plausibility import MAX_STEP, check_dynamic_range, check_envelope, check_track, violation
+from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
+from .matv5 import MatInflationError, MatStructureError, MatSummary, check_mat_v5
+from .plausibility import (
+    MAX_BEND,
+    MAX_STEP,
+    as_lenient,
+    check_envelope,
+    check_signal,
+    check_track,
+    violation,
+)
 
 __all__ = ["read_gotcha", "write_gotcha", "is_gotcha_file", "DEFAULT_NAME_PATTERN"]
 
@@ -176,8 +185,12 @@ def _unreadable_reason(exc: BaseException) -> str:
     return "corrupt or truncated MATLAB v5 structure"
 
 
-def _load_record(path: Path) -> Any:
-    """The ``data`` struct of a MATLAB v5 file, or a DataError saying why not."""
+def _inspect(path: Path) -> MatSummary:
+    """The structure of a MATLAB v5 file checked, its variable ``data`` measured.
+
+    The file is read whole (its size is checked against the memory limit first); only
+    the variable ``data`` is inflated, within the memory limit (:mod:`.matv5`).
+    """
     if not path.exists():
         raise DataError(f"{path}: file not found")
     if not path.is_file():
@@ -188,20 +201,45 @@ def _load_record(path: Path) -> Any:
         raise DataError(
             f"{path}: MATLAB v7.3 (HDF5) file; GOTCHA files are MATLAB v5 (save -v7 or older)"
         )
+    reason = over_budget(path.stat().st_size, "the file, read whole for its structure check")
+    if reason:
+        raise DataError(f"{path}: {reason}")
     try:
-        check_mat_v5(path.read_bytes())
+        return check_mat_v5(path.read_bytes(), variables=("data",), max_inflated=memory_limit())
+    except MatInflationError:
+        raise DataError(
+            f"{path}: reading it would allocate more than {format_bytes(memory_limit())} "
+            "(the variable 'data' inflates beyond the memory limit; --max-memory sets it)"
+        ) from None
     except MatStructureError as exc:
         raise DataError(f"{path}: not a readable MATLAB .mat file: {exc}") from None
+
+
+def _check_budget(paths: list[Path], summaries: list[MatSummary]) -> None:
+    """The arrays of ``data`` of every file plus the working copies fit the memory limit."""
+    stored = sum(m.loaded_bytes for m in summaries)
+    samples = sum(m.largest_elements for m in summaries)  # data.fp, the largest array
+    reason = over_budget(
+        stored + phase_history_bytes(samples, 1),
+        f"{format_bytes(stored)} of MATLAB arrays and the phase history's working copies",
+    )
+    if reason:
+        names = str(paths[0]) if len(paths) == 1 else f"{paths[0]} .. {paths[-1].name}"
+        raise DataError(f"{names}: {reason}")
+
+
+def _load_record(path: Path, names: list[str]) -> Any:
+    """The ``data`` struct of a MATLAB v5 file (checked by :func:`_inspect`), or a DataError."""
     try:
-        mat = scipy.io.loadmat(path, appendmat=False)
+        mat = scipy.io.loadmat(path, appendmat=False, variable_names=["data"])
     except Exception as exc:  # scipy raises ValueError, MatReadError, zlib.error, ...
         logger.debug("scipy.io.loadmat(%s) failed: %r", path, exc)
         raise DataError(
             f"{path}: not a readable MATLAB .mat file: {_unreadable_reason(exc)}"
         ) from None
     if "data" not in mat:
-        names = ", ".join(k for k in mat if not k.startswith("__")) or "none"
-        raise DataError(f"{path}: not a GOTCHA file: no MATLAB struct 'data' (variables: {names})")
+        shown = ", ".join(dict.fromkeys(names)) or "none"
+        raise DataError(f"{path}: not a GOTCHA file: no MATLAB struct 'data' (variables: {shown})")
     data = mat["data"]
     if not isinstance(data, np.ndarray) or data.dtype.names is None or data.size != 1:
         got = getattr(data, "dtype", type(data).__name__)
@@ -251,9 +289,9 @@ def _check_finite(values: NDArray[Any], path: Path, name: str, axes: tuple[str, 
         )
 
 
-def _read_file(path: Path, *, lenient: bool = False) -> _GotchaFile:
+def _read_file(path: Path, names: list[str], *, lenient: bool = False) -> _GotchaFile:
     """One file's fields, checked for shape, finiteness and plausibility."""
-    rec = _load_record(path)
+    rec = _load_record(path, names)
     for name in _REQUIRED:
         _field(rec, name, path)
     fp = _field(rec, "fp", path)
@@ -304,7 +342,7 @@ def _check_plausible(f: _GotchaFile, *, lenient: bool) -> None:
             f"range = {tol[j] * 1e3:.2g} mm, float32 rounding)",
             lenient=lenient,
         )
-    check_dynamic_range(f.path, "data.fp", np.abs(f.phase_history), lenient=lenient)
+    check_signal(f.path, "data.fp", f.phase_history, lenient=lenient)
 
 
 def _check_angles(f: _GotchaFile, *, lenient: bool) -> None:
@@ -422,6 +460,34 @@ def _check_consecutive(files: list[_GotchaFile]) -> None:
                 f"pulse spacings) from its last pulse (azimuth {a.th_deg[-1]:.4f} deg) to "
                 f"the first pulse here ({b.th_deg[0]:.4f} deg); the files must be "
                 "consecutive, without gaps or repeats"
+            )
+
+
+def _check_continuity(files: list[_GotchaFile], *, lenient: bool) -> None:
+    """The track rule of a file holds across files: second differences at the junctions.
+
+    At the junction of consecutive files ``a`` and ``b``, the second differences of the
+    last two pulses of ``a`` and the first two of ``b`` are at most ``MAX_BEND`` times
+    the median pulse spacing of all the files, as within one file: a file shifted by a
+    fraction of a spacing, or a missing pulse, breaks it.
+    """
+    steps = np.concatenate([np.linalg.norm(np.diff(f.positions_m, axis=0), axis=1) for f in files])
+    if steps.size == 0:
+        return
+    spacing = float(np.median(steps))
+    for a, b in zip(files[:-1], files[1:], strict=True):
+        window = np.concatenate([a.positions_m[-2:], b.positions_m[:2]])
+        if window.shape[0] < 3:
+            continue
+        bend = np.linalg.norm(np.diff(window, 2, axis=0), axis=1)
+        if float(bend.max()) > MAX_BEND * spacing:
+            violation(
+                f"{b.path}: data.x/y/z, pulse 0: the track does not continue that of "
+                f"{a.path.name}: an antenna position at the junction is "
+                f"{0.5 * float(bend.max()):.3g} m off the midpoint of its neighbours (rule: "
+                f"second differences at most {MAX_BEND:g} x the median spacing of "
+                f"{spacing:.4g} m across files as within one)",
+                lenient=lenient,
             )
 
 
@@ -564,11 +630,15 @@ def read_gotcha(
     """
     speed = positive(speed_mps, "speed_mps", unit="m/s")
     rho_o = as_point(reference_point_m, name="reference_point_m")
-    files = [_read_file(p, lenient=lenient) for p in _as_paths(paths)]
+    given = _as_paths(paths)
+    summaries = [_inspect(p) for p in given]
+    _check_budget(given, summaries)
+    files = [_read_file(p, m.names, lenient=lenient) for p, m in zip(given, summaries, strict=True)]
     radar = _common_radar(files)
     _check_duplicates(files)
     files = _flight_order(files)
     _check_consecutive(files)
+    _check_continuity(files, lenient=lenient)
     positions = np.concatenate([f.positions_m for f in files])
     trajectory = _trajectory(files, positions, speed)
     freqs = radar.frequencies_hz
@@ -597,7 +667,9 @@ def is_gotcha_file(path: PathLike) -> bool:
     if not p.is_file():
         return False
     try:
-        check_mat_v5(p.read_bytes())
+        if over_budget(p.stat().st_size, "the file"):
+            return False
+        check_mat_v5(p.read_bytes(), variables=("data",), max_inflated=memory_limit())
         variables = scipy.io.whosmat(p, appendmat=False)
     except Exception:  # not a MATLAB v5 file: scipy raises ValueError, MatReadError, ...
         return False

@@ -14,14 +14,25 @@ count; or the 4-byte "small element" form with the count in the upper 16 bits) a
 data padded to 8 bytes. ``miMATRIX`` elements hold array flags, dimensions, a name and,
 by class, real/imaginary parts, struct field names and fields, cells, or sparse indices;
 ``miCOMPRESSED`` elements hold a zlib stream of further elements.
+
+Only the variables asked for (``data`` for GOTCHA files) are walked to the end and
+inflated; of every other variable the header alone is read (the first
+:data:`_HEADER_BYTES` of its zlib stream), as :func:`scipy.io.loadmat` with
+``variable_names`` skips them. The walk adds up the bytes scipy will allocate for the
+variables asked for (:attr:`MatSummary.loaded_bytes`) and refuses a zlib stream that
+inflates beyond ``max_inflated`` (in total over those variables): five compressed 1 GB
+arrays of zeros next to ``data`` cost nothing, and a ``data`` that inflates beyond the
+memory limit is refused before it is inflated.
 """
 
 from __future__ import annotations
 
 import struct
 import zlib
+from collections.abc import Collection
+from dataclasses import dataclass
 
-__all__ = ["MatStructureError", "check_mat_v5"]
+__all__ = ["MatInflationError", "MatStructureError", "MatSummary", "check_mat_v5"]
 
 _MI_SIZES = {1: 1, 2: 1, 3: 2, 4: 2, 5: 4, 6: 4, 7: 4, 9: 8, 12: 8, 13: 8, 16: 1, 17: 2, 18: 4}
 _MI_MATRIX, _MI_COMPRESSED = 14, 15
@@ -29,25 +40,72 @@ _NUMERIC_CLASSES = set(range(6, 16))
 _CHAR, _STRUCT, _CELL, _SPARSE = 4, 2, 1, 5
 _MAX_DEPTH = 16
 _MAX_INFLATED = 1 << 31
+#: Bytes inflated of a variable that is not read, enough for its header (flags, up to
+#: thousands of dimensions, a name).
+_HEADER_BYTES = 1 << 16
+#: numpy bytes per element of each MATLAB class (char: UCS-4); struct and cell elements
+#: become Python objects, counted at :data:`_OBJECT_BYTES` each.
+_CLASS_BYTES = {4: 4, 6: 8, 7: 4, 8: 1, 9: 1, 10: 2, 11: 2, 12: 4, 13: 4, 14: 8, 15: 8}
+_OBJECT_BYTES = 128
 
 
 class MatStructureError(ValueError):
     """The element structure of a MATLAB v5 file is corrupt (a short reason)."""
 
 
-def check_mat_v5(raw: bytes) -> None:
-    """Raise :class:`MatStructureError` unless ``raw`` is a well-formed MATLAB v5 file."""
+class MatInflationError(MatStructureError):
+    """The variables to read inflate beyond the allowed size."""
+
+
+@dataclass
+class MatSummary:
+    """What :func:`scipy.io.loadmat` will allocate for the variables walked."""
+
+    names: list[str]  # every variable of the file, in order
+    loaded_bytes: int = 0  # bytes of the arrays of the variables asked for
+    largest_elements: int = 0  # elements of their largest numeric array
+    inflated_bytes: int = 0  # bytes of their zlib streams, inflated
+
+
+def check_mat_v5(
+    raw: bytes,
+    *,
+    variables: Collection[str] | None = None,
+    max_inflated: int = _MAX_INFLATED,
+) -> MatSummary:
+    """Raise :class:`MatStructureError` unless ``raw`` is a well-formed MATLAB v5 file.
+
+    Parameters
+    ----------
+    raw : bytes
+        The file.
+    variables : collection of str, optional
+        The variables to walk to the end (module notes); default all.
+    max_inflated : int
+        Largest total size (bytes) of the inflated zlib streams of those variables;
+        :class:`MatInflationError` beyond it, raised before inflating further.
+
+    Returns
+    -------
+    MatSummary
+        The variable names and the bytes the variables asked for will take once loaded.
+    """
     if len(raw) < 128:
         raise MatStructureError(f"shorter than the 128-byte MATLAB header ({len(raw)} bytes)")
     order = {b"IM": "<", b"MI": ">"}.get(raw[126:128])
     if order is None:
         raise MatStructureError("no MATLAB v5 endian indicator in the header")
-    _Walker(order).elements(raw, 128, len(raw), depth=0, top=True)
+    walker = _Walker(order, variables, max_inflated)
+    walker.elements(raw, 128, len(raw), depth=0, top=True)
+    return walker.summary
 
 
 class _Walker:
-    def __init__(self, order: str) -> None:
+    def __init__(self, order: str, variables: Collection[str] | None, max_inflated: int) -> None:
         self.order = order
+        self.variables = variables
+        self.max_inflated = max_inflated
+        self.summary = MatSummary(names=[])
 
     def tag(self, buf: bytes, pos: int, end: int) -> tuple[int, int, int, int]:
         """(type, nbytes, data start, next element) of the element at ``pos``."""
@@ -74,17 +132,48 @@ class _Walker:
                 return
             mtype, nbytes, start, pos = self.tag(buf, pos, end)
             if mtype == _MI_COMPRESSED:
-                self.compressed(buf[start : start + nbytes], depth)
+                self.compressed(buf[start : start + nbytes], depth, top=top)
             elif mtype == _MI_MATRIX:
+                if top and not self.wanted(self.variable_name(buf, start, start + nbytes)):
+                    continue
                 self.matrix(buf, start, start + nbytes, depth)
             elif mtype not in _MI_SIZES:
                 raise MatStructureError(f"unknown element type {mtype} at byte {start - 8}")
 
-    def compressed(self, data: bytes, depth: int) -> None:
+    def wanted(self, name: str) -> bool:
+        self.summary.names.append(name)
+        return self.variables is None or name in self.variables
+
+    def variable_name(self, buf: bytes, pos: int, end: int) -> str:
+        """The name of the matrix at ``pos`` (its flags, dimensions and name checked)."""
+        if pos == end:
+            return ""
+        flags, pos = self.values(buf, pos, end, "array flags")
+        dims, pos = self.values(buf, pos, end, "dimensions")
+        if len(flags) != 2 or len(dims) < 2 or any(d > 2**31 for d in dims):
+            raise MatStructureError(f"array flags {flags} or dimensions {dims} are corrupt")
+        mtype, nbytes, start, _ = self.tag(buf, pos, end)
+        if mtype not in (1, 2, 16) or nbytes > 4096:
+            raise MatStructureError(f"array name at byte {pos} has type {mtype}, {nbytes} bytes")
+        return bytes(buf[start : start + nbytes]).decode("latin-1")
+
+    def compressed(self, data: bytes, depth: int, *, top: bool = False) -> None:
+        budget = self.max_inflated - self.summary.inflated_bytes
         try:
-            inflated = zlib.decompressobj().decompress(data, _MAX_INFLATED)
+            if top:  # one variable: its header first, all of it only when it is read
+                head = zlib.decompressobj().decompress(data, _HEADER_BYTES)
+                if len(head) >= 8 and struct.unpack_from(self.order + "I", head)[0] == _MI_MATRIX:
+                    if not self.wanted(self.variable_name(head, 8, len(head))):
+                        return
+            inflater = zlib.decompressobj()
+            inflated = inflater.decompress(data, budget + 1)
         except zlib.error:
             raise MatStructureError("a compressed element is corrupt") from None
+        if len(inflated) > budget:
+            raise MatInflationError(
+                f"its variables inflate to more than {budget} bytes (the memory limit)"
+            )
+        self.summary.inflated_bytes += len(inflated)
         self.elements(inflated, 0, len(inflated), depth=depth + 1)
 
     def numeric(self, buf: bytes, pos: int, end: int, what: str) -> tuple[int, int, int]:
@@ -116,6 +205,10 @@ class _Walker:
         cls, n = flags[0] & 0xFF, 1
         for d in dims:
             n *= d
+        complex_ = bool(flags[0] & 0x800)
+        self.summary.loaded_bytes += n * _CLASS_BYTES.get(cls, _OBJECT_BYTES) * (1 + complex_)
+        if cls in _NUMERIC_CLASSES:
+            self.summary.largest_elements = max(self.summary.largest_elements, n)
         if cls in _NUMERIC_CLASSES or cls == _CHAR:
             for part in ("real part", "imaginary part")[: 2 if flags[0] & 0x800 else 1]:
                 mtype, count, pos = self.numeric(buf, pos, end, part)

@@ -31,6 +31,21 @@ Images, ``schema = "sarmotion.image/1"``::
 
 Files are written to a temporary file in the target directory and renamed onto the
 target when complete (``os.replace``): a failed write leaves no file, or the previous one.
+
+Reading is confined to the file and to the memory limit:
+
+* external links, virtual datasets and datasets with external raw storage would make
+  the HDF5 library read other files: a file holding one is refused, wherever it is; a
+  soft link must resolve inside the file (a loop of soft links is refused);
+* the bytes a read allocates are computed from the dataset headers and checked against
+  the memory limit (:mod:`sarmotion._limits`) before any array is read; the positions
+  and slow times are read and checked before the trace data.
+
+Plausibility rules of a traces file, beyond those of :mod:`sarmotion.io.plausibility`
+shared with the other readers: the slow times increase, and with the positions imply
+a platform speed of 1 mm/s to 10 km/s; the reference point is seen from every antenna
+position at a grazing angle of at least 5 deg (a reference point far from the scene the
+aperture looks at, e.g. displaced by 100 km, is at a few degrees).
 """
 
 from __future__ import annotations
@@ -49,9 +64,18 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
 from ..core import Radar, Traces, Trajectory
 from .errors import DataError, staged_paths
-from .plausibility import check_dynamic_range, check_envelope, check_track
+from .plausibility import (
+    as_lenient,
+    check_envelope,
+    check_reference_point,
+    check_signal,
+    check_speed,
+    check_times,
+    check_track,
+)
 
 __all__ = [
     "TRACES_SCHEMA",
@@ -63,6 +87,8 @@ __all__ = [
     "load_image",
     "native_schema",
     "check_hdf5_terminates",
+    "open_native_blocks",
+    "NativeBlocks",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -98,6 +124,8 @@ def _from_json(text: Any, path: Path, where: str) -> dict[str, Any]:
         if isinstance(text, bytes):
             text = text.decode("utf-8")
         value = json.loads(text)
+    except RecursionError:
+        raise DataError(f"{path}: attribute {where} nests JSON too deeply (corrupt)") from None
     except UnicodeDecodeError:
         raise DataError(f"{path}: attribute {where} is not UTF-8 text (corrupt)") from None
     except (TypeError, ValueError) as exc:
@@ -118,14 +146,25 @@ def _check_finite(values: NDArray[Any], path: Path | str, name: str) -> None:
 
 _WALK = """
 import sys, h5py
+limit, seen = int(sys.argv[2]), set()
 def visit(obj):
+    if hash(obj.id) in seen:
+        return
+    seen.add(hash(obj.id))
     for name in obj.attrs:
         obj.attrs[name]
     if isinstance(obj, h5py.Group):
         for name in obj:
-            visit(obj[name])
-    else:
+            if isinstance(obj.get(name, getlink=True), h5py.HardLink):
+                visit(obj[name])
+    elif obj.is_virtual or obj.external or obj.size * obj.dtype.itemsize > limit:
+        return
+    elif obj.ndim == 0 or obj.size == 0:
         obj[()]
+    else:
+        step = max(1, (1 << 24) // max(1, obj.size // obj.shape[0] * obj.dtype.itemsize))
+        for i in range(0, obj.shape[0], step):
+            obj[i : i + step]
 try:
     with h5py.File(sys.argv[1], "r") as fh:
         visit(fh)
@@ -134,15 +173,21 @@ except Exception:
 """
 
 
+#: Files the child process read to the end: (path, inode, size, mtime, limit) -> True.
+_TERMINATES: dict[tuple[Any, ...], bool] = {}
+
+
 def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> None:
     """Read every attribute and dataset of an HDF5 file in a child process, with a time limit.
 
     Some corruptions of an HDF5 file make the HDF5 library loop forever or crash inside
     a single call (measured with h5py 3 on byte-flipped copies of a 24-pulse traces file:
     4 of 600 mutants looped reading a root attribute), which no Python code of the
-    reading process can interrupt. The child process reads the whole file; a child that
-    does not finish within ``timeout_s`` (default 20 s plus 1 s per 20 MB) is killed and
-    the file refused. Errors the child meets are left to the real reader to report.
+    reading process can interrupt. The child process reads the whole file, through hard
+    links only and 16 MB at a time, skipping datasets beyond the memory limit and those
+    stored outside the file (which the reader refuses); a child that does not finish
+    within ``timeout_s`` (default 20 s plus 1 s per 20 MB) is killed and the file
+    refused. Errors the child meets are left to the real reader to report.
 
     Raises
     ------
@@ -150,11 +195,15 @@ def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> 
         The HDF5 library did not finish reading the file, or crashed on it.
     """
     p = Path(path)
+    st = p.stat()
+    key = (str(p.resolve()), st.st_ino, st.st_size, st.st_mtime_ns, memory_limit())
+    if key in _TERMINATES:
+        return
     if timeout_s is None:
-        timeout_s = 20.0 + p.stat().st_size / 20e6
+        timeout_s = 20.0 + st.st_size / 20e6
     try:
         done = subprocess.run(
-            [sys.executable, "-c", _WALK, str(p)],
+            [sys.executable, "-c", _WALK, str(p), str(memory_limit())],
             timeout=timeout_s,
             capture_output=True,
             check=False,
@@ -166,6 +215,9 @@ def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> 
         ) from None
     if done.returncode < 0:
         raise DataError(f"{p}: not a readable HDF5 file: the HDF5 library crashed on it (corrupt)")
+    _TERMINATES[key] = True
+    while len(_TERMINATES) > 64:
+        _TERMINATES.pop(next(iter(_TERMINATES)))
 
 
 def native_schema(path: PathLike) -> str | None:
@@ -192,12 +244,14 @@ def _open(path: PathLike, expected: str) -> tuple[h5py.File, Path]:
         raise DataError(f"{p}: not a file")
     if not h5py.is_hdf5(p):
         raise DataError(f"{p}: not an HDF5 file (expected a {expected} file)")
+    check_hdf5_terminates(p)
     try:
         fh = h5py.File(p, "r")
     except OSError as exc:
         reason = "truncated" if "truncated" in str(exc) else "corrupt HDF5 structure"
         raise DataError(f"{p}: not a readable HDF5 file: {reason}") from None
     try:
+        _check_confined(fh, p)
         schema = fh.attrs.get("schema")
         if isinstance(schema, bytes):
             schema = schema.decode("utf-8", "replace")
@@ -218,12 +272,88 @@ def _open(path: PathLike, expected: str) -> tuple[h5py.File, Path]:
     return fh, p
 
 
-def _dataset(group: h5py.Group, name: str, path: Path, *, ndim: int) -> NDArray[Any]:
+def _check_confined(fh: h5py.File, path: Path) -> None:
+    """DataError for a link or dataset that reaches outside the file, or a soft-link loop.
+
+    Walks every object reachable through hard links (each once: hard links may form
+    cycles) and every link of every group.
+    """
+    seen: set[int] = set()
+    stack: list[h5py.Group] = [fh]
+    while stack:
+        group = stack.pop()
+        for name in group:
+            where = f"{group.name.rstrip('/')}/{name}"
+            try:
+                link = group.get(name, getlink=True)
+            except (KeyError, RuntimeError, OSError, ValueError):
+                raise DataError(f"{path}: unreadable link {where} (corrupt)") from None
+            if isinstance(link, h5py.ExternalLink):
+                raise DataError(
+                    f"{path}: {where} is an external link to {link.filename}:{link.path}; "
+                    "sarmotion reads no file but the one given"
+                )
+            if isinstance(link, h5py.SoftLink):
+                try:
+                    group.get(name)
+                except (KeyError, RuntimeError, OSError, ValueError):
+                    raise DataError(
+                        f"{path}: soft link {where} -> {link.path} does not resolve (a loop of "
+                        "soft links, or a missing target)"
+                    ) from None
+                continue
+            if not isinstance(link, h5py.HardLink):
+                raise DataError(f"{path}: {where} is a user-defined link (not supported)")
+            obj = group.get(name)
+            key = hash(obj.id)
+            if key in seen:
+                continue
+            seen.add(key)
+            if isinstance(obj, h5py.Group):
+                stack.append(obj)
+            elif isinstance(obj, h5py.Dataset):
+                if obj.is_virtual:
+                    raise DataError(
+                        f"{path}: dataset {where} is virtual (its data are in other files); "
+                        "sarmotion reads no file but the one given"
+                    )
+                if obj.external:
+                    raise DataError(
+                        f"{path}: dataset {where} has external raw storage in "
+                        f"{obj.external[0][0]!s}; sarmotion reads no file but the one given"
+                    )
+
+
+def _declared_bytes(group: h5py.Group, name: str) -> int:
+    """Bytes of the dataset ``name`` of ``group`` as declared by its header (0 if absent)."""
+    obj = group.get(name)
+    if not isinstance(obj, h5py.Dataset):
+        return 0
+    return int(obj.size) * int(obj.dtype.itemsize)
+
+
+def _check_budget(path: Path, nbytes: int, what: str) -> None:
+    reason = over_budget(nbytes, what)
+    if reason:
+        raise DataError(f"{path}: {reason}")
+
+
+def _dataset(
+    group: h5py.Group, name: str, path: Path, *, ndim: int, rows: slice | None = None
+) -> NDArray[Any]:
     where = f"{group.name.rstrip('/')}/{name}"
     obj = group.get(name)
     if not isinstance(obj, h5py.Dataset):
         raise DataError(f"{path}: missing dataset {where}")
-    value = obj[()]
+    if obj.ndim != ndim:
+        raise DataError(f"{path}: dataset {where} must be {ndim}-D, got shape {obj.shape}")
+    if obj.dtype.kind not in "biufc":
+        raise DataError(f"{path}: dataset {where} must be a numeric array")
+    nbytes = int(obj.size) * int(obj.dtype.itemsize)
+    if rows is not None:
+        nbytes = len(range(*rows.indices(obj.shape[0]))) * nbytes // max(1, obj.shape[0])
+    _check_budget(path, nbytes, f"dataset {where} of shape {obj.shape}, {obj.dtype}")
+    value = obj[()] if rows is None else obj[rows]
     if not isinstance(value, np.ndarray) or value.dtype.kind not in "biufc":
         raise DataError(f"{path}: dataset {where} must be a numeric array")
     if value.ndim != ndim:
@@ -314,6 +444,71 @@ def save_traces(
     return target
 
 
+def _traces_header(fh: h5py.File, p: Path, *, lenient: bool) -> dict[str, Any]:
+    """Everything of a traces file but the data, checked: radar, trajectory, reference.
+
+    The memory the data will take is checked against the limit from the header of
+    ``/traces/data``; the positions and slow times are read and checked against the
+    plausibility rules before any trace is read.
+    """
+    g = fh.get("traces")
+    if not isinstance(g, h5py.Group):
+        raise DataError(f"{p}: missing group /traces")
+    d = g.get("data")
+    if not isinstance(d, h5py.Dataset):
+        raise DataError(f"{p}: missing dataset /traces/data")
+    if d.ndim != 2:
+        raise DataError(f"{p}: dataset /traces/data must be 2-D, got shape {d.shape}")
+    n, m = (int(k) for k in d.shape)
+    if d.dtype.kind != "c":
+        raise DataError(f"{p}: dataset /traces/data must be complex, got {d.dtype}")
+    stored = sum(_declared_bytes(g, k) for k in ("data", "positions_m", "slow_times_s"))
+    _check_budget(
+        p,
+        stored + phase_history_bytes(n, m),
+        f"{format_bytes(stored)} of datasets and the working copies of {n} x {m} traces",
+    )
+    pos = _dataset(g, "positions_m", p, ndim=2)
+    s = _dataset(g, "slow_times_s", p, ndim=1)
+    attrs = {name: _attr(g, name, p) for name in _RADAR_ATTRS}
+    ref = np.asarray(_attr(g, "reference_point_m", p), dtype=np.float64)
+    meta = _from_json(_attr(g, "metadata", p), p, "/traces metadata")
+    if pos.shape != (n, 3):
+        raise DataError(
+            f"{p}: dataset /traces/positions_m has shape {pos.shape}, expected ({n}, 3)"
+        )
+    if s.shape != (n,):
+        raise DataError(f"{p}: dataset /traces/slow_times_s has shape {s.shape}, expected ({n},)")
+    if ref.shape != (3,):
+        raise DataError(f"{p}: attribute reference_point_m has shape {ref.shape}, expected (3,)")
+    _check_finite(ref, p, "attribute reference_point_m")
+    pos = pos.astype(np.float64)
+    s = s.astype(np.float64)
+    field = "/traces/positions_m"
+    check_envelope(p, field, pos - ref, lenient=lenient)
+    check_track(p, field, pos, lenient=lenient)
+    check_times(p, "/traces/slow_times_s", s, lenient=lenient)
+    check_speed(p, "/traces/positions_m and slow_times_s", pos, s, lenient=lenient)
+    check_reference_point(p, "/traces reference_point_m", pos, ref, lenient=lenient)
+    try:
+        radar = Radar(
+            carrier_hz=float(attrs["carrier_hz"]),
+            bandwidth_hz=float(attrs["bandwidth_hz"]),
+            n_samples=int(attrs["n_samples"]),
+            frequency_step_hz=float(attrs["frequency_step_hz"]),
+            pulse=str(attrs["pulse"]),  # type: ignore[arg-type]
+        )
+        trajectory = Trajectory(positions_m=pos, slow_times_s=s)
+    except (TypeError, ValueError) as exc:
+        raise DataError(f"{p}: inconsistent traces: {exc}") from None
+    if radar.n_samples != m:
+        raise DataError(
+            f"{p}: inconsistent traces: /traces/data has {m} samples per pulse, the radar "
+            f"{radar.n_samples}"
+        )
+    return {"radar": radar, "trajectory": trajectory, "reference_point_m": ref, "metadata": meta}
+
+
 def load_traces(path: PathLike, *, lenient: bool = False) -> Traces:
     """Read the traces of a native HDF5 file (schema ``sarmotion.traces/1``).
 
@@ -337,47 +532,16 @@ def load_traces(path: PathLike, *, lenient: bool = False) -> Traces:
         plausibility rule of :mod:`sarmotion.io.plausibility` (antenna envelope relative
         to the reference point, a smooth track, the phase history's dynamic range).
     """
+    lenient = as_lenient(lenient)
     fh, p = _open(path, TRACES_SCHEMA)
     with fh:
-        g = fh.get("traces")
-        if not isinstance(g, h5py.Group):
-            raise DataError(f"{p}: missing group /traces")
-        data = _dataset(g, "data", p, ndim=2)
-        pos = _dataset(g, "positions_m", p, ndim=2)
-        s = _dataset(g, "slow_times_s", p, ndim=1)
-        attrs = {name: _attr(g, name, p) for name in _RADAR_ATTRS}
-        ref = np.asarray(_attr(g, "reference_point_m", p), dtype=np.float64)
-        meta = _from_json(_attr(g, "metadata", p), p, "/traces metadata")
-    n, m = data.shape
-    if not np.iscomplexobj(data):
-        raise DataError(f"{p}: dataset /traces/data must be complex, got {data.dtype}")
-    if pos.shape != (n, 3):
-        raise DataError(
-            f"{p}: dataset /traces/positions_m has shape {pos.shape}, expected ({n}, 3)"
-        )
-    if s.shape != (n,):
-        raise DataError(f"{p}: dataset /traces/slow_times_s has shape {s.shape}, expected ({n},)")
-    if ref.shape != (3,):
-        raise DataError(f"{p}: attribute reference_point_m has shape {ref.shape}, expected (3,)")
+        header = _traces_header(fh, p, lenient=lenient)
+        data = _dataset(fh["traces"], "data", p, ndim=2)
     try:
-        radar = Radar(
-            carrier_hz=float(attrs["carrier_hz"]),
-            bandwidth_hz=float(attrs["bandwidth_hz"]),
-            n_samples=int(attrs["n_samples"]),
-            frequency_step_hz=float(attrs["frequency_step_hz"]),
-            pulse=str(attrs["pulse"]),  # type: ignore[arg-type]
-        )
-        trajectory = Trajectory(positions_m=pos, slow_times_s=s)
-        traces = Traces(
-            data=data, trajectory=trajectory, radar=radar, reference_point_m=ref, metadata=meta
-        )
+        traces = Traces(data=data, **header)
     except (TypeError, ValueError) as exc:
         raise DataError(f"{p}: inconsistent traces: {exc}") from None
-    check_envelope(p, "/traces/positions_m", pos - ref, lenient=lenient)
-    check_track(p, "/traces/positions_m", pos, lenient=lenient)
-    check_dynamic_range(
-        p, "/traces/data (as phase history)", np.abs(traces.phase_history()), lenient=lenient
-    )
+    check_signal(p, "/traces/data (as phase history)", traces.phase_history(), lenient=lenient)
     return traces
 
 
@@ -395,6 +559,8 @@ def load_extra(path: PathLike) -> dict[str, NDArray[Any]]:
             return {}
         if not isinstance(e, h5py.Group):
             raise DataError(f"{p}: /extra must be a group")
+        total = sum(_declared_bytes(e, name) for name in e)
+        _check_budget(p, total, f"{len(e)} dataset(s) in /extra")
         out = {}
         for name in e:
             value = _dataset(e, name, p, ndim=2)

@@ -20,9 +20,15 @@ __all__ = [
     "MAX_BEND",
     "MAX_DYNAMIC_RANGE",
     "MAX_STEP",
+    "MIN_GRAZING_DEG",
     "RANGE_ENVELOPE_M",
+    "SPEED_RANGE_MPS",
+    "as_lenient",
     "check_dynamic_range",
     "check_envelope",
+    "check_reference_point",
+    "check_signal",
+    "check_speed",
     "check_times",
     "check_track",
     "violation",
@@ -38,6 +44,24 @@ MAX_BEND = 0.01
 MAX_DYNAMIC_RANGE = 1e3
 #: Antenna distance from the scene centre (m) inside which positions are plausible.
 RANGE_ENVELOPE_M = (10.0, 1e6)
+#: Platform speeds (m/s) implied by positions and slow times: from a ground-based rail
+#: SAR (mm/s) to a satellite in low orbit (7.6 km/s), as ``--speed`` accepts.
+SPEED_RANGE_MPS = (1e-3, 1e4)
+#: Smallest grazing angle (deg) at which the antenna sees the reference point. Airborne
+#: SAR images at about 10-60 deg, spaceborne at 15-75 deg; below a few degrees the
+#: ground is in shadow and multipath. 5 deg is half the usual airborne minimum; a
+#: reference point displaced by 100 km from a scene seen from 7 km altitude is at 4 deg.
+MIN_GRAZING_DEG = 5.0
+#: Samples of a constant phase history agree to this fraction of their magnitude
+#: (4 float32 roundings): the value of a fill, not the echoes of a scene.
+_CONSTANT_TOL = 4.0 * float(np.finfo(np.float32).eps)
+
+
+def as_lenient(value: object) -> bool:
+    """``lenient`` as a bool: True or False (numpy bools too), else TypeError."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"lenient must be True or False, got {value!r}")
+    return bool(value)
 
 
 def violation(message: str, *, lenient: bool) -> None:
@@ -104,6 +128,87 @@ def check_dynamic_range(
             f"{path}: {field}, pulse {j}, frequency index {k}: magnitude {peak:.4g} against a "
             f"median of {median:.4g} ({ratio}; rule: at most {MAX_DYNAMIC_RANGE:g} x the "
             "median magnitude)",
+            lenient=lenient,
+        )
+
+
+def check_signal(
+    path: Path | str, field: str, phase_history: NDArray[np.complexfloating], *, lenient: bool
+) -> None:
+    """Not all zero (refused even leniently), not constant, within the dynamic range.
+
+    An all-zero phase history holds no echo (a never-written array, a fill value): every
+    image of it is empty. A constant one (every sample equal to float32 rounding) is a
+    fill value too, or a single reflector exactly at the reference point with a flat
+    spectrum, which ``lenient`` accepts.
+    """
+    magnitudes = np.abs(phase_history)
+    if phase_history.size == 0 or not np.any(magnitudes):
+        raise DataError(
+            f"{path}: {field}: every sample is zero (no echo to image or analyse)"
+        )
+    first = phase_history.reshape(-1)[0]
+    spread = float(np.max(np.abs(phase_history - first)))
+    if spread <= _CONSTANT_TOL * float(magnitudes.max()):
+        violation(
+            f"{path}: {field}: every sample equals {complex(first):.6g} (rule: a phase "
+            f"history varies over pulses and frequencies; constant to {_CONSTANT_TOL:.2g} "
+            "relative is a fill value)",
+            lenient=lenient,
+        )
+    check_dynamic_range(path, field, magnitudes, lenient=lenient)
+
+
+def check_speed(
+    path: Path | str,
+    field: str,
+    positions_m: NDArray[np.float64],
+    times_s: NDArray[np.float64],
+    *,
+    lenient: bool,
+) -> None:
+    """The platform speed, path length over time span, is within :data:`SPEED_RANGE_MPS`."""
+    if positions_m.shape[0] < 2:
+        return
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        length = float(np.sum(np.linalg.norm(np.diff(positions_m, axis=0), axis=1)))
+        span = float(times_s[-1] - times_s[0])
+        speed = length / span if span > 0 else np.inf
+    lo, hi = SPEED_RANGE_MPS
+    if not lo <= speed <= hi:
+        violation(
+            f"{path}: {field}: the antenna covers {length:.6g} m in {span:.6g} s, a platform "
+            f"speed of {speed:.3g} m/s (rule: {lo:g} to {hi:g} m/s, from a rail SAR to a "
+            "satellite in low orbit)",
+            lenient=lenient,
+        )
+
+
+def check_reference_point(
+    path: Path | str,
+    field: str,
+    positions_m: NDArray[np.float64],
+    reference_point_m: NDArray[np.float64],
+    *,
+    lenient: bool,
+) -> None:
+    """Every antenna position sees the reference point at least :data:`MIN_GRAZING_DEG` up.
+
+    The grazing angle of pulse ``j`` is the elevation of the antenna above the reference
+    point, ``asin((z_j - z_o) / |r_j - rho_o|)``: a reference point far outside the scene
+    the aperture looks at is seen at a grazing angle near zero.
+    """
+    d = positions_m - reference_point_m[None, :]
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        grazing = np.rad2deg(np.arcsin(d[:, 2] / np.linalg.norm(d, axis=1)))
+    bad = np.flatnonzero(~(grazing >= MIN_GRAZING_DEG))
+    if bad.size:
+        j = int(bad[0])
+        x, y, z = reference_point_m
+        violation(
+            f"{path}: {field} ({x:.6g}, {y:.6g}, {z:.6g}) m is seen from pulse {j} at a "
+            f"grazing angle of {grazing[j]:.3g} deg, far from the scene the aperture looks "
+            f"at (rule: at least {MIN_GRAZING_DEG:g} deg at every pulse)",
             lenient=lenient,
         )
 
