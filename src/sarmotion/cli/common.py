@@ -199,10 +199,28 @@ def noise_options(func: Callable[..., Any]) -> Any:
     )(func)
 
 
+def _within_envelope(flags: str, coordinates: Sequence[float]) -> None:
+    """Image coordinates within twice the inputs' range envelope of the scene centre.
+
+    No antenna of an accepted input is more than 1000 km from the scene centre
+    (:data:`~sarmotion.io.plausibility.RANGE_ENVELOPE_M`), so no pixel further than
+    2000 km from it is within the range envelope of any of them.
+    """
+    from ..io.plausibility import RANGE_ENVELOPE_M
+
+    reach = 2.0 * RANGE_ENVELOPE_M[1]
+    if not all(np.isfinite(c) and abs(c) <= reach for c in coordinates):
+        raise InputError(
+            f"{flags} must keep the image within {reach:g} m of the scene centre (twice the "
+            "range envelope of the inputs)"
+        )
+
+
 def square_grid(size_m: float, spacing_m: float, centre: tuple[float, float]) -> ImageGrid:
     """Square image grid from ``--size``, ``--spacing`` and ``--centre``."""
     size_m = positive(size_m, "--size", unit="m")
     spacing_m = positive(spacing_m, "--spacing", unit="m")
+    _within_envelope("--size/--centre", [c + h for c in centre for h in (-size_m / 2, size_m / 2)])
     if size_m / spacing_m > 4096:
         raise InputError(
             f"--size/--spacing gives {size_m / spacing_m:.0f} pixels a side (max 4096)"
@@ -218,6 +236,7 @@ def extent_grid(extent: tuple[float, float, float, float], spacing_m: float) -> 
             f"--grid must be XMIN < XMAX, YMIN < YMAX (m) and --spacing > 0, got {extent}, "
             f"{spacing_m}"
         )
+    _within_envelope("--grid", extent)
     if max(x1 - x0, y1 - y0) / spacing_m > 4096:
         raise InputError("--grid/--spacing gives more than 4096 pixels a side")
     return ImageGrid.from_extent(x_range_m=(x0, x1), y_range_m=(y0, y1), spacing_m=spacing_m)

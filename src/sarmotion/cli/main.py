@@ -32,6 +32,12 @@ EXIT_INTERNAL = 1
 EXIT_TERMINATED = 128 + signal.SIGTERM
 
 
+_MAX_MEMORY_HELP = (
+    "Largest allocation an input may make its reader do, e.g. 4G or 512MiB; inputs "
+    "beyond it are refused from their headers. Default: half the memory available."
+)
+
+
 class Terminated(BaseException):
     """SIGTERM, raised in the main thread so that staged outputs are removed."""
 
@@ -121,8 +127,15 @@ class _LazyGroup(click.Group):
 @click.version_option(__version__, prog_name="sarmotion")
 @click.option("-v", "--verbose", count=True, help="More log output (-v info, -vv debug).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars.")
+@click.option(
+    "--max-memory",
+    "max_memory",
+    metavar="SIZE",
+    default=None,
+    help=_MAX_MEMORY_HELP,
+)
 @click.pass_context
-def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
+def main(ctx: click.Context, verbose: int, quiet: bool, max_memory: str | None) -> None:
     """Single-antenna SAR imaging and motion estimation of complex scenes.
 
     Separates the echoes of stationary and moving targets (travel-time annihilation
@@ -135,6 +148,7 @@ def main(ctx: click.Context, verbose: int, quiet: bool) -> None:
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     ctx.ensure_object(dict)
     ctx.obj["progress"] = not quiet and sys.stderr.isatty()
+    _max_memory(ctx, None, max_memory)
 
 
 def _quiet(ctx: click.Context, param: click.Parameter, value: bool) -> None:
@@ -147,8 +161,20 @@ def _verbose(ctx: click.Context, param: click.Parameter, value: int) -> None:
         logging.getLogger().setLevel(logging.WARNING - 10 * min(value, 2))
 
 
+def _max_memory(ctx: click.Context, param: click.Parameter | None, value: str | None) -> None:
+    from .._limits import parse_size, set_memory_limit
+
+    if param is None:  # the group's option: reset the limit of a previous run in-process
+        set_memory_limit(None)
+    if value is not None:
+        try:
+            set_memory_limit(parse_size(value))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"--max-memory: {exc}") from None
+
+
 def _add_shared_options(command: click.Command) -> None:
-    """-q and -v after the command name too (``sarmotion analyze -q ...``)."""
+    """-q, -v and --max-memory after the command name too (``sarmotion analyze -q ...``)."""
     command.params += [
         click.Option(
             ["-q", "--quiet"],
@@ -163,6 +189,13 @@ def _add_shared_options(command: click.Command) -> None:
             expose_value=False,
             callback=_verbose,
             help="More log output (-v info, -vv debug).",
+        ),
+        click.Option(
+            ["--max-memory"],
+            metavar="SIZE",
+            expose_value=False,
+            callback=_max_memory,
+            help=_MAX_MEMORY_HELP,
         ),
     ]
 

@@ -333,5 +333,7 @@ def scene_grid(
         raise ValueError(
             f"size_m / spacing_m must give <= 4096 pixels a side, got {size} m / {spacing} m"
         )
+    if size > 2e6:  # the inputs' range envelope: antennas within 1000 km of the scene
+        raise ValueError(f"size_m must be at most 2e+06 m (1000 km either side), got {size:g} m")
     centre = tuple(float(v) for v in traces.reference_point_m[:2])
     return ImageGrid.square(centre_m=centre, size_m=size, spacing_m=spacing)

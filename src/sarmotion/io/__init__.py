@@ -3,20 +3,27 @@
 This is the only layer of sarmotion that opens files. Every bad input raises
 :class:`DataError` (a ``ValueError``) with one line naming the file and the problem;
 implausible geometry or samples break the rules of :mod:`sarmotion.io.plausibility`
-(``lenient=True`` logs them instead).
+(``lenient=True`` logs them instead). Every reader computes from the headers of its input
+what it will allocate and refuses an input beyond :func:`memory_limit`
+(:func:`set_memory_limit`; ``--max-memory`` on the command line) before allocating it.
+Large files are read block by block with :func:`open_cphd_blocks` and
+:func:`open_native_blocks`.
 """
 
-from .cphd import is_cphd_file, read_cphd, write_cphd
+from .._limits import memory_limit, set_memory_limit
+from .cphd import CphdBlocks, is_cphd_file, open_cphd_blocks, read_cphd, write_cphd
 from .errors import DataError, staged_directory, staged_paths
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
 from .inputs import is_scene_reference, read_inputs
 from .native import (
     IMAGE_SCHEMA,
     TRACES_SCHEMA,
+    NativeBlocks,
     load_extra,
     load_image,
     load_traces,
     native_schema,
+    open_native_blocks,
     save_image,
     save_traces,
 )
@@ -37,6 +44,12 @@ __all__ = [
     "native_schema",
     "TRACES_SCHEMA",
     "IMAGE_SCHEMA",
+    "CphdBlocks",
+    "NativeBlocks",
+    "memory_limit",
+    "open_cphd_blocks",
+    "open_native_blocks",
+    "set_memory_limit",
 ]
 
 from .results import RESULTS_SCHEMA, results_document, write_json  # noqa: E402

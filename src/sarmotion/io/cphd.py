@@ -68,6 +68,7 @@ import datetime as _dt
 import json
 import logging
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -79,7 +80,9 @@ import sarkit.wgs84 as skwgs84
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._validation import integer
 from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
+from ..core.spectral import to_fast_time
 from .errors import DataError, staged_paths
 from .._limits import over_budget, phase_history_bytes
 from .native import _to_json
@@ -94,7 +97,7 @@ from .plausibility import (
     violation,
 )
 
-__all__ = ["read_cphd", "write_cphd", "is_cphd_file"]
+__all__ = ["CphdBlocks", "is_cphd_file", "open_cphd_blocks", "read_cphd", "write_cphd"]
 
 logger = logging.getLogger(__name__)
 
@@ -1052,3 +1055,106 @@ def write_cphd(
             writer.write_pvp(_CHANNEL_ID, lay.pvps)
     logger.debug("wrote CPHD %s: %d vectors of %d samples", target, *traces.shape)
     return target
+
+
+# ------------------------------------------------------------------------ block reading
+class CphdBlocks:
+    """A CPHD channel opened for reading its vectors block by block.
+
+    Made by :func:`open_cphd_blocks`. The PVPs of every selected vector are read and
+    checked on opening (the geometry rules of the module notes); the signal is read by
+    :meth:`blocks`, only the vectors of one block at a time.
+
+    Attributes
+    ----------
+    radar : Radar
+        The frequency grid, as :func:`read_cphd` gives it.
+    reference_point_m : (3,) ndarray
+        Reference point ``rho_o`` of the blocks (m, float64, scene frame).
+    trajectory : Trajectory
+        Antenna positions and slow times of every selected vector.
+    n_pulses : int
+        Number of selected vectors.
+    metadata : dict
+        As :func:`read_cphd` gives it.
+    """
+
+    def __init__(self, path: Path, prepared: _Prepared) -> None:
+        self.path = path
+        self._prepared = prepared
+        self.radar: Radar = prepared.radar
+        self.reference_point_m: NDArray[np.float64] = np.asarray(
+            prepared.reference_point_m, dtype=np.float64
+        )
+        self.trajectory: Trajectory = prepared.trajectory
+        self.n_pulses: int = prepared.span[1] - prepared.span[0]
+        self.metadata: dict[str, Any] = prepared.metadata
+
+    def blocks(self, block_pulses: int) -> Iterator[tuple[int, int, NDArray[np.complex128]]]:
+        """``(start, stop, data[start:stop])`` for consecutive blocks of ``block_pulses``.
+
+        ``data`` is what :func:`read_cphd` returns as ``Traces.data`` (fast time,
+        complex128, re-referenced to :attr:`reference_point_m`), for pulses
+        ``start:stop`` counted from the first selected vector. Only the vectors of one
+        block are read from the file at a time.
+
+        Raises
+        ------
+        DataError
+            A block beyond the memory limit, or a file that no longer reads (truncated,
+            NaN samples).
+        """
+        rows = integer(block_pulses, "block_pulses", minimum=1)
+        prep = self._prepared
+        n_samples = self.radar.n_samples
+        reason = over_budget(
+            rows * n_samples * 8 + phase_history_bytes(rows, n_samples),
+            f"a block of {rows} x {n_samples} samples and its working copies",
+        )
+        if reason:
+            raise DataError(f"{self.path}: {reason}")
+        return self._blocks(rows)
+
+    def _blocks(self, rows: int) -> Iterator[tuple[int, int, NDArray[np.complex128]]]:
+        prep = self._prepared
+        first = prep.span[0]
+        frequencies = self.radar.frequencies_hz
+        with self.path.open("rb") as fh:
+            reader = _open(self.path, fh)
+            for a in range(0, self.n_pulses, rows):
+                b = min(a + rows, self.n_pulses)
+                pvps = prep.pvps[a:b]
+                block = _signal(reader, prep.channel, first + a, first + b, pvps, self.path)
+                if prep.delays_s is not None:
+                    block *= delay_phase(prep.delays_s[a:b], frequencies)
+                yield a, b, to_fast_time(block)
+
+
+def open_cphd_blocks(
+    path: PathLike,
+    channel: str | int | None = None,
+    *,
+    vectors: tuple[int, int] | None = None,
+    reference_point_m: ArrayLike | None = None,
+    lenient: bool = False,
+) -> CphdBlocks:
+    """Open one channel of a CPHD file to read its signal block by block.
+
+    Parameters are those of :func:`read_cphd`. The header, the memory budget of the
+    PVPs, and the plausibility rules that need only the PVPs (envelope, track, times,
+    speed, SRP) are checked here; the signal rules (zero, constant, dynamic range) need
+    the whole signal and are not.
+
+    Returns
+    -------
+    CphdBlocks
+        ``radar``, ``reference_point_m``, ``trajectory``, ``n_pulses``, ``metadata`` and
+        ``blocks(block_pulses)``.
+    """
+    lenient = as_lenient(lenient)
+    p = Path(path)
+    if not p.is_file():
+        raise DataError(f"{p}: file not found" if not p.exists() else f"{p}: not a file")
+    with p.open("rb") as fh:
+        prepared = _prepare(p, fh, channel, vectors, reference_point_m, 1, lenient=lenient)
+    return CphdBlocks(p, prepared)

@@ -115,6 +115,7 @@ from .matv5 import MatInflationError, MatStructureError, MatSummary, check_mat_v
 from .plausibility import (
     MAX_BEND,
     MAX_STEP,
+    SPEED_RANGE_MPS,
     as_lenient,
     check_envelope,
     check_signal,
@@ -501,10 +502,22 @@ def _carrier_phase(frequencies_hz: NDArray[np.float64], ranges_m: NDArray[np.flo
     return np.exp(-2j * np.pi * cycles)
 
 
+def _as_path(p: Any) -> Path:
+    if not isinstance(p, (str, os.PathLike)):
+        raise TypeError(
+            f"paths must be a path (str or os.PathLike) or a sequence of paths, got "
+            f"{type(p).__name__} {p!r:.60}"
+        )
+    path = Path(p)  # a PathLike of bytes raises TypeError here
+    return path
+
+
 def _as_paths(paths: PathLike | Sequence[PathLike]) -> list[Path]:
-    if isinstance(paths, (str, os.PathLike)):
-        return [Path(paths)]
-    out = [Path(p) for p in paths]
+    if isinstance(paths, (str, os.PathLike, bytes, bytearray)) or not isinstance(
+        paths, Sequence
+    ):
+        return [_as_path(paths)]
+    out = [_as_path(p) for p in paths]
     if not out:
         raise DataError("no GOTCHA file given")
     seen: dict[Path, Path] = {}
@@ -629,6 +642,11 @@ def read_gotcha(
         files, a broken plausibility rule, duplicate or non-consecutive files).
     """
     speed = positive(speed_mps, "speed_mps", unit="m/s")
+    lo, hi = SPEED_RANGE_MPS
+    if not lo <= speed <= hi:
+        raise ValueError(f"speed_mps must be within [{lo:g}, {hi:g}] m/s, got {speed_mps!r}")
+    lenient = as_lenient(lenient)
+    autofocus = as_lenient(autofocus, "autofocus")
     rho_o = as_point(reference_point_m, name="reference_point_m")
     given = _as_paths(paths)
     summaries = [_inspect(p) for p in given]

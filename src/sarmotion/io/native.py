@@ -55,7 +55,7 @@ import os
 import re
 import subprocess
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -65,6 +65,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
 from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
+from .._validation import integer
 from ..core import Radar, Traces, Trajectory
 from .errors import DataError, staged_paths
 from .plausibility import (
@@ -173,7 +174,7 @@ except Exception:
 """
 
 
-#: Files the child process read to the end: (path, inode, size, mtime, limit) -> True.
+#: Files the child process read to the end: (path, inode, size, mtime, limit, walk) -> True.
 _TERMINATES: dict[tuple[Any, ...], bool] = {}
 
 
@@ -196,7 +197,7 @@ def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> 
     """
     p = Path(path)
     st = p.stat()
-    key = (str(p.resolve()), st.st_ino, st.st_size, st.st_mtime_ns, memory_limit())
+    key = (str(p.resolve()), st.st_ino, st.st_size, st.st_mtime_ns, memory_limit(), _WALK)
     if key in _TERMINATES:
         return
     if timeout_s is None:
@@ -444,12 +445,14 @@ def save_traces(
     return target
 
 
-def _traces_header(fh: h5py.File, p: Path, *, lenient: bool) -> dict[str, Any]:
+def _traces_header(
+    fh: h5py.File, p: Path, *, lenient: bool, block_rows: int | None = None
+) -> dict[str, Any]:
     """Everything of a traces file but the data, checked: radar, trajectory, reference.
 
     The memory the data will take is checked against the limit from the header of
-    ``/traces/data``; the positions and slow times are read and checked against the
-    plausibility rules before any trace is read.
+    ``/traces/data`` (of ``block_rows`` pulses of it when given); the positions and slow
+    times are read and checked against the plausibility rules before any trace is read.
     """
     g = fh.get("traces")
     if not isinstance(g, h5py.Group):
@@ -462,11 +465,13 @@ def _traces_header(fh: h5py.File, p: Path, *, lenient: bool) -> dict[str, Any]:
     n, m = (int(k) for k in d.shape)
     if d.dtype.kind != "c":
         raise DataError(f"{p}: dataset /traces/data must be complex, got {d.dtype}")
-    stored = sum(_declared_bytes(g, k) for k in ("data", "positions_m", "slow_times_s"))
+    rows = n if block_rows is None else min(block_rows, n)
+    stored = sum(_declared_bytes(g, k) for k in ("positions_m", "slow_times_s"))
+    stored += _declared_bytes(g, "data") // max(n, 1) * rows
     _check_budget(
         p,
-        stored + phase_history_bytes(n, m),
-        f"{format_bytes(stored)} of datasets and the working copies of {n} x {m} traces",
+        stored + phase_history_bytes(rows, m),
+        f"{format_bytes(stored)} of datasets and the working copies of {rows} x {m} traces",
     )
     pos = _dataset(g, "positions_m", p, ndim=2)
     s = _dataset(g, "slow_times_s", p, ndim=1)
@@ -689,3 +694,87 @@ def load_image(path: PathLike) -> dict[str, Any]:
         "metadata": meta,
         "schema": schema,
     }
+
+
+# ------------------------------------------------------------------------ block reading
+class NativeBlocks:
+    """A native traces file opened for reading its traces block by block.
+
+    Made by :func:`open_native_blocks`. The positions, slow times, radar and reference
+    point are read and checked on opening; :meth:`blocks` reads the pulses of one block
+    at a time.
+
+    Attributes
+    ----------
+    radar : Radar
+        The radar of the file.
+    reference_point_m : (3,) ndarray
+        Reference point ``rho_o`` (m, float64).
+    trajectory : Trajectory
+        Antenna positions and slow times of every pulse.
+    n_pulses : int
+        Number of pulses.
+    metadata : dict
+        The file's metadata.
+    """
+
+    def __init__(self, path: Path, header: dict[str, Any]) -> None:
+        self.path = path
+        self.radar: Radar = header["radar"]
+        self.reference_point_m: NDArray[np.float64] = header["reference_point_m"]
+        self.trajectory: Trajectory = header["trajectory"]
+        self.n_pulses: int = self.trajectory.n_pulses
+        self.metadata: dict[str, Any] = header["metadata"]
+
+    def blocks(self, block_pulses: int) -> Iterator[tuple[int, int, NDArray[np.complexfloating]]]:
+        """``(start, stop, data[start:stop])`` for consecutive blocks of ``block_pulses``.
+
+        ``data`` is ``load_traces(path).data`` (fast time, the dtype stored); only the
+        pulses of one block are read from the file at a time.
+
+        Raises
+        ------
+        DataError
+            A block beyond the memory limit, NaN/inf samples, or a file that changed.
+        """
+        rows = integer(block_pulses, "block_pulses", minimum=1)
+        m = self.radar.n_samples
+        reason = over_budget(
+            rows * m * 16 + phase_history_bytes(rows, m),
+            f"a block of {rows} x {m} traces and its working copies",
+        )
+        if reason:
+            raise DataError(f"{self.path}: {reason}")
+        return self._blocks(rows)
+
+    def _blocks(self, rows: int) -> Iterator[tuple[int, int, NDArray[np.complexfloating]]]:
+        fh, p = _open(self.path, TRACES_SCHEMA)
+        with fh:
+            g = fh.get("traces")
+            d = g.get("data") if isinstance(g, h5py.Group) else None
+            if not isinstance(d, h5py.Dataset) or d.shape != (self.n_pulses, self.radar.n_samples):
+                raise DataError(f"{p}: /traces/data changed since the file was opened")
+            for a in range(0, self.n_pulses, rows):
+                b = min(a + rows, self.n_pulses)
+                yield a, b, _dataset(g, "data", p, ndim=2, rows=slice(a, b))
+
+
+def open_native_blocks(path: PathLike, *, lenient: bool = False) -> NativeBlocks:
+    """Open a native traces file to read its traces block by block.
+
+    The file's confinement (no external links, virtual or external datasets), the
+    memory budget of its positions, and the plausibility rules that need only the
+    positions, times and reference point are checked here; the signal rules (zero,
+    constant, dynamic range) need every trace and are not.
+
+    Returns
+    -------
+    NativeBlocks
+        ``radar``, ``reference_point_m``, ``trajectory``, ``n_pulses``, ``metadata`` and
+        ``blocks(block_pulses)``.
+    """
+    lenient = as_lenient(lenient)
+    fh, p = _open(path, TRACES_SCHEMA)
+    with fh:
+        header = _traces_header(fh, p, lenient=lenient, block_rows=1)
+    return NativeBlocks(p, header)

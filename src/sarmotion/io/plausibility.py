@@ -57,10 +57,10 @@ MIN_GRAZING_DEG = 5.0
 _CONSTANT_TOL = 4.0 * float(np.finfo(np.float32).eps)
 
 
-def as_lenient(value: object) -> bool:
-    """``lenient`` as a bool: True or False (numpy bools too), else TypeError."""
+def as_lenient(value: object, name: str = "lenient") -> bool:
+    """A flag such as ``lenient`` as a bool: True or False (numpy bools too), else TypeError."""
     if not isinstance(value, (bool, np.bool_)):
-        raise TypeError(f"lenient must be True or False, got {value!r}")
+        raise TypeError(f"{name} must be True or False, got {value!r:.60}")
     return bool(value)
 
 

@@ -94,6 +94,11 @@ def analyze(
     """
     if not isinstance(traces, Traces):
         raise TypeError(f"traces must be a sarmotion Traces, got {type(traces).__name__}")
+    if options is not None and not isinstance(options, AnalysisOptions):
+        raise TypeError(
+            f"options must be an AnalysisOptions (AnalysisOptions(**mapping) builds one from "
+            f"a dict), got {type(options).__name__}"
+        )
     opts = (options or AnalysisOptions()).resolved(traces)
     timings: dict[str, float] = {}
     central = central_sub_aperture(traces, opts.sub_aperture_deg)

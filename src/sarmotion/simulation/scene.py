@@ -24,6 +24,12 @@ Scene file schema (``schema = "sarmotion.scene/1"``), all SI units::
     label = "mover A"                    # optional
 
 Any other key is an error that names the key and the file.
+
+Limits, checked from the file before any array is built: the simulation's memory (the
+phase histories of the stationary and of the moving targets, ``n_pulses x n_samples``
+complex128 each, with their working copies) within the memory limit of
+:mod:`sarmotion._limits` (``--max-memory``), and its work, ``n_pulses x n_samples x
+n_targets`` terms of the forward model, at most :data:`MAX_SIMULATION_TERMS`.
 """
 
 from __future__ import annotations
@@ -37,7 +43,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._limits import over_budget, phase_history_bytes
 from ..core import Radar, Trajectory, as_point, target_positions
+from ..core.geometry import GOTCHA_PULSES_PER_DEG
 
 __all__ = [
     "PointTarget",
@@ -49,6 +57,9 @@ __all__ = [
 ]
 
 SCHEMA = "sarmotion.scene/1"
+#: Most terms (pulse x sample x target) of the forward model a scene may ask for: a
+#: full 360-degree GOTCHA circle (42 120 pulses of 424 samples) with 500 targets.
+MAX_SIMULATION_TERMS = 10**10
 _TOP_KEYS = {"schema", "name", "description", "reference_point_m", "trajectory", "radar", "targets"}
 _TARGET_KEYS = {"position_m", "velocity_mps", "amplitude", "phase_deg", "label"}
 _CIRCULAR_KEYS = {
@@ -218,6 +229,7 @@ class Scene:
         raw_targets = raw.get("targets", [])
         if not isinstance(raw_targets, list) or not raw_targets:
             raise SceneError(f"{source}: targets must be a non-empty array of tables")
+        _check_size(traj, radar, len(raw_targets), source)
         targets = []
         for i, t in enumerate(raw_targets):
             where = f"targets[{i}]"
@@ -300,6 +312,40 @@ class Scene:
                 for t in self.targets
             ],
         }
+
+
+def _pulse_count(spec: dict[str, Any]) -> int | None:
+    """Pulses the trajectory ``spec`` will hold (the rules of ``Trajectory``), or None."""
+    with np.errstate(all="ignore"):
+        if spec.get("kind", "circular") == "circular":
+            if "n_pulses" in spec:
+                return int(spec["n_pulses"])
+            n = float(spec.get("aperture_deg", 1.0)) * float(
+                spec.get("pulses_per_deg", GOTCHA_PULSES_PER_DEG)
+            )
+        else:
+            n = float(spec.get("aperture_m", 400.0)) / float(spec.get("pulse_spacing_m", 1.055))
+            n += 1.0
+    return int(round(n)) if np.isfinite(n) and n > 0 else None
+
+
+def _check_size(spec: dict[str, Any], radar: Radar, n_targets: int, source: str) -> None:
+    """The scene's memory and work limits (module notes), before anything is built."""
+    n = _pulse_count(spec)
+    if n is None or n < 1:
+        return  # Trajectory refuses it with its own message
+    m = radar.n_samples
+    terms = n * m * n_targets
+    if terms > MAX_SIMULATION_TERMS:
+        raise SceneError(
+            f"{source}: simulating it takes {n} pulses x {m} samples x {n_targets} targets = "
+            f"{terms:.3g} terms, over the limit of {MAX_SIMULATION_TERMS:.0e} (a full GOTCHA "
+            "circle with 500 targets)"
+        )
+    nbytes = 2 * phase_history_bytes(n, m) + 4 * 24 * n
+    reason = over_budget(nbytes, f"{n} pulses x {m} samples, complex128, with working copies")
+    if reason:
+        raise SceneError(f"{source}: {reason.replace('reading', 'simulating')}")
 
 
 def _check_keys(table: dict[str, Any], allowed: set[str], source: str, prefix: str) -> None:
