@@ -206,14 +206,19 @@ def _inspect(path: Path) -> MatSummary:
     if reason:
         raise DataError(f"{path}: {reason}")
     try:
-        return check_mat_v5(path.read_bytes(), variables=("data",), max_inflated=memory_limit())
+        return check_mat_v5(path.read_bytes(), variables=("data",), max_inflated=_inflation_cap())
     except MatInflationError:
         raise DataError(
             f"{path}: reading it would allocate more than {format_bytes(memory_limit())} "
-            "(the variable 'data' inflates beyond the memory limit; --max-memory sets it)"
+            "(the variable 'data' inflates beyond half the memory limit; --max-memory sets it)"
         ) from None
     except MatStructureError as exc:
         raise DataError(f"{path}: not a readable MATLAB .mat file: {exc}") from None
+
+
+def _inflation_cap() -> int:
+    """Largest inflated size of ``data``: half the memory limit (grown by copies)."""
+    return memory_limit() // 2
 
 
 def _check_budget(paths: list[Path], summaries: list[MatSummary]) -> None:
@@ -687,7 +692,7 @@ def is_gotcha_file(path: PathLike) -> bool:
     try:
         if over_budget(p.stat().st_size, "the file"):
             return False
-        check_mat_v5(p.read_bytes(), variables=("data",), max_inflated=memory_limit())
+        check_mat_v5(p.read_bytes(), variables=("data",), max_inflated=_inflation_cap())
         variables = scipy.io.whosmat(p, appendmat=False)
     except Exception:  # not a MATLAB v5 file: scipy raises ValueError, MatReadError, ...
         return False

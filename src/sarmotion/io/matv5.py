@@ -100,6 +100,22 @@ def check_mat_v5(
     return walker.summary
 
 
+def _inflate(data: bytes, budget: int) -> bytearray:
+    """The zlib stream ``data`` inflated 16 MB at a time; MatInflationError beyond ``budget``."""
+    inflater = zlib.decompressobj()
+    out = bytearray()
+    tail = data
+    while tail:
+        out += inflater.decompress(tail, 1 << 24)
+        if len(out) > budget:
+            raise MatInflationError(f"its variables inflate to more than {budget} bytes")
+        tail = inflater.unconsumed_tail
+    out += inflater.flush()
+    if len(out) > budget:
+        raise MatInflationError(f"its variables inflate to more than {budget} bytes")
+    return out
+
+
 class _Walker:
     def __init__(self, order: str, variables: Collection[str] | None, max_inflated: int) -> None:
         self.order = order
@@ -165,14 +181,9 @@ class _Walker:
                 if len(head) >= 8 and struct.unpack_from(self.order + "I", head)[0] == _MI_MATRIX:
                     if not self.wanted(self.variable_name(head, 8, len(head))):
                         return
-            inflater = zlib.decompressobj()
-            inflated = inflater.decompress(data, budget + 1)
+            inflated = _inflate(data, budget)
         except zlib.error:
             raise MatStructureError("a compressed element is corrupt") from None
-        if len(inflated) > budget:
-            raise MatInflationError(
-                f"its variables inflate to more than {budget} bytes (the memory limit)"
-            )
         self.summary.inflated_bytes += len(inflated)
         self.elements(inflated, 0, len(inflated), depth=depth + 1)
 
