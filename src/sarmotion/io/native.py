@@ -50,6 +50,7 @@ aperture looks at, e.g. displaced by 100 km, is at a few degrees).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -146,8 +147,9 @@ def _check_finite(values: NDArray[Any], path: Path | str, name: str) -> None:
 
 
 _WALK = """
-import sys, h5py
+import os, sys, h5py
 limit, seen = int(sys.argv[2]), set()
+limit = min(limit, 64 * os.path.getsize(sys.argv[1]) + (1 << 24))
 def visit(obj):
     if hash(obj.id) in seen:
         return
@@ -185,8 +187,9 @@ def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> 
     a single call (measured with h5py 3 on byte-flipped copies of a 24-pulse traces file:
     4 of 600 mutants looped reading a root attribute), which no Python code of the
     reading process can interrupt. The child process reads the whole file, through hard
-    links only and 16 MB at a time, skipping datasets beyond the memory limit and those
-    stored outside the file (which the reader refuses); a child that does not finish
+    links only and 16 MB at a time, skipping datasets stored outside the file (which the
+    reader refuses) and those beyond the memory limit or 64 times the file's size (fill
+    values of chunks never written, which no structure of the file is read for); a child that does not finish
     within ``timeout_s`` (default 20 s plus 1 s per 20 MB) is killed and the file
     refused. Errors the child meets are left to the real reader to report.
 
@@ -252,8 +255,9 @@ def _open(path: PathLike, expected: str) -> tuple[h5py.File, Path]:
         reason = "truncated" if "truncated" in str(exc) else "corrupt HDF5 structure"
         raise DataError(f"{p}: not a readable HDF5 file: {reason}") from None
     try:
-        _check_confined(fh, p)
-        schema = fh.attrs.get("schema")
+        with _hdf5_errors(p):
+            _check_confined(fh, p)
+            schema = fh.attrs.get("schema")
         if isinstance(schema, bytes):
             schema = schema.decode("utf-8", "replace")
         if schema is None:
@@ -271,6 +275,16 @@ def _open(path: PathLike, expected: str) -> tuple[h5py.File, Path]:
         fh.close()
         raise
     return fh, p
+
+
+@contextlib.contextmanager
+def _hdf5_errors(path: Path) -> Iterator[None]:
+    """The HDF5 library's errors on a corrupt file (RuntimeError, OSError, ...) as DataError."""
+    try:
+        yield
+    except (RuntimeError, OSError, KeyError) as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise DataError(f"{path}: not a readable HDF5 file: corrupt HDF5 structure ({msg})") from None
 
 
 def _check_confined(fh: h5py.File, path: Path) -> None:
@@ -306,6 +320,8 @@ def _check_confined(fh: h5py.File, path: Path) -> None:
             if not isinstance(link, h5py.HardLink):
                 raise DataError(f"{path}: {where} is a user-defined link (not supported)")
             obj = group.get(name)
+            if obj is None:
+                raise DataError(f"{path}: object {where} cannot be opened (corrupt)")
             key = hash(obj.id)
             if key in seen:
                 continue
@@ -465,6 +481,12 @@ def _traces_header(
     n, m = (int(k) for k in d.shape)
     if d.dtype.kind != "c":
         raise DataError(f"{p}: dataset /traces/data must be complex, got {d.dtype}")
+    for name, shape in (("positions_m", (n, 3)), ("slow_times_s", (n,))):
+        obj = g.get(name)
+        if isinstance(obj, h5py.Dataset) and obj.shape != shape:
+            raise DataError(
+                f"{p}: dataset /traces/{name} has shape {obj.shape}, expected {shape}"
+            )
     rows = n if block_rows is None else min(block_rows, n)
     stored = sum(_declared_bytes(g, k) for k in ("positions_m", "slow_times_s"))
     stored += _declared_bytes(g, "data") // max(n, 1) * rows
@@ -539,7 +561,7 @@ def load_traces(path: PathLike, *, lenient: bool = False) -> Traces:
     """
     lenient = as_lenient(lenient)
     fh, p = _open(path, TRACES_SCHEMA)
-    with fh:
+    with fh, _hdf5_errors(p):
         header = _traces_header(fh, p, lenient=lenient)
         data = _dataset(fh["traces"], "data", p, ndim=2)
     try:
@@ -556,7 +578,7 @@ def load_extra(path: PathLike) -> dict[str, NDArray[Any]]:
     Returns an empty dict when the file has none.
     """
     fh, p = _open(path, TRACES_SCHEMA)
-    with fh:
+    with fh, _hdf5_errors(p):
         g = fh.get("traces")
         shape = g["data"].shape if isinstance(g, h5py.Group) and "data" in g else None
         e = fh.get("extra")
@@ -669,7 +691,7 @@ def load_image(path: PathLike) -> dict[str, Any]:
         wrong shapes or NaN/inf values.
     """
     fh, p = _open(path, IMAGE_SCHEMA)
-    with fh:
+    with fh, _hdf5_errors(p):
         values = _dataset(fh, "values", p, ndim=2)
         x = _dataset(fh, "x_m", p, ndim=1)
         y = _dataset(fh, "y_m", p, ndim=1)
@@ -749,7 +771,7 @@ class NativeBlocks:
 
     def _blocks(self, rows: int) -> Iterator[tuple[int, int, NDArray[np.complexfloating]]]:
         fh, p = _open(self.path, TRACES_SCHEMA)
-        with fh:
+        with fh, _hdf5_errors(p):
             g = fh.get("traces")
             d = g.get("data") if isinstance(g, h5py.Group) else None
             if not isinstance(d, h5py.Dataset) or d.shape != (self.n_pulses, self.radar.n_samples):
@@ -775,6 +797,6 @@ def open_native_blocks(path: PathLike, *, lenient: bool = False) -> NativeBlocks
     """
     lenient = as_lenient(lenient)
     fh, p = _open(path, TRACES_SCHEMA)
-    with fh:
+    with fh, _hdf5_errors(p):
         header = _traces_header(fh, p, lenient=lenient, block_rows=1)
     return NativeBlocks(p, header)
