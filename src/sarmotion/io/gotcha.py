@@ -205,12 +205,14 @@ def _inspect(path: Path) -> MatSummary:
     reason = over_budget(path.stat().st_size, "the file, read whole for its structure check")
     if reason:
         raise DataError(f"{path}: {reason}")
+    cap = _inflation_cap()
     try:
-        return check_mat_v5(path.read_bytes(), variables=("data",), max_inflated=_inflation_cap())
+        return check_mat_v5(path.read_bytes(), variables=("data",), max_inflated=cap)
     except MatInflationError:
         raise DataError(
-            f"{path}: reading it would allocate more than {format_bytes(memory_limit())} "
-            "(the variable 'data' inflates beyond half the memory limit; --max-memory sets it)"
+            f"{path}: reading it would allocate more than {format_bytes(cap)} (the variable "
+            f"'data' inflates beyond half the memory limit of {format_bytes(2 * cap)}; "
+            "--max-memory sets it)"
         ) from None
     except MatStructureError as exc:
         raise DataError(f"{path}: not a readable MATLAB .mat file: {exc}") from None
