@@ -524,3 +524,56 @@ def test_api_reads_native_files_as_the_command_line_does(tmp_path, traces, monke
 
 def _refuse(path, **kwargs):
     raise DataError(f"{path}: checked")
+
+
+# ---------------------------------------------------------------------------- roads
+def _roads(tmp_path: Path, doc, *, prefix: bytes = b"") -> Path:
+    path = tmp_path / "roads.geojson"
+    path.write_bytes(prefix + (doc if isinstance(doc, bytes) else json.dumps(doc).encode()))
+    return path
+
+
+def _line(points, **extra):
+    return {"type": "Feature", "geometry": {"type": "LineString", "coordinates": points}, **extra}
+
+
+def test_roads_beyond_the_range_envelope_are_refused(tmp_path):
+    from sarmotion.io import read_roads
+
+    path = _roads(tmp_path, _line([[-1e308, 0.0], [1e308, 10.0]]))
+    with pytest.raises(DataError, match=r"roads\.geojson: feature 1: .*beyond 2e\+06 m"):
+        read_roads(path)
+
+
+def test_roads_with_a_crs_or_in_degrees_are_refused_with_advice(tmp_path):
+    from sarmotion.io import read_roads
+
+    crs = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32617"}}
+    doc = {"type": "FeatureCollection", "crs": crs, "features": [_line([[0, 0], [50, 0]])]}
+    with pytest.raises(DataError, match="'crs' member.*convert them"):
+        read_roads(_roads(tmp_path, doc))
+    dayton = _line([[-84.0512, 39.7801], [-84.0498, 39.7809]])  # a 150 m road, in degrees
+    with pytest.raises(DataError, match="like longitude/latitude in degrees"):
+        read_roads(_roads(tmp_path, dayton))
+
+
+def test_roads_with_a_byte_order_mark_are_read(tmp_path):
+    from sarmotion.io import read_roads
+
+    roads = read_roads(_roads(tmp_path, _line([[0, 0], [50, 5]]), prefix=b"\xef\xbb\xbf"))
+    np.testing.assert_array_equal(roads[0].points_m, [[0, 0], [50, 5]])
+
+
+def test_road_count_and_nesting_are_limited(tmp_path):
+    from sarmotion.io import read_roads
+    from sarmotion.io.roads import MAX_ROADS
+
+    many = {
+        "type": "FeatureCollection",
+        "features": [_line([[k, 0.0], [k, 10.0]]) for k in range(MAX_ROADS + 1)],
+    }
+    with pytest.raises(DataError, match=f"more than {MAX_ROADS} roads"):
+        read_roads(_roads(tmp_path, many))
+    nested = b'{"type": "LineString", "coordinates": ' + b"[" * 100_000 + b"]" * 100_000 + b"}"
+    with pytest.raises(DataError, match="nested too deeply"):
+        read_roads(_roads(tmp_path, nested))
