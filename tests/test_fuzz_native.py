@@ -79,9 +79,10 @@ def original(tmp_path_factory):
 
 
 def _differential_range(positions, reference):
-    return np.linalg.norm(positions[:, None] - SCENE_POINTS[None], axis=2) - np.linalg.norm(
-        positions - reference, axis=1
-    )[:, None]
+    return (
+        np.linalg.norm(positions[:, None] - SCENE_POINTS[None], axis=2)
+        - np.linalg.norm(positions - reference, axis=1)[:, None]
+    )
 
 
 def _structural(target: Path, other: Path, kind: str, name: str, size: int) -> None:

@@ -129,9 +129,7 @@ def test_mat_variables_other_than_data_are_not_inflated(tmp_path):
     assert bomb.stat().st_size < 20e6
     done = run_limited(["convert", str(bomb), "--to", "h5", "--out", str(tmp_path / "o.h5")])
     assert done.returncode == 0, done.stderr[-2000:]
-    np.testing.assert_array_equal(
-        load_traces(tmp_path / "o.h5").data, read_gotcha(good).data
-    )
+    np.testing.assert_array_equal(load_traces(tmp_path / "o.h5").data, read_gotcha(good).data)
 
 
 def test_mat_data_that_inflates_beyond_the_limit_is_refused(tmp_path):
@@ -240,9 +238,7 @@ def test_sparse_cphd_declaring_200000_vectors_is_refused(tmp_path, traces):
 # ------------------------------------------------------------------ memory: scene files
 def test_scene_with_10_to_8_pulses_is_refused(tmp_path):
     scene = tmp_path / "big.toml"
-    scene.write_text(
-        '[trajectory]\nn_pulses = 100000000\n[[targets]]\nposition_m = [0.0, 0.0]\n'
-    )
+    scene.write_text("[trajectory]\nn_pulses = 100000000\n[[targets]]\nposition_m = [0.0, 0.0]\n")
     assert scene.stat().st_size < 200
     done = run_limited(["simulate", str(scene), "--out", str(tmp_path / "o.h5")])
     assert_refused(done, "big.toml", "100000000 pulses")

@@ -1,4 +1,4 @@
-"""Block readers: the blocks of a CPHD or native file are the full read's traces, in bounded memory."""
+"""Block readers: blocks of a CPHD or native file are the full read's traces, in bounded memory."""
 
 from __future__ import annotations
 

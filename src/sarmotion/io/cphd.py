@@ -80,11 +80,11 @@ import sarkit.wgs84 as skwgs84
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._limits import over_budget, phase_history_bytes
 from .._validation import integer
 from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
 from ..core.spectral import to_fast_time
 from .errors import DataError, staged_paths
-from .._limits import over_budget, phase_history_bytes
 from .native import _to_json
 from .plausibility import (
     MAX_BEND,
@@ -1105,7 +1105,6 @@ class CphdBlocks:
             NaN samples).
         """
         rows = integer(block_pulses, "block_pulses", minimum=1)
-        prep = self._prepared
         n_samples = self.radar.n_samples
         reason = over_budget(
             rows * n_samples * 8 + phase_history_bytes(rows, n_samples),

@@ -107,10 +107,10 @@ import numpy as np
 import scipy.io
 from numpy.typing import ArrayLike, NDArray
 
+from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
 from .._validation import positive
 from ..core import C, Radar, Traces, Trajectory, as_point
 from .errors import DataError, staged_paths
-from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
 from .matv5 import MatInflationError, MatStructureError, MatSummary, check_mat_v5
 from .plausibility import (
     MAX_BEND,
@@ -520,9 +520,7 @@ def _as_path(p: Any) -> Path:
 
 
 def _as_paths(paths: PathLike | Sequence[PathLike]) -> list[Path]:
-    if isinstance(paths, (str, os.PathLike, bytes, bytearray)) or not isinstance(
-        paths, Sequence
-    ):
+    if isinstance(paths, (str, os.PathLike, bytes, bytearray)) or not isinstance(paths, Sequence):
         return [_as_path(paths)]
     out = [_as_path(p) for p in paths]
     if not out:

@@ -189,9 +189,11 @@ def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> 
     reading process can interrupt. The child process reads the whole file, through hard
     links only and 16 MB at a time, skipping datasets stored outside the file (which the
     reader refuses) and those beyond the memory limit or 64 times the file's size (fill
-    values of chunks never written, which no structure of the file is read for); a child that does not finish
-    within ``timeout_s`` (default 20 s plus 1 s per 20 MB) is killed and the file
-    refused. Errors the child meets are left to the real reader to report.
+    values of chunks never written, for which no structure of the file is read); a child
+    that does not finish within ``timeout_s`` (default 20 s plus 1 s per 20 MB) is killed
+    and the file refused. Errors the child meets are left to the real reader to report.
+    A file that passed is remembered (by path, inode, size and modification time) and not
+    read again.
 
     Raises
     ------
@@ -284,7 +286,9 @@ def _hdf5_errors(path: Path) -> Iterator[None]:
         yield
     except (RuntimeError, OSError, KeyError) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise DataError(f"{path}: not a readable HDF5 file: corrupt HDF5 structure ({msg})") from None
+        raise DataError(
+            f"{path}: not a readable HDF5 file: corrupt HDF5 structure ({msg})"
+        ) from None
 
 
 def _check_confined(fh: h5py.File, path: Path) -> None:
@@ -484,9 +488,7 @@ def _traces_header(
     for name, shape in (("positions_m", (n, 3)), ("slow_times_s", (n,))):
         obj = g.get(name)
         if isinstance(obj, h5py.Dataset) and obj.shape != shape:
-            raise DataError(
-                f"{p}: dataset /traces/{name} has shape {obj.shape}, expected {shape}"
-            )
+            raise DataError(f"{p}: dataset /traces/{name} has shape {obj.shape}, expected {shape}")
     rows = n if block_rows is None else min(block_rows, n)
     stored = sum(_declared_bytes(g, k) for k in ("positions_m", "slow_times_s"))
     stored += _declared_bytes(g, "data") // max(n, 1) * rows

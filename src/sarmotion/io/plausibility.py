@@ -144,9 +144,7 @@ def check_signal(
     """
     magnitudes = np.abs(phase_history)
     if phase_history.size == 0 or not np.any(magnitudes):
-        raise DataError(
-            f"{path}: {field}: every sample is zero (no echo to image or analyse)"
-        )
+        raise DataError(f"{path}: {field}: every sample is zero (no echo to image or analyse)")
     first = phase_history.reshape(-1)[0]
     spread = float(np.max(np.abs(phase_history - first)))
     if spread <= _CONSTANT_TOL * float(magnitudes.max()):
