@@ -107,12 +107,15 @@ def test_cphd_truncated_in_a_block(files, tmp_path):
     copy.write_bytes(path.read_bytes())
     opened = open_cphd_blocks(copy)
     size = copy.stat().st_size
-    with copy.open("r+b") as fh:  # cut in the middle of the last block of 64 vectors
+    blocks = opened.blocks(64)
+    next(blocks)
+    with copy.open("r+b") as fh:  # cut while reading: 14 vectors into the block 320:384
         fh.truncate(size - 30 * N_SAMPLES * 8)
     with pytest.raises(DataError) as info:
-        for _ in opened.blocks(64):
+        for _ in blocks:
             pass
     assert "\n" not in str(info.value) and str(info.value).startswith(str(copy))
+    assert "vectors 320:384 cannot be read (truncated" in str(info.value)
     with pytest.raises(DataError, match="truncated"):
         open_cphd_blocks(copy)
 
