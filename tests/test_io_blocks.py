@@ -109,7 +109,7 @@ def test_cphd_truncated_in_a_block(files, tmp_path):
     size = copy.stat().st_size
     blocks = opened.blocks(64)
     next(blocks)
-    with copy.open("r+b") as fh:  # cut while reading: 14 vectors into the block 320:384
+    with copy.open("r+b") as fh:  # cut while reading: 50 vectors into the block 320:384
         fh.truncate(size - 30 * N_SAMPLES * 8)
     with pytest.raises(DataError) as info:
         for _ in blocks:
