@@ -34,12 +34,16 @@ Plausibility
     the antenna above the ground and 10 m to 1000 km from the reference point, a track
     that moves by more than 0 and at most 2.5 median spacings per vector with second
     differences within 1 % of the spacing, ``TxTime`` increasing by at most 2.5 median
-    intervals, an ``SRPPos`` track as smooth as the antenna's (second differences within
+    intervals and, with the positions, a platform speed of 1 mm/s to 10 km/s, an
+    ``SRPPos`` track as smooth as the antenna's (second differences within
     1 % of the antenna spacing: a fixed SRP, one moving smoothly, or jumps that hold for
     two vectors or more), the IARP's ECF and LLH within 0.1 m, and a largest
-    sample modulus at most 1000 times the median. A corrupted PVP that passes them
-    changes the differential range of the scene by less than a quarter cycle
-    (``tests/test_fuzz_cphd.py``).
+    sample modulus at most 1000 times the median, not all zero (refused even
+    leniently) and not constant. The rules on the PVPs are checked before the signal is
+    read, and the bytes the read will take (from ``NumVectors``, ``NumSamples`` and the
+    sample format, which must fill the file's blocks exactly) before anything is read.
+    A corrupted PVP that passes them changes the differential range of the scene by
+    less than a quarter cycle (``tests/test_fuzz_cphd.py``).
 Not modelled
     ``TDTropoSRP`` and ``TDIonoSRP`` (the data are taken as referenced to the geometric
     TOA of the SRP), antenna patterns, noise levels and support arrays.
@@ -547,7 +551,10 @@ def read_cphd(
         Missing or truncated file, not a CPHD file, an unsupported version, TOA-domain,
         compressed or bistatic data, an unknown channel, a bad vector range, missing or
         NaN PVPs, NaN samples, frequency grids that differ between vectors, or a broken
-        plausibility rule (module notes; unless ``lenient``).
+        plausibility rule (module notes; unless ``lenient``); NumVectors or NumSamples
+        that disagree with the blocks of the file; the bytes the read would take beyond
+        the memory limit (checked from the XML before the PVPs are read; the PVP rules
+        are checked before the signal is read).
     """
     lenient = as_lenient(lenient)
     p = Path(path)

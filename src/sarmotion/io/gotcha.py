@@ -48,6 +48,13 @@ Track
     0.10 % (float32 rounding of 7 km coordinates, 1 mm against 1.055 m); the built-in
     scenes 0.015 %; a real aircraft at 70 m/s and 1 m spacing would need 5 g to bend
     its track by 1 %.
+Continuity
+    Consecutive files follow each other as pulses within a file do: the second
+    differences of the last two pulses of a file and the first two of the next are at
+    most 1 % of the median spacing (a file shifted by 1 m, or a missing pulse, breaks it;
+    measured on pass 1: at most 0.07 % at the three junctions).
+Signal
+    ``fp`` is not all zero (refused even leniently: no echo) and not constant (a fill).
 Angles
     ``th`` and ``phi`` agree with the azimuth and elevation of ``x, y, z`` to 0.01 deg
     (measured: 2.8e-7 and 3.2e-6 deg).
@@ -644,7 +651,11 @@ def read_gotcha(
     ------
     DataError
         One line naming the file, field, pulse and rule (unreadable or inconsistent
-        files, a broken plausibility rule, duplicate or non-consecutive files).
+        files, a broken plausibility rule, duplicate or non-consecutive files), or the
+        bytes the files would take beyond the memory limit (:mod:`sarmotion._limits`;
+        only the variable ``data`` of each file is inflated and read).
+    TypeError
+        ``paths`` is not a path or a sequence of paths (bytes are refused).
     """
     speed = positive(speed_mps, "speed_mps", unit="m/s")
     lo, hi = SPEED_RANGE_MPS

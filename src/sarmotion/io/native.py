@@ -559,7 +559,10 @@ def load_traces(path: PathLike, *, lenient: bool = False) -> Traces:
         Missing file, not HDF5, another schema or a newer version, a missing dataset or
         attribute, wrong shapes, NaN/inf values, inconsistent parameters, or a broken
         plausibility rule of :mod:`sarmotion.io.plausibility` (antenna envelope relative
-        to the reference point, a smooth track, the phase history's dynamic range).
+        to the reference point, a smooth track, increasing slow times, the platform
+        speed, the grazing angle of the reference point, a phase history not zero nor
+        constant and within the dynamic range); a file that reaches other files or
+        loops; the bytes it would take beyond the memory limit.
     """
     lenient = as_lenient(lenient)
     fh, p = _open(path, TRACES_SCHEMA)
