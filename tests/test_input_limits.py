@@ -573,3 +573,14 @@ def test_road_count_and_nesting_are_limited(tmp_path):
     nested = b'{"type": "LineString", "coordinates": ' + b"[" * 100_000 + b"]" * 100_000 + b"}"
     with pytest.raises(DataError, match="nested too deeply"):
         read_roads(_roads(tmp_path, nested))
+
+
+def test_scene_file_size_is_limited_before_parsing(tmp_path, capsys):
+    from sarmotion.simulation.scene import MAX_SCENE_FILE_BYTES
+
+    scene = tmp_path / "huge.toml"
+    line = b"[[targets]]\nposition_m = [1.0, 2.0]\n"
+    scene.write_bytes(line * (MAX_SCENE_FILE_BYTES // len(line) + 1))
+    assert run(["simulate", str(scene), "--out", str(tmp_path / "o.h5")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "a scene file holds at most" in err, err

@@ -29,7 +29,8 @@ Limits, checked from the file before any array is built: the simulation's memory
 phase histories of the stationary and of the moving targets, ``n_pulses x n_samples``
 complex128 each, with their working copies) within the memory limit of
 :mod:`sarmotion._limits` (``--max-memory``), and its work, ``n_pulses x n_samples x
-n_targets`` terms of the forward model, at most :data:`MAX_SIMULATION_TERMS`.
+n_targets`` terms of the forward model, at most :data:`MAX_SIMULATION_TERMS`; and the
+file itself at most :data:`MAX_SCENE_FILE_BYTES`, checked before it is parsed.
 """
 
 from __future__ import annotations
@@ -60,6 +61,9 @@ SCHEMA = "sarmotion.scene/1"
 #: Most terms (pulse x sample x target) of the forward model a scene may ask for: a
 #: full 360-degree GOTCHA circle (42 120 pulses of 424 samples) with 500 targets.
 MAX_SIMULATION_TERMS = 10**10
+#: Largest scene file (bytes). At GOTCHA sampling (117 pulses of 424 samples, one degree)
+#: the work limit admits 2e5 targets, about 6 MB of ``[[targets]]`` tables of 30 bytes.
+MAX_SCENE_FILE_BYTES = 16 * 2**20
 _TOP_KEYS = {"schema", "name", "description", "reference_point_m", "trajectory", "radar", "targets"}
 _TARGET_KEYS = {"position_m", "velocity_mps", "amplitude", "phase_deg", "label"}
 _CIRCULAR_KEYS = {
@@ -275,6 +279,11 @@ class Scene:
         p = Path(path)
         if not p.is_file():
             raise SceneError(f"scene file not found: {p}")
+        if p.stat().st_size > MAX_SCENE_FILE_BYTES:
+            raise SceneError(
+                f"{p}: {p.stat().st_size} bytes; a scene file holds at most "
+                f"{MAX_SCENE_FILE_BYTES} (the work limit of the simulation)"
+            )
         try:
             raw = tomllib.loads(p.read_text(encoding="utf-8"))
         except UnicodeDecodeError as exc:
