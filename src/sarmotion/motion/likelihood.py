@@ -45,7 +45,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.fft as sfft
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize
+from scipy.optimize import least_squares, minimize
 from threadpoolctl import threadpool_limits
 
 from ..core import (
@@ -62,10 +62,12 @@ from ..core.ascent import ResponseDerivatives, newton_ascent
 from ..core.spectral import FrequencyPlanes, phased_row_sums
 from ..imaging import resolution
 from ._aligned import _Aligner, _columns, _refine_max
+from .aperture import ranges_m
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
 
 __all__ = [
     "MatchedFilter",
+    "NEAR_EQUAL_LOBES",
     "PointFit",
     "fit_point_mover",
     "point_model",
@@ -81,6 +83,25 @@ _CHUNK = 1 << 21
 #: Units of the Newton ascent in :func:`_local_fit`: about an eighth of a resolution in
 #: range position (m), range speed and cross-range speed (m/s) on a GOTCHA degree.
 _LOCAL_UNITS = np.array([0.03, 0.0015, 0.09])
+
+#: Lobes of the global profile (its largest local maxima, a cross-range-speed resolution
+#: apart) from which :func:`fit_point_mover` starts local fits.
+_PROFILE_LOBES = 3
+
+#: Largest relative shortfall of the chosen fit's ``|I|`` below the profile's maximum.
+#: The profile is ``|I|`` itself at points of the search (same data, same units) and
+#: a local ascent from the profile's maximum cannot end lower; the tolerance admits the
+#: search's single-precision spectra and the least-squares conversion of its point to
+#: the matched filter's parameters (a residual range error of ``lambda / 50`` rms
+#: costs 1 - exp(-(4 pi / 50)^2 / 2) = 3 % of ``|I|``).
+_PROFILE_TOLERANCE = 0.05
+
+#: ``|I|`` ratio of two maxima on different lobes (cross-range speeds more than a
+#: resolution apart) at or above which the likelihood is reported ambiguous
+#: (:attr:`PointFit.ambiguous`): 0.9 in ``|I|`` is 0.9 dB, within the noise of ``|I|^2``
+#: at an SNR of the matched filter below ~20 dB (its relative deviation is
+#: ``2 / sqrt(2 SNR)``), where the larger maximum may not be the true one.
+NEAR_EQUAL_LOBES = 0.9
 
 
 class MatchedFilter:
@@ -169,6 +190,13 @@ class PointFit:
     grid_mps, profile : (n_grid,) ndarray
         The global search: cross-range speeds and ``max |I|`` over range and range speed
         at each (data units times ``n_pulses``), for plotting beside ``g_perp``.
+    lobe_ratio : float
+        ``|I|`` of the best local maximum on another lobe (cross-range speed more than a
+        resolution away) over the fit's ``|I|``; 0 when no other lobe was fitted.
+    other_cross_range_speed_mps : float or None
+        That maximum's cross-range speed (m/s).
+    ambiguous : bool
+        The likelihood has two near-equal maxima: ``lobe_ratio >= NEAR_EQUAL_LOBES``.
     """
 
     position_m: NDArray[np.float64]
@@ -178,15 +206,53 @@ class PointFit:
     amplitude: complex
     grid_mps: NDArray[np.float64]
     profile: NDArray[np.float64]
+    lobe_ratio: float = 0.0
+    other_cross_range_speed_mps: float | None = None
+    ambiguous: bool = False
+
+
+@dataclass(frozen=True)
+class _Profile:
+    """The global search over cross-range speed (:func:`_global_cross_search`).
+
+    ``values[i]``: ``max |I|`` over the window's ground-range offsets and the residual
+    range speeds at the cross-range speed ``grid[i]``; ``residual_mps[i]`` and
+    ``delay_s[i]``: where that maximum is (residual range speed, m/s, and the aligned
+    trace's fast-time delay, s).
+    """
+
+    grid: NDArray[np.float64]
+    values: NDArray[np.float64]
+    residual_mps: NDArray[np.float64]
+    delay_s: NDArray[np.float64]
+
+    def peaks(self, separation: int, count: int) -> list[int]:
+        """Indices of the profile's ``count`` largest local maxima, ``separation`` apart.
+
+        Largest first; a maximum within ``separation`` grid steps of a larger one is
+        the same lobe's shoulder and is not listed.
+        """
+        order = np.argsort(-self.values, kind="stable")
+        out: list[int] = []
+        for i in order:
+            if len(out) == count:
+                break
+            lo, hi = max(0, i - 1), min(self.values.size, i + 2)
+            if self.values[i] < self.values[lo:hi].max():
+                continue  # not a local maximum
+            if all(abs(int(i) - j) > separation for j in out):
+                out.append(int(i))
+        return out
 
 
 def _global_cross_search(
     traces: Traces, data: NDArray, range_speed_mps: float, grid: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], float, float, float]:
+) -> _Profile:
     """Profile of ``max |I|`` over range and residual range speed for each ``u_p`` of ``grid``.
 
-    Returns the profile, and at its maximum the cross-range speed, the residual range
-    speed (m/s) and the slant-range delay of the aligned trace (s).
+    The profile is in the units of ``|I|`` (``a n_pulses`` for a mover of reflectivity
+    ``a`` at the parameters): the aligned traces are scaled as :attr:`Traces.data`, whose
+    point response peaks at ``mean(W) = 1`` (:meth:`sarmotion.core.Radar.spectral_weights`).
     """
     d = traces.with_data(data)
     al = _Aligner(d, d.reference_point_m)
@@ -211,12 +277,59 @@ def _global_cross_search(
             k = dop.argmax(axis=1)
             profile[i0 : i0 + 8] = dop[np.arange(vel.shape[0]), k]
             where[i0 : i0 + 8] = np.stack(np.unravel_index(k, (n_dop, cols.size)), axis=1)
-    b = int(np.argmax(profile))
-    kd, it = where[b]
+    kd, it = where[:, 0], where[:, 1]
     ds = float(np.median(np.diff(d.slow_times_s)))
-    doppler_hz = (kd if kd < n_dop // 2 else kd - n_dop) / (n_dop * ds)
+    doppler_hz = np.where(kd < n_dop // 2, kd, kd - n_dop) / (n_dop * ds)
     du = doppler_hz * C / (2.0 * d.radar.carrier_hz)
-    return profile, float(grid[b]), du, float(al.times_s[cols[it]])
+    mean_w = float(np.mean(d.radar.spectral_weights()))
+    return _Profile(
+        grid=np.asarray(grid, dtype=np.float64),
+        values=profile / mean_w,
+        residual_mps=du,
+        delay_s=al.times_s[cols[it]].astype(np.float64),
+    )
+
+
+def _model_start(
+    traces: Traces, delay_s: float, range_speed_mps: float, cross_range_speed_mps: float
+) -> tuple[NDArray[np.float64], float, float]:
+    """The matched filter's parameters of a point of the global search.
+
+    The search aligns the traces on the reference point: its point ``(delay, u_r, u_p)``
+    is the range history ``|r(s) - rho_o - s u| + c delay / 2`` (``u`` the ground velocity
+    of ``(u_r, u_p)``). The matched filter's parameters hold the position on the
+    reference point's cross range, ``rho_o + x e_r``: the motion there with the same
+    range history has other speeds. Off the reference point the line of sight's
+    elevation differs (a ground velocity's range rate scales with its cosine: 28 m/s
+    at 40 m of ground range on GOTCHA is 0.04 m/s, five Doppler resolutions of a
+    degree), and so does the curvature of a circular flight's range history. The three
+    numbers of the range history over a straight sub-aperture (range, rate, curvature,
+    :mod:`sarmotion.motion.aperture`) fix ``(x, u_r, u_p)``: they are fitted by least
+    squares on the ranges at every pulse.
+
+    Returns
+    -------
+    position : (3,) ndarray
+        ``rho_o + x e_r`` (m).
+    range_speed_mps, cross_range_speed_mps : float
+    """
+    geom = traces.geometry
+    cells = resolution(traces)
+    e_r = np.r_[cells.range_direction, 0.0]
+    ref = traces.reference_point_m
+    g_r, g_p = ground_velocity(1.0, 0.0, geom), ground_velocity(0.0, 1.0, geom)
+    target = (
+        ranges_m(traces, ref, range_speed_mps * g_r + cross_range_speed_mps * g_p)
+        + 0.5 * C * delay_s
+    )
+    x0 = -0.5 * C * delay_s / np.cos(cells.elevation_rad)
+
+    def residual(q: NDArray[np.float64]) -> NDArray[np.float64]:
+        v = (range_speed_mps + q[1]) * g_r + (cross_range_speed_mps + q[2]) * g_p
+        return ranges_m(traces, ref + (x0 + q[0]) * e_r, v) - target
+
+    q = least_squares(residual, np.zeros(3), x_scale=np.array([0.1, 0.01, 0.1]), xtol=1e-12).x
+    return ref + (x0 + q[0]) * e_r, range_speed_mps + float(q[1]), cross_range_speed_mps + float(q[2])
 
 
 def _local_fit(
@@ -317,21 +430,40 @@ def fit_point_mover(
 
     u0, _ = _refine_max(g, float(range_speed_mps), 0.5 * res_u, 1e-3)
     lo, hi = cross_speed_range_mps
-    step = 0.5 * cross_range_speed_resolution(tr) if step_mps is None else float(step_mps)
+    res_c = cross_range_speed_resolution(tr)
+    step = 0.5 * res_c if step_mps is None else float(step_mps)
     grid = lo + step * np.arange(int(np.floor((hi - lo) / step)) + 1)
-    profile, up, du, delay = _global_cross_search(tr, d, u0, grid)
-    cells = resolution(tr)
-    x = -0.5 * C * delay / np.cos(cells.elevation_rad)  # ground-range offset of the trace
-    start = tr.reference_point_m + x * np.r_[cells.range_direction, 0.0]
+    search = _global_cross_search(tr, d, u0, grid)
     mf = MatchedFilter(tr, d)
     # Local maxima one Doppler resolution apart in range speed trade it against metres
-    # per second of cross-range speed (one degree of aperture): the local fit from the
-    # search's range speed and from one resolution either side, the largest |I| kept.
+    # per second of cross-range speed (one degree of aperture): from the profile's
+    # largest maximum the local fit starts at its range speed and one resolution either
+    # side; from the next lobes' maxima at their own range speed.
     doppler_mps = C / (
         2.0 * tr.radar.carrier_hz * tr.n_pulses * np.median(np.diff(tr.slow_times_s))
     )
-    fits = [_local_fit(tr, mf, start, u0 + du + k * doppler_mps, up) for k in (0, -1, 1)]
+    lobe_steps = max(1, int(np.ceil(res_c / step)))
+    peaks = search.peaks(lobe_steps, _PROFILE_LOBES)
+    fits = []
+    for rank, i in enumerate(peaks):
+        start, ur0, up0 = _model_start(
+            tr, search.delay_s[i], u0 + search.residual_mps[i], float(grid[i])
+        )
+        for k in (0, -1, 1) if rank == 0 else (0,):
+            fits.append(_local_fit(tr, mf, start, ur0 + k * doppler_mps, up0))
     pos, ur, up, value = max(fits, key=lambda f: abs(f[3]))
+    # The check against the profile: a local ascent never ends below its start, and the
+    # start of the first fits is the profile's maximum (its |I| in the same units), so a
+    # fit more than _PROFILE_TOLERANCE below it did not start on the profile's lobe.
+    best = peaks[0]
+    if abs(value) < (1.0 - _PROFILE_TOLERANCE) * search.values[best]:
+        pos, ur, up = _model_start(
+            tr, search.delay_s[best], u0 + search.residual_mps[best], float(grid[best])
+        )
+        value = complex(mf.responses(pos[None], ground_velocity(ur, up, tr.geometry)[None])[0])
+    others = [f for f in fits if abs(f[2] - up) > res_c]
+    other = max(others, key=lambda f: abs(f[3])) if others else None
+    ratio = abs(other[3]) / max(abs(value), 1e-300) if other is not None else 0.0
     return PointFit(
         position_m=pos,
         range_speed_mps=ur,
@@ -339,7 +471,10 @@ def fit_point_mover(
         velocity_mps=ground_velocity(ur, up, tr.geometry),
         amplitude=value / tr.n_pulses,
         grid_mps=grid,
-        profile=profile,
+        profile=search.values,
+        lobe_ratio=float(ratio),
+        other_cross_range_speed_mps=None if other is None else float(other[2]),
+        ambiguous=bool(ratio >= NEAR_EQUAL_LOBES),
     )
 
 
