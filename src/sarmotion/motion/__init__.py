@@ -46,6 +46,7 @@ from .detector import (
 from .likelihood import (
     MatchedFilter,
     PointFit,
+    duplicate_fits,
     fit_point_mover,
     matched_filter_noise_variance,
     noise_variance,
@@ -72,6 +73,7 @@ __all__ = [
     "detect_range_speeds",
     "false_alarm_probability",
     "fisher_information",
+    "duplicate_fits",
     "fit_point_mover",
     "local_floor",
     "local_statistic",

@@ -25,8 +25,21 @@ cross-range family, :mod:`sarmotion.motion.aperture`). The search
    peak) and over a residual range speed ``+- lambda PRF / 4`` (a Doppler FFT over slow
    time, padded four times): the linear phase ``exp(i 4 pi du s / lambda)`` that a
    range-speed error leaves on the aligned trace;
-2. **local**: a loose Nelder–Mead on the exact ``|I(theta)|`` from the best grid point,
-   then a Newton ascent of ``|I|^2`` (analytic derivatives, :mod:`sarmotion.core.ascent`).
+2. **local**: a loose Nelder–Mead on the exact ``|I(theta)|``, then a Newton ascent of
+   ``|I|^2`` (analytic derivatives, :mod:`sarmotion.core.ascent`), from each of the
+   profile's largest lobes. A point of the search is a range history aligned on the
+   reference point; the start is the motion on the fit's (the reference point's) cross
+   range with the same range history (:func:`_model_start`): off the reference point
+   the same ground velocity has another range rate, by several Doppler resolutions for
+   a fast mover tens of metres away, and a start that far off climbs to another lobe of
+   lower likelihood metres per second away in cross-range speed. The fit of largest
+   ``|I|`` is kept and checked against the profile's maximum (the same ``|I|`` at a
+   point of the search: a fit more than ``_PROFILE_TOLERANCE`` below it is replaced by
+   that point). A maximum on another lobe within ``NEAR_EQUAL_LOBES`` of the fit's
+   ``|I|`` makes the fit :attr:`PointFit.ambiguous`.
+
+:func:`duplicate_fits` finds fits that repeat another's range history (one mover fitted
+twice).
 
 :func:`refine_jointly` re-fits every mover with the others' fitted models subtracted
 from the data, a few rounds (the alternating maximisation of the joint likelihood).
@@ -70,6 +83,7 @@ __all__ = [
     "NEAR_EQUAL_LOBES",
     "PointFit",
     "fit_point_mover",
+    "duplicate_fits",
     "point_model",
     "refine_jointly",
     "refit_movers",
@@ -329,7 +343,11 @@ def _model_start(
         return ranges_m(traces, ref + (x0 + q[0]) * e_r, v) - target
 
     q = least_squares(residual, np.zeros(3), x_scale=np.array([0.1, 0.01, 0.1]), xtol=1e-12).x
-    return ref + (x0 + q[0]) * e_r, range_speed_mps + float(q[1]), cross_range_speed_mps + float(q[2])
+    return (
+        ref + (x0 + q[0]) * e_r,
+        range_speed_mps + float(q[1]),
+        cross_range_speed_mps + float(q[2]),
+    )
 
 
 def _local_fit(
@@ -418,7 +436,9 @@ def fit_point_mover(
     Returns
     -------
     PointFit
-        Its position is on the reference point's cross range.
+        Its position is on the reference point's cross range; ``ambiguous``,
+        ``lobe_ratio`` and ``other_cross_range_speed_mps`` say whether another lobe of
+        the likelihood came near its maximum.
     """
     d = np.asarray(data)
     tr = traces.with_data(d)
@@ -476,6 +496,41 @@ def fit_point_mover(
         other_cross_range_speed_mps=None if other is None else float(other[2]),
         ambiguous=bool(ratio >= NEAR_EQUAL_LOBES),
     )
+
+
+def duplicate_fits(traces: Traces, fits: Sequence[PointFit]) -> list[int]:
+    """Indices of the fits that repeat a stronger one: the same range history.
+
+    Two point movers whose ranges ``|r(s) - rho - s u|`` differ by less than a
+    slant-range resolution ``c / (2 B)`` at every pulse of ``traces`` are within one
+    resolution cell of each other all along the aperture: their traces are one trace
+    to ``g(u)`` and to the separation, and what the point model leaves of a mover
+    fitted on a side lobe (whose range history differs from the main lobe's by a few
+    wavelengths of curvature) follows that trace, so a second fit of it is the same
+    mover. Of such a group the fit of largest ``|amplitude|`` is kept.
+
+    Parameters
+    ----------
+    traces : Traces
+        The (sub-)aperture the fits were made on (``s = 0`` their time).
+    fits : sequence of PointFit
+
+    Returns
+    -------
+    list of int
+        The indices to drop, ascending.
+    """
+    cell = 0.5 * C / traces.radar.bandwidth_hz
+    order = sorted(range(len(fits)), key=lambda k: -abs(fits[k].amplitude))
+    histories = [ranges_m(traces, f.position_m, f.velocity_mps) for f in fits]
+    kept: list[int] = []
+    drop: list[int] = []
+    for k in order:
+        if any(np.max(np.abs(histories[k] - histories[j])) < cell for j in kept):
+            drop.append(k)
+        else:
+            kept.append(k)
+    return sorted(drop)
 
 
 def point_model(

@@ -27,6 +27,7 @@ from ..motion import (
     StationaryExplanation,
     TrajectoryEstimate,
     detect_range_speeds,
+    duplicate_fits,
     estimate_cross_range_speed,
     estimate_trajectory,
     family_direction,
@@ -164,6 +165,11 @@ def estimate_movers(
     if image is not None and fits:
         threshold = options.separation.candidate_threshold_db
         fits, data_sub = refit_movers_on_data(sub, image, fits, threshold_db=threshold)
+    drop = set(duplicate_fits(sub, fits))  # one mover is not declared twice
+    if drop:
+        log.info("%d fit(s) repeat a stronger mover's range history: merged", len(drop))
+        keep = [k for k in range(len(fits)) if k not in drop]
+        fits, on_s, found = ([x[k] for k in keep] for x in (fits, on_s, found))
     models = [point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in fits]
     left = data_sub - sum(models, np.zeros(sub.shape, dtype=complex))
     residual = np.array(moving, dtype=np.complex128)
