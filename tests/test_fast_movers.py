@@ -174,3 +174,31 @@ def test_two_near_equal_lobes_are_reported():
     )
     found = sorted([fit.cross_range_speed_mps, fit.other_cross_range_speed_mps])
     assert np.allclose(found, truths, atol=CROSS_SPEED_TOL), (found, truths)
+
+
+@pytest.mark.parametrize("seed", [1062, 1063])
+def test_the_local_fits_start_within_a_doppler_resolution(seed):
+    """The start of the local fits is the truth's range history, to a Doppler resolution.
+
+    The search point at the profile's maximum is a range history aligned on the
+    reference point; ``_model_start`` gives the motion on the fit's cross range with
+    that range history, whose range speed is the truth's (on its family) to within a
+    Doppler resolution ``lambda / (2 T)``: inside the main lobe of the likelihood in
+    range speed, from where the ascent stays on it.
+    """
+    from types import SimpleNamespace
+
+    from sarmotion.core import C
+    from sarmotion.motion.likelihood import _global_cross_search, _model_start
+
+    sim = fast_mover_scene(seed, 1.0, 0)
+    tr, truth = sim.traces, sim.scene.moving[0]
+    geom = tr.geometry
+    ur = range_speed(truth.velocity_mps, geom)
+    search = _global_cross_search(tr, tr.data, ur, np.arange(-12.0, 12.0, 0.37))
+    i = int(np.argmax(search.values))
+    pos, u_r, u_p = _model_start(tr, search.delay_s[i], ur + search.residual_mps[i], search.grid[i])
+    start = SimpleNamespace(position_m=pos, velocity_mps=ground_velocity(u_r, u_p, geom))
+    doppler = C / (2.0 * tr.radar.carrier_hz * (tr.slow_times_s[-1] - tr.slow_times_s[0]))
+    err = family_errors(tr, start, truth)
+    assert abs(err[1]) < doppler, (err, doppler)

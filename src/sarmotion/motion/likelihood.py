@@ -33,10 +33,11 @@ cross-range family, :mod:`sarmotion.motion.aperture`). The search
    the same ground velocity has another range rate, by several Doppler resolutions for
    a fast mover tens of metres away, and a start that far off climbs to another lobe of
    lower likelihood metres per second away in cross-range speed. The fit of largest
-   ``|I|`` is kept and checked against the profile's maximum (the same ``|I|`` at a
-   point of the search: a fit more than ``_PROFILE_TOLERANCE`` below it is replaced by
-   that point). A maximum on another lobe within ``NEAR_EQUAL_LOBES`` of the fit's
-   ``|I|`` makes the fit :attr:`PointFit.ambiguous`.
+   ``|I|`` is kept and checked against the profile's maximum (``|I|`` of an approximate
+   signature at a point of the search: a fit more than ``_PROFILE_TOLERANCE`` below it
+   gives way to that point's motion where its ``|I|`` is larger). A maximum on another
+   lobe within ``NEAR_EQUAL_LOBES`` of the fit's ``|I|`` makes the fit
+   :attr:`PointFit.ambiguous`.
 
 :func:`duplicate_fits` finds fits that repeat another's range history (one mover fitted
 twice).
@@ -103,11 +104,14 @@ _LOCAL_UNITS = np.array([0.03, 0.0015, 0.09])
 _PROFILE_LOBES = 3
 
 #: Largest relative shortfall of the chosen fit's ``|I|`` below the profile's maximum.
-#: The profile is ``|I|`` itself at points of the search (same data, same units) and
-#: a local ascent from the profile's maximum cannot end lower; the tolerance admits the
-#: search's single-precision spectra and the least-squares conversion of its point to
-#: the matched filter's parameters (a residual range error of ``lambda / 50`` rms
-#: costs 1 - exp(-(4 pi / 50)^2 / 2) = 3 % of ``|I|``).
+#: The profile correlates the data with an approximation of the signature of the search
+#: point's range history, in the units of ``|I|`` (its residual range speed is
+#: compensated by its phase at the carrier only); the first local fit starts at the
+#: exact signature of that range history (:func:`_model_start`) and an ascent never
+#: ends below its start. A fit further below the profile's maximum than the two
+#: signatures' difference can explain is replaced by that start where the start's
+#: ``|I|`` is larger. The tolerance: noise between the two signatures (a relative
+#: deviation of ``|I|`` of ``1 / sqrt(2 SNR)``, 5 % at a matched-filter SNR of 23 dB).
 _PROFILE_TOLERANCE = 0.05
 
 #: ``|I|`` ratio of two maxima on different lobes (cross-range speeds more than a
@@ -266,7 +270,9 @@ def _global_cross_search(
 
     The profile is in the units of ``|I|`` (``a n_pulses`` for a mover of reflectivity
     ``a`` at the parameters): the aligned traces are scaled as :attr:`Traces.data`, whose
-    point response peaks at ``mean(W) = 1`` (:meth:`sarmotion.core.Radar.spectral_weights`).
+    point response peaks at ``mean(W)`` (1, :meth:`sarmotion.core.Radar.spectral_weights`).
+    The residual range speed is compensated by its phase at the carrier: a lower bound
+    of ``|I|`` at the motion of the same range history, not ``|I|`` itself.
     """
     d = traces.with_data(data)
     al = _Aligner(d, d.reference_point_m)
@@ -472,15 +478,16 @@ def fit_point_mover(
         for k in (0, -1, 1) if rank == 0 else (0,):
             fits.append(_local_fit(tr, mf, start, ur0 + k * doppler_mps, up0))
     pos, ur, up, value = max(fits, key=lambda f: abs(f[3]))
-    # The check against the profile: a local ascent never ends below its start, and the
-    # start of the first fits is the profile's maximum (its |I| in the same units), so a
-    # fit more than _PROFILE_TOLERANCE below it did not start on the profile's lobe.
+    # The check against the profile (_PROFILE_TOLERANCE): a fit far below the profile's
+    # maximum gives way to the motion of that maximum's range history, if higher.
     best = peaks[0]
     if abs(value) < (1.0 - _PROFILE_TOLERANCE) * search.values[best]:
-        pos, ur, up = _model_start(
+        p0, ur0, up0 = _model_start(
             tr, search.delay_s[best], u0 + search.residual_mps[best], float(grid[best])
         )
-        value = complex(mf.responses(pos[None], ground_velocity(ur, up, tr.geometry)[None])[0])
+        v0 = complex(mf.responses(p0[None], ground_velocity(ur0, up0, tr.geometry)[None])[0])
+        if abs(v0) > abs(value):
+            pos, ur, up, value = p0, ur0, up0, v0
     others = [f for f in fits if abs(f[2] - up) > res_c]
     other = max(others, key=lambda f: abs(f[3])) if others else None
     ratio = abs(other[3]) / max(abs(value), 1e-300) if other is not None else 0.0
