@@ -395,27 +395,27 @@ class OutputClaim:
     def _appeared(self) -> OutputError:
         return OutputError(f"--out {self.out} was created while sarmotion ran; --force replaces it")
 
+    def _present(self, state: str, written: Set[str] = frozenset()) -> None:
+        """Check the target found at commit time (``state`` not "missing")."""
+        if not self.existed and not self.force:
+            raise self._appeared()
+        self._check(state, written=written)
+
     def _swap_file(self, staged: Path) -> None:
         if not staged.is_file():
             raise RuntimeError(f"{staged}: nothing was written")
-        state = _state(self.out)
-        self._check(state)
-        if state == "missing":
+        if _state(self.out) == "missing":
             try:
                 os.link(staged, self.out)  # atomic, and fails if the target appeared
                 return
             except FileExistsError:
-                state = _state(self.out)
-                self._check(state)
+                pass
             except OSError:  # no hard links here: a rename, checked just before
                 if not os.path.lexists(self.out):
                     os.rename(staged, self.out)
                     return
-                state = _state(self.out)
-                self._check(state)
-        if not self.existed and not self.force:
-            raise self._appeared()
-        os.rename(staged, self.out)
+        self._present(_state(self.out))
+        os.rename(staged, self.out)  # atomic replace
 
     def _swap_directory(self, stage: Path) -> None:
         out = self.out
@@ -432,9 +432,7 @@ class OutputClaim:
                     os.rename(stage, out)
                     return
             state = _state(out)
-        self._check(state, written=written)
-        if not self.existed and not self.force:
-            raise self._appeared()
+        self._present(state, written)
         for entry in os.listdir(out):
             if not self._ours(entry, written):
                 _carry(out / entry, stage / entry)  # the user's own files stay
