@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import logging
 import os
 import re
 from collections.abc import Callable, Iterator, Sequence
@@ -21,6 +22,7 @@ __all__ = [
     "Progress",
     "as_flags",
     "check_out",
+    "dask_logging",
     "extent_grid",
     "force_option",
     "lenient_option",
@@ -55,6 +57,43 @@ def as_flags(**flags: str) -> Iterator[None]:
         for name, flag in flags.items():
             text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w])", flag, text)
         raise InputError(text) from None
+
+
+#: Loggers of Dask and of the libraries under it (the web server, the event loop).
+DASK_LOGGERS = ("distributed", "dask", "tornado", "asyncio", "bokeh")
+
+
+@contextlib.contextmanager
+def dask_logging() -> Iterator[None]:
+    """Dask's log lines through sarmotion's verbosity while the block runs.
+
+    ``-v`` (info) and ``-vv`` (debug) show them in sarmotion's format; by default and with
+    ``-q`` they are silent (a failure still reaches the user as the task's exception,
+    reported as any other error). Importing ``distributed`` sets its own levels, so it is
+    imported first; the previous levels come back afterwards.
+    """
+    import distributed  # noqa: F401
+
+    root = logging.getLogger().getEffectiveLevel()
+    level = root if root <= logging.INFO else logging.CRITICAL + 1
+    names = [
+        n
+        for n in list(logging.root.manager.loggerDict)
+        if any(n == p or n.startswith(p + ".") for p in DASK_LOGGERS)
+    ]
+    saved = {}
+    for name in sorted(set(names) | set(DASK_LOGGERS)):
+        logger = logging.getLogger(name)
+        saved[name] = (logger.level, logger.propagate)
+        logger.setLevel(level if name in DASK_LOGGERS else logging.NOTSET)
+        logger.propagate = logger.propagate or not logger.handlers
+    try:
+        yield
+    finally:
+        for name, (lvl, propagate) in saved.items():
+            logger = logging.getLogger(name)
+            logger.setLevel(lvl)
+            logger.propagate = propagate
 
 
 class Progress:

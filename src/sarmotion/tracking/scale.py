@@ -27,17 +27,101 @@ from __future__ import annotations
 
 import logging
 import os
+import tempfile
 from collections.abc import Iterator, Sequence
-from contextlib import ExitStack
+from contextlib import ExitStack, contextmanager
 from typing import Any
 
 from ..core import Traces
 from ..pipeline import AnalysisOptions
 from .sub_apertures import SubApertureDetections, analyze_sub_aperture, sub_aperture_time_s
 
-__all__ = ["map_sub_apertures"]
+__all__ = ["MAX_WORKERS_PER_CORE", "check_workers", "local_cluster", "map_sub_apertures"]
 
 log = logging.getLogger(__name__)
+
+#: Most local workers per core. Each analysis is CPU-bound, so more workers than cores
+#: only queue; a few per core still overlap the tracker's and the I/O's waits. Beyond
+#: this, workers only add memory (about 24 MB each, and a copy of their sub-aperture).
+MAX_WORKERS_PER_CORE = 4
+
+
+def check_workers(n_workers: int) -> None:
+    """ValueError unless ``1 <= n_workers <= MAX_WORKERS_PER_CORE x cores``."""
+    cores = os.cpu_count() or 1
+    limit = MAX_WORKERS_PER_CORE * cores
+    if not 1 <= n_workers <= limit:
+        raise ValueError(
+            f"n_workers must be within [0, {limit}] ({MAX_WORKERS_PER_CORE} per core on "
+            f"{cores} core(s); 0: no Dask), got {n_workers}"
+        )
+
+
+@contextmanager
+def local_cluster(
+    n_workers: int, *, processes: bool = False, dashboard_address: str | None = None
+) -> Iterator[Any]:
+    """A ``distributed.LocalCluster`` that only this process can use, and that leaves nothing.
+
+    - *Threads* (``processes=False``): the scheduler and workers talk in memory
+      (``inproc://``); no network listener carries tasks.
+    - *Processes*: every connection is TLS with mutual authentication, from a key pair
+      and self-signed certificate generated for this cluster and held in memory only
+      (``distributed.Security.temporary()``, which needs ``cryptography``), bound to
+      127.0.0.1. A client without that certificate cannot complete the handshake, so no
+      other process, local or remote, can submit code to the workers.
+    - The HTTP endpoints Dask starts on every scheduler and worker are bound to
+      127.0.0.1 with no routes; the dashboard only with ``dashboard_address``.
+    - Worker scratch space is a temporary directory removed with the cluster (not
+      ``dask-scratch-space`` in the system's temporary directory).
+    - The workers' log level is this process's level of the ``distributed`` logger
+      (the command line sets it from ``-v``).
+
+    Parameters
+    ----------
+    n_workers : int
+        Workers, one thread each (:func:`check_workers`).
+    processes : bool
+        Workers as processes (secured as above) or threads of this process.
+    dashboard_address : str, optional
+        ``"host:port"`` of the scheduler's dashboard; default none.
+
+    Yields
+    ------
+    distributed.LocalCluster
+    """
+    import dask
+    from distributed import LocalCluster, Security
+
+    check_workers(n_workers)
+    security = Security.temporary() if processes else None
+    with ExitStack() as stack:
+        scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="sarmotion-dask-"))
+        stack.enter_context(
+            dask.config.set(
+                {
+                    "temporary-directory": scratch,
+                    "distributed.scheduler.http.routes": [],
+                    "distributed.worker.http.routes": [],
+                }
+            )
+        )
+        level = logging.getLogger("distributed").getEffectiveLevel()
+        cluster = stack.enter_context(
+            LocalCluster(
+                n_workers=n_workers,
+                threads_per_worker=1,
+                processes=processes,
+                **({"host": "127.0.0.1", "protocol": "tls://"} if processes else {}),
+                security=security,
+                dashboard_address=dashboard_address or "127.0.0.1:0",
+                scheduler_kwargs={"dashboard": dashboard_address is not None},
+                worker_dashboard_address="127.0.0.1:0",
+                local_directory=scratch,
+                silence_logs=level,
+            )
+        )
+        yield cluster
 
 
 def _task(
@@ -71,6 +155,7 @@ def map_sub_apertures(
     scheduler: str | Any | None = None,
     n_workers: int | None = None,
     processes: bool = False,
+    dashboard_address: str | None = None,
 ) -> Iterator[SubApertureDetections]:
     """Analyse every sub-aperture, on Dask, and yield the results in slow-time order.
 
@@ -90,6 +175,8 @@ def map_sub_apertures(
         Dask. Ignored with ``scheduler``.
     processes : bool
         Local workers as processes, or threads of this process (default).
+    dashboard_address : str, optional
+        ``"host:port"`` of the local cluster's dashboard (needs ``bokeh``); default none.
 
     Yields
     ------
@@ -103,23 +190,15 @@ def map_sub_apertures(
                 traces.select_pulses(sl.start, sl.stop), options, index=k, pulses=sl, time_s=t
             )
         return
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     cores = os.cpu_count() or 1
     with ExitStack() as stack:
         if scheduler is None:
             workers = cores if n_workers is None else int(n_workers)
-            if workers < 1:
-                raise ValueError(f"n_workers must be >= 0, got {n_workers!r}")
+            check_workers(workers)
             cluster = stack.enter_context(
-                LocalCluster(
-                    n_workers=workers,
-                    threads_per_worker=1,
-                    processes=processes,
-                    dashboard_address=None,
-                    silence_logs=logging.ERROR,
-                    **({"host": "127.0.0.1"} if processes else {}),
-                )
+                local_cluster(workers, processes=processes, dashboard_address=dashboard_address)
             )
             client = stack.enter_context(Client(cluster))
             threads: int | None = max(1, cores // workers)

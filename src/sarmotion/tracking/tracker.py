@@ -90,7 +90,7 @@ from ..core import Traces
 from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
 from .roads import Road, RoadFix, road_fix
-from .sub_apertures import Detection, SubApertureDetections
+from .sub_apertures import Detection, SubApertureDetections, check_overlap
 
 __all__ = ["TrackingOptions", "TrackState", "Track", "Tracker"]
 
@@ -117,7 +117,8 @@ class TrackingOptions:
         Azimuth span of a sub-aperture (degrees, > 0). Default 1, as the motion
         estimates assume.
     overlap : float
-        Fraction of a sub-aperture shared with the next (0 <= overlap < 1). Default 0.5.
+        Fraction of a sub-aperture shared with the next (0 <= overlap <= 0.9,
+        :data:`~sarmotion.tracking.sub_apertures.MAX_OVERLAP`). Default 0.5.
     acceleration_psd : float
         Spectral density ``q`` of the white-noise acceleration of the
         nearly-constant-velocity model (m^2/s^3, > 0). Default 1.
@@ -164,8 +165,7 @@ class TrackingOptions:
                 f"analysis must be an AnalysisOptions, got {type(self.analysis).__name__}"
             )
         positive(self.sub_aperture_deg, "sub_aperture_deg", unit="degrees")
-        if not (np.isfinite(self.overlap) and 0.0 <= self.overlap < 1.0):
-            raise ValueError(f"overlap must be in [0, 1), got {self.overlap!r}")
+        check_overlap(self.overlap)
         positive(self.acceleration_psd, "acceleration_psd", unit="m^2/s^3")
         if self.family_std_m is not None:
             positive(self.family_std_m, "family_std_m", unit="m")
