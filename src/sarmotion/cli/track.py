@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -177,7 +178,11 @@ def track(
         f"{len(slices)} sub-aperture(s) of {pulses} pulses ({sub_aperture_deg:g} degrees, "
         f"overlap {overlap:g}), {size:.4g} m images, {where}"
     )
-    with Progress(enabled=ctx.obj["progress"]) as bar, dask_logging():
+    uses_dask = scheduler is not None or n_workers != 0
+    with (
+        Progress(enabled=ctx.obj["progress"]) as bar,
+        dask_logging() if uses_dask else contextlib.nullcontext(),
+    ):
         result = run_tracking(
             traces,
             options,

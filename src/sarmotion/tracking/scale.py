@@ -8,18 +8,19 @@ back: the tracker consumes sub-aperture ``k`` while later ones still run.
 
 Where the tasks run:
 
-- ``scheduler=None``: a local ``distributed.LocalCluster`` of ``n_workers`` workers
-  (default: one per core) with one thread each, as *threads* of this process by
-  default, or as processes. Measured with ``benchmarks/bench_tracking.py`` (seven
-  1-degree sub-apertures of Scene 1, warm clusters, on the 2-core machine while other
-  jobs kept its load average near 10, so the figures are low and noisy): threads 0.061
-  sub-apertures/s with 1 worker and 0.063 with 2, processes 0.029 and 0.041; cold, the
-  4 GOTCHA degrees with two movers took 36 s on 2 threads, 47 s on 2 processes (each
-  process compiles numba's kernels again, about 20 s) and 63 s without Dask. Inside a
-  task, numba's and the BLAS thread pools are limited to the worker's share of the
-  cores so that the workers do not oversubscribe them.
-- ``scheduler="tcp://host:8786"`` (or a ``distributed.Client``): that cluster's
-  workers, which must have sarmotion importable.
+- ``scheduler=None``: a local cluster (:func:`local_cluster`) of ``n_workers`` workers
+  (default: one per core, at most :data:`MAX_WORKERS_PER_CORE` per core) with one
+  thread each, as *threads* of this process by default, or as processes (each process
+  imports the library and loads numba's kernels again, which a pass of a few seconds
+  does not repay; ``benchmarks/bench_tracking.py`` measures both). Inside a task,
+  numba's and the BLAS thread pools are limited to the worker's share of the cores so
+  that the workers do not oversubscribe them. The local cluster accepts no one else's
+  code: threads talk in memory, processes over TLS with a certificate generated for the
+  cluster (:func:`local_cluster`).
+- ``scheduler="tcp://host:8786"`` (or ``"tls://..."``, or a ``distributed.Client``):
+  that cluster's workers, which must have sarmotion importable. Its security is the
+  cluster's own: a ``tls://`` address is reached with the certificates of Dask's
+  configuration (``distributed.comm.tls.*``), as any Dask client does.
 - ``n_workers=0``: no Dask, the sub-apertures one after the other in this process.
 """
 
