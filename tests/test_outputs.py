@@ -14,7 +14,6 @@ import stat
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import pytest
@@ -74,20 +73,29 @@ def _holder(out: Path, kind: str) -> subprocess.Popen:
 
 
 @pytest.mark.parametrize(
-    ("args", "kind"),
+    ("args", "kind", "work"),
     [
-        (["image", "hyperbola", "--size", "10"], "directory"),
-        (["simulate", "hyperbola"], "file"),
+        (["image", "hyperbola", "--size", "10"], "directory", ("image", "read_inputs")),
+        (["simulate", "hyperbola"], "file", ("simulate", "run")),
     ],
 )
-def test_a_concurrent_run_is_refused_at_once_naming_the_holder(tmp_path, capsys, args, kind):
+def test_a_concurrent_run_is_refused_at_once_naming_the_holder(
+    tmp_path, capsys, monkeypatch, args, kind, work
+):
+    import importlib
+
+    module = importlib.import_module(f"sarmotion.cli.{work[0]}")
+
+    def no_work(*a, **k):
+        raise AssertionError("the refused run started its work")
+
     out = tmp_path / ("o.h5" if kind == "file" else "o")
     holder = _holder(out, kind)
     try:
-        t0 = time.perf_counter()
-        err = _one_line_refusal([*args, "--out", str(out)], capsys, f"pid {holder.pid}")
+        with monkeypatch.context() as m:
+            m.setattr(module, work[1], no_work)
+            err = _one_line_refusal([*args, "--out", str(out)], capsys, f"pid {holder.pid}")
         assert "another sarmotion run" in err
-        assert time.perf_counter() - t0 < 2.0  # before any work (imaging alone takes longer)
         assert not out.exists()
     finally:
         holder.communicate("", timeout=30)
@@ -408,3 +416,16 @@ def test_staged_file_and_directory_without_a_claim(tmp_path):
         (stage / "z.txt").write_text("z")
     assert _entries(tmp_path / "d") == {"y.txt": b"y", "z.txt": b"z"}  # others kept
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "d"]
+
+
+def test_a_directory_that_is_not_an_output_directory_is_refused(tmp_path, capsys, monkeypatch):
+    """Folders of the user's, or the current directory, are never swapped away."""
+    out = tmp_path / "project"
+    (out / "src").mkdir(parents=True)
+    (out / "src" / "main.py").write_text("mine")
+    args = ["image", "hyperbola", "--size", "10", "--force", "--out"]
+    _one_line_refusal([*args, str(out)], capsys, "holds folders sarmotion does not write (src)")
+    monkeypatch.chdir(out / "src")
+    _one_line_refusal([*args, str(out)], capsys, "is the current directory or holds it")
+    _one_line_refusal([*args, "."], capsys, "is the current directory or holds it")
+    assert _entries(out) == {"src/main.py": b"mine"}

@@ -32,11 +32,13 @@ For an output target ``out`` (a file, or a directory of files):
      recognised by name and by the PID in it: only a PID that no longer runs (or this
      process's own) marks leftovers, and only the claim's holder touches them.
 4. **``force`` replaces the whole previous output set.** After a swap ``out`` holds
-   exactly the entries the new run wrote, plus the entries of the previous directory that
+   exactly the entries the new run wrote, plus the files of the previous directory that
    are not outputs of the command (user files: not named in ``names``, not matching
    ``patterns``, not written by this run), which are carried over as hard links (copies
    where the file system has none), so they are never moved out of ``out`` before the
-   swap. Without ``force`` an existing output entry refuses the claim before any work;
+   swap. A directory holding folders the command does not write, or holding the current
+   directory, is refused: it is not an output directory, and swapping it would move
+   them. Without ``force`` an existing output entry refuses the claim before any work;
    a target that appears while the command runs (a file the user created) is not
    replaced without ``force``.
 
@@ -145,6 +147,29 @@ def _alive(pid: int) -> bool:
     return True
 
 
+_LOCK_FLAGS = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+
+
+def _read_pid(fd: int) -> str:
+    """The text of a lock file (its holder's PID, or empty)."""
+    os.lseek(fd, 0, os.SEEK_SET)
+    return os.read(fd, 32).decode("ascii", "replace").strip()
+
+
+def _flock(fd: int, path: Path) -> None:
+    """Lock ``fd`` exclusively without waiting (BlockingIOError if another process holds it).
+
+    Without ``fcntl`` (Windows) the lock is the lock file's PID: held while that process
+    runs.
+    """
+    if fcntl is not None:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return
+    text = _read_pid(fd)  # pragma: no cover
+    if text.isdigit() and int(text) != os.getpid() and _alive(int(text)):  # pragma: no cover
+        raise BlockingIOError(errno.EWOULDBLOCK, "locked", str(path))
+
+
 # --------------------------------------------------------------------- the target
 _KINDS = {
     stat.S_IFCHR: "a character device",
@@ -205,14 +230,8 @@ def _rmtree(path: Path) -> None:
 
 
 def _carry(src: Path, dst: Path) -> None:
-    """Put the entry ``src`` at ``dst`` as hard links (copies where links are refused)."""
+    """Put the file ``src`` at ``dst`` as a hard link (a copy where links are refused)."""
     st = os.lstat(src)
-    if stat.S_ISDIR(st.st_mode):
-        os.mkdir(dst, 0o700)
-        for entry in os.listdir(src):
-            _carry(src / entry, dst / entry)
-        os.chmod(dst, stat.S_IMODE(st.st_mode))
-        return
     try:
         os.link(src, dst, follow_symlinks=False)
     except OSError:
@@ -272,18 +291,15 @@ class OutputClaim:
         path = self.lock_path
         for _ in range(20):
             try:
-                fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+                fd = os.open(path, _LOCK_FLAGS, 0o644)
             except OSError as exc:
                 if exc.errno == errno.ELOOP:
                     raise OutputError(f"--out {self.out}: its lock file {path} is a link") from None
                 raise OutputError(
                     f"--out {self.out}: cannot create {path}: {exc.strerror}"
                 ) from None
-            if fcntl is None:  # pragma: no cover
-                os.close(fd)
-                raise OutputError("--out: output locking needs a POSIX system")
             try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                _flock(fd, path)
             except BlockingIOError:
                 holder = _holder(fd)
                 os.close(fd)
@@ -301,7 +317,8 @@ class OutputClaim:
                 continue
             previous = _holder(fd, wait_s=0.0)
             os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            os.lseek(fd, 0, os.SEEK_SET)
+            os.write(fd, f"{os.getpid()}\n".encode())
             self._fd = fd
             if previous not in ("unknown", str(os.getpid())):
                 log.info("%s: the previous run (pid %s) ended without releasing it", path, previous)
@@ -362,8 +379,24 @@ class OutputClaim:
             return
         if state == "file":
             raise OutputError(f"--out {out} exists and is not a directory")
-        if state == "directory" and not self.force:
-            clash = sorted(e for e in os.listdir(out) if self._ours(e, written))
+        if state != "directory":
+            return
+        cwd = Path.cwd().resolve()
+        if out.resolve() in (cwd, *cwd.parents):
+            raise OutputError(
+                f"--out {out} is the current directory or holds it; outputs are swapped in "
+                "as a whole directory: give one of their own"
+            )
+        entries = os.listdir(out)
+        folders = sorted(e for e in entries if not self._ours(e, written) and (out / e).is_dir())
+        if folders:
+            shown = ", ".join(folders[:4]) + (", ..." if len(folders) > 4 else "")
+            raise OutputError(
+                f"--out {out} holds folders sarmotion does not write ({shown}); outputs are "
+                "swapped in as a whole directory: give a new or empty one, or a previous output"
+            )
+        if not self.force:
+            clash = sorted(e for e in entries if self._ours(e, written))
             if clash:
                 shown = ", ".join(clash[:4]) + (", ..." if len(clash) > 4 else "")
                 raise OutputError(f"--out {out} already holds {shown}; --force replaces them")
@@ -454,7 +487,7 @@ def _holder(fd: int, wait_s: float = 0.5) -> str:
     """The PID written in a lock file (waiting up to ``wait_s`` for its holder to write it)."""
     deadline = time.monotonic() + wait_s
     while True:
-        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+        text = _read_pid(fd)
         if text.isdigit():
             return text
         if time.monotonic() >= deadline:
