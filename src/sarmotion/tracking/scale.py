@@ -132,15 +132,23 @@ def _task(
     pulses: slice,
     time_s: float,
     threads: int | None,
+    numba_threads: int | None = None,
 ) -> SubApertureDetections:
-    """One sub-aperture's analysis with numba's and BLAS's thread pools limited to ``threads``."""
+    """One sub-aperture's analysis with BLAS's thread pools limited to ``threads``.
+
+    numba's pool gets ``numba_threads`` (default ``threads``). Its kernels hold the GIL,
+    so the worker *threads* of one process never run two of them at once: each may use
+    every core (results do not depend on numba's thread count: its parallel loops write
+    disjoint elements). Worker *processes* share the cores.
+    """
     if threads is None:
         return analyze_sub_aperture(traces, options, index=index, pulses=pulses, time_s=time_s)
     import numba
     from threadpoolctl import threadpool_limits
 
     previous = numba.get_num_threads()
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    wanted = threads if numba_threads is None else numba_threads
+    numba.set_num_threads(max(1, min(wanted, numba.config.NUMBA_NUM_THREADS)))
     try:
         with threadpool_limits(limits=threads):
             return analyze_sub_aperture(traces, options, index=index, pulses=pulses, time_s=time_s)
@@ -203,12 +211,13 @@ def map_sub_apertures(
             )
             client = stack.enter_context(Client(cluster))
             threads: int | None = max(1, cores // workers)
+            numba_threads: int | None = threads if processes else cores
         elif isinstance(scheduler, str):
             client = stack.enter_context(Client(scheduler))
-            threads = None
+            threads = numba_threads = None
         else:
             client = scheduler
-            threads = None
+            threads = numba_threads = None
         log.info("sub-apertures on %s", client)
         futures = [
             client.submit(
@@ -219,6 +228,7 @@ def map_sub_apertures(
                 sl,
                 t,
                 threads,
+                numba_threads,
                 pure=False,
                 key=f"sarmotion-sub-aperture-{k}-{id(jobs)}",
             )
