@@ -30,7 +30,7 @@ import logging
 import os
 import tempfile
 from collections.abc import Iterator, Sequence
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, contextmanager, nullcontext
 from typing import Any
 
 from ..core import Traces
@@ -134,12 +134,16 @@ def _task(
     threads: int | None,
     numba_threads: int | None = None,
 ) -> SubApertureDetections:
-    """One sub-aperture's analysis with BLAS's thread pools limited to ``threads``.
+    """One sub-aperture's analysis with numba's and BLAS's thread pools limited.
 
-    numba's pool gets ``numba_threads`` (default ``threads``). Its kernels hold the GIL,
-    so the worker *threads* of one process never run two of them at once: each may use
-    every core (results do not depend on numba's thread count: its parallel loops write
-    disjoint elements). Worker *processes* share the cores.
+    ``numba_threads`` (default ``threads``) for numba's pool, which is per thread;
+    ``threads`` for BLAS's, which is per process, so it is set here only when
+    ``numba_threads`` is None (a worker process of its own), and otherwise held by the
+    caller for every worker thread at once (:func:`map_sub_apertures`): set and reset
+    by each task, it would change under the other tasks, and with it the rounding of
+    their results. numba's kernels hold the GIL, so the worker *threads* of one process
+    never run two of them at once and each may use every core (results do not depend
+    on numba's thread count: its parallel loops write disjoint elements).
     """
     if threads is None:
         return analyze_sub_aperture(traces, options, index=index, pulses=pulses, time_s=time_s)
@@ -150,7 +154,7 @@ def _task(
     wanted = threads if numba_threads is None else numba_threads
     numba.set_num_threads(max(1, min(wanted, numba.config.NUMBA_NUM_THREADS)))
     try:
-        with threadpool_limits(limits=threads):
+        with threadpool_limits(limits=threads) if numba_threads is None else nullcontext():
             return analyze_sub_aperture(traces, options, index=index, pulses=pulses, time_s=time_s)
     finally:
         numba.set_num_threads(previous)
@@ -211,7 +215,11 @@ def map_sub_apertures(
             )
             client = stack.enter_context(Client(cluster))
             threads: int | None = max(1, cores // workers)
-            numba_threads: int | None = threads if processes else cores
+            numba_threads: int | None = None if processes else cores
+            if not processes:  # BLAS's pool is per process: one limit for every thread
+                from threadpoolctl import threadpool_limits
+
+                stack.enter_context(threadpool_limits(limits=threads))
         elif isinstance(scheduler, str):
             client = stack.enter_context(Client(scheduler))
             threads = numba_threads = None
