@@ -245,6 +245,9 @@ def _carry(src: Path, dst: Path) -> None:
 
 # ----------------------------------------------------------------------- the claim
 _CLAIMS: dict[Path, OutputClaim] = {}
+#: Directories this process's claims created (as parents of their targets): a target
+#: among them did not "appear while the run worked", this run made it.
+_CREATED: set[Path] = set()
 
 
 @dataclass(eq=False)
@@ -336,6 +339,8 @@ class OutputClaim:
         for d in self._made:  # innermost first
             with contextlib.suppress(OSError):
                 d.rmdir()  # only if empty
+            if not d.exists():
+                _CREATED.discard(d)
         self._made = []
         if _CLAIMS.get(self.out) is self:
             del _CLAIMS[self.out]
@@ -430,7 +435,7 @@ class OutputClaim:
 
     def _present(self, state: str, written: Set[str] = frozenset()) -> None:
         """Check the target found at commit time (``state`` not "missing")."""
-        if not self.existed and not self.force:
+        if not self.existed and not self.force and self.out not in _CREATED:
             raise self._appeared()
         self._check(state, written=written)
 
@@ -555,6 +560,7 @@ def claim_output(
     except OSError as exc:
         raise OutputError(f"--out {out}: cannot create {target.parent}: {exc.strerror}") from None
     claim._made = missing
+    _CREATED.update(missing)
     try:
         claim._acquire()
     except BaseException:
@@ -562,6 +568,7 @@ def claim_output(
         for d in missing:
             with contextlib.suppress(OSError):
                 d.rmdir()
+            _CREATED.discard(d)
         raise
     _CLAIMS[target] = claim
     try:
