@@ -75,7 +75,7 @@ def _holder(out: Path, kind: str) -> subprocess.Popen:
 @pytest.mark.parametrize(
     ("args", "kind", "work"),
     [
-        (["image", "hyperbola", "--size", "10"], "directory", ("image", "read_inputs")),
+        (["image", "hyperbola", "--size", "10"], "directory", ("image", "backproject")),
         (["simulate", "hyperbola"], "file", ("simulate", "run")),
     ],
 )
