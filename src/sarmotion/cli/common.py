@@ -142,7 +142,10 @@ def out_option(help_text: str, **kwargs: Any) -> Callable[[Callable[..., Any]], 
 
 
 force_option = click.option(
-    "--force", is_flag=True, help="Replace outputs that already exist in --out."
+    "--force",
+    is_flag=True,
+    help="Replace an existing output as a whole (the files this command writes there; "
+    "other files are kept).",
 )
 
 lenient_option = click.option(
