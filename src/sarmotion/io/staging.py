@@ -8,7 +8,8 @@ For an output target ``out`` (a file, or a directory of files):
    ``.NAME.lock`` beside it (``NAME`` = ``out``'s name; :func:`fcntl.flock`, which the
    kernel releases when its holder dies, even by SIGKILL, so a lock is never stale). The
    holder writes its PID into it. A second claim is refused at once with one line naming
-   the holder's PID; the lock file is removed when the claim is released.
+   the holder's PID; the lock file is removed when the claim is released (after a
+   SIGKILL it stays, unlocked, until the next claim of the same target takes it over).
 2. **Nothing but regular files and directories, and never through a link.** A target that
    is a symbolic link (to anything, dangling, to itself, or in a loop), a device, a FIFO
    or a socket is refused, with or without ``force``; the final path component is never
