@@ -206,23 +206,32 @@ def test_read_only_out_directory(work, capsys):
         out.chmod(0o755)
 
 
-def test_failed_move_into_out_is_undone(work, capsys, monkeypatch):
-    """A move that fails half-way (as on a read-only --out) puts everything back."""
-    from sarmotion.io import errors
+@pytest.mark.parametrize("exchange", [True, False])
+def test_failed_move_into_out_is_undone(work, capsys, monkeypatch, exchange):
+    """A swap that fails (as on a read-only parent) leaves the previous output as it was."""
+    from sarmotion.io import staging
 
     out = work / "img"
     assert run(["image", "hyperbola", "--out", str(out), "--size", "10"]) == 0
     capsys.readouterr()
-    real_replace = os.replace
-    calls = []
 
-    def flaky(src, dst):
-        calls.append(dst)
-        if len(calls) == 4:  # after the first output was replaced
-            raise PermissionError(13, "Permission denied", str(dst))
-        return real_replace(src, dst)
+    def refuse(src, dst):
+        raise PermissionError(13, "Permission denied", str(dst))
 
-    monkeypatch.setattr(errors.os, "replace", flaky)
+    if exchange:
+        monkeypatch.setattr(staging, "_exchange", refuse)
+    else:  # no renameat2: rename the old output aside, then the new one in; the second fails
+        real_rename = os.rename
+        calls = []
+
+        def flaky(src, dst):
+            calls.append(dst)
+            if len(calls) == 2:
+                refuse(src, dst)
+            return real_rename(src, dst)
+
+        monkeypatch.setattr(staging, "_exchange", lambda a, b: False)
+        monkeypatch.setattr(staging.os, "rename", flaky)
     args = ["image", "hyperbola", "--out", str(out), "--size", "12", "--force"]
     _refused(args, capsys, "Permission denied", out)
 

@@ -332,3 +332,119 @@ def test_track_cli_bad_input(tmp_path, capsys):
     assert run(["track", "scene1", "--out", str(tmp_path / "o"), "--roads", str(bad)]) == 2
     assert "roads.geojson" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------- limits before any worker
+@pytest.fixture
+def no_cluster(monkeypatch):
+    """Fail the test if a local Dask cluster is started."""
+    distributed = pytest.importorskip("distributed")
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a Dask cluster was started")
+
+    monkeypatch.setattr(distributed.LocalCluster, "__init__", refuse)
+
+
+@pytest.mark.parametrize(
+    ("args", "pattern"),
+    [
+        (
+            ["--sub-aperture", "0.01"],
+            "--sub-aperture 0.01 gives sub-apertures of 2 pulse(s) (at least 3",
+        ),
+        (["--sub-aperture", "0.05"], "at least 2 cells must fit across"),
+        (["--overlap", "0.95"], "--overlap must be in [0, 0.9]"),
+        (["--workers", "100000"], "--workers must be within [0,"),
+    ],
+)
+def test_track_limits_are_refused_before_the_cluster_starts(
+    tmp_path, capsys, no_cluster, args, pattern
+):
+    out = tmp_path / "o"
+    code = run(["track", "hyperbola", "--out", str(out), "--size", "20", *args])
+    captured = capsys.readouterr()
+    err = captured.err.strip()
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and pattern in err, err
+    assert "sub-aperture(s) of" not in captured.out  # refused before the plan is said
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_least_sub_aperture_follows_the_cross_range_cell():
+    """The least span passes and a shorter one does not: cell = lambda L / (2 a) <= side / 2."""
+    from sarmotion.imaging import resolution
+    from sarmotion.tracking.sub_apertures import MIN_CROSS_RANGE_CELLS, check_sub_apertures
+
+    data = load_scene("hyperbola")
+    traces = simulate(data).traces
+    side = 20.0
+    cell_1deg = resolution(traces.select_pulses(0, sub_aperture_slices(traces, 1.0, 0)[0].stop))
+    least = 1.0 * cell_1deg.cross_range_m / (side / MIN_CROSS_RANGE_CELLS)
+    for factor, passes in ((1.25, True), (0.8, False)):
+        deg = least * factor
+        slices = sub_aperture_slices(traces, deg, 0.0)
+        if passes:
+            check_sub_apertures(traces, slices, deg, side)
+        else:
+            with pytest.raises(ValueError, match="cross-range cell"):
+                check_sub_apertures(traces, slices, deg, side)
+
+
+def test_the_plan_is_said_before_work_starts(tmp_path, capsys, no_cluster):
+    """The number of sub-apertures is on the console before any worker starts."""
+    code = run(
+        [
+            "track",
+            "hyperbola",
+            "--out",
+            str(tmp_path / "o"),
+            "--size",
+            "20",
+            "--sub-aperture",
+            "1",
+            "--overlap",
+            "0.5",
+        ]
+    )
+    captured = capsys.readouterr()
+    assert code == 1  # the refusing stand-in for the cluster: an internal error
+    first = captured.out.splitlines()[0]
+    n = len(sub_aperture_slices(simulate(load_scene("hyperbola")).traces, 1.0, 0.5))
+    assert first.startswith(f"{n} sub-aperture(s) of "), first
+
+
+# -------------------------------------------------------------- Dask kept quiet
+def _track_subprocess(tmp_path, *flags):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    tmp = tmp_path / "tmp"
+    tmp.mkdir(exist_ok=True)
+    env = {**os.environ, "PYTHONPATH": str(root / "src"), "TMPDIR": str(tmp)}
+    args = ["track", "hyperbola", "--sub-aperture", "1.5", "--overlap", "0", "--size", "20"]
+    out = tmp_path / ("o" + "".join(flags))
+    proc = subprocess.run(
+        [sys.executable, "-m", "sarmotion", *flags, *args, "--out", str(out)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return proc, sorted(p.name for p in tmp.iterdir())
+
+
+@pytest.mark.slow
+def test_dask_is_quiet_unless_asked_and_leaves_no_scratch(tmp_path):
+    proc, left = _track_subprocess(tmp_path)
+    assert proc.stderr == "", proc.stderr  # no INFO, no dashboard line, nothing
+    assert left == []  # no dask-scratch-space in the temporary directory
+    proc, left = _track_subprocess(tmp_path, "-q")
+    assert proc.stderr == "" and left == []
+    proc, left = _track_subprocess(tmp_path, "-v")
+    assert "INFO distributed.scheduler:" in proc.stderr  # -v shows them, in our format
+    assert left == []

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import logging
 import os
 import re
 from collections.abc import Callable, Iterator, Sequence
@@ -20,6 +22,7 @@ __all__ = [
     "Progress",
     "as_flags",
     "check_out",
+    "dask_logging",
     "extent_grid",
     "force_option",
     "lenient_option",
@@ -54,6 +57,43 @@ def as_flags(**flags: str) -> Iterator[None]:
         for name, flag in flags.items():
             text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w])", flag, text)
         raise InputError(text) from None
+
+
+#: Loggers of Dask and of the libraries under it (the web server, the event loop).
+DASK_LOGGERS = ("distributed", "dask", "tornado", "asyncio", "bokeh")
+
+
+@contextlib.contextmanager
+def dask_logging() -> Iterator[None]:
+    """Dask's log lines through sarmotion's verbosity while the block runs.
+
+    ``-v`` (info) and ``-vv`` (debug) show them in sarmotion's format; by default and with
+    ``-q`` they are silent (a failure still reaches the user as the task's exception,
+    reported as any other error). Importing ``distributed`` sets its own levels, so it is
+    imported first; the previous levels come back afterwards.
+    """
+    import distributed  # noqa: F401
+
+    root = logging.getLogger().getEffectiveLevel()
+    level = root if root <= logging.INFO else logging.CRITICAL + 1
+    names = [
+        n
+        for n in list(logging.root.manager.loggerDict)
+        if any(n == p or n.startswith(p + ".") for p in DASK_LOGGERS)
+    ]
+    saved = {}
+    for name in sorted(set(names) | set(DASK_LOGGERS)):
+        logger = logging.getLogger(name)
+        saved[name] = (logger.level, logger.propagate)
+        logger.setLevel(level if name in DASK_LOGGERS else logging.NOTSET)
+        logger.propagate = logger.propagate or not logger.handlers
+    try:
+        yield
+    finally:
+        for name, (lvl, propagate) in saved.items():
+            logger = logging.getLogger(name)
+            logger.setLevel(lvl)
+            logger.propagate = propagate
 
 
 class Progress:
@@ -102,7 +142,10 @@ def out_option(help_text: str, **kwargs: Any) -> Callable[[Callable[..., Any]], 
 
 
 force_option = click.option(
-    "--force", is_flag=True, help="Replace outputs that already exist in --out."
+    "--force",
+    is_flag=True,
+    help="Replace an existing output as a whole (the files this command writes there; "
+    "other files are kept).",
 )
 
 lenient_option = click.option(
@@ -124,32 +167,46 @@ def _writable_ancestor(path: Path) -> Path:
 def check_out(
     out: Path, *, force: bool, names: Sequence[str] = (), patterns: Sequence[str] = ()
 ) -> None:
-    """Check ``--out`` before any work is done.
+    """Check and claim ``--out`` before any work is done (:mod:`sarmotion.io.staging`).
 
     A file output (``names`` empty, ``patterns`` empty) may not be an existing directory
     and is replaced only with ``--force``; a directory output may not be an existing file,
     and may already hold none of ``names`` (or entries matching ``patterns``) unless
-    ``--force``. The directory that will receive the output must be writable.
+    ``--force``. Links, devices, FIFOs and sockets are refused, with or without
+    ``--force``. The directory that will receive the output must be writable. The
+    target is then locked for this run (a concurrent run is refused at once, naming this
+    one's PID) until the command ends; :func:`~sarmotion.io.staged_directory` and
+    :func:`~sarmotion.io.staged_file` write through this claim.
     """
+    from ..io.staging import OutputError, claim_output
+
     is_file = not names and not patterns
-    if is_file:
-        if out.is_dir():
-            raise InputError(f"--out {out} is a directory; expected a file name")
-        if out.exists() and not force:
-            raise InputError(f"--out {out} already exists; --force replaces it")
-        where = _writable_ancestor(out.parent)
+    try:
+        claim = claim_output(
+            out,
+            kind="file" if is_file else "directory",
+            force=force,
+            names=names,
+            patterns=patterns,
+            check=lambda: _check_writable(out, is_file=is_file),
+        )
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None:
+        ctx.call_on_close(claim.release)
     else:
-        if out.exists() and not out.is_dir():
-            raise InputError(f"--out {out} exists and is not a directory")
-        clash = [n for n in names if (out / n).exists() or (out / n).is_symlink()]
-        for pattern in patterns:
-            clash += sorted(p.name for p in out.glob(pattern)) if out.is_dir() else []
-        if clash and not force:
-            shown = ", ".join(clash[:4]) + (", ..." if len(clash) > 4 else "")
-            raise InputError(f"--out {out} already holds {shown}; --force replaces them")
-        where = out if out.is_dir() else _writable_ancestor(out.parent)
-    if not os.access(where, os.W_OK | os.X_OK):
-        raise InputError(f"--out {out}: cannot write in {where} (permission denied)")
+        atexit.register(claim.release)
+
+
+def _check_writable(out: Path, *, is_file: bool) -> None:
+    """InputError unless this user may write where ``out`` goes (and in ``out``)."""
+    where = [_writable_ancestor(out.parent)]
+    if not is_file and out.is_dir() and not out.is_symlink():
+        where.insert(0, out)
+    for w in where:
+        if not os.access(w, os.W_OK | os.X_OK):
+            raise InputError(f"--out {out}: cannot write in {w} (permission denied)")
 
 
 #: Platform speeds (m/s) accepted by --speed: from a ground-based rail SAR (mm/s to cm/s)

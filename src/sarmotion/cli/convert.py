@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..io import save_traces, staged_directory, write_cphd, write_gotcha
+from ..io import save_traces, staged_directory, staged_file, write_cphd, write_gotcha
 from .autofocus import autofocus_options, read_focused
 from .common import (
     InputError,
@@ -104,9 +104,9 @@ def convert(
             files = write_gotcha(traces, stage)
         click.echo(f"wrote {len(files)} GOTCHA file(s) to {out}")
         return
-    with staged_directory(out.parent) as stage:
+    with staged_file(out) as path:
         if to == "cphd":
-            write_cphd(stage / out.name, traces, origin_llh=origin_llh or (0.0, 0.0, 0.0))
+            write_cphd(path, traces, origin_llh=origin_llh or (0.0, 0.0, 0.0))
         else:
-            save_traces(stage / out.name, traces)
+            save_traces(path, traces)
     click.echo(f"wrote {out} ({traces.n_pulses} pulses x {traces.n_samples} samples, {to})")

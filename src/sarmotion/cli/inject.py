@@ -8,7 +8,7 @@ from typing import Any
 import click
 import numpy as np
 
-from ..io import read_inputs, save_traces, staged_directory, write_gotcha
+from ..io import read_inputs, save_traces, staged_directory, staged_file, write_gotcha
 from ..simulation import PointTarget
 from ..simulation import inject as run
 from .common import (
@@ -93,8 +93,8 @@ def inject(
         )
     result = run(traces, parsed)
     if native:
-        with staged_directory(out.parent) as stage:
-            save_traces(stage / out.name, result)
+        with staged_file(out) as path:
+            save_traces(path, result)
         click.echo(f"wrote {out} with {len(parsed)} injected target(s)")
     else:
         with staged_directory(out) as stage:

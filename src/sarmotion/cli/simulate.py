@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..io import save_traces, staged_directory, write_gotcha
+from ..io import save_traces, staged_directory, staged_file, write_gotcha
 from ..simulation import load_scene
 from ..simulation import simulate as run
 from .common import as_flags, check_out, force_option, noise_options, out_option
@@ -39,9 +39,9 @@ def simulate(
     with as_flags(snr_db="--snr-db", rng="--seed"):
         sim = run(load_scene(scene), snr_db=snr_db, rng=seed, spreading=spreading)
     if native:
-        with staged_directory(out.parent) as stage:
+        with staged_file(out) as path:
             save_traces(
-                stage / out.name,
+                path,
                 sim.traces,
                 extra={"stationary": sim.stationary, "moving": sim.moving},
             )

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
 from pathlib import Path
 
 import click
@@ -9,13 +11,16 @@ import click
 from ..io import read_inputs, read_roads, staged_directory, tracks_document, write_json
 from ..pipeline import AnalysisOptions
 from ..report.tracks import write_tracks_report
-from ..tracking import TrackingOptions
+from ..tracking import TrackingOptions, sub_aperture_slices
 from ..tracking import track as run_tracking
+from ..tracking.scale import check_workers
+from ..tracking.sub_apertures import check_sub_apertures
 from .common import (
     InputError,
     Progress,
     as_flags,
     check_out,
+    dask_logging,
     force_option,
     lenient_option,
     out_option,
@@ -38,14 +43,15 @@ OUTPUTS = ("tracks.json", "tracks.png", "report.html")
     type=float,
     default=1.0,
     show_default=True,
-    help="Azimuth span of each sub-aperture (degrees).",
+    help="Azimuth span of each sub-aperture (degrees); at least enough for two "
+    "cross-range resolution cells across the image (the minimum is said if not).",
 )
 @click.option(
     "--overlap",
     type=float,
     default=0.5,
     show_default=True,
-    help="Fraction of a sub-aperture shared with the next, in [0, 1).",
+    help="Fraction of a sub-aperture shared with the next, in [0, 0.9].",
 )
 @click.option(
     "--roads",
@@ -58,14 +64,23 @@ OUTPUTS = ("tracks.json", "tracks.png", "report.html")
 @click.option(
     "--scheduler",
     default=None,
-    help="Address of a Dask scheduler (tcp://host:8786); default a local cluster.",
+    help="Address of a Dask scheduler (tcp://host:8786, or tls://host:8786 with the "
+    "certificates of Dask's configuration); default a local cluster that only this "
+    "process can use.",
+)
+@click.option(
+    "--dashboard",
+    "dashboard_address",
+    default=None,
+    metavar="HOST:PORT",
+    help="Serve the local cluster's Dask dashboard there (needs bokeh); default none.",
 )
 @click.option(
     "--workers",
     "n_workers",
     type=int,
     default=None,
-    help="Local Dask workers (default one per core; 0: no Dask).",
+    help="Local Dask workers (default one per core; at most 4 per core; 0: no Dask).",
 )
 @click.option(
     "--threads/--processes",
@@ -100,6 +115,7 @@ def track(
     overlap: float,
     roads_file: Path | None,
     scheduler: str | None,
+    dashboard_address: str | None,
     n_workers: int | None,
     threads: bool,
     max_movers: int,
@@ -136,11 +152,37 @@ def track(
         raise InputError(text) from None
     if n_workers is not None and n_workers < 0:
         raise InputError(f"--workers must be >= 0, got {n_workers}")
+    if n_workers:
+        with as_flags(n_workers="--workers"):
+            check_workers(n_workers)
+    if dashboard_address is not None and (scheduler is not None or n_workers == 0):
+        raise InputError("--dashboard applies to the local cluster (no --scheduler, --workers > 0)")
     check_out(out, force=force, names=OUTPUTS)
     roads = read_roads(roads_file) if roads_file is not None else ()
     with as_flags(speed_mps="--speed"):
         traces, _ = read_inputs(inputs, speed_mps=speed_mps, lenient=lenient)
-    with Progress(enabled=ctx.obj["progress"]) as bar:
+    with as_flags(sub_aperture_deg="--sub-aperture", image_size_m="--size"):
+        slices = sub_aperture_slices(traces, sub_aperture_deg, overlap)
+        size = float(options.analysis.resolved(traces).image_size_m)
+        check_sub_apertures(traces, slices, sub_aperture_deg, size)
+    pulses = slices[0].stop - slices[0].start
+    where = (
+        f"on {scheduler}"
+        if scheduler is not None
+        else "in this process"
+        if n_workers == 0
+        else f"on {n_workers or os.cpu_count() or 1} local {'thread' if threads else 'process'} "
+        "worker(s)"
+    )
+    click.echo(
+        f"{len(slices)} sub-aperture(s) of {pulses} pulses ({sub_aperture_deg:g} degrees, "
+        f"overlap {overlap:g}), {size:.4g} m images, {where}"
+    )
+    uses_dask = scheduler is not None or n_workers != 0
+    with (
+        Progress(enabled=ctx.obj["progress"]) as bar,
+        dask_logging() if uses_dask else contextlib.nullcontext(),
+    ):
         result = run_tracking(
             traces,
             options,
@@ -148,6 +190,7 @@ def track(
             scheduler=scheduler,
             n_workers=n_workers,
             processes=not threads,
+            dashboard_address=dashboard_address,
             progress=bar,
         )
     doc = tracks_document(result)

@@ -12,7 +12,7 @@ Large files are read block by block with :func:`open_cphd_blocks` and
 
 from .._limits import memory_limit, set_memory_limit
 from .cphd import CphdBlocks, is_cphd_file, open_cphd_blocks, read_cphd, write_cphd
-from .errors import DataError, staged_directory, staged_paths
+from .errors import DataError
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
 from .inputs import is_scene_reference, read_inputs
 from .native import (
@@ -26,6 +26,13 @@ from .native import (
     open_native_blocks,
     save_image,
     save_traces,
+)
+from .staging import (
+    OutputError,
+    claim_output,
+    staged_directory,
+    staged_file,
+    staged_paths,
 )
 
 __all__ = [
@@ -59,7 +66,10 @@ __all__ += [
     "is_scene_reference",
     "read_inputs",
     "results_document",
+    "OutputError",
+    "claim_output",
     "staged_directory",
+    "staged_file",
     "staged_paths",
     "write_json",
 ]

@@ -88,7 +88,7 @@ from .._limits import over_budget, phase_history_bytes
 from .._validation import integer
 from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
 from ..core.spectral import to_fast_time
-from .errors import DataError, staged_paths
+from .errors import DataError
 from .native import _to_json
 from .plausibility import (
     MAX_BEND,
@@ -100,6 +100,7 @@ from .plausibility import (
     check_track,
     violation,
 )
+from .staging import staged_paths
 
 __all__ = ["CphdBlocks", "is_cphd_file", "open_cphd_blocks", "read_cphd", "write_cphd"]
 

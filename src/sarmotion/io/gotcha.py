@@ -117,7 +117,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
 from .._validation import positive
 from ..core import C, Radar, Traces, Trajectory, as_point
-from .errors import DataError, staged_paths
+from .errors import DataError
 from .matv5 import MatInflationError, MatStructureError, MatSummary, check_mat_v5
 from .plausibility import (
     MAX_BEND,
@@ -129,6 +129,7 @@ from .plausibility import (
     check_track,
     violation,
 )
+from .staging import staged_paths
 
 __all__ = ["read_gotcha", "write_gotcha", "is_gotcha_file", "DEFAULT_NAME_PATTERN"]
 

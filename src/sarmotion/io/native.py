@@ -68,7 +68,7 @@ from .. import __version__
 from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
 from .._validation import integer
 from ..core import Radar, Traces, Trajectory
-from .errors import DataError, staged_paths
+from .errors import DataError
 from .plausibility import (
     as_lenient,
     check_envelope,
@@ -78,6 +78,7 @@ from .plausibility import (
     check_times,
     check_track,
 )
+from .staging import staged_paths
 
 __all__ = [
     "TRACES_SCHEMA",

@@ -65,7 +65,8 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from ..core import C, Traces
 from .cphd import _band, _enu_frame, _utc
-from .errors import DataError, staged_paths
+from .errors import DataError
+from .staging import staged_paths
 
 __all__ = ["SICD_NAMESPACE", "check_sicd_grid", "read_sicd", "sicd_pixels", "write_sicd"]
 

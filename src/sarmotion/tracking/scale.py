@@ -8,18 +8,19 @@ back: the tracker consumes sub-aperture ``k`` while later ones still run.
 
 Where the tasks run:
 
-- ``scheduler=None``: a local ``distributed.LocalCluster`` of ``n_workers`` workers
-  (default: one per core) with one thread each, as *threads* of this process by
-  default, or as processes. Measured with ``benchmarks/bench_tracking.py`` (seven
-  1-degree sub-apertures of Scene 1, warm clusters, on the 2-core machine while other
-  jobs kept its load average near 10, so the figures are low and noisy): threads 0.061
-  sub-apertures/s with 1 worker and 0.063 with 2, processes 0.029 and 0.041; cold, the
-  4 GOTCHA degrees with two movers took 36 s on 2 threads, 47 s on 2 processes (each
-  process compiles numba's kernels again, about 20 s) and 63 s without Dask. Inside a
-  task, numba's and the BLAS thread pools are limited to the worker's share of the
-  cores so that the workers do not oversubscribe them.
-- ``scheduler="tcp://host:8786"`` (or a ``distributed.Client``): that cluster's
-  workers, which must have sarmotion importable.
+- ``scheduler=None``: a local cluster (:func:`local_cluster`) of ``n_workers`` workers
+  (default: one per core, at most :data:`MAX_WORKERS_PER_CORE` per core) with one
+  thread each, as *threads* of this process by default, or as processes (each process
+  imports the library and loads numba's kernels again, which a pass of a few seconds
+  does not repay; ``benchmarks/bench_tracking.py`` measures both). Inside a task,
+  numba's and the BLAS thread pools are limited to the worker's share of the cores so
+  that the workers do not oversubscribe them. The local cluster accepts no one else's
+  code: threads talk in memory, processes over TLS with a certificate generated for the
+  cluster (:func:`local_cluster`).
+- ``scheduler="tcp://host:8786"`` (or ``"tls://..."``, or a ``distributed.Client``):
+  that cluster's workers, which must have sarmotion importable. Its security is the
+  cluster's own: a ``tls://`` address is reached with the certificates of Dask's
+  configuration (``distributed.comm.tls.*``), as any Dask client does.
 - ``n_workers=0``: no Dask, the sub-apertures one after the other in this process.
 """
 
@@ -27,17 +28,101 @@ from __future__ import annotations
 
 import logging
 import os
+import tempfile
 from collections.abc import Iterator, Sequence
-from contextlib import ExitStack
+from contextlib import ExitStack, contextmanager, nullcontext
 from typing import Any
 
 from ..core import Traces
 from ..pipeline import AnalysisOptions
 from .sub_apertures import SubApertureDetections, analyze_sub_aperture, sub_aperture_time_s
 
-__all__ = ["map_sub_apertures"]
+__all__ = ["MAX_WORKERS_PER_CORE", "check_workers", "local_cluster", "map_sub_apertures"]
 
 log = logging.getLogger(__name__)
+
+#: Most local workers per core. Each analysis is CPU-bound, so more workers than cores
+#: only queue; a few per core still overlap the tracker's and the I/O's waits. Beyond
+#: this, workers only add memory (about 24 MB each, and a copy of their sub-aperture).
+MAX_WORKERS_PER_CORE = 4
+
+
+def check_workers(n_workers: int) -> None:
+    """ValueError unless ``1 <= n_workers <= MAX_WORKERS_PER_CORE x cores``."""
+    cores = os.cpu_count() or 1
+    limit = MAX_WORKERS_PER_CORE * cores
+    if not 1 <= n_workers <= limit:
+        raise ValueError(
+            f"n_workers must be within [0, {limit}] ({MAX_WORKERS_PER_CORE} per core on "
+            f"{cores} core(s); 0: no Dask), got {n_workers}"
+        )
+
+
+@contextmanager
+def local_cluster(
+    n_workers: int, *, processes: bool = False, dashboard_address: str | None = None
+) -> Iterator[Any]:
+    """A ``distributed.LocalCluster`` that only this process can use, and that leaves nothing.
+
+    - *Threads* (``processes=False``): the scheduler and workers talk in memory
+      (``inproc://``); no network listener carries tasks.
+    - *Processes*: every connection is TLS with mutual authentication, from a key pair
+      and self-signed certificate generated for this cluster and held in memory only
+      (``distributed.Security.temporary()``, which needs ``cryptography``), bound to
+      127.0.0.1. A client without that certificate cannot complete the handshake, so no
+      other process, local or remote, can submit code to the workers.
+    - The HTTP endpoints Dask starts on every scheduler and worker are bound to
+      127.0.0.1 with no routes; the dashboard only with ``dashboard_address``.
+    - Worker scratch space is a temporary directory removed with the cluster (not
+      ``dask-scratch-space`` in the system's temporary directory).
+    - The workers' log level is this process's level of the ``distributed`` logger
+      (the command line sets it from ``-v``).
+
+    Parameters
+    ----------
+    n_workers : int
+        Workers, one thread each (:func:`check_workers`).
+    processes : bool
+        Workers as processes (secured as above) or threads of this process.
+    dashboard_address : str, optional
+        ``"host:port"`` of the scheduler's dashboard; default none.
+
+    Yields
+    ------
+    distributed.LocalCluster
+    """
+    import dask
+    from distributed import LocalCluster, Security
+
+    check_workers(n_workers)
+    security = Security.temporary() if processes else None
+    with ExitStack() as stack:
+        scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="sarmotion-dask-"))
+        stack.enter_context(
+            dask.config.set(
+                {
+                    "temporary-directory": scratch,
+                    "distributed.scheduler.http.routes": [],
+                    "distributed.worker.http.routes": [],
+                }
+            )
+        )
+        level = logging.getLogger("distributed").getEffectiveLevel()
+        cluster = stack.enter_context(
+            LocalCluster(
+                n_workers=n_workers,
+                threads_per_worker=1,
+                processes=processes,
+                **({"host": "127.0.0.1", "protocol": "tls://"} if processes else {}),
+                security=security,
+                dashboard_address=dashboard_address or "127.0.0.1:0",
+                scheduler_kwargs={"dashboard": dashboard_address is not None},
+                worker_dashboard_address="127.0.0.1:0",
+                local_directory=scratch,
+                silence_logs=level,
+            )
+        )
+        yield cluster
 
 
 def _task(
@@ -47,17 +132,29 @@ def _task(
     pulses: slice,
     time_s: float,
     threads: int | None,
+    numba_threads: int | None = None,
 ) -> SubApertureDetections:
-    """One sub-aperture's analysis with numba's and BLAS's thread pools limited to ``threads``."""
+    """One sub-aperture's analysis with numba's and BLAS's thread pools limited.
+
+    ``numba_threads`` (default ``threads``) for numba's pool, which is per thread;
+    ``threads`` for BLAS's, which is per process, so it is set here only when
+    ``numba_threads`` is None (a worker process of its own), and otherwise held by the
+    caller for every worker thread at once (:func:`map_sub_apertures`): set and reset
+    by each task, it would change under the other tasks, and with it the rounding of
+    their results. numba's kernels hold the GIL, so the worker *threads* of one process
+    never run two of them at once and each may use every core (results do not depend
+    on numba's thread count: its parallel loops write disjoint elements).
+    """
     if threads is None:
         return analyze_sub_aperture(traces, options, index=index, pulses=pulses, time_s=time_s)
     import numba
     from threadpoolctl import threadpool_limits
 
     previous = numba.get_num_threads()
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    wanted = threads if numba_threads is None else numba_threads
+    numba.set_num_threads(max(1, min(wanted, numba.config.NUMBA_NUM_THREADS)))
     try:
-        with threadpool_limits(limits=threads):
+        with threadpool_limits(limits=threads) if numba_threads is None else nullcontext():
             return analyze_sub_aperture(traces, options, index=index, pulses=pulses, time_s=time_s)
     finally:
         numba.set_num_threads(previous)
@@ -71,6 +168,7 @@ def map_sub_apertures(
     scheduler: str | Any | None = None,
     n_workers: int | None = None,
     processes: bool = False,
+    dashboard_address: str | None = None,
 ) -> Iterator[SubApertureDetections]:
     """Analyse every sub-aperture, on Dask, and yield the results in slow-time order.
 
@@ -90,6 +188,8 @@ def map_sub_apertures(
         Dask. Ignored with ``scheduler``.
     processes : bool
         Local workers as processes, or threads of this process (default).
+    dashboard_address : str, optional
+        ``"host:port"`` of the local cluster's dashboard (needs ``bokeh``); default none.
 
     Yields
     ------
@@ -103,32 +203,29 @@ def map_sub_apertures(
                 traces.select_pulses(sl.start, sl.stop), options, index=k, pulses=sl, time_s=t
             )
         return
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     cores = os.cpu_count() or 1
     with ExitStack() as stack:
         if scheduler is None:
             workers = cores if n_workers is None else int(n_workers)
-            if workers < 1:
-                raise ValueError(f"n_workers must be >= 0, got {n_workers!r}")
+            check_workers(workers)
             cluster = stack.enter_context(
-                LocalCluster(
-                    n_workers=workers,
-                    threads_per_worker=1,
-                    processes=processes,
-                    dashboard_address=None,
-                    silence_logs=logging.ERROR,
-                    **({"host": "127.0.0.1"} if processes else {}),
-                )
+                local_cluster(workers, processes=processes, dashboard_address=dashboard_address)
             )
             client = stack.enter_context(Client(cluster))
             threads: int | None = max(1, cores // workers)
+            numba_threads: int | None = None if processes else cores
+            if not processes:  # BLAS's pool is per process: one limit for every thread
+                from threadpoolctl import threadpool_limits
+
+                stack.enter_context(threadpool_limits(limits=threads))
         elif isinstance(scheduler, str):
             client = stack.enter_context(Client(scheduler))
-            threads = None
+            threads = numba_threads = None
         else:
             client = scheduler
-            threads = None
+            threads = numba_threads = None
         log.info("sub-apertures on %s", client)
         futures = [
             client.submit(
@@ -139,6 +236,7 @@ def map_sub_apertures(
                 sl,
                 t,
                 threads,
+                numba_threads,
                 pure=False,
                 key=f"sarmotion-sub-aperture-{k}-{id(jobs)}",
             )

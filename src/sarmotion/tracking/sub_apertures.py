@@ -15,6 +15,7 @@ in m, velocities in m/s.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,11 +28,44 @@ from ..motion.speed_resolution import cross_range_speed_resolution, range_speed_
 from ..pipeline import AnalysisOptions, analyze
 
 __all__ = [
+    "MAX_OVERLAP",
+    "MIN_CROSS_RANGE_CELLS",
+    "MIN_PULSES",
     "Detection",
     "SubApertureDetections",
     "analyze_sub_aperture",
+    "check_overlap",
+    "check_sub_apertures",
     "sub_aperture_slices",
 ]
+
+#: Largest overlap of consecutive sub-apertures. At 0.9 every pulse is analysed ten
+#: times; beyond it the work grows as 1 / (1 - overlap) (0.99: a hundred times, 353
+#: sub-apertures on four GOTCHA degrees) for tracks sampled more finely than the
+#: sub-apertures' own time resolution, which stays one sub-aperture.
+MAX_OVERLAP = 0.9
+
+#: Fewest cross-range resolution cells a sub-aperture's image must hold across its side.
+#: With one cell or less, the sub-aperture resolves nothing in cross range: every target
+#: of the image lies in one cell, and neither separation nor the cross-range speed can
+#: work. Two cells is the least that resolves anything.
+MIN_CROSS_RANGE_CELLS = 2
+
+#: Fewest pulses of a sub-aperture: the range-speed search of :mod:`sarmotion.motion`
+#: refuses fewer than three.
+MIN_PULSES = 3
+
+
+def check_overlap(overlap: float) -> float:
+    """ValueError unless ``0 <= overlap <= MAX_OVERLAP``; return it as a float."""
+    if not (isinstance(overlap, (int, float, np.floating, np.integer)) and np.isfinite(overlap)):
+        raise ValueError(f"overlap must be a fraction in [0, {MAX_OVERLAP}], got {overlap!r}")
+    if not 0.0 <= overlap <= MAX_OVERLAP:
+        raise ValueError(
+            f"overlap must be in [0, {MAX_OVERLAP}] (at {MAX_OVERLAP} every pulse is analysed "
+            f"{round(1 / (1 - MAX_OVERLAP))} times), got {overlap!r}"
+        )
+    return float(overlap)
 
 
 def sub_aperture_slices(
@@ -53,7 +87,8 @@ def sub_aperture_slices(
     sub_aperture_deg : float
         Azimuth span of one sub-aperture (degrees, > 0).
     overlap : float
-        Fraction of a sub-aperture shared with the next (0 <= overlap < 1).
+        Fraction of a sub-aperture shared with the next (0 <= overlap <= 0.9,
+        :data:`MAX_OVERLAP`).
 
     Returns
     -------
@@ -63,8 +98,7 @@ def sub_aperture_slices(
     """
     if not (np.isfinite(sub_aperture_deg) and sub_aperture_deg > 0):
         raise ValueError(f"sub_aperture_deg must be positive (degrees), got {sub_aperture_deg!r}")
-    if not (np.isfinite(overlap) and 0.0 <= overlap < 1.0):
-        raise ValueError(f"overlap must be in [0, 1), got {overlap!r}")
+    overlap = check_overlap(overlap)
     n = traces.n_pulses
     span = azimuth_span_deg(traces)
     if span <= 1.5 * sub_aperture_deg:
@@ -74,6 +108,55 @@ def sub_aperture_slices(
     count = max(1, int(round((n - m) / step))) + 1
     starts = np.round(np.linspace(0, n - m, count)).astype(int)
     return [slice(int(a), int(a) + m) for a in starts]
+
+
+def check_sub_apertures(
+    traces: Traces, slices: Sequence[slice], sub_aperture_deg: float, image_size_m: float
+) -> None:
+    """Refuse sub-apertures too short to resolve their image (before any work starts).
+
+    The rule: each sub-aperture holds at least :data:`MIN_PULSES` pulses, and its
+    cross-range cell ``lambda_o L / (2 a)`` (:func:`sarmotion.imaging.resolution`: the
+    wavelength, the range to the reference point and the aperture flown) is at most
+    ``image_size_m / MIN_CROSS_RANGE_CELLS``, so that its image holds at least two
+    cross-range cells. The aperture of a sub-aperture grows with its span, so the least
+    span that passes is ``sub_aperture_deg x cell / (image_size_m / 2)``, which the
+    message gives.
+
+    Parameters
+    ----------
+    traces : Traces
+        The whole acquisition.
+    slices : sequence of slice
+        Its sub-apertures (:func:`sub_aperture_slices`).
+    sub_aperture_deg : float
+        Their requested span (degrees).
+    image_size_m : float
+        Side of each sub-aperture's image (m).
+
+    Raises
+    ------
+    ValueError
+        Naming ``sub_aperture_deg``, the least span that passes and why.
+    """
+    fewest = min(sl.stop - sl.start for sl in slices)
+    if fewest < MIN_PULSES:
+        raise ValueError(
+            f"sub_aperture_deg {sub_aperture_deg:g} gives sub-apertures of {fewest} pulse(s) "
+            f"(at least {MIN_PULSES} needed)"
+        )
+    widest = max(  # the first, middle and last: the geometry changes slowly along a pass
+        float(resolution(traces.select_pulses(sl.start, sl.stop)).cross_range_m)
+        for sl in (slices[0], slices[len(slices) // 2], slices[-1])
+    )
+    largest = image_size_m / MIN_CROSS_RANGE_CELLS
+    if widest > largest:
+        least = sub_aperture_deg * widest / largest
+        raise ValueError(
+            f"sub_aperture_deg {sub_aperture_deg:g} is too short to resolve the "
+            f"{image_size_m:g} m image: its cross-range cell is {widest:.3g} m, and at least "
+            f"{MIN_CROSS_RANGE_CELLS} cells must fit across (at least {least:.2g} degrees)"
+        )
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -30,8 +30,8 @@ from ..core import Traces
 from ..core.progress import ProgressCallback, report
 from ..imaging import ImageGrid
 from .roads import Road
-from .scale import map_sub_apertures
-from .sub_apertures import SubApertureDetections, sub_aperture_slices
+from .scale import check_workers, map_sub_apertures
+from .sub_apertures import SubApertureDetections, check_sub_apertures, sub_aperture_slices
 from .tracker import Track, Tracker, TrackingOptions
 
 __all__ = ["TrackingResult", "track"]
@@ -78,6 +78,7 @@ def track(
     scheduler: str | Any | None = None,
     n_workers: int | None = None,
     processes: bool = False,
+    dashboard_address: str | None = None,
     progress: ProgressCallback | None = None,
 ) -> TrackingResult:
     """Follow the movers of ``traces`` across sub-apertures (module notes).
@@ -94,16 +95,26 @@ def track(
     scheduler : str or distributed.Client, optional
         A Dask scheduler's address or a client; default a local cluster.
     n_workers : int, optional
-        Local workers (default one per core; 0: no Dask).
+        Local workers (default one per core; 0: no Dask; at most 4 per core,
+        :data:`~sarmotion.tracking.scale.MAX_WORKERS_PER_CORE`).
     processes : bool
         Local workers as processes, or threads of this process (default; measured
         faster, :mod:`sarmotion.tracking.scale`).
+    dashboard_address : str, optional
+        ``"host:port"`` of the local cluster's dashboard; default none.
     progress : callable, optional
         ``progress("sub-apertures", done, total)``.
 
     Returns
     -------
     TrackingResult
+
+    Raises
+    ------
+    ValueError
+        Before any worker starts: an overlap above 0.9, sub-apertures too short to
+        resolve their image (:func:`~sarmotion.tracking.sub_apertures.check_sub_apertures`),
+        too many local workers.
     """
     if not isinstance(traces, Traces):
         raise TypeError(f"traces must be a sarmotion Traces, got {type(traces).__name__}")
@@ -111,12 +122,21 @@ def track(
     start = time.perf_counter()
     slices = sub_aperture_slices(traces, opts.sub_aperture_deg, opts.overlap)
     analysis = opts.analysis.resolved(traces)
+    check_sub_apertures(traces, slices, opts.sub_aperture_deg, float(analysis.image_size_m))
+    if scheduler is None and n_workers:
+        check_workers(int(n_workers))
     tracker = Tracker(traces, opts, roads=roads)
     subs: list[SubApertureDetections] = []
     power: NDArray[np.float64] | None = None
     grid: ImageGrid | None = None
     for sub in map_sub_apertures(
-        traces, slices, analysis, scheduler=scheduler, n_workers=n_workers, processes=processes
+        traces,
+        slices,
+        analysis,
+        scheduler=scheduler,
+        n_workers=n_workers,
+        processes=processes,
+        dashboard_address=dashboard_address,
     ):
         tracker.step(sub)
         # Incoherent mean of the stationary images on the first one's grid; only the

@@ -64,39 +64,78 @@ import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime, timedelta
+from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
-from stonesoup.deleter.time import UpdateTimeStepsDeleter
-from stonesoup.hypothesiser.distance import DistanceHypothesiser
-from stonesoup.initiator.simple import SimpleMeasurementInitiator
-from stonesoup.measures import Mahalanobis
-from stonesoup.models.measurement.linear import LinearGaussian
-from stonesoup.models.transition.linear import (
-    CombinedLinearGaussianTransitionModel,
-    ConstantVelocity,
-)
-from stonesoup.predictor.kalman import KalmanPredictor
-from stonesoup.types.detection import Detection as StoneDetection
-from stonesoup.types.hypothesis import SingleHypothesis
-from stonesoup.types.state import GaussianState
-from stonesoup.types.track import Track as StoneTrack
-from stonesoup.types.update import Update
-from stonesoup.updater.kalman import KalmanUpdater
 
 from .._validation import integer, positive
 from ..core import Traces
 from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
 from .roads import Road, RoadFix, road_fix
-from .sub_apertures import Detection, SubApertureDetections
+from .sub_apertures import Detection, SubApertureDetections, check_overlap
+
+if TYPE_CHECKING:
+    from stonesoup.types.detection import Detection as StoneDetection
+    from stonesoup.types.state import GaussianState
+    from stonesoup.types.track import Track as StoneTrack
 
 __all__ = ["TrackingOptions", "TrackState", "Track", "Tracker"]
 
 log = logging.getLogger(__name__)
 
 _EPOCH = datetime(2000, 1, 1)
+
+_STONESOUP: SimpleNamespace | None = None
+
+
+def _stonesoup() -> SimpleNamespace:
+    """Stone Soup's classes, imported when the first detection arrives.
+
+    Stone Soup imports scipy.stats, which builds its distributions' documentation on
+    import (most of a second of CPU): a pass without detections never needs it, and
+    with detections the import runs while later sub-apertures are still analysed.
+    """
+    global _STONESOUP
+    if _STONESOUP is None:
+        from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
+        from stonesoup.deleter.time import UpdateTimeStepsDeleter
+        from stonesoup.hypothesiser.distance import DistanceHypothesiser
+        from stonesoup.initiator.simple import SimpleMeasurementInitiator
+        from stonesoup.measures import Mahalanobis
+        from stonesoup.models.measurement.linear import LinearGaussian
+        from stonesoup.models.transition.linear import (
+            CombinedLinearGaussianTransitionModel,
+            ConstantVelocity,
+        )
+        from stonesoup.predictor.kalman import KalmanPredictor
+        from stonesoup.types.detection import Detection as StoneDetection
+        from stonesoup.types.hypothesis import SingleHypothesis
+        from stonesoup.types.state import GaussianState
+        from stonesoup.types.update import Update
+        from stonesoup.updater.kalman import KalmanUpdater
+
+        _STONESOUP = SimpleNamespace(
+            GNNWith2DAssignment=GNNWith2DAssignment,
+            UpdateTimeStepsDeleter=UpdateTimeStepsDeleter,
+            DistanceHypothesiser=DistanceHypothesiser,
+            SimpleMeasurementInitiator=SimpleMeasurementInitiator,
+            Mahalanobis=Mahalanobis,
+            LinearGaussian=LinearGaussian,
+            CombinedLinearGaussianTransitionModel=CombinedLinearGaussianTransitionModel,
+            ConstantVelocity=ConstantVelocity,
+            KalmanPredictor=KalmanPredictor,
+            StoneDetection=StoneDetection,
+            SingleHypothesis=SingleHypothesis,
+            GaussianState=GaussianState,
+            Update=Update,
+            KalmanUpdater=KalmanUpdater,
+        )
+    return _STONESOUP
+
+
 # State (x, ux, y, uy); measurement (x, y, ux, uy).
 _MAPPING = (0, 2, 1, 3)
 # Along the family a track's update carries no information: its standard deviation there
@@ -117,7 +156,8 @@ class TrackingOptions:
         Azimuth span of a sub-aperture (degrees, > 0). Default 1, as the motion
         estimates assume.
     overlap : float
-        Fraction of a sub-aperture shared with the next (0 <= overlap < 1). Default 0.5.
+        Fraction of a sub-aperture shared with the next (0 <= overlap <= 0.9,
+        :data:`~sarmotion.tracking.sub_apertures.MAX_OVERLAP`). Default 0.5.
     acceleration_psd : float
         Spectral density ``q`` of the white-noise acceleration of the
         nearly-constant-velocity model (m^2/s^3, > 0). Default 1.
@@ -164,8 +204,7 @@ class TrackingOptions:
                 f"analysis must be an AnalysisOptions, got {type(self.analysis).__name__}"
             )
         positive(self.sub_aperture_deg, "sub_aperture_deg", unit="degrees")
-        if not (np.isfinite(self.overlap) and 0.0 <= self.overlap < 1.0):
-            raise ValueError(f"overlap must be in [0, 1), got {self.overlap!r}")
+        check_overlap(self.overlap)
         positive(self.acceleration_psd, "acceleration_psd", unit="m^2/s^3")
         if self.family_std_m is not None:
             positive(self.family_std_m, "family_std_m", unit="m")
@@ -286,31 +325,44 @@ class Tracker:
         self.traces = traces
         self.options = options
         self.roads = tuple(roads)
-        q = options.acceleration_psd
-        transition = CombinedLinearGaussianTransitionModel(
-            [ConstantVelocity(q), ConstantVelocity(q)]
-        )
-        self._predictor = KalmanPredictor(transition)
-        self._updater = KalmanUpdater(measurement_model=None)
-        from scipy.stats import chi2  # scipy.stats takes ~0.7 s to import: when needed
-
-        gate = float(np.sqrt(chi2.ppf(options.gate_probability, 4)))
-        hypothesiser = DistanceHypothesiser(
-            self._predictor, self._updater, measure=Mahalanobis(), missed_distance=gate
-        )
-        self._associator = GNNWith2DAssignment(hypothesiser)
-        self._initiator = SimpleMeasurementInitiator(
-            prior_state=GaussianState(np.zeros((4, 1)), np.zeros((4, 4))), measurement_model=None
-        )
-        self._deleter = UpdateTimeStepsDeleter(time_steps_since_update=options.max_misses + 1)
+        self._ready = False
         self._live: set[StoneTrack] = set()
         self._ended: list[StoneTrack] = []
         self._meta: dict[int, _Meta] = {}
         self._order: dict[StoneTrack, int] = {}
 
+    def _build(self) -> None:
+        """Stone Soup's predictor, updater, associator, initiator and deleter (once)."""
+        if self._ready:
+            return
+        ss = _stonesoup()
+        options = self.options
+        q = options.acceleration_psd
+        transition = ss.CombinedLinearGaussianTransitionModel(
+            [ss.ConstantVelocity(q), ss.ConstantVelocity(q)]
+        )
+        self._predictor = ss.KalmanPredictor(transition)
+        self._updater = ss.KalmanUpdater(measurement_model=None)
+        from scipy.stats import chi2  # scipy.stats takes ~0.7 s to import: when needed
+
+        gate = float(np.sqrt(chi2.ppf(options.gate_probability, 4)))
+        hypothesiser = ss.DistanceHypothesiser(
+            self._predictor, self._updater, measure=ss.Mahalanobis(), missed_distance=gate
+        )
+        self._associator = ss.GNNWith2DAssignment(hypothesiser)
+        self._initiator = ss.SimpleMeasurementInitiator(
+            prior_state=ss.GaussianState(np.zeros((4, 1)), np.zeros((4, 4))),
+            measurement_model=None,
+        )
+        self._deleter = ss.UpdateTimeStepsDeleter(time_steps_since_update=options.max_misses + 1)
+        self._ready = True
+
     # ------------------------------------------------------------------ steps
     def step(self, sub: SubApertureDetections) -> None:
         """Associate, update and start tracks with one sub-aperture (in time order)."""
+        if not sub.detections and not self._live:
+            return  # nothing to associate, update, start or end
+        self._build()
         when = _EPOCH + timedelta(seconds=sub.time_s)
         free = {
             self._measurement(sub, d, d.position_m, d.velocity_mps, None, when, k, update=True)
@@ -327,7 +379,7 @@ class Tracker:
             used.add(k)
             pred = np.asarray(hyp.prediction.state_vector, dtype=np.float64).ravel()
             meas, meta = self._known(sub, sub.detections[k], pred[[0, 2]], when, k)
-            post = self._updater.update(SingleHypothesis(hyp.prediction, meas))
+            post = self._updater.update(_stonesoup().SingleHypothesis(hyp.prediction, meas))
             trk.append(post)
             self._meta[id(post)] = meta
         fresh = []
@@ -483,16 +535,19 @@ class Tracker:
             w = np.r_[det.family_position_per_m, det.family_velocity_per_m]
             scale = _UNOBSERVED if update else 1.0
             r += (scale * self._family_std(sub)) ** 2 * np.outer(w, w)
-        model = LinearGaussian(ndim_state=4, mapping=_MAPPING, noise_covar=r)
+        ss = _stonesoup()
+        model = ss.LinearGaussian(ndim_state=4, mapping=_MAPPING, noise_covar=r)
         z = np.r_[position, z_v].reshape(4, 1)
-        return StoneDetection(z, timestamp=when, measurement_model=model, metadata={"detection": k})
+        return ss.StoneDetection(
+            z, timestamp=when, measurement_model=model, metadata={"detection": k}
+        )
 
     def _state(self, state: GaussianState) -> TrackState:
         meta = self._meta[id(state)]
         x = np.asarray(state.state_vector, dtype=np.float64).ravel()
         cov = np.asarray(state.covar, dtype=np.float64)
         pos_idx, vel_idx = [0, 2], [1, 3]
-        detection = meta.detection if isinstance(state, Update) else None
+        detection = meta.detection if isinstance(state, _stonesoup().Update) else None
         return TrackState(
             time_s=meta.sub.time_s,
             sub_aperture=meta.sub.index,
