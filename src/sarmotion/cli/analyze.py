@@ -267,10 +267,23 @@ def analyze(
     )
 
 
+#: The demo's own output directory: an earlier demo's output there is replaced.
+DEMO_OUT = Path("sarmotion-demo")
+
+
 @click.command()
-@out_option("Output directory.", required=False, default=Path("sarmotion-demo"), show_default=True)
+@out_option(
+    "Output directory. At the default, an earlier demo's output (its results.json) is "
+    "replaced, so the demo can be run again; elsewhere an existing output needs --force.",
+    required=False,
+    default=DEMO_OUT,
+    show_default=True,
+)
 @force_option
 @click.pass_context
 def demo(ctx: click.Context, out: Path, force: bool) -> None:
     """Analyse the built-in Scene 1 (20 stationary targets, 2 movers) into OUT."""
-    run_analyze(("scene1",), out, AnalysisOptions(), progress=ctx.obj["progress"], force=force)
+    rerun = out == DEMO_OUT and (out / "results.json").is_file() and not out.is_symlink()
+    run_analyze(
+        ("scene1",), out, AnalysisOptions(), progress=ctx.obj["progress"], force=force or rerun
+    )
