@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 from sarmotion.core import Trajectory
-from sarmotion.imaging import ImageGrid, backproject, ffbp
-from sarmotion.imaging import _bp_kernels, _bp_table
+from sarmotion.imaging import ImageGrid, _bp_kernels, _bp_table, backproject, ffbp
 from sarmotion.imaging.ffbp import half_sample_filter
 from sarmotion.io import read_gotcha
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate

@@ -47,7 +47,9 @@ def test_concurrent_backprojection_with_evictions(traces, monkeypatch, fast_swit
                 scale = complex(k + 1, r)
                 tr = traces.with_data(traces.data * scale)  # a new traces object each round
                 img = backproject(tr, grid).values
-                np.testing.assert_allclose(img, scale * alone, rtol=1e-5, atol=1e-6 * abs(alone).max() * abs(scale))
+                np.testing.assert_allclose(
+                    img, scale * alone, rtol=1e-5, atol=1e-6 * abs(alone).max() * abs(scale)
+                )
                 again = backproject(tr, grid).values  # the cached table, if still held
                 np.testing.assert_array_equal(again, img)
                 del tr  # its table's entry is queued for removal by the callback

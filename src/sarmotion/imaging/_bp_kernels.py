@@ -322,8 +322,10 @@ def backproject_f32(
     stops = np.ascontiguousarray(ranges[:, 1])
     for step, (g0, g1) in enumerate(zip(groups[:-1], groups[1:], strict=True), start=1):
         with numba.parallel_chunksize(1):  # tiles handed out one at a time
-            _tile_kernel(table_values, starts, stops, ant, lat, consts, n_up,
-                         (int(tile[0]), int(tile[1])), int(g0), int(g1), out_re, out_im)  # fmt: skip
+            _tile_kernel(
+                table_values, starts, stops, ant, lat, consts, n_up,
+                (int(tile[0]), int(tile[1])), int(g0), int(g1), out_re, out_im,
+            )  # fmt: skip
         if progress is not None:
             progress("backprojection", step, len(groups) - 1)
     return out_re, out_im

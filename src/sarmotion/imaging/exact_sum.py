@@ -33,7 +33,9 @@ from ..core.spectral import unit_phasor
 __all__ = ["exact_sum", "fast_time_window"]
 
 
-def fast_time_window(n_samples: int, sample_interval_s: float, upsample: int) -> tuple[float, float]:
+def fast_time_window(
+    n_samples: int, sample_interval_s: float, upsample: int
+) -> tuple[float, float]:
     """Delays ``[lo, hi)`` (s) at which backprojection reads a trace.
 
     The span of the upsampled table: from upsampled sample 0 to sample ``N - 1``
@@ -60,6 +62,7 @@ def _exact_kernel(pr, pi, f0, df, ant, ref, px, py, t_lo, t_hi):  # pragma: no c
         acc_re = np.zeros(_BLOCK)
         acc_im = np.zeros(_BLOCK)
         tau = np.zeros(_BLOCK)
+        inside = np.zeros(_BLOCK, np.bool_)
         rot_re = np.zeros(_BLOCK)
         rot_im = np.zeros(_BLOCK)
         w_re = np.zeros(_BLOCK)
@@ -71,11 +74,11 @@ def _exact_kernel(pr, pi, f0, df, ant, ref, px, py, t_lo, t_hi):  # pragma: no c
                 dy = ant[j, 1] - py[i0 + i]
                 r = math.sqrt(dx * dx + dy * dy + ant[j, 2] * ant[j, 2])
                 t = 2.0 * (r - ref[j]) / C
-                inside = t >= t_lo and t < t_hi
-                any_in = any_in or inside
-                tau[i] = t if inside else 0.0
+                inside[i] = t >= t_lo and t < t_hi
+                any_in = any_in or inside[i]
+                tau[i] = t if inside[i] else 0.0
                 step = t * df
-                z = unit_phasor(step - math.floor(step)) if inside else 0j
+                z = unit_phasor(step - math.floor(step)) if inside[i] else 0j
                 rot_re[i] = z.real
                 rot_im[i] = z.imag
             if not any_in:
@@ -83,7 +86,7 @@ def _exact_kernel(pr, pi, f0, df, ant, ref, px, py, t_lo, t_hi):  # pragma: no c
             for k0 in range(0, n, 32):
                 for i in range(m):
                     c = tau[i] * (f0 + df * k0)
-                    z = unit_phasor(c - math.floor(c)) if rot_re[i] != 0.0 or rot_im[i] != 0.0 else 0j
+                    z = unit_phasor(c - math.floor(c)) if inside[i] else 0j
                     w_re[i] = z.real
                     w_im[i] = z.imag
                 for k in range(k0, min(k0 + 32, n)):
@@ -144,7 +147,8 @@ def exact_sum(
     lo, hi = fast_time_window(traces.n_samples, traces.radar.sample_interval_s, upsample)
     flat = p.reshape(-1, 2)
     out = _exact_kernel(
-        np.ascontiguousarray(P.real), np.ascontiguousarray(P.imag), float(f[0]), float(traces.radar.frequency_step_hz), ant, ref,
-        np.ascontiguousarray(flat[:, 0]), np.ascontiguousarray(flat[:, 1]), lo, hi,
+        np.ascontiguousarray(P.real), np.ascontiguousarray(P.imag), float(f[0]),
+        float(traces.radar.frequency_step_hz), ant, ref, np.ascontiguousarray(flat[:, 0]),
+        np.ascontiguousarray(flat[:, 1]), lo, hi,
     )  # fmt: skip
     return out.reshape(p.shape[:-1])
