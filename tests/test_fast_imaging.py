@@ -105,10 +105,17 @@ def test_trace_table_cache(four_degrees):
     backproject(copy, grid)
     copy.data[:] *= -1.0
     np.testing.assert_allclose(backproject(copy, grid).values, -a, rtol=1e-6, atol=1e-9)
-    # The complex64 table holds the float64 cubic pieces to complex64 rounding.
+    # The packed table holds the float64 cubic pieces: c0, c1 to complex64 rounding (6e-8
+    # relative), c2, c3 to float16 rounding (2^-11 of the pulse's largest, 2^e).
     full = _bp_table.hermite_coefficients(four_degrees.data, 8)
-    t = table.values.view(np.complex64).reshape(full.shape)
-    np.testing.assert_allclose(t, full, rtol=0, atol=1e-6 * np.abs(full).max())
+    got = _bp_table.unpack_table(table)
+    top = np.abs(full[..., :2]).max()
+    np.testing.assert_allclose(got[..., :2], full[..., :2], rtol=0, atol=1.2e-7 * top)
+    high = np.abs(np.stack([full[..., 2:].real, full[..., 2:].imag])).max(axis=(0, 2, 3))
+    scale = 2.0 ** np.ceil(np.log2(high))  # per pulse
+    err = np.abs(got[..., 2:] - full[..., 2:]).max(axis=(1, 2))
+    assert np.all(err <= 2.0**-11 * np.sqrt(2.0) * scale)
+    assert np.all(got[:, [0, -1]] == 0)
 
 
 # -------------------------------------------------------------------------- FFBP

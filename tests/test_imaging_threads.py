@@ -20,8 +20,8 @@ from sarmotion.core import Trajectory
 from sarmotion.imaging import ImageGrid, _bp_table, backproject
 from sarmotion.simulation import PointTarget, Scene, simulate
 
-N_THREADS = 12
-ROUNDS = 6
+N_THREADS = 8
+ROUNDS = 4
 
 
 @pytest.fixture(scope="module")

@@ -3,25 +3,28 @@
 One call adds one pulse to one image tile: for every pixel of ``n_rows`` rows of ``n``
 pixels (``n`` a multiple of :data:`LANES`) it evaluates, ``LANES`` pixels at a time,
 
-    N      = Nx[k] + Ny[r]                                  (float32, m^2)
-    delta  = N (a1 + N (a2 + N (a3 + N a4)))                (range offset from the anchor, m)
-    q      = f0 + delta si ;  i = floor(q) ;  w = q - i       (fast-time table position)
-    v      = (1 - w) tab[i0 + i] + w tab[i0 + i + 1]         (linear interpolation, complex)
-    T      = t0 + delta sq                                    (carrier phase, quarter cycles)
+    N      = Nx[k] + Ny[r]                                    (float32, m^2)
+    nl     = N^2 (a2 + N (a3 + N a4))                         (range series beyond linear, m)
+    delta  = a1 N + nl                                        (range offset from the anchor, m)
+    q      = f0 + delta si ;  i = floor(q) ;  w = q - i         (fast-time table position)
+    v      = c0 + w (c1 + w sc (c2 + w c3))                    (cubic piece i0 + i, complex)
+    T      = Tx[k] + Ty[r] + nl sq                             (carrier phase, quarter cycles)
     acc   += v exp(i pi T / 2)
 
-``tab`` holds the upsampled traces of the pulse as complex64 pairs read as 64-bit integers,
-so one gather fetches a whole complex sample. Positions outside ``[1, hi)`` read entry 0
-(zero) with weight 0. ``exp(i pi T / 2)`` is ``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``,
-with minimax polynomials on ``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4
-terms, 5.4e-8).
+``Tx``, ``Ty`` carry the anchor's phase and the phase of the linear term ``a1 N``, formed in
+float64 and reduced to ``[-2, 2)`` by the caller (:func:`tile_pulses`), so only ``nl sq``
+(a few quarter cycles) is float32. ``tab`` holds the pulse's cubic pieces
+(:class:`~sarmotion.imaging._bp_table.TraceTable`): per entry three 64-bit words, ``c0`` and
+``c1`` as complex64 and ``c2``, ``c3`` as four float16 scaled by ``1 / sc``; one 64-bit
+gather per word, two shuffles to de-interleave, a float16 conversion. Positions outside
+``[1, hi)`` read entry 0 (zero) with ``w = 0``. ``exp(i pi T / 2)`` is
+``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``, with minimax polynomials on
+``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4 terms, 5.4e-8).
 
-Why IR and not a numba loop: numba's auto-vectoriser gave 8-lane loops with 64-bit-index
-gathers of single floats (0.5 Gpp/s per core measured on the 2-core AVX-512 machine); this
-loop is written for 16 lanes, fetches (re, im) with one 64-bit gather per sample and
-de-interleaves with two shuffles (1.1 Gpp/s per core, same machine). The IR is generic
-LLVM (vector types, ``llvm.masked.gather``): on a CPU without gathers or 512-bit registers
-LLVM splits or scalarises it, and the result is the same.
+Why IR and not a numba loop: numba's auto-vectoriser gives 8-lane loops with 64-bit-index
+gathers of single floats; this loop is written for 16 lanes and fetches whole 64-bit words.
+The IR is generic LLVM (vector types, ``llvm.masked.gather``, ``half``): on a CPU without
+gathers or 512-bit registers LLVM splits or scalarises it, and the result is the same.
 
 The function is linked into each numba function that calls :func:`tile_pulse` (weak ODR
 linkage, so copies merge) and is not inlined, so its ``prefer-vector-width`` attribute
@@ -48,7 +51,9 @@ LANES = 16
 _SIN = (1.5707885026931763, -0.6457120180130005, 0.07766739279031754)
 _COS = (1.0, -1.2336970567703247, 0.2535986304283142, -0.020408352836966515)
 
-_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_hermite"
+#: Change ``SIMD_VERSION`` in :mod:`._bp_kernels` and :mod:`._ffbp_kernels` with this IR
+#: (numba's cache of their kernels does not see this file).
+_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_hermite16"
 
 
 def _f32(x: float) -> str:
@@ -56,7 +61,7 @@ def _f32(x: float) -> str:
     return f"0x{int(np.array(np.float32(x), np.float64).view(np.uint64)):016X}"
 
 
-def _build_ir(v: int = LANES, taps: int = 4) -> str:
+def _build_ir(v: int = LANES) -> str:
     vf, vi, vl, vp, vb = (f"<{v} x float>", f"<{v} x i32>", f"<{v} x i64>", f"<{v} x ptr>",
                           f"<{v} x i1>")  # fmt: skip
     fma = f"@llvm.fmuladd.v{v}f32"
@@ -71,7 +76,7 @@ def _build_ir(v: int = LANES, taps: int = 4) -> str:
             acc = f"%{name}{i}"
         return acc
 
-    scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi"]
+    scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi", "sc"]
     a(f"define weak_odr void @{_NAME}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tx,"
       " ptr noalias %ty, ptr noalias %tab,"
       " ptr noalias %acc_re, ptr noalias %acc_im, i64 %n, i64 %n_rows, i64 %stride, "
@@ -119,33 +124,32 @@ def _build_ir(v: int = LANES, taps: int = 4) -> str:
     a(f"  %ix = select {vb} %ok, {vi} %ix0, {vi} zeroinitializer")
     a(f"  %wk = select {vb} %ok, {vf} %w, {vf} zeroinitializer")
     gather = f"@llvm.masked.gather.v{v}i64.v{v}p0"
-    fields = "abcd"[:taps]
-    if taps == 4:
-        a(f"  %ixe = shl {vi} %ix, splat (i32 2)")  # 4 coefficients (8 bytes each) per entry
-    else:
-        a(f"  %ixe = add {vi} %ix, zeroinitializer")
+    vh = f"<{v} x half>"
+    a(f"  %ixe = mul {vi} %ix, splat (i32 3)")  # 3 words per entry
     a(f"  %pa = getelementptr inbounds i64, ptr %tab, {vi} %ixe")
-    for i, g in enumerate(fields[1:], start=1):
-        a(f"  %p{g} = getelementptr inbounds i64, {vp} %pa, i64 {i}")
-    for g in fields:
+    a(f"  %pb = getelementptr inbounds i64, {vp} %pa, i64 1")
+    a(f"  %pc = getelementptr inbounds i64, {vp} %pa, i64 2")
+    for g in "abc":
         a(f"  %g{g} = call {vl} {gather}({vp} %p{g}, i32 8, {vb} splat (i1 true), {vl} poison)")
     even = ", ".join(f"i32 {2 * i}" for i in range(v))
     odd = ", ".join(f"i32 {2 * i + 1}" for i in range(v))
-    for g in fields:
+    for g in "ab":  # c0, c1: complex64
         a(f"  %{g}f = bitcast {vl} %g{g} to <{2 * v} x float>")
         pair = f"<{2 * v} x float> %{g}f, <{2 * v} x float> poison"
         a(f"  %{g}re = shufflevector {pair}, {vi} <{even}>")
         a(f"  %{g}im = shufflevector {pair}, {vi} <{odd}>")
-    if taps == 2:  # linear: v = a + w (b - a)
-        a(f"  %dre = fsub fast {vf} %bre, %are")
-        a(f"  %dim = fsub fast {vf} %bim, %aim")
-        a(f"  %vre = call fast {vf} {fma}({vf} %wk, {vf} %dre, {vf} %are)")
-        a(f"  %vim = call fast {vf} {fma}({vf} %wk, {vf} %dim, {vf} %aim)")
-    else:  # cubic: v = a + w (b + w (c + w d))
-        for part in ("re", "im"):
-            a(f"  %h2{part} = call fast {vf} {fma}({vf} %wk, {vf} %d{part}, {vf} %c{part})")
-            a(f"  %h1{part} = call fast {vf} {fma}({vf} %wk, {vf} %h2{part}, {vf} %b{part})")
-            a(f"  %v{part} = call fast {vf} {fma}({vf} %wk, {vf} %h1{part}, {vf} %a{part})")
+    # c2, c3: four float16 (c2 re, c2 im, c3 re, c3 im) scaled by 1 / sc
+    a(f"  %cf = bitcast {vl} %gc to <{4 * v} x half>")
+    for name, q in (("cre", 0), ("cim", 1), ("dre", 2), ("dim", 3)):
+        idx = ", ".join(f"i32 {4 * i + q}" for i in range(v))
+        halves = f"<{4 * v} x half> %cf, <{4 * v} x half> poison"
+        a(f"  %{name}.h = shufflevector {halves}, {vi} <{idx}>")
+        a(f"  %{name} = fpext {vh} %{name}.h to {vf}")
+    for part in ("re", "im"):
+        a(f"  %h2{part} = call fast {vf} {fma}({vf} %wk, {vf} %d{part}, {vf} %c{part})")
+        a(f"  %h2s{part} = fmul fast {vf} %h2{part}, %sc.v")
+        a(f"  %h1{part} = call fast {vf} {fma}({vf} %wk, {vf} %h2s{part}, {vf} %b{part})")
+        a(f"  %v{part} = call fast {vf} {fma}({vf} %wk, {vf} %h1{part}, {vf} %a{part})")
     a(f"  %T = call fast {vf} {fma}({vf} %nl, {vf} %sq.v, {vf} %txy)")
     a(f"  %kq = call fast {vf} @llvm.rint.v{v}f32({vf} %T)")
     a(f"  %x = fsub fast {vf} %T, %kq")
@@ -206,24 +210,23 @@ llvm.parse_assembly(_IR).verify()  # fail at import, not inside a compilation
 @intrinsic
 def tile_pulse(
     typingctx, nx, ny, tx, ty, tab, tab_offset, acc_re, acc_im, n, n_rows, stride,
-    f0, i0f, a1, a2, a3, a4, si, sq, hi,
+    f0, i0f, a1, a2, a3, a4, si, sq, hi, sc,
 ):  # fmt: skip
     """Add one pulse to one tile (see the module docstring); compiled code only.
 
-    ``nx``, ``tx`` (float32, >= n), ``ny``, ``ty`` (float32, >= n_rows), ``tab`` (uint64 view
-    of the complex64 coefficient table, the pulse's row starting at flat index
-    ``tab_offset``), ``acc_re`` / ``acc_im`` (float32, row ``r`` at ``r * stride``); the nine
-    scalars are float32.
+    ``nx``, ``tx`` (float32, >= n), ``ny``, ``ty`` (float32, >= n_rows), ``tab`` (the uint64
+    table, the pulse's entries starting at flat index ``tab_offset``), ``acc_re`` /
+    ``acc_im`` (float32, row ``r`` at ``r * stride``); the ten scalars are float32.
     """
     f = types.float32
     i = types.int64
-    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, f, f, f, f, f, f, f, f, f)
+    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, f, f, f, f, f, f, f, f, f, f)
 
     def codegen(context, builder, signature, args):
         context.active_code_library.add_llvm_module(llvm.parse_assembly(_IR))
         byte_ptr = ir.IntType(8).as_pointer()
         i64 = ir.IntType(64)
-        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 7 + [i64] * 3 + [ir.FloatType()] * 9)
+        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 7 + [i64] * 3 + [ir.FloatType()] * 10)
         fn = cgutils.get_or_insert_function(builder.module, fnty, _NAME)
 
         def data(k: int, offset=None):
@@ -288,9 +291,10 @@ def tile_pulses(
             nyv[r] = nr_
             t = lin * nr_
             tyv[r] = t - 4.0 * np.rint(0.25 * t)
+        scale = f32(math.ldexp(1.0, np.int64(tab[j, 0]) - 1024))
         tile_pulse(
-            nxv, nyv, txv, tyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp,
+            nxv, nyv, txv, tyv, tab, j * stride + 1, acc_re, acc_im, ncp, nr, ncp,
             f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
             f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
-            si, sq, hi,
+            si, sq, hi, scale,
         )  # fmt: skip
