@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core import C, Traces
 from ..core.geometry import _as_velocity
 from ..core.spectral import unit_phasor
+from ._bp_common import DEFAULT_UPSAMPLE
 
 __all__ = ["exact_sum", "fast_time_window"]
 
@@ -109,7 +110,7 @@ def exact_sum(
     points_m: ArrayLike,
     *,
     velocity_mps: ArrayLike | None = None,
-    upsample: int = 8,
+    upsample: int = DEFAULT_UPSAMPLE,
     phase_history: ArrayLike | None = None,
 ) -> NDArray[np.complex128]:
     """The backprojection sum at ground points, without interpolation (module docstring).

@@ -17,7 +17,7 @@ So ``J_A`` is sampled on the image's own columns ``u`` (no interpolation across 
 and on rows ``v`` spaced ``1 / (2 alpha b_A)``: coarse for short sub-apertures. The tree is
 evaluated bottom-up:
 
-- leaves: exact backprojection (the float32 tile arithmetic of :mod:`.backprojection`) of
+- leaves: exact backprojection (the float32 tile arithmetic of :mod:`._bp_kernels`) of
   a few to a hundred pulses on their coarse grid, demodulated as each tile is written;
 - a parent ``J_P = J_A + J_B`` on a grid twice as fine in ``v``: even rows are the
   children's rows, odd rows the half-sample interpolation of each child by a ``TAPS``-tap
@@ -427,8 +427,8 @@ def ffbp_values(
 
     Parameters
     ----------
-    table_values : (n_pulses, n_up + 2) ndarray
-        Trace table of :mod:`.backprojection` (uint64 view of complex64).
+    table_values : (n_pulses, 1 + 3 (n_up + 2)) ndarray
+        Trace table (:attr:`~._bp_table.TraceTable.values`).
     positions : (n_pulses, 3) ndarray
         Effective antenna positions ``r(s_j) - s_j u`` (m).
     ref_ranges : (n_pulses,) ndarray
