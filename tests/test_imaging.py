@@ -371,3 +371,17 @@ def test_width_3db_default_length(point_1deg: Traces) -> None:
     res = resolution(point_1deg, point_m=TARGET)
     w = width_3db(img, TARGET, res.cross_range_direction, traces=point_1deg)
     assert w == pytest.approx(0.886 * res.cross_range_m, rel=0.03)
+
+
+def test_device_keyword(point_1deg: Traces) -> None:
+    from sarmotion.imaging import cuda
+
+    grid = ImageGrid.square(centre_m=TARGET, size_m=2.0, spacing_m=0.5)
+    with pytest.raises(ValueError, match="device"):
+        backproject(point_1deg, grid, device="tpu")
+    if cuda.available():  # the GPU image, the same sum within both kernels' bounds
+        gpu = backproject(point_1deg, grid, device="cuda").values
+        assert _ser_db(backproject(point_1deg, grid).values, gpu) >= 80.0
+    else:  # one line naming what is missing
+        with pytest.raises(RuntimeError, match=r"sarmotion\[gpu\] extra and an NVIDIA GPU"):
+            backproject(point_1deg, grid, device="cuda")
