@@ -31,8 +31,9 @@ sample of pixels (the whole image at 256^2).
   45 degrees about the scene centre (the rotated path of FFBP);
 - ``test_against_fastsar``: sarmotion exact and FFBP against FastSAR (the ``bench`` extra,
   ``fastsar==0.1.8``) exact (``ExactFormer``, cubic, its default upsampling 8) and
-  factorised (``ImageFormer``) at 256^2, 1024^2, 2048^2: the same phase history, antenna
-  positions, reference ranges and grid, ``window=False``, 2 threads each
+  factorised (``ImageFormer``) at 256^2, 1024^2, 2048^2 over one 51.2 m square
+  (:data:`FASTSAR_EXTENT_M`): the same phase history, antenna positions, reference ranges
+  and grid, ``window=False``, 2 threads each
   (``OMP_NUM_THREADS=2``, ``OMP_WAIT_POLICY=passive`` unless set), the four called in turn
   in every round; medians of the rounds, ``pixel_pulses_per_second``, SER against the exact
   sum (FastSAR's images divided by ``n_samples``, the normalisation of ``eq:image`` here),
@@ -67,6 +68,10 @@ from sarmotion.imaging.exact_sum import exact_sum  # noqa: E402
 SPACING_M = 0.25
 SIZES = (128, 256, 512, 1024)
 FASTSAR_SIZES = (256, 1024, 2048)
+#: Side of the FastSAR comparison's grids (m): FastSAR's exact former refuses a grid whose
+#: range span from a pulse exceeds the unambiguous range ``c / (2 df)`` (102 m on GOTCHA)
+#: less a margin, so every size covers the same 51.2 m square, 0.2 m to 0.025 m pixels.
+FASTSAR_EXTENT_M = 51.2
 #: Pixels of each image on which the exact sum is evaluated.
 N_CHECK = 65536
 
@@ -304,7 +309,7 @@ def compare_with_fastsar(traces, n: int, rounds: int) -> dict:
     import fastsar
 
     numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
-    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+    grid = ImageGrid.square(size_m=FASTSAR_EXTENT_M, spacing_m=FASTSAR_EXTENT_M / n)
     P = np.ascontiguousarray(traces.phase_history(), dtype=np.complex64)
     fs_exact, fs_factorised = _fastsar_formers(fastsar, traces, grid)
     scale = 1.0 / traces.n_samples
@@ -327,6 +332,7 @@ def compare_with_fastsar(traces, n: int, rounds: int) -> dict:
     rates = {name: work / float(np.median(t)) for name, t in times.items()}
     return {
         "grid": f"{n}x{n}",
+        "spacing_m": FASTSAR_EXTENT_M / n,
         "rounds": rounds,
         "threads": numba.get_num_threads(),
         "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
@@ -344,7 +350,7 @@ def test_against_fastsar(benchmark, traces, n):
         "fastsar", reason="FastSAR is not installed (pip install 'sarmotion[bench]')"
     )
     row = compare_with_fastsar(traces, n, rounds=5 if n <= 256 else 3)
-    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+    grid = ImageGrid.square(size_m=FASTSAR_EXTENT_M, spacing_m=FASTSAR_EXTENT_M / n)
     benchmark.pedantic(backproject, args=(traces, grid), rounds=1, iterations=1)
     benchmark.extra_info.update(row)
 
