@@ -120,13 +120,14 @@ _REFERENCES: dict = {}
 def _reference(traces, grid: ImageGrid) -> tuple[np.ndarray, np.ndarray]:
     """Flat indices of :data:`N_CHECK` seeded random pixels and the exact sum there."""
     key = (id(traces), grid.shape, float(grid.x_m[0]), float(grid.y_m[0]), grid.spacing_m)
-    if key not in _REFERENCES:
+    entry = _REFERENCES.get(key)
+    if entry is None or entry[0] is not traces:  # ids of collected objects are reused
         ny, nx = grid.shape
         rng = np.random.default_rng(20261126)
         idx = np.sort(rng.choice(ny * nx, size=min(N_CHECK, ny * nx), replace=False))
         pts = np.stack([grid.x_m[idx % nx], grid.y_m[idx // nx]], axis=-1)
-        _REFERENCES[key] = (idx, exact_sum(traces, pts))
-    return _REFERENCES[key]
+        entry = _REFERENCES[key] = (traces, idx, exact_sum(traces, pts))
+    return entry[1], entry[2]
 
 
 def _ser_vs_exact(traces, grid: ImageGrid, values: np.ndarray) -> float:
