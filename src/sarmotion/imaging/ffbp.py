@@ -67,7 +67,8 @@ Columns whose pixels no pulse's fast-time window reaches are zero, as in exact
 backprojection. The rotated path adds the resampling's error to the factorisation's
 (independent, they add in power; the filter's response error is at most 6.5e-3 at the
 ``u`` band's edges, 6e-4 along ``v``): GOTCHA turned 30 and 45 degrees, 1024^2: 54.0,
-55.8 dB.
+55.8 dB. Simulated points (four targets, one moving, 20 dB SNR) at 0 and 30 degree looks,
+1024^2: 52.2, 51.6 dB.
 
 References: L. M. H. Ulander, H. Hellsten, G. Stenström, "Synthetic-aperture radar
 processing using fast factorized back-projection", IEEE Trans. AES 39(3), 2003 (polar
