@@ -47,8 +47,11 @@ def test_concurrent_backprojection_with_evictions(traces, monkeypatch, fast_swit
                 scale = complex(k + 1, r)
                 tr = traces.with_data(traces.data * scale)  # a new traces object each round
                 img = backproject(tr, grid).values
+                # The scaled data round differently in the table (float16 c2, c3: up to
+                # 7e-5 of the amplitude, module bound; complex64 c0, c1): the two images
+                # agree within twice that of the coherent sum's peak, |scale| max|alone|.
                 np.testing.assert_allclose(
-                    img, scale * alone, rtol=1e-5, atol=1e-6 * abs(alone).max() * abs(scale)
+                    img, scale * alone, rtol=0, atol=1.5e-4 * abs(scale) * abs(alone).max()
                 )
                 again = backproject(tr, grid).values  # the cached table, if still held
                 np.testing.assert_array_equal(again, img)
