@@ -1,32 +1,43 @@
-"""Backprojection speed and accuracy, every figure against its reference in the same run.
+"""Backprojection speed and accuracy, every accuracy figure against the exact sum.
 
 Run with::
 
     pytest benchmarks/bench_backprojection.py --benchmark-only
+    python benchmarks/bench_backprojection.py          # the FastSAR comparison table only
 
 (``--benchmark-only`` overrides the ``--benchmark-skip`` of the project configuration;
 ``--benchmark-enable`` does not.)
 
 Data: the four GOTCHA degrees (469 pulses x 424 samples; ``$SARMOTION_GOTCHA_DIR`` or
 ``../shared/data/gotcha``), or, without them, a simulated GOTCHA-like 4-degree aperture
-(468 pulses, three points and a mover). Upsample 8, 0.25 m pixels, numba's default threads.
+(468 pulses, three points and a mover). 0.25 m pixels, numba's default threads (the
+FastSAR comparison: 2 threads each).
+
+Accuracy is always the signal-to-error ratio against the exact sum
+(:func:`sarmotion.imaging.exact_sum.exact_sum`: every pulse's band-limited trace evaluated
+at the pixel's delay by a direct sum over the phase history, no interpolation), on
+:data:`N_CHECK` pixels drawn at random (seeded) from the image: the SER estimated on a
+sample of pixels (the whole image at 256^2).
 
 - ``test_exact``: the compiled float32 kernel at 128^2 ... 1024^2 (``extra_info``:
-  ``pixel_pulses_per_second_{median,best}``, the signal-to-error ratio against the float64
-  numpy reference at 128^2 and 256^2, against the float64 compiled kernel, itself ~190 dB
-  from the reference, above);
-- ``test_float64_kernel``: the float64 compiled kernel the float32 one replaced, same
-  sizes (the "before" figures);
-- ``test_exact_in_swath``: 1024^2 at 0.1 m, every pixel inside the fast-time window (a
-  0.25 m 1024^2 grid is 256 m wide, the window reaches ~+-70 m of ground range);
+  ``pixel_pulses_per_second_{median,best}``, ``ser_db_vs_exact_sum``);
+- ``test_float64_kernel``: the float64 compiled kernel (the fallback), same sizes;
+- ``test_exact_in_swath``: 1024^2 at 0.1 m, every pixel inside the fast-time window;
 - ``test_ffbp``: fast factorised backprojection at 1024^2 and 2048^2 against exact
   backprojection in the same run, the two alternating (7 pairs): ``speed_up`` (median
-  wall clock, exact / FFBP), ``speed_up_cpu`` (median CPU time, all threads) and
-  ``ser_db_vs_exact``;
+  wall clock, exact / FFBP), ``speed_up_cpu`` (median CPU time, all threads),
+  ``ser_db_vs_exact_sum`` of both;
 - ``test_ffbp_oblique``: the same at an oblique look, the GOTCHA degrees turned by 30 and
-  45 degrees about the scene centre (the rotated path of FFBP), same figures plus
-  ``ffbp_path`` and ``exact_pixels`` (pixels near the fast-time window's ends computed
-  exactly).
+  45 degrees about the scene centre (the rotated path of FFBP);
+- ``test_against_fastsar``: sarmotion exact and FFBP against FastSAR (the ``bench`` extra,
+  ``fastsar==0.1.8``) exact (``ExactFormer``, cubic, its default upsampling 8) and
+  factorised (``ImageFormer``) at 256^2, 1024^2, 2048^2 over one 51.2 m square
+  (:data:`FASTSAR_EXTENT_M`): the same phase history, antenna positions, reference ranges
+  and grid, ``window=False``, 2 threads each
+  (``OMP_NUM_THREADS=2``, ``OMP_WAIT_POLICY=passive`` unless set), the four called in turn
+  in every round; medians of the rounds, ``pixel_pulses_per_second``, SER against the exact
+  sum (FastSAR's images divided by ``n_samples``, the normalisation of ``eq:image`` here),
+  the 1-minute load average before and after. Skipped, saying so, without FastSAR.
 
 Each benchmark first runs once outside the timing (JIT cache load, thread start-up, the
 upsampled-trace table, which later calls on the same traces reuse). ``extra_info`` also
@@ -41,18 +52,28 @@ import os
 import time
 from pathlib import Path
 
-import numba
-import numpy as np
-import pytest
+os.environ.setdefault("OMP_NUM_THREADS", "2")  # before FastSAR loads its OpenMP kernels
+os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
-from sarmotion.core import Trajectory
-from sarmotion.imaging import ImageGrid, backproject
-from sarmotion.imaging import backprojection as bp
-from sarmotion.io import read_gotcha
-from sarmotion.simulation import PointTarget, Scene, simulate
+import numba  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from sarmotion.core import Trajectory  # noqa: E402
+from sarmotion.imaging import ImageGrid, backproject  # noqa: E402
+from sarmotion.imaging._bp_common import make_setup  # noqa: E402
+from sarmotion.imaging._bp_kernels import run_numba_f64  # noqa: E402
+from sarmotion.imaging.exact_sum import exact_sum  # noqa: E402
 
 SPACING_M = 0.25
 SIZES = (128, 256, 512, 1024)
+FASTSAR_SIZES = (256, 1024, 2048)
+#: Side of the FastSAR comparison's grids (m): FastSAR's exact former refuses a grid whose
+#: range span from a pulse exceeds the unambiguous range ``c / (2 df)`` (102 m on GOTCHA)
+#: less a margin, so every size covers the same 51.2 m square, 0.2 m to 0.025 m pixels.
+FASTSAR_EXTENT_M = 51.2
+#: Pixels of each image on which the exact sum is evaluated.
+N_CHECK = 65536
 
 
 def _gotcha_files() -> list[Path]:
@@ -65,8 +86,10 @@ def _gotcha_files() -> list[Path]:
     return []
 
 
-@pytest.fixture(scope="module")
-def traces():
+def _load_traces():
+    from sarmotion.io import read_gotcha
+    from sarmotion.simulation import PointTarget, Scene, simulate
+
     files = _gotcha_files()
     if files:
         return read_gotcha(files)
@@ -81,13 +104,39 @@ def traces():
     return simulate(scene, trajectory=Trajectory.circular(aperture_deg=4.0)).traces
 
 
+@pytest.fixture(scope="module")
+def traces():
+    return _load_traces()
+
+
 def _ser_db(ref: np.ndarray, x: np.ndarray) -> float:
     err = float(np.linalg.norm(x - ref))
     return math.inf if err == 0 else 20.0 * math.log10(float(np.linalg.norm(ref)) / err)
 
 
+_REFERENCES: dict = {}
+
+
+def _reference(traces, grid: ImageGrid) -> tuple[np.ndarray, np.ndarray]:
+    """Flat indices of :data:`N_CHECK` seeded random pixels and the exact sum there."""
+    key = (id(traces), grid.shape, float(grid.x_m[0]), float(grid.y_m[0]), grid.spacing_m)
+    entry = _REFERENCES.get(key)
+    if entry is None or entry[0] is not traces:  # ids of collected objects are reused
+        ny, nx = grid.shape
+        rng = np.random.default_rng(20261126)
+        idx = np.sort(rng.choice(ny * nx, size=min(N_CHECK, ny * nx), replace=False))
+        pts = np.stack([grid.x_m[idx % nx], grid.y_m[idx // nx]], axis=-1)
+        entry = _REFERENCES[key] = (traces, idx, exact_sum(traces, pts))
+    return entry[1], entry[2]
+
+
+def _ser_vs_exact(traces, grid: ImageGrid, values: np.ndarray) -> float:
+    idx, ref = _reference(traces, grid)
+    return _ser_db(ref, values.reshape(-1)[idx])
+
+
 def _float64_kernel(traces, grid):
-    return bp._run_numba_f64(bp._setup(traces, None, 8), grid, None)
+    return run_numba_f64(make_setup(traces, None, 6), grid, None)
 
 
 def _rates(benchmark, traces, n: int) -> None:
@@ -113,22 +162,19 @@ def test_exact(benchmark, traces, n):
     img = backproject(traces, grid)
     benchmark.pedantic(backproject, args=(traces, grid), rounds=15 if n < 512 else 5, iterations=1)
     _rates(benchmark, traces, n)
-    if n <= 256:
-        ref = backproject(traces, grid, kernel="numpy").values
-        benchmark.extra_info["ser_db_vs_numpy_float64_reference"] = _ser_db(ref, img.values)
-    else:
-        ref = _float64_kernel(traces, grid)
-        benchmark.extra_info["ser_db_vs_float64_compiled_kernel"] = _ser_db(ref, img.values)
+    benchmark.extra_info["ser_db_vs_exact_sum"] = _ser_vs_exact(traces, grid, img.values)
+    benchmark.extra_info["upsample"] = img.metadata["upsample"]
     benchmark.extra_info["kernel_variant"] = img.metadata["kernel_variant"]
 
 
 @pytest.mark.parametrize("n", SIZES)
 def test_float64_kernel(benchmark, traces, n):
     grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
-    _float64_kernel(traces, grid)
+    img = _float64_kernel(traces, grid)
     benchmark.pedantic(_float64_kernel, args=(traces, grid), rounds=5 if n < 1024 else 3,
                        iterations=1)  # fmt: skip
     _rates(benchmark, traces, n)
+    benchmark.extra_info["ser_db_vs_exact_sum"] = _ser_vs_exact(traces, grid, img)
 
 
 def test_exact_in_swath(benchmark, traces):
@@ -172,6 +218,8 @@ def test_ffbp(benchmark, traces, n):
             "ffbp_cpu_seconds_median": cpu_f,
             "speed_up_cpu": cpu_e / cpu_f,
             "ser_db_vs_exact": _ser_db(exact.values, fast.values),
+            "ser_db_vs_exact_sum": _ser_vs_exact(traces, grid, fast.values),
+            "exact_ser_db_vs_exact_sum": _ser_vs_exact(traces, grid, exact.values),
             "ffbp": fast.metadata["ffbp"],
             "threads": numba.get_num_threads(),
             "load_average_1min": os.getloadavg()[0],
@@ -222,6 +270,8 @@ def test_ffbp_oblique(benchmark, traces, n, deg):
             "ffbp_cpu_seconds_median": cpu_f,
             "speed_up_cpu": cpu_e / cpu_f,
             "ser_db_vs_exact": _ser_db(exact.values, fast.values),
+            "ser_db_vs_exact_sum": _ser_vs_exact(tr, grid, fast.values),
+            "exact_ser_db_vs_exact_sum": _ser_vs_exact(tr, grid, exact.values),
             "ffbp_path": info.get("path"),
             "exact_pixels": info.get("exact_pixels"),
             "ffbp": info,
@@ -229,3 +279,111 @@ def test_ffbp_oblique(benchmark, traces, n, deg):
             "load_average_1min": load,
         }
     )
+
+
+# ------------------------------------------------------------------- FastSAR comparison
+def _fastsar_formers(fastsar, traces, grid: ImageGrid):
+    """FastSAR's exact (cubic) and factorised formers on ``grid``, ``window=False``.
+
+    FastSAR's grid is ``x_i = (i - nx/2) spx`` (and ``y``) about ``center`` (``ExactFormer``)
+    or the origin (``ImageFormer``): the grids here are centred squares, so they agree.
+    """
+    ny, nx = grid.shape
+    dx, dy = grid.spacing_m
+    if not (math.isclose(grid.x_m[0], -nx / 2 * dx) and math.isclose(grid.y_m[0], -ny / 2 * dy)):
+        raise ValueError("the FastSAR comparison needs a grid x_i = (i - nx/2) dx")
+    if np.any(traces.reference_point_m != 0.0):
+        raise ValueError("the FastSAR comparison needs the reference point at the origin")
+    f = traces.frequencies_hz
+    common = dict(
+        ant=traces.positions_m, fmin=float(f[0]), df=float(traces.radar.frequency_step_hz),
+        K=traces.n_samples, nx=nx, ny=ny, spx=dx, spy=dy, backend="cpu", window=False,
+        ref=np.linalg.norm(traces.positions_m - traces.reference_point_m, axis=1),
+    )  # fmt: skip
+    exact = fastsar.ExactFormer(**common, interp="cubic")
+    factorised = fastsar.ImageFormer(**common)
+    return exact, factorised
+
+
+def compare_with_fastsar(traces, n: int, rounds: int) -> dict:
+    """One row of the comparison (module docstring): rates, SER against the exact sum, load."""
+    import fastsar
+
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    grid = ImageGrid.square(size_m=FASTSAR_EXTENT_M, spacing_m=FASTSAR_EXTENT_M / n)
+    P = np.ascontiguousarray(traces.phase_history(), dtype=np.complex64)
+    fs_exact, fs_factorised = _fastsar_formers(fastsar, traces, grid)
+    scale = 1.0 / traces.n_samples
+    imagers = {
+        "sarmotion exact": lambda: backproject(traces, grid).values,
+        "sarmotion FFBP": lambda: backproject(traces, grid, method="ffbp").values,
+        "FastSAR exact (cubic)": lambda: np.asarray(fs_exact(P)).T * scale,
+        "FastSAR factorised": lambda: np.asarray(fs_factorised(P)).T * scale,
+    }
+    load = [os.getloadavg()[0]]
+    ser = {name: _ser_vs_exact(traces, grid, f()) for name, f in imagers.items()}  # + warm-up
+    times: dict[str, list[float]] = {name: [] for name in imagers}
+    for _ in range(rounds):  # alternating: every imager once per round
+        for name, f in imagers.items():
+            t0 = time.perf_counter()
+            f()
+            times[name].append(time.perf_counter() - t0)
+    load.append(os.getloadavg()[0])
+    work = n * n * traces.n_pulses
+    rates = {name: work / float(np.median(t)) for name, t in times.items()}
+    return {
+        "grid": f"{n}x{n}",
+        "spacing_m": FASTSAR_EXTENT_M / n,
+        "rounds": rounds,
+        "threads": numba.get_num_threads(),
+        "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
+        "ser_db_vs_exact_sum": ser,
+        "pixel_pulses_per_second_median": rates,
+        "exact_speed_ratio": rates["sarmotion exact"] / rates["FastSAR exact (cubic)"],
+        "ffbp_speed_ratio": rates["sarmotion FFBP"] / rates["FastSAR factorised"],
+        "load_average_1min": load,
+    }
+
+
+@pytest.mark.parametrize("n", FASTSAR_SIZES)
+def test_against_fastsar(benchmark, traces, n):
+    pytest.importorskip(
+        "fastsar", reason="FastSAR is not installed (pip install 'sarmotion[bench]')"
+    )
+    row = compare_with_fastsar(traces, n, rounds=5 if n <= 256 else 3)
+    grid = ImageGrid.square(size_m=FASTSAR_EXTENT_M, spacing_m=FASTSAR_EXTENT_M / n)
+    benchmark.pedantic(backproject, args=(traces, grid), rounds=1, iterations=1)
+    benchmark.extra_info.update(row)
+
+
+def _table(rows: list[dict]) -> str:
+    names = list(rows[0]["ser_db_vs_exact_sum"])
+    head = "| imager | SER vs exact sum (dB) | pixel-pulses/s: " + " / ".join(
+        r["grid"] for r in rows
+    )
+    lines = [head + " |", "|---|---|---|"]
+    for name in names:
+        sers = ", ".join(f"{r['ser_db_vs_exact_sum'][name]:.1f}" for r in rows)
+        rates = " / ".join(f"{r['pixel_pulses_per_second_median'][name]:.2e}" for r in rows)
+        lines.append(f"| {name} | {sers} | {rates} |")
+    loads = "; ".join(
+        f"{r['grid']}: {r['load_average_1min'][0]:.1f}-{r['load_average_1min'][1]:.1f}"
+        for r in rows
+    )
+    ratios = "; ".join(
+        f"{r['grid']}: exact {r['exact_speed_ratio']:.2f}x, FFBP {r['ffbp_speed_ratio']:.2f}x"
+        for r in rows
+    )
+    return "\n".join(lines) + f"\n\nsarmotion / FastSAR: {ratios}\nload average: {loads}"
+
+
+if __name__ == "__main__":
+    import importlib.util
+    import sys
+
+    if importlib.util.find_spec("fastsar") is None:
+        sys.exit("FastSAR is not installed (pip install 'sarmotion[bench]'): nothing to compare")
+    tr = _load_traces()
+    sizes = [int(a) for a in sys.argv[1:]] or list(FASTSAR_SIZES)
+    out = [compare_with_fastsar(tr, n, rounds=5 if n <= 256 else 3) for n in sizes]
+    sys.stdout.write(_table(out) + "\n")

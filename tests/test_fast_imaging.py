@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 from sarmotion.core import Trajectory
-from sarmotion.imaging import ImageGrid, backproject, ffbp
-from sarmotion.imaging import backprojection as bp
+from sarmotion.imaging import ImageGrid, _bp_kernels, _bp_table, backproject, ffbp
 from sarmotion.imaging.ffbp import half_sample_filter
 from sarmotion.io import read_gotcha
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate
@@ -55,9 +54,9 @@ def test_float32_kernel_matches_the_numpy_reference(four_degrees, spacing_m, vel
     fast = backproject(four_degrees, grid, velocity_mps=velocity)
     assert fast.metadata["kernel_variant"] == "numba-float32"
     ref = backproject(four_degrees, grid, velocity_mps=velocity, kernel="numpy").values
-    # Spec >= 60 dB; 70-85 dB measured (float32 phase offsets of up to ~4000 quarter
-    # cycles keep ~2e-4 of a quarter cycle).
-    assert _ser_db(ref, fast.values) >= 60.0
+    # Same interpolation, float32 against float64: the float32 errors bounded in
+    # sarmotion.imaging.backprojection stay ~20 dB under the interpolation's; >= 100 dB.
+    assert _ser_db(ref, fast.values) >= 100.0
 
 
 @pytest.mark.gotcha
@@ -66,7 +65,7 @@ def test_float32_kernel_on_gotcha(gotcha_files):
     grid = ImageGrid.square(size_m=24.0, spacing_m=0.25)
     fast = backproject(tr, grid).values
     ref = backproject(tr, grid, kernel="numpy").values
-    assert _ser_db(ref, fast) >= 60.0  # 77 dB measured
+    assert _ser_db(ref, fast) >= 100.0  # as above
 
 
 def test_near_range_geometry_uses_the_float64_kernel():
@@ -77,27 +76,27 @@ def test_near_range_geometry_uses_the_float64_kernel():
     img = backproject(tr, grid)
     assert img.metadata["kernel_variant"] == "numba-float64"
     ref = backproject(tr, grid, kernel="numpy").values
-    assert _ser_db(ref, img.values) >= 60.0
+    assert _ser_db(ref, img.values) >= 200.0  # float64 both: rounding only
 
 
 def test_tile_bounds():
     pos = np.array([[7000.0, 0.0, 7300.0], [7000.0, 400.0, 7300.0]])
     x = np.arange(-64.0, 64.0, 0.25)
-    assert bp._tile_shape(pos, x, x, 256.0) == (64, 64)
+    assert _bp_kernels.tile_shape(pos, x, x, 256.0) == (64, 64)
     # 2 m pixels: 64-pixel tiles would span 128 m; smaller tiles keep the phase offsets.
     x2 = np.arange(-200.0, 200.0, 2.0)
-    assert bp._tile_shape(pos, x2, x2, 256.0) in ((32, 32), (16, 16))
+    assert _bp_kernels.tile_shape(pos, x2, x2, 256.0) in ((32, 32), (16, 16))
     near = np.array([[30.0, 0.0, 20.0]])
-    assert bp._tile_shape(near, x, x, 256.0) is None
+    assert _bp_kernels.tile_shape(near, x, x, 256.0) is None
 
 
 def test_trace_table_cache(four_degrees):
     grid = ImageGrid.square(size_m=10.0, spacing_m=0.5)
-    bp._TABLES.clear()
+    _bp_table.TABLES.clear()
     a = backproject(four_degrees, grid).values
-    table = bp._TABLES.get(four_degrees, 8)
-    assert bp._TABLES.get(four_degrees, 8) is table  # reused
-    assert bp._TABLES.get(four_degrees, 4) is not table  # other upsampling
+    table = _bp_table.TABLES.get(four_degrees, 8)
+    assert _bp_table.TABLES.get(four_degrees, 8) is table  # reused
+    assert _bp_table.TABLES.get(four_degrees, 4) is not table  # other upsampling
     # A traces object with other data gets its own table; a change of the data in place is
     # noticed (CRC-32) and the table rebuilt.
     other = four_degrees.with_data(four_degrees.data * 2.0)
@@ -106,11 +105,17 @@ def test_trace_table_cache(four_degrees):
     backproject(copy, grid)
     copy.data[:] *= -1.0
     np.testing.assert_allclose(backproject(copy, grid).values, -a, rtol=1e-6, atol=1e-9)
-    # The complex64 table holds the same samples as the float64 upsampling.
-    full = bp._upsample_fast_time(four_degrees.data, 8)
-    t = table.values.view(np.complex64)
-    np.testing.assert_allclose(t[:, 1:-1], full, atol=2e-6 * np.abs(full).max())
-    assert np.all(t[:, 0] == 0) and np.all(t[:, -1] == 0)
+    # The packed table holds the float64 cubic pieces: c0, c1 to complex64 rounding (6e-8
+    # relative), c2, c3 to float16 rounding (2^-11 of the pulse's largest, 2^e).
+    full = _bp_table.hermite_coefficients(four_degrees.data, 8)
+    got = _bp_table.unpack_table(table)
+    top = np.abs(full[..., :2]).max()
+    np.testing.assert_allclose(got[..., :2], full[..., :2], rtol=0, atol=1.2e-7 * top)
+    high = np.abs(np.stack([full[..., 2:].real, full[..., 2:].imag])).max(axis=(0, 2, 3))
+    scale = 2.0 ** np.ceil(np.log2(high))  # per pulse
+    err = np.abs(got[..., 2:] - full[..., 2:]).max(axis=(1, 2))
+    assert np.all(err <= 2.0**-11 * np.sqrt(2.0) * scale)
+    assert np.all(got[:, [0, -1]] == 0)
 
 
 # -------------------------------------------------------------------------- FFBP

@@ -2,8 +2,12 @@
 
 - :mod:`~sarmotion.imaging.grid` — :class:`ImageGrid` (pixel axes in m) and :class:`Image`;
 - :mod:`~sarmotion.imaging.backprojection` — :func:`backproject` (``eq:image``, with motion
-  compensation ``eq:imagecompu``), at pixels or at arbitrary points; its compiled kernel
-  runs on float32 tiles (inner loop in :mod:`~sarmotion.imaging._simd`);
+  compensation ``eq:imagecompu``), at pixels or at arbitrary points, with its error bound;
+  the trace tables (cubic pieces of the exactly upsampled traces) in ``_bp_table``, the
+  numpy reference in ``_bp_reference``, the compiled kernels in ``_bp_kernels`` (float32
+  tiles, inner loop in ``_simd``);
+- :mod:`~sarmotion.imaging.exact_sum` — the backprojection sum without interpolation, the
+  reference of every accuracy figure;
 - :mod:`~sarmotion.imaging.ffbp` — fast factorised backprojection for large images
   (``backproject(..., method="ffbp")``);
 - :mod:`~sarmotion.imaging.resolution` — the theoretical resolution cell and 3 dB widths;
@@ -17,6 +21,7 @@
 
 from .autofocus import AutofocusResult, apply_phase_correction, focus_mover, pga
 from .backprojection import backproject, backproject_phase_history, backproject_points
+from .exact_sum import exact_sum
 from .grid import Image, ImageGrid, default_scene_size_m, scene_grid
 from .peaks import find_peaks, parabolic_peak
 from .point_response import point_response, pulse_responses, refine_location
@@ -36,6 +41,7 @@ __all__ = [
     "Resolution",
     "backproject",
     "default_scene_size_m",
+    "exact_sum",
     "scene_grid",
     "backproject_phase_history",
     "backproject_points",

@@ -3,25 +3,28 @@
 One call adds one pulse to one image tile: for every pixel of ``n_rows`` rows of ``n``
 pixels (``n`` a multiple of :data:`LANES`) it evaluates, ``LANES`` pixels at a time,
 
-    N      = Nx[k] + Ny[r]                                  (float32, m^2)
-    delta  = N (a1 + N (a2 + N (a3 + N a4)))                (range offset from the anchor, m)
-    q      = f0 + delta si ;  i = floor(q) ;  w = q - i       (fast-time table position)
-    v      = (1 - w) tab[i0 + i] + w tab[i0 + i + 1]         (linear interpolation, complex)
-    T      = t0 + delta sq                                    (carrier phase, quarter cycles)
+    N      = Nx[k] + Ny[r]                                    (float32, m^2)
+    nl     = N^2 (a2 + N (a3 + N a4))                         (range series beyond linear, m)
+    delta  = a1 N + nl                                        (range offset from the anchor, m)
+    q      = f0 + delta si ;  i = floor(q) ;  w = q - i         (fast-time table position)
+    v      = c0 + w (c1 + w sc (c2 + w c3))                    (cubic piece i0 + i, complex)
+    T      = Tx[k] + Ty[r] + nl sq                             (carrier phase, quarter cycles)
     acc   += v exp(i pi T / 2)
 
-``tab`` holds the upsampled traces of the pulse as complex64 pairs read as 64-bit integers,
-so one gather fetches a whole complex sample. Positions outside ``[1, hi)`` read entry 0
-(zero) with weight 0. ``exp(i pi T / 2)`` is ``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``,
-with minimax polynomials on ``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4
-terms, 5.4e-8).
+``Tx``, ``Ty`` carry the anchor's phase and the phase of the linear term ``a1 N``, formed in
+float64 and reduced to ``[-2, 2)`` by the caller (:func:`tile_pulses`), so only ``nl sq``
+(a few quarter cycles) is float32. ``tab`` holds the pulse's cubic pieces
+(:class:`~sarmotion.imaging._bp_table.TraceTable`): per entry three 64-bit words, ``c0`` and
+``c1`` as complex64 and ``c2``, ``c3`` as four float16 scaled by ``1 / sc``; one 64-bit
+gather per word, two shuffles to de-interleave, a float16 conversion. Positions outside
+``[1, hi)`` read entry 0 (zero) with ``w = 0``. ``exp(i pi T / 2)`` is
+``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``, with minimax polynomials on
+``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4 terms, 5.4e-8).
 
-Why IR and not a numba loop: numba's auto-vectoriser gave 8-lane loops with 64-bit-index
-gathers of single floats (0.5 Gpp/s per core measured on the 2-core AVX-512 machine); this
-loop is written for 16 lanes, fetches (re, im) with one 64-bit gather per sample and
-de-interleaves with two shuffles (1.1 Gpp/s per core, same machine). The IR is generic
-LLVM (vector types, ``llvm.masked.gather``): on a CPU without gathers or 512-bit registers
-LLVM splits or scalarises it, and the result is the same.
+Why IR and not a numba loop: numba's auto-vectoriser gives 8-lane loops with 64-bit-index
+gathers of single floats; this loop is written for 16 lanes and fetches whole 64-bit words.
+The IR is generic LLVM (vector types, ``llvm.masked.gather``, ``half``): on a CPU without
+gathers or 512-bit registers LLVM splits or scalarises it, and the result is the same.
 
 The function is linked into each numba function that calls :func:`tile_pulse` (weak ODR
 linkage, so copies merge) and is not inlined, so its ``prefer-vector-width`` attribute
@@ -48,7 +51,9 @@ LANES = 16
 _SIN = (1.5707885026931763, -0.6457120180130005, 0.07766739279031754)
 _COS = (1.0, -1.2336970567703247, 0.2535986304283142, -0.020408352836966515)
 
-_NAME = f"sarmotion_bp_tile_pulse_v{LANES}"
+#: Change ``SIMD_VERSION`` in :mod:`._bp_kernels` and :mod:`._ffbp_kernels` with this IR
+#: (numba's cache of their kernels does not see this file).
+_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_hermite16"
 
 
 def _f32(x: float) -> str:
@@ -71,8 +76,9 @@ def _build_ir(v: int = LANES) -> str:
             acc = f"%{name}{i}"
         return acc
 
-    scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "t0", "hi"]
-    a(f"define weak_odr void @{_NAME}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tab,"
+    scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi", "sc"]
+    a(f"define weak_odr void @{_NAME}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tx,"
+      " ptr noalias %ty, ptr noalias %tab,"
       " ptr noalias %acc_re, ptr noalias %acc_im, i64 %n, i64 %n_rows, i64 %stride, "
       + ", ".join(f"float %{s}" for s in scalars) + ") #0 {")  # fmt: skip
     a("entry:")
@@ -86,6 +92,10 @@ def _build_ir(v: int = LANES) -> str:
     a("  %nyr = load float, ptr %ny.p, align 4")
     a(f"  %nyr.i = insertelement {vf} poison, float %nyr, i64 0")
     a(f"  %nyr.v = shufflevector {vf} %nyr.i, {vf} poison, {vi} zeroinitializer")
+    a("  %ty.p = getelementptr inbounds float, ptr %ty, i64 %r")
+    a("  %tyr = load float, ptr %ty.p, align 4")
+    a(f"  %tyr.i = insertelement {vf} poison, float %tyr, i64 0")
+    a(f"  %tyr.v = shufflevector {vf} %tyr.i, {vf} poison, {vi} zeroinitializer")
     a("  %off = mul i64 %r, %stride")
     a("  %row.re = getelementptr inbounds float, ptr %acc_re, i64 %off")
     a("  %row.im = getelementptr inbounds float, ptr %acc_im, i64 %off")
@@ -97,8 +107,12 @@ def _build_ir(v: int = LANES) -> str:
     a(f"  %N = fadd fast {vf} %nxk, %nyr.v")
     a(f"  %h3 = call fast {vf} {fma}({vf} %N, {vf} %a4.v, {vf} %a3.v)")
     a(f"  %h2 = call fast {vf} {fma}({vf} %N, {vf} %h3, {vf} %a2.v)")
-    a(f"  %h1 = call fast {vf} {fma}({vf} %N, {vf} %h2, {vf} %a1.v)")
-    a(f"  %dl = fmul fast {vf} %N, %h1")
+    a(f"  %N2 = fmul fast {vf} %N, %N")
+    a(f"  %nl = fmul fast {vf} %N2, %h2")  # the range offset less its part linear in N
+    a(f"  %dl = call fast {vf} {fma}({vf} %N, {vf} %a1.v, {vf} %nl)")
+    a("  %tx.p = getelementptr inbounds float, ptr %tx, i64 %k")
+    a(f"  %txk = load {vf}, ptr %tx.p, align 4")
+    a(f"  %txy = fadd fast {vf} %txk, %tyr.v")
     a(f"  %q = call fast {vf} {fma}({vf} %dl, {vf} %si.v, {vf} %f0.v)")
     a(f"  %fl = call fast {vf} @llvm.floor.v{v}f32({vf} %q)")
     a(f"  %w = fsub fast {vf} %q, %fl")
@@ -109,23 +123,34 @@ def _build_ir(v: int = LANES) -> str:
     a(f"  %ix0 = fptosi {vf} %fa to {vi}")
     a(f"  %ix = select {vb} %ok, {vi} %ix0, {vi} zeroinitializer")
     a(f"  %wk = select {vb} %ok, {vf} %w, {vf} zeroinitializer")
-    a(f"  %pa = getelementptr inbounds i64, ptr %tab, {vi} %ix")
-    a(f"  %pb = getelementptr inbounds i64, {vp} %pa, i64 1")
     gather = f"@llvm.masked.gather.v{v}i64.v{v}p0"
-    for g in ("a", "b"):
+    vh = f"<{v} x half>"
+    a(f"  %ixe = mul {vi} %ix, splat (i32 3)")  # 3 words per entry
+    a(f"  %pa = getelementptr inbounds i64, ptr %tab, {vi} %ixe")
+    a(f"  %pb = getelementptr inbounds i64, {vp} %pa, i64 1")
+    a(f"  %pc = getelementptr inbounds i64, {vp} %pa, i64 2")
+    for g in "abc":
         a(f"  %g{g} = call {vl} {gather}({vp} %p{g}, i32 8, {vb} splat (i1 true), {vl} poison)")
     even = ", ".join(f"i32 {2 * i}" for i in range(v))
     odd = ", ".join(f"i32 {2 * i + 1}" for i in range(v))
-    for g in ("a", "b"):
+    for g in "ab":  # c0, c1: complex64
         a(f"  %{g}f = bitcast {vl} %g{g} to <{2 * v} x float>")
         pair = f"<{2 * v} x float> %{g}f, <{2 * v} x float> poison"
         a(f"  %{g}re = shufflevector {pair}, {vi} <{even}>")
         a(f"  %{g}im = shufflevector {pair}, {vi} <{odd}>")
-    a(f"  %dre = fsub fast {vf} %bre, %are")
-    a(f"  %dim = fsub fast {vf} %bim, %aim")
-    a(f"  %vre = call fast {vf} {fma}({vf} %wk, {vf} %dre, {vf} %are)")
-    a(f"  %vim = call fast {vf} {fma}({vf} %wk, {vf} %dim, {vf} %aim)")
-    a(f"  %T = call fast {vf} {fma}({vf} %dl, {vf} %sq.v, {vf} %t0.v)")
+    # c2, c3: four float16 (c2 re, c2 im, c3 re, c3 im) scaled by 1 / sc
+    a(f"  %cf = bitcast {vl} %gc to <{4 * v} x half>")
+    for name, q in (("cre", 0), ("cim", 1), ("dre", 2), ("dim", 3)):
+        idx = ", ".join(f"i32 {4 * i + q}" for i in range(v))
+        halves = f"<{4 * v} x half> %cf, <{4 * v} x half> poison"
+        a(f"  %{name}.h = shufflevector {halves}, {vi} <{idx}>")
+        a(f"  %{name} = fpext {vh} %{name}.h to {vf}")
+    for part in ("re", "im"):
+        a(f"  %h2{part} = call fast {vf} {fma}({vf} %wk, {vf} %d{part}, {vf} %c{part})")
+        a(f"  %h2s{part} = fmul fast {vf} %h2{part}, %sc.v")
+        a(f"  %h1{part} = call fast {vf} {fma}({vf} %wk, {vf} %h2s{part}, {vf} %b{part})")
+        a(f"  %v{part} = call fast {vf} {fma}({vf} %wk, {vf} %h1{part}, {vf} %a{part})")
+    a(f"  %T = call fast {vf} {fma}({vf} %nl, {vf} %sq.v, {vf} %txy)")
     a(f"  %kq = call fast {vf} @llvm.rint.v{v}f32({vf} %T)")
     a(f"  %x = fsub fast {vf} %T, %kq")
     a(f"  %z = fmul fast {vf} %x, %x")
@@ -184,24 +209,24 @@ llvm.parse_assembly(_IR).verify()  # fail at import, not inside a compilation
 
 @intrinsic
 def tile_pulse(
-    typingctx, nx, ny, tab, tab_offset, acc_re, acc_im, n, n_rows, stride,
-    f0, i0f, a1, a2, a3, a4, si, sq, t0, hi,
+    typingctx, nx, ny, tx, ty, tab, tab_offset, acc_re, acc_im, n, n_rows, stride,
+    f0, i0f, a1, a2, a3, a4, si, sq, hi, sc,
 ):  # fmt: skip
     """Add one pulse to one tile (see the module docstring); compiled code only.
 
-    ``nx`` (float32, >= n), ``ny`` (float32, >= n_rows), ``tab`` (uint64 view of the complex64
-    table, the pulse's row starting at flat index ``tab_offset``), ``acc_re`` / ``acc_im``
-    (float32, row ``r`` at ``r * stride``); the ten scalars are float32.
+    ``nx``, ``tx`` (float32, >= n), ``ny``, ``ty`` (float32, >= n_rows), ``tab`` (the uint64
+    table, the pulse's entries starting at flat index ``tab_offset``), ``acc_re`` /
+    ``acc_im`` (float32, row ``r`` at ``r * stride``); the ten scalars are float32.
     """
     f = types.float32
     i = types.int64
-    sig = types.void(nx, ny, tab, i, acc_re, acc_im, i, i, i, f, f, f, f, f, f, f, f, f, f)
+    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, f, f, f, f, f, f, f, f, f, f)
 
     def codegen(context, builder, signature, args):
         context.active_code_library.add_llvm_module(llvm.parse_assembly(_IR))
         byte_ptr = ir.IntType(8).as_pointer()
         i64 = ir.IntType(64)
-        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 5 + [i64] * 3 + [ir.FloatType()] * 10)
+        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 7 + [i64] * 3 + [ir.FloatType()] * 10)
         fn = cgutils.get_or_insert_function(builder.module, fnty, _NAME)
 
         def data(k: int, offset=None):
@@ -209,8 +234,8 @@ def tile_pulse(
             ptr = arr.data if offset is None else builder.gep(arr.data, [offset])
             return builder.bitcast(ptr, byte_ptr)
 
-        ptrs = [data(0), data(1), data(2, args[3]), data(4), data(5)]
-        builder.call(fn, ptrs + list(args[6:]))
+        ptrs = [data(0), data(1), data(2), data(3), data(4, args[5]), data(6), data(7)]
+        builder.call(fn, ptrs + list(args[8:]))
         return context.get_dummy_value()
 
     return sig, codegen
@@ -224,10 +249,13 @@ def tile_pulses(
     """Add pulses ``j0:j1`` to one tile's float32 accumulators (``nr x ncp``, row-major).
 
     Per pulse, the anchor quantities at the tile's centre pixel ``(cc, rc)`` (at ``xc,
-    yc``, m) are float64: its range, the fractional sample index and the phase reduced to
-    whole cycles; the pixels' offsets from it, ``u (u + 2 dx_a)`` along columns and
-    ``v (v + 2 dy_a)`` along rows, go to :func:`tile_pulse` in float32 with the series
-    coefficients of the range. Shared by exact backprojection and the FFBP leaves.
+    yc``, m) are float64: its range, the fractional sample index, and the carrier phase of
+    the anchor plus the part of each pixel's phase linear in ``N``, ``sq a1 Nx[k]`` and
+    ``sq a1 Ny[r]``, each reduced exactly to ``[-2, 2)`` quarter cycles. The pixels'
+    offsets ``Nx = u (u + 2 dx_a)`` along columns and ``Ny = v (v + 2 dy_a)`` along rows go
+    to :func:`tile_pulse` in float32 with the series coefficients of the range; only the
+    series' higher terms (a small fraction of a cycle) enter the phase in float32. Shared
+    by exact backprojection and the FFBP leaves.
     """
     stride = tab.shape[1]
     f32 = np.float32
@@ -235,6 +263,8 @@ def tile_pulses(
     sq = f32(quarter_scale)
     nxv = np.empty(ncp, np.float32)
     nyv = np.empty(nr, np.float32)
+    txv = np.empty(ncp, np.float32)
+    tyv = np.empty(nr, np.float32)
     for j in range(j0, j1):
         ddx = xc - ant_x[j]
         ddy = yc - ant_y[j]
@@ -246,17 +276,25 @@ def tile_pulses(
         t0 -= 4.0 * np.rint(0.25 * t0)  # whole cycles, exact
         inv = 1.0 / r_anchor
         inv2 = inv * inv
+        lin = 0.5 * inv * quarter_scale  # quarter cycles per m^2 of N, linear term
         bx = 2.0 * ddx
         by = 2.0 * ddy
         for k in range(ncp):
             u = (c0 + k - cc) * dx
-            nxv[k] = u * (u + bx)
+            nk = u * (u + bx)
+            nxv[k] = nk
+            t = t0 + lin * nk
+            txv[k] = t - 4.0 * np.rint(0.25 * t)
         for r in range(nr):
             v = (r0 + r - rc) * dy
-            nyv[r] = v * (v + by)
+            nr_ = v * (v + by)
+            nyv[r] = nr_
+            t = lin * nr_
+            tyv[r] = t - 4.0 * np.rint(0.25 * t)
+        scale = f32(math.ldexp(1.0, np.int64(tab[j, 0]) - 1024))
         tile_pulse(
-            nxv, nyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp,
+            nxv, nyv, txv, tyv, tab, j * stride + 1, acc_re, acc_im, ncp, nr, ncp,
             f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
             f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
-            si, sq, f32(t0), hi,
+            si, sq, hi, scale,
         )  # fmt: skip

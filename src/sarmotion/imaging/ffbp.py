@@ -17,7 +17,7 @@ So ``J_A`` is sampled on the image's own columns ``u`` (no interpolation across 
 and on rows ``v`` spaced ``1 / (2 alpha b_A)``: coarse for short sub-apertures. The tree is
 evaluated bottom-up:
 
-- leaves: exact backprojection (the float32 tile arithmetic of :mod:`.backprojection`) of
+- leaves: exact backprojection (the float32 tile arithmetic of :mod:`._bp_kernels`) of
   a few to a hundred pulses on their coarse grid, demodulated as each tile is written;
 - a parent ``J_P = J_A + J_B`` on a grid twice as fine in ``v``: even rows are the
   children's rows, odd rows the half-sample interpolation of each child by a ``TAPS``-tap
@@ -55,20 +55,20 @@ image rows of every strip one last region. On the shared 2-core machine every re
 in a barrier that waits for a descheduled thread, so the number of regions (about the
 depth, 7 at 2048 x 2048), not only the arithmetic, sets the time.
 
-Accuracy. The error against exact backprojection comes from the interpolations: it grows
-as ``alpha`` falls and with the number of levels. The default ``alpha = 1.4`` is the
-smallest multiple of 0.1 for which every GOTCHA geometry measured stays 3 dB above the
-40 dB specification: 4 degrees at 0.25 m, 512^2 to 2048^2: 47.1, 44.7, 43.9, 44.0 dB
-(512, 1024, 1536, 2048); 4 degrees at 0.5 m, 1024^2: 45.2 dB; at 0.1 m, 1024^2: 48.3 dB;
-two degrees at 1024^2 and 2048^2: 44.8, 43.9 dB; one degree at 1024^2: 44.7 dB
-(``alpha = 1.3``: 42.9 dB at 1536^2). Not used in the choice: simulated point scenes,
-48.6-50.2 dB; motion-compensated (four velocities, 64 m and 128 m), 46.5-52.4 dB. Columns
-whose pixels no pulse's fast-time window reaches are zero, as in exact backprojection.
-The rotated path adds the resampling's error to the factorisation's (independent, they add
-in power; the filter's response error is at most 6.5e-3 at the ``u`` band's edges, 6e-4
-along ``v``): GOTCHA turned 15, 30, 45, 70 degrees, 1024^2: 48.8, 48.9, 48.9, 48.1 dB;
-30 and 45 degrees at 2048^2: 48.4, 48.7 dB; simulated points at 15-70 degrees, 1024^2:
-47.0-48.1 dB, every one 3 dB above the specification at the default ``alpha``.
+Accuracy. Every figure here is the signal-to-error ratio against the exact sum
+(:func:`~sarmotion.imaging.exact_sum.exact_sum`, no interpolation), on 65536 seeded pixels
+(``benchmarks/bench_backprojection.py``); exact backprojection is some 87 dB from it, so the
+figures are FFBP's own error. That error comes from the interpolations: it grows as
+``alpha`` falls and with the number of levels. The default ``alpha = 1.4`` is the smallest
+multiple of 0.1 for which every GOTCHA geometry measured (4 degrees at 0.1, 0.25 and 0.5 m,
+512^2 to 2048^2; two and one degrees at 1024^2 and 2048^2) stays 3 dB above the 40 dB
+specification. GOTCHA 4 degrees at 0.25 m, 512^2, 1024^2, 2048^2: 56.0, 45.8, 44.9 dB.
+Columns whose pixels no pulse's fast-time window reaches are zero, as in exact
+backprojection. The rotated path adds the resampling's error to the factorisation's
+(independent, they add in power; the filter's response error is at most 6.5e-3 at the
+``u`` band's edges, 6e-4 along ``v``): GOTCHA turned 30 and 45 degrees, 1024^2: 54.0,
+55.8 dB. Simulated points (four targets, one moving, 20 dB SNR) at 0 and 30 degree looks,
+1024^2: 52.2, 51.6 dB.
 
 References: L. M. H. Ulander, H. Hellsten, G. Stenström, "Synthetic-aperture radar
 processing using fast factorized back-projection", IEEE Trans. AES 39(3), 2003 (polar
@@ -427,8 +427,8 @@ def ffbp_values(
 
     Parameters
     ----------
-    table_values : (n_pulses, n_up + 2) ndarray
-        Trace table of :mod:`.backprojection` (uint64 view of complex64).
+    table_values : (n_pulses, 1 + 3 (n_up + 2)) ndarray
+        Trace table (:attr:`~._bp_table.TraceTable.values`).
     positions : (n_pulses, 3) ndarray
         Effective antenna positions ``r(s_j) - s_j u`` (m).
     ref_ranges : (n_pulses,) ndarray

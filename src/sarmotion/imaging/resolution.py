@@ -10,6 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import positive as _positive
 from ..core import Traces, as_point, look_geometry
+from ._bp_common import DEFAULT_UPSAMPLE
 from .backprojection import backproject_points
 from .grid import Image
 
@@ -163,7 +164,7 @@ def width_3db(
                 traces,
                 line,
                 velocity_mps=image.velocity_mps,
-                upsample=int(image.metadata.get("upsample", 8)),
+                upsample=int(image.metadata.get("upsample", DEFAULT_UPSAMPLE)),
             )
         )
     else:
