@@ -24,8 +24,9 @@ import numpy as np
 import pytest
 
 from sarmotion.cli import run
+from sarmotion.documents import RESULTS_SCHEMA, results_document
 from sarmotion.imaging import point_response, resolution
-from sarmotion.io import RESULTS_SCHEMA, read_gotcha, results_document, write_gotcha
+from sarmotion.io import read_gotcha, write_gotcha
 from sarmotion.pipeline import AnalysisOptions, analyze, compare_with_truth, extract_mover
 from sarmotion.separation import SeparationOptions
 from sarmotion.simulation import PointTarget, Scene, inject, load_scene, random_scene, simulate

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 import sarkit.verification as skver
 
+from sarmotion.cli.inputs import read_inputs
 from sarmotion.cli.main import EXIT_BAD_INPUT, run
-from sarmotion.io import load_image, load_traces, read_cphd, read_inputs, save_traces, write_cphd
+from sarmotion.io import load_image, load_traces, read_cphd, save_traces, write_cphd
 from sarmotion.pipeline import AnalysisOptions, analyze
 from sarmotion.simulation import load_scene, simulate
 

@@ -534,7 +534,7 @@ def _line(points, **extra):
 
 
 def test_roads_beyond_the_range_envelope_are_refused(tmp_path):
-    from sarmotion.io import read_roads
+    from sarmotion.documents import read_roads
 
     path = _roads(tmp_path, _line([[-1e308, 0.0], [1e308, 10.0]]))
     with pytest.raises(DataError, match=r"roads\.geojson: feature 1: .*beyond 2e\+06 m"):
@@ -542,7 +542,7 @@ def test_roads_beyond_the_range_envelope_are_refused(tmp_path):
 
 
 def test_roads_with_a_crs_or_in_degrees_are_refused_with_advice(tmp_path):
-    from sarmotion.io import read_roads
+    from sarmotion.documents import read_roads
 
     crs = {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32617"}}
     doc = {"type": "FeatureCollection", "crs": crs, "features": [_line([[0, 0], [50, 0]])]}
@@ -554,15 +554,15 @@ def test_roads_with_a_crs_or_in_degrees_are_refused_with_advice(tmp_path):
 
 
 def test_roads_with_a_byte_order_mark_are_read(tmp_path):
-    from sarmotion.io import read_roads
+    from sarmotion.documents import read_roads
 
     roads = read_roads(_roads(tmp_path, _line([[0, 0], [50, 5]]), prefix=b"\xef\xbb\xbf"))
     np.testing.assert_array_equal(roads[0].points_m, [[0, 0], [50, 5]])
 
 
 def test_road_count_and_nesting_are_limited(tmp_path):
-    from sarmotion.io import read_roads
-    from sarmotion.io.roads import MAX_ROADS
+    from sarmotion.documents import read_roads
+    from sarmotion.documents.roads import MAX_ROADS
 
     many = {
         "type": "FeatureCollection",

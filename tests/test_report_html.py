@@ -52,7 +52,7 @@ def test_report_gives_the_aperture_in_degrees(no_mover_report):
 @pytest.fixture(scope="module")
 def scene1_report(tmp_path_factory):
     """Scene 1 with its truth: two movers."""
-    from sarmotion.io import results_document
+    from sarmotion.documents import results_document
     from sarmotion.pipeline import compare_with_truth
 
     sim = simulate(load_scene("scene1"))

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from sarmotion.cli import run
-from sarmotion.io import DataError, read_gotcha, read_roads, tracks_document
+from sarmotion.documents import read_roads, tracks_document
+from sarmotion.io import DataError, read_gotcha
 from sarmotion.pipeline import AnalysisOptions
 from sarmotion.simulation import PathTarget, PointTarget, Scene, inject, load_scene, simulate
 from sarmotion.tracking import (

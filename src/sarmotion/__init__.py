@@ -10,13 +10,15 @@ The names a user starts with are here: :func:`analyze` with :class:`AnalysisOpti
 :func:`read_gotcha`, :func:`load_scene` and :func:`simulate`, :func:`backproject`,
 :class:`Traces` and :class:`Scene`. The subpackages, in the order data flow through them:
 ``core`` (radar, geometry, traces), ``simulation``, ``io``, ``imaging``, ``separation``,
-``motion``, ``pipeline``, ``report``, ``cli``.
+``motion``, ``pipeline``, ``tracking``, ``documents``, ``report``, ``paper``, ``cli``. A
+module imports only from the layers below its own (``tests/test_layering.py`` states the
+layers); :mod:`sarmotion.errors` holds the exceptions every layer raises.
 """
-
-__version__ = "0.1.0"
 
 from importlib import import_module
 from typing import TYPE_CHECKING
+
+from ._version import __version__
 
 if TYPE_CHECKING:
     from .core import Traces

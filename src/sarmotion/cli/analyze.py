@@ -7,8 +7,9 @@ from pathlib import Path
 
 import click
 
+from ..documents.results import results_document
 from ..imaging.quality import point_quality
-from ..io import DataError, results_document, staged_directory, write_json
+from ..io import DataError, staged_directory, write_json
 from ..io.sicd import write_sicd
 from ..pipeline import AnalysisOptions, compare_with_truth
 from ..pipeline import analyze as run_analysis

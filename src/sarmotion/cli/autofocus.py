@@ -9,9 +9,9 @@ import click
 
 from ..core import Traces
 from ..imaging.autofocus import AutofocusResult, pga
-from ..io import read_inputs
 from ..simulation import Simulation
 from .common import InputError, as_flags
+from .inputs import read_inputs
 
 __all__ = ["autofocus_options", "read_focused"]
 

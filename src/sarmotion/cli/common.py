@@ -15,6 +15,7 @@ import click
 import numpy as np
 
 from .._validation import positive
+from ..errors import InputError
 from ..imaging import ImageGrid
 
 __all__ = [
@@ -33,24 +34,18 @@ __all__ = [
 ]
 
 
-class InputError(Exception):
-    """Bad user input: reported as one line, exit status 2."""
-
-
 @contextlib.contextmanager
 def as_flags(**flags: str) -> Iterator[None]:
     """Report a library's argument error under the flags the user typed.
 
     ``with as_flags(speed_mps="--speed"): ...`` turns ``ValueError("speed_mps must be >
     0 ...")`` into ``InputError("--speed must be > 0 ...")``. Errors about files
-    (:class:`~sarmotion.io.DataError`, scene errors) name their file and pass unchanged.
+    (:class:`~sarmotion.io.DataError`, scene errors: :class:`~sarmotion.errors.InputError`)
+    name their file and pass unchanged.
     """
-    from ..io import DataError
-    from ..simulation import SceneError
-
     try:
         yield
-    except (DataError, SceneError):
+    except InputError:
         raise
     except (TypeError, ValueError) as exc:
         text = str(exc)
@@ -275,8 +270,9 @@ def _within_envelope(flags: str, coordinates: Sequence[float]) -> None:
 
 def square_grid(size_m: float, spacing_m: float, centre: tuple[float, float]) -> ImageGrid:
     """Square image grid from ``--size``, ``--spacing`` and ``--centre``."""
-    size_m = positive(size_m, "--size", unit="m")
-    spacing_m = positive(spacing_m, "--spacing", unit="m")
+    with as_flags():  # the messages name the flags already
+        size_m = positive(size_m, "--size", unit="m")
+        spacing_m = positive(spacing_m, "--spacing", unit="m")
     _within_envelope("--size/--centre", [c + h for c in centre for h in (-size_m / 2, size_m / 2)])
     if size_m / spacing_m > 4096:
         raise InputError(

@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..documents.peaks import peaks_document
 from ..imaging import backproject
 from ..imaging.quality import point_quality
 from ..io import DataError, save_image, staged_directory, write_json
@@ -234,27 +235,16 @@ def image(
             velocity_mps=velocity,
             metadata={"inputs": list(inputs), **traces.metadata},
         )
+        pixel_pulses = grid.shape[0] * grid.shape[1] * traces.n_pulses
         write_json(
             stage / "peaks.json",
-            {
-                "schema": "sarmotion.peaks/1",
-                "peaks": [
-                    {
-                        "position_m": [x, y],
-                        "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2])),
-                        "quality": q,
-                    }
-                    for (x, y, v), q in zip(
-                        [p for p in peaks if abs(p[2]) > 0], quality, strict=True
-                    )
-                ],
-                "autofocus": None if focus is None else focus.to_dict(),
-                "seconds": elapsed,
-                "pixel_pulses_per_second": grid.shape[0]
-                * grid.shape[1]
-                * traces.n_pulses
-                / elapsed,
-            },
+            peaks_document(
+                peaks,
+                quality=quality,
+                autofocus=None if focus is None else focus.to_dict(),
+                seconds=elapsed,
+                pixel_pulses=pixel_pulses,
+            ),
         )
         if sicd_path is not None:
             write_sicd(

@@ -8,7 +8,7 @@ from typing import Any
 import click
 import numpy as np
 
-from ..io import read_inputs, save_traces, staged_directory, staged_file, write_gotcha
+from ..io import save_traces, staged_directory, staged_file, write_gotcha
 from ..simulation import PointTarget
 from ..simulation import inject as run
 from .common import (
@@ -21,6 +21,7 @@ from .common import (
     speed_option,
 )
 from .image import MAX_GROUND_SPEED_MPS
+from .inputs import read_inputs
 
 __all__ = ["inject"]
 

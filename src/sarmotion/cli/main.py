@@ -1,9 +1,12 @@
 """The ``sarmotion`` command group, its entry point and its error policy.
 
-The CLI is the only layer that parses arguments and configures logging. Bad input never shows
-a traceback: one line on stderr (``sarmotion: error: ...``) and exit status 2; outputs
-are staged in a hidden sibling directory and moved into place only on success, so a
-failed run leaves nothing half-written.
+The CLI is the only layer that parses arguments and configures logging. Bad input
+(:class:`~sarmotion.errors.InputError`, a file that cannot be opened) never shows a
+traceback: one line on stderr (``sarmotion: error: ...``) and exit status 2. Any other
+exception is a defect of sarmotion, not of the input: one line (``sarmotion: internal
+error: ...; -vv shows the traceback``) and exit status 1. Outputs are staged in a hidden
+sibling directory and moved into place only on success, so a failed run leaves nothing
+half-written.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from collections.abc import Iterator, Sequence
 
 import click
 
-from .. import __version__
+from .._version import __version__
 
 __all__ = ["main", "run", "entry_point"]
 
@@ -200,12 +203,16 @@ def _add_shared_options(command: click.Command) -> None:
     ]
 
 
-def _known_errors() -> tuple[type[BaseException], ...]:
-    from ..io import DataError
-    from ..simulation import SceneError
-    from .common import InputError
+def _bad_input() -> tuple[type[BaseException], ...]:
+    """The exceptions that mean bad input: exit status 2 with one line.
 
-    return (InputError, DataError, SceneError, ValueError, FileNotFoundError, OSError)
+    :class:`~sarmotion.errors.InputError` (its subclasses included: the I/O layer's
+    ``DataError``, ``SceneError``, the command line's own checks) and files that cannot
+    be opened. Any other exception, a bare ``ValueError`` included, is a defect.
+    """
+    from ..errors import InputError
+
+    return (InputError, FileNotFoundError, OSError)
 
 
 def run(args: Sequence[str] | None = None) -> int:
@@ -226,14 +233,14 @@ def run(args: Sequence[str] | None = None) -> int:
     except click.ClickException as exc:
         exc.show()
         return exc.exit_code
-    except _known_errors() as exc:
+    except _bad_input() as exc:
         log.debug("bad input", exc_info=True)
         click.echo(f"sarmotion: error: {exc}", err=True)
         return EXIT_BAD_INPUT
     except Exception as exc:  # a defect of sarmotion, not of the input
         log.debug("internal error", exc_info=True)
         click.echo(
-            f"sarmotion: internal error: {type(exc).__name__}: {exc} (-vv shows the traceback)",
+            f"sarmotion: internal error: {type(exc).__name__}: {exc}; -vv shows the traceback",
             err=True,
         )
         return EXIT_INTERNAL

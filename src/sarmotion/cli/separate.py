@@ -10,10 +10,11 @@ import click
 import numpy as np
 
 from ..core.traces import Traces
+from ..documents.separation import separation_document
 from ..imaging import Image, backproject, scene_grid
-from ..io import read_inputs, save_traces, staged_directory, write_json
+from ..io import save_traces, staged_directory, write_json
 from ..report.plotting import image_figure, save_figure, traces_figure
-from ..separation import Separation, SeparationOptions, quality_against_truth
+from ..separation import Separation, SeparationOptions
 from ..separation import separate as run
 from .common import (
     Progress,
@@ -25,6 +26,7 @@ from .common import (
     out_option,
     speed_option,
 )
+from .inputs import read_inputs
 
 OUTPUTS = ("separated.h5", "separation.png", "image.png", "separation.json")
 
@@ -122,24 +124,7 @@ def separate(
         prelim = backproject(traces, grid, progress=bar)
         sep = run(traces, prelim, options, progress=bar)
     elapsed = time.perf_counter() - t0
-    summary: dict[str, Any] = {
-        "schema": "sarmotion.separation/1",
-        "method": sep.method,
-        "inputs": list(inputs),
-        "n_pulses": traces.n_pulses,
-        "n_samples": traces.n_samples,
-        "seconds": elapsed,
-        "stationary_points_m": sep.stationary_points_m,
-        "info": {k: v for k, v in sep.info.items() if k != "candidates"},
-    }
-    if sim is not None:
-        summary["quality"] = quality_against_truth(
-            sep,
-            traces,
-            true_stationary=sim.stationary,
-            true_moving=sim.moving,
-            movers=sim.scene.moving,
-        )
+    summary = separation_document(sep, traces, inputs=inputs, seconds=elapsed, simulation=sim)
     with staged_directory(out) as stage:
         _write(stage, traces, sep, prelim, summary)
     line = f"wrote {out}/separated.h5, separation.png, image.png, separation.json ({elapsed:.1f} s)"

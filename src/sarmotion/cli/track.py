@@ -8,7 +8,9 @@ from pathlib import Path
 
 import click
 
-from ..io import read_inputs, read_roads, staged_directory, tracks_document, write_json
+from ..documents.roads import read_roads
+from ..documents.tracks import tracks_document
+from ..io import staged_directory, write_json
 from ..pipeline import AnalysisOptions
 from ..report.tracks import write_tracks_report
 from ..tracking import TrackingOptions, sub_aperture_slices
@@ -26,6 +28,7 @@ from .common import (
     out_option,
     speed_option,
 )
+from .inputs import read_inputs
 
 __all__ = ["track"]
 

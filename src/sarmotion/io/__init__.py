@@ -1,20 +1,23 @@
-"""Input and output: GOTCHA and CPHD phase history, native HDF5 files, the results document.
+"""Acquisition formats: GOTCHA and CPHD phase history, native HDF5 files, staged writing.
 
-This is the only layer of sarmotion that opens files. Every bad input raises
-:class:`DataError` (a ``ValueError``) with one line naming the file and the problem;
-implausible geometry or samples break the rules of :mod:`sarmotion.io.plausibility`
-(``lenient=True`` logs them instead). Every reader computes from the headers of its input
-what it will allocate and refuses an input beyond :func:`memory_limit`
-(:func:`set_memory_limit`; ``--max-memory`` on the command line) before allocating it.
-Large files are read block by block with :func:`open_cphd_blocks` and
-:func:`open_native_blocks`.
+This layer reads and writes the data of an acquisition and imports only
+:mod:`sarmotion.core` and the package's base modules (the documents an analysis produces
+are built in :mod:`sarmotion.documents`; the command line turns its inputs into traces in
+:mod:`sarmotion.cli.inputs`). Every bad input raises :class:`DataError` (an
+:class:`~sarmotion.errors.InputError`, hence a ``ValueError``) with one line naming the
+file and the problem; implausible geometry or samples break the rules of
+:mod:`sarmotion.io.plausibility` (``lenient=True`` logs them instead). Every reader
+computes from the headers of its input what it will allocate and refuses an input beyond
+:func:`memory_limit` (:func:`set_memory_limit`; ``--max-memory`` on the command line)
+before allocating it. Large files are read block by block with :func:`open_cphd_blocks`
+and :func:`open_native_blocks`.
 """
 
 from .._limits import memory_limit, set_memory_limit
 from .cphd import CphdBlocks, is_cphd_file, open_cphd_blocks, read_cphd, write_cphd
 from .errors import DataError
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
-from .inputs import is_scene_reference, read_inputs
+from .jsonfile import write_json
 from .native import (
     IMAGE_SCHEMA,
     TRACES_SCHEMA,
@@ -57,15 +60,6 @@ __all__ = [
     "open_cphd_blocks",
     "open_native_blocks",
     "set_memory_limit",
-]
-
-from .results import RESULTS_SCHEMA, results_document, write_json  # noqa: E402
-
-__all__ += [
-    "RESULTS_SCHEMA",
-    "is_scene_reference",
-    "read_inputs",
-    "results_document",
     "OutputError",
     "claim_output",
     "staged_directory",
@@ -73,8 +67,3 @@ __all__ += [
     "staged_paths",
     "write_json",
 ]
-
-from .roads import read_roads  # noqa: E402
-from .tracks import TRACKS_SCHEMA, tracks_document  # noqa: E402
-
-__all__ += ["TRACKS_SCHEMA", "read_roads", "tracks_document"]

@@ -83,9 +83,9 @@ import sarkit.cphd as skcphd
 import sarkit.wgs84 as skwgs84
 from numpy.typing import ArrayLike, NDArray
 
-from .. import __version__
 from .._limits import over_budget, phase_history_bytes
 from .._validation import integer
+from .._version import __version__
 from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
 from ..core.spectral import to_fast_time
 from .errors import DataError

@@ -32,6 +32,8 @@ import zlib
 from collections.abc import Collection
 from dataclasses import dataclass
 
+from ..errors import InputError
+
 __all__ = ["MatInflationError", "MatStructureError", "MatSummary", "check_mat_v5"]
 
 _MI_SIZES = {1: 1, 2: 1, 3: 2, 4: 2, 5: 4, 6: 4, 7: 4, 9: 8, 12: 8, 13: 8, 16: 1, 17: 2, 18: 4}
@@ -49,7 +51,7 @@ _CLASS_BYTES = {4: 4, 6: 8, 7: 4, 8: 1, 9: 1, 10: 2, 11: 2, 12: 4, 13: 4, 14: 8,
 _OBJECT_BYTES = 128
 
 
-class MatStructureError(ValueError):
+class MatStructureError(InputError):
     """The element structure of a MATLAB v5 file is corrupt (a short reason)."""
 
 

@@ -64,9 +64,9 @@ import h5py
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .. import __version__
 from .._limits import format_bytes, memory_limit, over_budget, phase_history_bytes
 from .._validation import integer
+from .._version import __version__
 from ..core import Radar, Traces, Trajectory
 from .errors import DataError
 from .plausibility import (

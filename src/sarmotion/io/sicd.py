@@ -62,7 +62,7 @@ import sarkit.sicd as sksicd
 import sarkit.wgs84 as skwgs84
 from numpy.typing import ArrayLike, NDArray
 
-from .. import __version__
+from .._version import __version__
 from ..core import C, Traces
 from .cphd import _band, _enu_frame, _utc
 from .errors import DataError

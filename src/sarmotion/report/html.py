@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from .. import __version__
-from ..io import results_document
+from .._version import __version__
+from ..documents.results import results_document
 from ..motion import trajectory_error
 from ..pipeline import AnalysisResult
 from .plotting import image_figure, plot_image, subplots, traces_figure

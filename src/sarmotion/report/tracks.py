@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from .. import __version__
+from .._version import __version__
 from ..tracking import TrackingResult
 
 __all__ = ["tracks_figure", "write_tracks_report"]

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._limits import over_budget, phase_history_bytes
 from ..core import Radar, Trajectory, as_point, target_positions
 from ..core.geometry import GOTCHA_PULSES_PER_DEG
+from ..errors import InputError
 
 __all__ = [
     "PointTarget",
@@ -80,7 +81,7 @@ _LINEAR_KEYS = {"kind", "centre_m", "direction", "speed_mps", "aperture_m", "pul
 _RADAR_KEYS = {"carrier_hz", "bandwidth_hz", "n_samples", "frequency_step_hz", "pulse"}
 
 
-class SceneError(ValueError):
+class SceneError(InputError):
     """A scene description is invalid; the message names the key and the value."""
 
 

@@ -14,7 +14,7 @@ road it is about ``sigma_w / sin(theta)``. A road parallel to the family (``thet
 exceeds ``max_std_m``.
 
 Roads are polylines in the scene's ground coordinates (m); reading them from GeoJSON
-is :func:`sarmotion.io.read_roads`.
+is :func:`sarmotion.documents.read_roads`.
 """
 
 from __future__ import annotations

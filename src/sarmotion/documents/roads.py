@@ -35,7 +35,7 @@ import logging
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import DataError
+from ..io import DataError
 
 if TYPE_CHECKING:
     from ..tracking import Road

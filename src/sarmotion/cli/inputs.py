@@ -1,4 +1,4 @@
-"""Reading a command's inputs as traces: a scene, native traces, GOTCHA or CPHD files.
+"""A command's inputs as traces: a scene (simulated here), native traces, GOTCHA or CPHD files.
 
 One entry point, :func:`read_inputs`, dispatches on what it is given: a built-in scene
 name or a scene ``.toml`` is simulated (its ground truth kept), a ``.h5`` file is read as
@@ -12,11 +12,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..core.traces import Traces
+from ..io import DataError, load_traces, read_cphd, read_gotcha
+from ..io.native import check_hdf5_terminates
 from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
-from .cphd import read_cphd
-from .errors import DataError
-from .gotcha import read_gotcha
-from .native import check_hdf5_terminates, load_traces
 
 __all__ = ["is_scene_reference", "read_inputs"]
 

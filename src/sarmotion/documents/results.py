@@ -21,14 +21,12 @@ statistic) instead of over the global median.
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
 from typing import Any
 
 from ..motion import NULL_TAIL, azimuth_span_deg
 from ..pipeline import AnalysisResult, MoverResult, TruthComparison
 
-__all__ = ["RESULTS_SCHEMA", "results_document", "write_json"]
+__all__ = ["RESULTS_SCHEMA", "results_document"]
 
 #: Schema name of the results document.
 RESULTS_SCHEMA = "sarmotion.results/1"
@@ -154,18 +152,3 @@ def _jsonable(v: Any) -> bool:
     return isinstance(v, str | int | float | bool) or (
         isinstance(v, list | tuple) and all(isinstance(x, str | int | float | bool) for x in v)
     )
-
-
-def write_json(path: Path, document: dict[str, Any]) -> None:
-    """Write ``document`` as indented JSON (numpy scalars and arrays converted)."""
-
-    def default(obj: Any) -> Any:
-        if hasattr(obj, "tolist"):  # numpy arrays and scalars
-            return obj.tolist()
-        if isinstance(obj, complex):
-            return [obj.real, obj.imag]
-        if isinstance(obj, Path):
-            return str(obj)
-        raise TypeError(f"not JSON-serialisable: {type(obj).__name__}")
-
-    Path(path).write_text(json.dumps(document, indent=2, default=default) + "\n")

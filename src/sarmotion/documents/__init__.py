@@ -1,0 +1,66 @@
+"""The documents sarmotion writes and the one it reads beside its data.
+
+One module per document, each a function from result objects to JSON-ready data (lists,
+floats, strings) and the schema name it carries:
+
+* :mod:`~sarmotion.documents.results` -- ``sarmotion.results/1``, an analysis
+  (:func:`sarmotion.pipeline.analyze`);
+* :mod:`~sarmotion.documents.tracks` -- ``sarmotion.tracks/1``, the movers followed across
+  sub-apertures (:func:`sarmotion.tracking.track`);
+* :mod:`~sarmotion.documents.separation` -- ``sarmotion.separation/1``, a separation;
+* :mod:`~sarmotion.documents.peaks` -- ``sarmotion.peaks/1``, the brightest points of an
+  image;
+* :mod:`~sarmotion.documents.roads` -- GeoJSON road centre lines, read into
+  :class:`sarmotion.tracking.Road`.
+
+This layer sits above :mod:`sarmotion.pipeline` and :mod:`sarmotion.tracking`, whose
+results it describes; :func:`sarmotion.io.write_json` writes a document to a file.
+"""
+
+from importlib import import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .peaks import PEAKS_SCHEMA, peaks_document
+    from .results import RESULTS_SCHEMA, results_document
+    from .roads import read_roads
+    from .separation import SEPARATION_SCHEMA, separation_document
+    from .tracks import TRACKS_SCHEMA, tracks_document
+
+# Imported on first use (PEP 562): the results document needs the pipeline and the tracks
+# document Stone Soup, neither of which a command that writes peaks should load.
+_LAZY = {
+    "PEAKS_SCHEMA": ".peaks",
+    "RESULTS_SCHEMA": ".results",
+    "SEPARATION_SCHEMA": ".separation",
+    "TRACKS_SCHEMA": ".tracks",
+    "peaks_document": ".peaks",
+    "read_roads": ".roads",
+    "results_document": ".results",
+    "separation_document": ".separation",
+    "tracks_document": ".tracks",
+}
+
+__all__ = [
+    "PEAKS_SCHEMA",
+    "RESULTS_SCHEMA",
+    "SEPARATION_SCHEMA",
+    "TRACKS_SCHEMA",
+    "peaks_document",
+    "read_roads",
+    "results_document",
+    "separation_document",
+    "tracks_document",
+]
+
+
+def __getattr__(name: str) -> object:
+    if name in _LAZY:
+        value = getattr(import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
