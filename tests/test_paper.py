@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from conftest import gotcha_directory
-from sarmotion.report.paper import CAPTIONS, FIGURE_LABELS, build_figures, figure_filename
-from sarmotion.report.paper.build import SECTIONS
+from sarmotion.paper.figures import CAPTIONS, FIGURE_LABELS, build_figures, figure_filename
+from sarmotion.paper.figures.build import SECTIONS
 
 pytestmark = pytest.mark.slow  # ~2 min for the whole quick build (2 cores)
 

@@ -19,7 +19,7 @@ from sarmotion.core import (
     range_direction_velocity,
     target_positions,
 )
-from sarmotion.separation.rank import (
+from sarmotion.paper.rank import (
     alpha,
     alpha_j,
     baseband_rank_fraction,

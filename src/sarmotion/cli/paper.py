@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from ..io import staged_directory
-from ..report.paper import FIGURE_LABELS, build_figures
+from ..paper.figures import FIGURE_LABELS, build_figures
 from .common import Progress, as_flags, check_out, force_option, out_option
 
 __all__ = ["paper"]

@@ -1,21 +1,37 @@
 """Motion estimation of the movers (paper ``sect:velocity``, ``sect:trajectory``).
 
-- :mod:`~sarmotion.motion.range_speed` — the number of movers and their range speeds,
-  peaks of ``g(u)`` (``eq:OBJg``);
-- :mod:`~sarmotion.motion.location` — a mover's location from its compensated image;
-- :mod:`~sarmotion.motion.cross_range` — the cross-range speed from ``g_perp`` (``eq:OBJ2``);
-- :mod:`~sarmotion.motion.velocity` — location and velocity together, alternating;
-- :mod:`~sarmotion.motion.speed_resolution` — the resolutions of those speeds;
-- :mod:`~sarmotion.motion.detector` — detection as a statistical test: the local-floor
-  statistic of the ``g(u)`` peaks, its measured null distribution and threshold, the
-  shape test and the focus gain against a stationary explanation;
-- :mod:`~sarmotion.motion.likelihood` — maximum-likelihood position and velocity (the
+Its public names fall in five groups (``__all__`` lists them in this order):
+
+**The paper's objectives** -- the functions the paper maximises or reads:
+
+- :mod:`~sarmotion.motion.range_speed` -- ``g(u)`` (``eq:OBJg``), whose peaks give the
+  number of movers and their range speeds;
+- :mod:`~sarmotion.motion.cross_range` -- ``g_perp`` (``eq:OBJ2``), whose minimum gives
+  the cross-range speed;
+- :mod:`~sarmotion.motion.wigner` -- the Wigner transform in slow time and its ridge;
+- :mod:`~sarmotion.motion.speed_resolution` -- the resolutions of those speeds.
+
+**The paper's estimators** -- the alternating ``g -> locate -> g_perp`` estimator and the
+phase-space trajectory; they serve the paper's figures and the tracker (which knows the
+position and seeks only the velocity):
+
+- :mod:`~sarmotion.motion.location` -- a mover's location from its compensated image;
+- :mod:`~sarmotion.motion.velocity` -- location and velocity together, alternating;
+- :mod:`~sarmotion.motion.phase_space` -- trajectories from the Wigner ridges of
+  sub-apertures.
+
+**Detection** -- :mod:`~sarmotion.motion.detector`: detection as a statistical test, the
+local-floor statistic of the ``g(u)`` peaks, its measured null distribution and
+threshold, the shape test and the focus gain against a stationary explanation.
+
+**Maximum likelihood** -- the estimator of :func:`sarmotion.pipeline.analyze`:
+
+- :mod:`~sarmotion.motion.likelihood` -- maximum-likelihood position and velocity (the
   matched filter, searched globally in cross-range speed), several movers jointly;
-- :mod:`~sarmotion.motion.bounds` — the Cramér–Rao bound of a point mover;
-- :mod:`~sarmotion.motion.aperture` — the cross-range family that fits the data equally
-  well, and the focus of an estimate on a whole (wide) aperture;
-- :mod:`~sarmotion.motion.wigner` — the Wigner transform in slow time and its ridge;
-- :mod:`~sarmotion.motion.phase_space` — trajectories from the Wigner ridges of sub-apertures.
+- :mod:`~sarmotion.motion.bounds` -- the Cramér–Rao bound of a point mover.
+
+**The aperture** -- :mod:`~sarmotion.motion.aperture`: the cross-range family that fits
+the data equally well, and the focus of an estimate on a whole (wide) aperture.
 """
 
 from .aperture import (
@@ -62,54 +78,59 @@ from .velocity import MoverEstimate, estimate_velocity
 from .wigner import WignerRidge, wigner_ridge, wigner_slow_time
 
 __all__ = [
+    # the paper's objectives
+    "RangeSpeeds",
+    "range_speed_objective",
+    "estimate_range_speeds",
+    "cross_range_objective",
+    "CrossRangeSpeed",
+    "estimate_cross_range_speed",
+    "WignerRidge",
+    "wigner_ridge",
+    "wigner_slow_time",
+    "cross_range_speed_resolution",
+    "range_speed_resolution",
+    # the paper's estimators
+    "MoverLocation",
+    "locate_mover",
+    "MoverEstimate",
+    "estimate_velocity",
+    "TrajectoryEstimate",
+    "estimate_trajectory",
+    "trajectory_error",
+    # detection
     "NULL_TAIL",
-    "MatchedFilter",
     "PeakStatistics",
-    "PointBound",
-    "PointFit",
     "RangeSpeedDetection",
     "StationaryExplanation",
     "alias_free_extent_m",
     "detect_range_speeds",
     "duplicate_fits",
     "false_alarm_probability",
-    "fisher_information",
-    "fit_point_mover",
     "local_floor",
     "local_statistic",
-    "matched_filter_noise_variance",
-    "noise_variance",
     "peak_statistics",
-    "point_model",
     "point_peak_width",
-    "point_mover_bound",
-    "range_gradients",
-    "refine_jointly",
-    "refit_movers",
     "stationary_explanation",
     "threshold_db",
+    # maximum likelihood
+    "MatchedFilter",
+    "PointFit",
+    "fit_point_mover",
+    "matched_filter_noise_variance",
+    "noise_variance",
+    "point_model",
+    "refine_jointly",
+    "refit_movers",
+    "PointBound",
+    "fisher_information",
+    "point_mover_bound",
+    "range_gradients",
+    # the aperture
     "ApertureFit",
-    "CrossRangeSpeed",
-    "MoverEstimate",
-    "MoverLocation",
-    "RangeSpeeds",
-    "TrajectoryEstimate",
-    "WignerRidge",
     "azimuth_span_deg",
     "central_sub_aperture",
-    "cross_range_objective",
-    "cross_range_speed_resolution",
-    "estimate_cross_range_speed",
-    "estimate_range_speeds",
-    "estimate_trajectory",
-    "estimate_velocity",
     "family_direction",
     "family_member",
-    "locate_mover",
-    "range_speed_objective",
-    "range_speed_resolution",
     "refine_on_aperture",
-    "trajectory_error",
-    "wigner_ridge",
-    "wigner_slow_time",
 ]

@@ -10,9 +10,10 @@
   :mod:`~sarmotion.separation.rpca_separation`, :mod:`~sarmotion.separation.combined`,
   behind one dispatcher :func:`separate` (:mod:`~sarmotion.separation.dispatch`);
 - :mod:`~sarmotion.separation.candidates` — stationary candidates from a preliminary image;
-- :mod:`~sarmotion.separation.quality` — errors against the true traces;
-- :mod:`~sarmotion.separation.rank` — the rank theory of the trace matrix (``sect:rank``),
-  used by the paper's figures.
+- :mod:`~sarmotion.separation.quality` — errors against the true traces.
+
+The rank theory of the trace matrix (``sect:rank``), which only the paper's figures use,
+is :mod:`sarmotion.paper.rank`.
 """
 
 from .annihilation import separate_annihilation

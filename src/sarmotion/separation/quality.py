@@ -3,17 +3,29 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import Traces
-from ..simulation import PointTarget
 from .result import Separation
 from .transforms import annihilate
 
 __all__ = ["separation_quality", "mover_trace_coverage", "quality_against_truth"]
+
+
+class TrueMover(Protocol):
+    """A mover of the true scene: what the quality measures read of it.
+
+    :class:`sarmotion.simulation.PointTarget` is one; the measures need only its motion,
+    so this layer does not import the simulator.
+    """
+
+    #: Position at slow time ``s = 0``, shape (3,) (m).
+    position_m: NDArray[np.float64]
+    #: Ground velocity ``(ux, uy)``, shape (2,) (m/s).
+    velocity_mps: NDArray[np.float64]
 
 
 # -------------------------------------------------------------------- quality
@@ -75,7 +87,7 @@ def separation_quality(
 def mover_trace_coverage(
     moving: ArrayLike,
     traces: Traces,
-    movers: Sequence[PointTarget],
+    movers: Sequence[TrueMover],
     *,
     half_width: int = 3,
     drop_db: float = 6.0,
@@ -95,8 +107,9 @@ def mover_trace_coverage(
         Separated moving traces ``S`` (or a filtered output such as ``Q M``).
     traces : Traces
         Acquisition of the data.
-    movers : sequence of PointTarget
-        The true movers (positions at ``s = 0`` in m, velocities in m/s).
+    movers : sequence of TrueMover
+        The true movers, e.g. :class:`sarmotion.simulation.PointTarget` (positions at
+        ``s = 0`` in m, velocities in m/s).
     half_width : int
         Half-width of the band around the trace (samples).
     drop_db : float
@@ -128,7 +141,7 @@ def quality_against_truth(
     *,
     true_stationary: ArrayLike,
     true_moving: ArrayLike,
-    movers: Sequence[PointTarget],
+    movers: Sequence[TrueMover],
 ) -> dict[str, Any]:
     """:func:`separation_quality` and :func:`mover_trace_coverage` of any method.
 

@@ -1,7 +1,10 @@
 """Every figure of the paper, regenerated from data, with the numbers behind it.
 
-- :mod:`~sarmotion.report.paper.build` — :func:`build_figures` and the ``index.html`` page;
-- :mod:`~sarmotion.report.paper.captions` — the paper's captions;
+The plotting half of the paper wing (:mod:`sarmotion.paper`): it sits in the report layer
+and draws with :mod:`sarmotion.report.plotting`.
+
+- :mod:`~sarmotion.paper.figures.build` — :func:`build_figures` and the ``index.html`` page;
+- :mod:`~sarmotion.paper.figures.captions` — the paper's captions;
 - ``fig_imaging``, ``fig_separation``, ``fig_rank``, ``fig_motion`` — the figure builders
   of each part of the paper; ``_context`` — the scenes and analyses they share.
 """

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..plotting import subplots
+from ...report.plotting import subplots
 from ._context import B_RANK, EPS, NU_O, _Context, _Result
 
 __all__ = []
@@ -23,7 +23,7 @@ def _linfit(x: NDArray, y: NDArray) -> tuple[float, float]:
 
 def _fig_rank1(ctx: _Context) -> _Result:
     from ...core import Trajectory, look_geometry, range_direction_velocity
-    from ...separation.rank import alpha, numerical_rank, passband_traces, szego_rank_fraction
+    from ..rank import alpha, numerical_rank, passband_traces, szego_rank_fraction
 
     kw = {"carrier_hz": NU_O, "bandwidth_hz": B_RANK}
     origin = np.zeros(3)
@@ -96,7 +96,7 @@ def _fig_rank1(ctx: _Context) -> _Result:
 
 def _fig_converge_rank(ctx: _Context) -> _Result:
     from ...core import Trajectory, look_geometry
-    from ...separation.rank import alpha_j, numerical_rank, passband_traces, szego_rank_fraction
+    from ..rank import alpha_j, numerical_rank, passband_traces, szego_rank_fraction
 
     kw = {"carrier_hz": NU_O, "bandwidth_hz": B_RANK}
     origin = np.zeros(3)
@@ -138,7 +138,7 @@ def _fig_converge_rank(ctx: _Context) -> _Result:
 
 def _fig_eigenvals2(ctx: _Context) -> _Result:
     from ...core import LookGeometry, Trajectory, look_geometry
-    from ...separation.rank import (
+    from ..rank import (
         alpha_j,
         beta,
         numerical_rank,

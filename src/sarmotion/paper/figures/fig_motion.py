@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from ..plotting import plot_image, subplots, traces_figure
+from ...report.plotting import plot_image, subplots, traces_figure
 from ._context import _annihilate_complete_stencils, _Context, _fmt, _rel, _Result, _scr_db
 from .fig_separation import _own_trace
 

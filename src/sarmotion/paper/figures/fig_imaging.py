@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import plot_image, plot_traces, subplots, traces_figure
+from ...report.plotting import plot_image, plot_traces, subplots, traces_figure
 from ._context import _Context, _fmt, _peak_delay_spread_ns, _peak_delays_s, _Result
 
 

@@ -7,14 +7,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..plotting import plot_traces, subplots, traces_figure
+from ...report.plotting import plot_traces, subplots, traces_figure
 from ._context import EPS, _Context, _fmt, _peak_delay_spread_ns, _rel, _Result, _scr_db
 
 __all__ = []
 
 
 def _fig_data_decomp(ctx: _Context) -> _Result:
-    from ...separation.rank import numerical_rank
+    from ..rank import numerical_rank
 
     sim = ctx.sim("scene1")
     tr = sim.traces
@@ -93,7 +93,7 @@ def _fig_rpca_ex1(ctx: _Context) -> _Result:
 
 
 def _fig_rpca_ex2a(ctx: _Context) -> _Result:
-    from ...separation.rank import numerical_rank
+    from ..rank import numerical_rank
 
     sim = ctx.sim("example2")
     tr = sim.traces

@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...core.progress import ProgressCallback
-from ..plotting import save_figure
+from ...report.plotting import save_figure
 from ._context import _Context, _Result
 from .captions import CAPTIONS
 from .fig_imaging import _fig_hyperbola, _fig_image_comp, _fig_rot_scatt, _fig_straight_trace
@@ -263,7 +263,7 @@ def _write_index(out: Path, records: Sequence[FigureRecord], quick: bool) -> Pat
         "<header><h1>Motion estimation and imaging of complex scenes with synthetic "
         "aperture radar &mdash; the figures, regenerated</h1>"
         f"<div>{len(records)} figures{' (quick: reduced sizes)' if quick else ''}, built in "
-        f"{total:.0f} s by <code>sarmotion.report.paper.build_figures</code>, each beside the "
+        f"{total:.0f} s by <code>sarmotion.paper.figures.build_figures</code>, each beside the "
         "paper's caption and what it measures. Click a figure to see it at full size.</div>"
         "</header>\n"
         f'<div class="layout"><nav><b>Contents</b><ol>{"".join(toc)}</ol></nav><main>\n'
