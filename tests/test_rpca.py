@@ -439,7 +439,8 @@ def test_single_precision_svds_keep_the_decomposition(monkeypatch):
     """
     import importlib
 
-    mod = importlib.import_module("sarmotion.separation.rpca")
+    mod = importlib.import_module("sarmotion.separation._thresholding")
+    ialm = importlib.import_module("sarmotion.separation._ialm")
     rng = np.random.default_rng(11)
     u = rng.standard_normal((200, 40)) + 1j * rng.standard_normal((200, 40))
     v = rng.standard_normal((40, 160)) + 1j * rng.standard_normal((40, 160))
@@ -457,7 +458,7 @@ def test_single_precision_svds_keep_the_decomposition(monkeypatch):
     single = rpca(m, tol=1e-5, svd="full")
     assert np.complex64 in calls  # the fast path ran
     calls.clear()
-    monkeypatch.setattr(mod, "_SINGLE_PRECISION_TOL", np.inf)
+    monkeypatch.setattr(ialm, "_SINGLE_PRECISION_TOL", np.inf)
     double = rpca(m, tol=1e-5, svd="full")
     assert np.complex64 not in calls
     assert single.converged and double.converged

@@ -228,7 +228,7 @@ def test_stacks_of_windows_are_bounded_and_agree(monkeypatch):
     with one stack (the windows are independent), to rounding (1e-15 measured)."""
     import importlib
 
-    mod = importlib.import_module("sarmotion.separation.rpca")
+    mod = importlib.import_module("sarmotion.separation._windows")
     rng = np.random.default_rng(44)
     low, sparse = low_rank_plus_sparse(rng, 60, 300, rank=3)
     one = windowed_rpca(low + sparse, window=40, tol=1e-7)

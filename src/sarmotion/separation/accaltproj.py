@@ -40,6 +40,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from .result import Decomposition
+
 __all__ = ["accaltproj", "default_beta", "estimate_rank"]
 
 #: Decay of the threshold's second term per iteration.
@@ -149,7 +151,7 @@ def accaltproj(
     beta: float | None = None,
     beta_init: float | None = None,
     gamma: float = GAMMA,
-) -> tuple[NDArray, NDArray, int, bool, NDArray[np.float64], int]:
+) -> Decomposition:
     """AccAltProj on a finite float64/complex128 matrix.
 
     Parameters
@@ -170,18 +172,15 @@ def accaltproj(
 
     Returns
     -------
-    low, sparse : ndarray
-        ``L`` and ``S``, the dtype of ``m``.
-    n_iter : int
-    converged : bool
-    residuals : (n_iter,) ndarray
-        Relative residual after each iteration.
-    rank : int
+    Decomposition
+        ``low`` and ``sparse`` (``L`` and ``S``, the dtype of ``m``), ``n_iter``,
+        ``converged``, ``residuals`` (relative residual after each iteration, (n_iter,))
+        and ``rank``.
     """
     norm_m = float(np.linalg.norm(m))
     if norm_m == 0.0:
         z = np.zeros_like(m)
-        return z, z.copy(), 0, True, np.zeros(0), 0
+        return Decomposition(z, z.copy(), 0, True, np.zeros(0), 0)
     beta = default_beta(m.shape) if beta is None else float(beta)
     beta_init = 4.0 * beta if beta_init is None else float(beta_init)
     rng = np.random.default_rng(0)
@@ -222,4 +221,4 @@ def accaltproj(
             k > 5 and residuals[k - 1] > STALL * residuals[k - 6]
         ):
             break
-    return low, s, k, converged, residuals[:k].copy(), r
+    return Decomposition(low, s, k, converged, residuals[:k].copy(), r)
