@@ -1,13 +1,30 @@
-"""Shared fixtures: small seeded scenes and the location of the GOTCHA data set."""
+"""Shared fixtures: small seeded scenes and the location of the GOTCHA data set.
+
+The test run writes nothing into the source tree: numba's on-disk cache (``cache=True``
+kernels) and Python's bytecode go under one directory in the system's temporary
+directory, set here before any test imports sarmotion (and so numba) and passed on, in
+the environment, to the commands the tests start. A ``NUMBA_CACHE_DIR`` or
+``PYTHONPYCACHEPREFIX`` already set is kept. The directory persists between runs, so the
+kernels compile once, not once per run; numba keys its entries by the source file's full
+path and time stamp, so checkouts side by side do not share them.
+"""
 
 from __future__ import annotations
 
 import os
+import sys
+import tempfile
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+
+_CACHE = Path(tempfile.gettempdir()) / "sarmotion-test-cache"
+os.environ.setdefault("NUMBA_CACHE_DIR", str(_CACHE / "numba"))
+os.environ.setdefault("PYTHONPYCACHEPREFIX", str(_CACHE / "pycache"))
+if sys.pycache_prefix is None:
+    sys.pycache_prefix = os.environ["PYTHONPYCACHEPREFIX"]
 
 
 def gotcha_directory() -> Path | None:
