@@ -12,6 +12,7 @@ from .._validation import finite as _finite
 from .._validation import interval as _interval
 from .._validation import positive as _positive
 from ..core import C, Traces, as_point
+from ..errors import EstimationError
 from ._aligned import _Aligner, _basis, _check_traces, _refine_max, _speeds
 from .speed_resolution import cross_range_speed_resolution
 
@@ -45,8 +46,8 @@ def _lag(traces: Traces, lag_pulses: int | None) -> int:
         h = int(lag_pulses)
         if h < 1:
             raise ValueError(f"lag_pulses must be >= 1, got {lag_pulses}")
-    if traces.n_pulses < 2 * h + 1:
-        raise ValueError(
+    if traces.n_pulses < 2 * h + 1:  # too few pulses for the lag: no estimate, not bad input
+        raise EstimationError(
             f"lag_pulses = {h} needs at least {2 * h + 1} pulses, traces have {traces.n_pulses}"
         )
     return h

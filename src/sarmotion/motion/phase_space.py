@@ -129,6 +129,7 @@ from ..core import (
     to_fast_time,
     to_frequency,
 )
+from ..errors import EstimationError
 from .wigner import _check_lag_window, wigner_ridge
 
 #: Fast-time oversampling of the envelope in the coarse range-walk search.
@@ -411,7 +412,9 @@ def _check_trajectory_options(
     n = traces.n_pulses
     size = int(sub_aperture_pulses)
     if size != sub_aperture_pulses or not 5 <= size <= n:
-        raise ValueError(
+        # a valid option that these traces are too short for: no estimate, not bad input
+        too_short = size == sub_aperture_pulses and size >= 5
+        raise (EstimationError if too_short else ValueError)(
             f"sub_aperture_pulses must be an integer in [5, {n}], got {sub_aperture_pulses!r}"
         )
     lw = 2 * size - 1 if lag_window_pulses is None else _check_lag_window(lag_window_pulses, n)
@@ -422,7 +425,9 @@ def _check_trajectory_options(
             f"fast_time_halfwidth must be an integer >= 0, got {fast_time_halfwidth!r}"
         )
     if search < hw or search != fast_time_search or traces.n_samples // 2 - search - hw < 0:
-        raise ValueError(
+        # a valid option whose search runs past the end of the traces' fast-time window
+        past_edge = search >= hw and search == fast_time_search
+        raise (EstimationError if past_edge else ValueError)(
             f"fast_time_search must be an integer in [{hw}, {traces.n_samples // 2 - hw}], "
             f"got {fast_time_search!r}"
         )

@@ -70,6 +70,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import finite as _finite
 from .._validation import interval as _interval
 from ..core import Traces, as_point, ground_velocity
+from ..errors import EstimationError
 from ..imaging import (
     point_response,
 )
@@ -222,7 +223,7 @@ def estimate_velocity(
     )
     if u_hint is None:
         if curve.n_movers == 0:
-            raise ValueError(
+            raise EstimationError(
                 f"g(u) has no peak with |u| >= min_speed_mps within speed_range_mps "
                 f"{speed_range_mps!r}"
             )

@@ -18,6 +18,7 @@ from ..core.geometry import cross_range_speed, ground_velocity, range_speed
 from ..core.progress import ProgressCallback, report
 from ..core.spectral import to_fast_time, to_frequency
 from ..core.traces import Traces
+from ..errors import EstimationError
 from ..imaging import Image, ImageGrid, backproject, resolution, scene_grid
 from ..motion import (
     MoverEstimate,
@@ -522,7 +523,7 @@ def estimate_trajectories(
                     velocity_guess_mps=est.velocity_mps,
                 )
             )
-        except ValueError as exc:  # e.g. a mover too close to the window edge
+        except EstimationError as exc:  # e.g. too few pulses, or the search past the edge
             log.warning("trajectory of mover %d not estimated: %s", k + 1, exc)
             out.append(None)
         report(progress, "trajectories", k + 1, len(fits))

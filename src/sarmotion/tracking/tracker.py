@@ -72,6 +72,7 @@ from numpy.typing import NDArray
 
 from .._validation import integer, positive
 from ..core import Traces
+from ..errors import EstimationError
 from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
 from .roads import Road, RoadFix, road_fix
@@ -475,7 +476,7 @@ class Tracker:
                 speed_range_mps=(u - du, u + du),
                 cross_speed_range_mps=(up - dup, up + dup),
             )
-        except ValueError as exc:  # no g peak: keep the family member's velocity
+        except EstimationError as exc:  # no estimate: keep the family member's velocity
             log.warning("velocity at the known position failed (%s); family velocity kept", exc)
             return velocity
         return np.asarray(est.velocity_mps, dtype=np.float64)
