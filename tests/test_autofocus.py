@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 from sarmotion.core import C
+from sarmotion.documents import results_document
 from sarmotion.imaging import resolution
 from sarmotion.imaging.autofocus import apply_phase_correction, focus_mover, pga
 from sarmotion.imaging.quality import point_quality
-from sarmotion.io import read_gotcha, results_document
+from sarmotion.io import read_gotcha
 from sarmotion.pipeline import AnalysisOptions, analyze
 from sarmotion.simulation import PointTarget, Scene, load_scene, simulate
 

@@ -117,9 +117,10 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
     traces.data[: traces.n_pulses // 2] *= -2.0j
     changed = _case(traces, grid, None, None, "changed_in_place")
     # The command line with --device cuda, against the exact sum of the same inputs.
+    from sarmotion.cli.inputs import read_inputs
     from sarmotion.cli.main import run
     from sarmotion.imaging import point_response
-    from sarmotion.io import load_image, read_inputs
+    from sarmotion.io import load_image
 
     cli_out = out.parent / "cli"
     code = run(["image", "hyperbola", "--out", str(cli_out), "--device", "cuda", "--size",
