@@ -2,7 +2,8 @@
 
 From the bottom:
 
-1. ``core`` with the package's own helpers ``_validation``, ``_version`` and ``errors``;
+1. ``core`` with the package's own helpers ``_validation``, ``_version``, ``_limits`` (the
+   memory budget) and ``errors``;
 2. science, arrays in and arrays out: ``simulation`` and ``imaging`` import only the
    base; ``separation`` and ``motion`` import the base and ``imaging`` (neither imports
    the other nor ``simulation``);
@@ -33,14 +34,15 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = "sarmotion"
 
-BASE = {"core", "_validation", "_version", "errors"}
+BASE = {"core", "_validation", "_version", "_limits", "errors"}
 SCIENCE_LOW = BASE | {"simulation", "imaging"}
 SCIENCE = SCIENCE_LOW | {"separation", "motion"}
 
 #: Each part of the package and the parts it may import (besides its own).
 MAY_IMPORT: dict[str, set[str]] = {
-    "core": {"_validation", "_version", "errors"},
+    "core": {"_validation", "_version", "_limits", "errors"},
     "_validation": set(),
+    "_limits": set(),
     "_version": set(),
     "errors": set(),
     "simulation": BASE,
@@ -125,7 +127,7 @@ def layering_violations(src: Path = SRC) -> list[str]:
         if allowed is None:
             bad.append(f"{where}: part {part!r} has no place in the layers (tests/test_layering)")
             continue
-        for line, target in _imports(path, src):
+        for line, target in sorted(set(_imports(path, src))):
             if target.split(".")[0] == "matplotlib" and part not in PLOTTING:
                 bad.append(f"{where}:{line}: imports {target} outside the report layer")
             other = _part(target)

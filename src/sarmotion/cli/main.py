@@ -166,6 +166,7 @@ def _verbose(ctx: click.Context, param: click.Parameter, value: int) -> None:
 
 def _max_memory(ctx: click.Context, param: click.Parameter | None, value: str | None) -> None:
     from .._limits import parse_size, set_memory_limit
+    from ..errors import InputError
 
     if param is None:  # the group's option: reset the limit of a previous run in-process
         set_memory_limit(None)
@@ -173,7 +174,7 @@ def _max_memory(ctx: click.Context, param: click.Parameter | None, value: str | 
         try:
             set_memory_limit(parse_size(value))
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"--max-memory: {exc}") from None
+            raise InputError(f"--max-memory: {exc}") from None
 
 
 def _add_shared_options(command: click.Command) -> None:
