@@ -208,12 +208,15 @@ def _bad_input() -> tuple[type[BaseException], ...]:
     """The exceptions that mean bad input: exit status 2 with one line.
 
     :class:`~sarmotion.errors.InputError` (its subclasses included: the I/O layer's
-    ``DataError``, ``SceneError``, the command line's own checks) and files that cannot
-    be opened. Any other exception, a bare ``ValueError`` included, is a defect.
+    ``DataError``, ``SceneError``, the command line's own checks), an output that cannot
+    be claimed (:class:`~sarmotion.io.staging.OutputError`, a ``ValueError``: the staging
+    module imports nothing of the package, so that it can be loaded alone) and files that
+    cannot be opened. Any other exception, a bare ``ValueError`` included, is a defect.
     """
     from ..errors import InputError
+    from ..io.staging import OutputError
 
-    return (InputError, FileNotFoundError, OSError)
+    return (InputError, OutputError, FileNotFoundError, OSError)
 
 
 def run(args: Sequence[str] | None = None) -> int:

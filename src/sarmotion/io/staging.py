@@ -68,8 +68,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
-from ..errors import InputError
-
 try:  # POSIX
     import fcntl
 except ImportError:  # pragma: no cover - Windows: an O_EXCL lock file instead
@@ -89,7 +87,7 @@ log = logging.getLogger(__name__)
 Kind = Literal["file", "directory"]
 
 
-class OutputError(InputError):
+class OutputError(ValueError):
     """An output target cannot be claimed or replaced: one line naming it and why."""
 
 
