@@ -1,0 +1,40 @@
+"""Whole collections: scenes of any size cut into patches, analysed one patch at a time.
+
+- :mod:`~sarmotion.collection.plan` — :func:`plan_patches`: the patches' cores, windows and
+  slow-time filters, sized from the data;
+- :mod:`~sarmotion.collection.extract` — :func:`extract_patches`: each patch's traces,
+  re-referenced to its centre, windowed and decimated, built block by block;
+- :mod:`~sarmotion.collection.merge` — one mover per range history, stationary targets
+  de-duplicated, the stationary mosaic;
+- :mod:`~sarmotion.collection.run` — :func:`analyze_collection`: the patches as tasks
+  (Dask or in process) and their merged result.
+"""
+
+from .document import COLLECTION_SCHEMA, collection_document
+from .extract import PatchBuilder, extract_patches, patch_radar
+from .merge import MoverRecord, StationaryRecord, merge_movers, merge_stationary, same_mover
+from .plan import CollectionOptions, Patch, PatchPlan, RegionError, plan_patches, unambiguous_scene
+from .run import CollectionResult, PatchResult, analyze_collection, analyze_patch
+
+__all__ = [
+    "COLLECTION_SCHEMA",
+    "CollectionResult",
+    "MoverRecord",
+    "PatchResult",
+    "StationaryRecord",
+    "analyze_collection",
+    "analyze_patch",
+    "collection_document",
+    "merge_movers",
+    "merge_stationary",
+    "same_mover",
+    "CollectionOptions",
+    "Patch",
+    "PatchBuilder",
+    "PatchPlan",
+    "RegionError",
+    "extract_patches",
+    "patch_radar",
+    "plan_patches",
+    "unambiguous_scene",
+]

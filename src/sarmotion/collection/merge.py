@@ -1,0 +1,255 @@
+"""One answer from many patches: movers by range history, stationary targets, the mosaic.
+
+**Movers.** The data fix a mover's range history ``R(s) = |r(s) - rho - s u|`` over the
+aperture, not its place along its cross-range family (:mod:`sarmotion.motion.aperture`):
+two patches may report the same mover at different family members. Over a degree the
+history is fixed to first order, its range ``R(0)`` and range rate ``R'(0)``; its
+curvature (the cross-range speed) is what the family and ``g_perp`` leave loose. Two
+movers are one when
+
+    |R_a(0) - R_b(0)| <= 3 sqrt(sigma_xa^2 + sigma_xb^2) + rho_r / 2,
+    |R_a'(0) - R_b'(0)| <= 3 sqrt(sigma_ua^2 + sigma_ub^2) + rho_u / 2,
+
+with ``sigma_x``, ``sigma_u`` the Cramér–Rao bounds of the range position and range speed
+each patch reported, ``rho_r = c / 2B`` the range resolution and ``rho_u = rho_r / (T /
+2)`` the range-speed resolution of ``g(u)`` (``T`` the analysed aperture's duration): two
+point movers closer than half a cell in both are one peak of ``g`` in every patch. Of a
+group the fit with the smallest range-position error (then the highest SNR) is kept.
+
+**Stationary targets** are one when within one resolution cell in ground range and in
+cross range (their positions, unlike a mover's, are fixed by the data); the brighter is
+kept. Their levels are compared across patches on one scale: ``|I| / n_pulses`` of each
+patch's stationary image (the slow-time filter has unit gain).
+
+**Mosaic.** Each patch's stationary image on its core, ``|I| / n_pulses``, on one grid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.constants import C
+from ..core.geometry import Trajectory, travel_time
+
+__all__ = [
+    "MoverRecord",
+    "StationaryRecord",
+    "PatchImage",
+    "same_mover",
+    "merge_movers",
+    "merge_stationary",
+    "mosaic",
+]
+
+
+@dataclass(frozen=True, kw_only=True)
+class MoverRecord:
+    """A mover as one patch reported it.
+
+    Attributes
+    ----------
+    patch : int
+        Index of the patch.
+    position_m : (3,) ndarray
+        Position at ``s = 0`` (m).
+    velocity_mps : (2,) ndarray
+        Ground velocity (m/s).
+    sigma_range_m, sigma_range_speed_mps : float
+        Standard errors of the range position (m) and range speed (m/s); ``inf`` when
+        the patch gave none.
+    snr_db : float
+        Matched-filter SNR (dB); ``-inf`` when unknown.
+    document : dict
+        Its entry of the ``sarmotion.results/1`` document.
+    """
+
+    patch: int
+    position_m: NDArray[np.float64]
+    velocity_mps: NDArray[np.float64]
+    sigma_range_m: float
+    sigma_range_speed_mps: float
+    snr_db: float
+    document: dict[str, Any]
+
+
+@dataclass(frozen=True, kw_only=True)
+class StationaryRecord:
+    """A stationary target as one patch reported it.
+
+    Attributes
+    ----------
+    patch : int
+        Index of the patch.
+    position_m : (float, float)
+        Position (m).
+    level : float
+        ``|I| / n_pulses`` of its patch's stationary image at the target (data units).
+    """
+
+    patch: int
+    position_m: tuple[float, float]
+    level: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class PatchImage:
+    """A patch's stationary image on its core, ``|I| / n_pulses``.
+
+    Attributes
+    ----------
+    x_m, y_m : ndarray
+        Pixel coordinates (m), increasing, uniform.
+    magnitude : (ny, nx) ndarray
+        Image magnitude (float32).
+    """
+
+    x_m: NDArray[np.float64]
+    y_m: NDArray[np.float64]
+    magnitude: NDArray[np.float32]
+
+
+def _history(trajectory: Trajectory, position: NDArray, velocity: NDArray) -> NDArray:
+    s = trajectory.slow_times_s
+    where = np.asarray(position, float)[None, :3] + s[:, None] * np.r_[velocity, 0.0][None, :]
+    return 0.5 * C * travel_time(trajectory.positions_m, where)
+
+
+def same_mover(
+    a: MoverRecord, b: MoverRecord, trajectory: Trajectory, range_resolution_m: float
+) -> bool:
+    """Whether ``a`` and ``b`` have one range history within their errors (module notes).
+
+    Parameters
+    ----------
+    a, b : MoverRecord
+        Two reports.
+    trajectory : Trajectory
+        The analysed pulses, with the acquisition's slow times (``s = 0`` where the
+        positions are given).
+    range_resolution_m : float
+        Slant-range resolution ``c / 2B`` (m).
+    """
+    s = trajectory.slow_times_s
+    j0 = int(np.argmin(np.abs(s)))
+    ra = _history(trajectory, a.position_m, a.velocity_mps)
+    rb = _history(trajectory, b.position_m, b.velocity_mps)
+    da = np.gradient(ra, s)[j0]
+    db = np.gradient(rb, s)[j0]
+    duration = float(s[-1] - s[0])
+    speed_cell = range_resolution_m / (0.5 * duration)
+    sx = np.hypot(_finite(a.sigma_range_m), _finite(b.sigma_range_m))
+    su = np.hypot(_finite(a.sigma_range_speed_mps), _finite(b.sigma_range_speed_mps))
+    return bool(
+        abs(ra[j0] - rb[j0]) <= 3.0 * sx + 0.5 * range_resolution_m
+        and abs(da - db) <= 3.0 * su + 0.5 * speed_cell
+    )
+
+
+def _finite(v: float) -> float:
+    return float(v) if np.isfinite(v) else 0.0
+
+
+def _better(a: MoverRecord) -> tuple[float, float]:
+    return (a.sigma_range_m, -a.snr_db)
+
+
+def merge_movers(
+    movers: Sequence[MoverRecord], trajectory: Trajectory, range_resolution_m: float
+) -> list[tuple[MoverRecord, list[int]]]:
+    """Group the reports of one mover; keep the best-determined of each group.
+
+    Parameters
+    ----------
+    movers : sequence of MoverRecord
+        Every patch's movers.
+    trajectory : Trajectory
+        The pulses the range histories are compared on.
+    range_resolution_m : float
+        Slant-range resolution (m).
+
+    Returns
+    -------
+    list of (MoverRecord, list of int)
+        The kept report and the patches that reported it, best-determined first.
+    """
+    order = sorted(range(len(movers)), key=lambda i: _better(movers[i]))
+    kept: list[tuple[MoverRecord, list[int]]] = []
+    for i in order:
+        m = movers[i]
+        for rep, patches in kept:
+            if same_mover(rep, m, trajectory, range_resolution_m):
+                patches.append(m.patch)
+                break
+        else:
+            kept.append((m, [m.patch]))
+    return kept
+
+
+def merge_stationary(
+    targets: Sequence[StationaryRecord],
+    *,
+    range_direction: NDArray,
+    range_cell_m: float,
+    cross_cell_m: float,
+) -> list[StationaryRecord]:
+    """One record per target: those within a resolution cell in range and cross range
+    merged, the brightest kept; brightest first.
+
+    Parameters
+    ----------
+    targets : sequence of StationaryRecord
+        Every patch's stationary targets.
+    range_direction : (2,) ndarray
+        Unit ground-range direction.
+    range_cell_m, cross_cell_m : float
+        Ground-range and cross-range resolution (m).
+    """
+    e_r = np.asarray(range_direction, float)
+    e_c = np.array([-e_r[1], e_r[0]])
+    kept: list[StationaryRecord] = []
+    pts = np.zeros((0, 2))
+    for t in sorted(targets, key=lambda t: -t.level):
+        p = np.asarray(t.position_m, float)
+        if pts.size:
+            d = pts - p[None, :]
+            close = (np.abs(d @ e_r) <= range_cell_m) & (np.abs(d @ e_c) <= cross_cell_m)
+            if np.any(close):
+                continue
+        kept.append(t)
+        pts = np.vstack([pts, p[None, :]])
+    return kept
+
+
+def mosaic(
+    images: Sequence[PatchImage], region_m: tuple[float, float, float, float], spacing_m: float
+) -> tuple[NDArray[np.float32], tuple[float, float, float, float]]:
+    """The patches' core images on one grid of ``spacing_m`` over ``region_m``.
+
+    Each mosaic pixel takes the largest patch pixel that falls in it (the patch images
+    are coarsened by block maxima when ``spacing_m`` exceeds their own).
+
+    Returns
+    -------
+    (ny, nx) ndarray, (left, right, bottom, top)
+        The mosaic (float32, zero where no patch) and its pixel-edge extent (m).
+    """
+    x0, y0, x1, y1 = region_m
+    nx = max(1, int(np.ceil((x1 - x0) / spacing_m)))
+    ny = max(1, int(np.ceil((y1 - y0) / spacing_m)))
+    out = np.zeros((ny, nx), np.float32)
+    for im in images:
+        ix = np.floor((im.x_m - x0) / spacing_m).astype(int)
+        iy = np.floor((im.y_m - y0) / spacing_m).astype(int)
+        okx = (ix >= 0) & (ix < nx)
+        oky = (iy >= 0) & (iy < ny)
+        if not (okx.any() and oky.any()):
+            continue
+        sub = im.magnitude[np.ix_(oky, okx)]
+        yy, xx = np.meshgrid(iy[oky], ix[okx], indexing="ij")
+        np.maximum.at(out, (yy.ravel(), xx.ravel()), sub.ravel().astype(np.float32))
+    return out, (x0, x0 + nx * spacing_m, y0, y0 + ny * spacing_m)

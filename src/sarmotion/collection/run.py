@@ -1,0 +1,462 @@
+"""A whole collection: plan, extract, analyse every patch (on Dask), merge.
+
+:func:`analyze_collection` reads the data block by block into the traces of a group of
+patches (:func:`~sarmotion.collection.extract.extract_patches`; a group is as many
+patches as fit in ``memory_mb``, so peak memory is a block plus one group's traces plus
+the tasks in flight), submits each patch as a task running
+:func:`~sarmotion.pipeline.analyze` unchanged on its traces (its image: the core), and
+gathers the results as they complete. Then one mover per range history, stationary
+targets de-duplicated, and the stationary mosaic (:mod:`~sarmotion.collection.merge`).
+
+Where the tasks run (as for ``track``, :mod:`sarmotion.tracking.scale`):
+
+- ``scheduler=None``: a local ``distributed.LocalCluster`` of ``n_workers`` workers
+  (default one per core), one thread each, threads of this process by default
+  (``processes=True``: separate processes, each compiling numba's kernels again);
+  inside a task numba's and BLAS's pools are limited to the worker's share of the cores;
+- ``scheduler="tcp://host:8786"`` or a ``distributed.Client``: that cluster's workers,
+  which need sarmotion importable but not the input file (each task carries its
+  patch's traces);
+- ``n_workers=0``: no Dask, the patches one after the other in this process.
+
+Nothing here reads files or prints; progress goes through ``progress(stage, done,
+total)`` ("patch traces" over pulses read, "patches" over patches analysed).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import os
+import time
+from collections.abc import Iterator
+from contextlib import ExitStack
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.blocks import PulseBlocks, TracesBlocks
+from ..core.geometry import Trajectory, look_geometry
+from ..core.progress import ProgressCallback, report
+from ..core.traces import Traces
+from ..pipeline import AnalysisOptions, AnalysisResult, analyze
+from .extract import extract_patches
+from .merge import (
+    MoverRecord,
+    PatchImage,
+    StationaryRecord,
+    merge_movers,
+    merge_stationary,
+    mosaic,
+)
+from .plan import CollectionOptions, Patch, PatchPlan, _analysed_pulses, plan_patches
+
+__all__ = ["PatchResult", "CollectionResult", "analyze_patch", "analyze_collection"]
+
+log = logging.getLogger(__name__)
+
+#: Most pixels a side of the stationary mosaic (it is coarsened beyond).
+MOSAIC_MAX_PIXELS = 4096
+
+
+@dataclass(frozen=True, kw_only=True)
+class PatchResult:
+    """What one patch's analysis returns to the collection (no traces, no matrices).
+
+    Attributes
+    ----------
+    index : int
+        Patch index.
+    movers : tuple of MoverRecord
+        Its movers.
+    stationary : tuple of StationaryRecord
+        Its stationary targets inside its core.
+    listed : int
+        Stationary targets the analysis listed (inside and outside the core).
+    capped : bool
+        The analysis listed ``max_stationary`` targets: more may have been dropped.
+    image : PatchImage
+        Its stationary image on the core.
+    method : str
+        Separation method.
+    n_pulses, n_samples : int
+        Size of its traces.
+    timings_s : dict
+        Stage times of its analysis (s).
+    """
+
+    index: int
+    movers: tuple[MoverRecord, ...]
+    stationary: tuple[StationaryRecord, ...]
+    listed: int
+    capped: bool
+    image: PatchImage
+    method: str
+    n_pulses: int
+    n_samples: int
+    timings_s: dict[str, float]
+
+
+@dataclass(frozen=True, kw_only=True)
+class CollectionResult:
+    """The merged analysis of a collection.
+
+    Attributes
+    ----------
+    plan : PatchPlan
+        The patches.
+    patches : tuple of PatchResult
+        Every patch's result, by index.
+    movers : tuple of (MoverRecord, tuple of int)
+        One per mover: the best-determined report and every patch that reported it.
+    stationary : tuple of StationaryRecord
+        De-duplicated stationary targets, brightest first, at most ``max_stationary``
+        per patch in all.
+    stationary_dropped : int
+        Stationary targets beyond that cap, not listed.
+    mosaic : (ny, nx) ndarray
+        Stationary image ``|I| / n_pulses`` over the region (float32).
+    mosaic_extent_m : (float, float, float, float)
+        Its ``(left, right, bottom, top)`` (m).
+    options : CollectionOptions
+        The options used.
+    timings_s : dict
+        Wall-clock time of the stages ("plan", "patches", "merge", "total") (s).
+    single_result : AnalysisResult or None
+        The whole analysis when the region is one patch (today's analysis, unchanged).
+    """
+
+    plan: PatchPlan
+    patches: tuple[PatchResult, ...]
+    movers: tuple[tuple[MoverRecord, tuple[int, ...]], ...]
+    stationary: tuple[StationaryRecord, ...]
+    stationary_dropped: int
+    mosaic: NDArray[np.float32]
+    mosaic_extent_m: tuple[float, float, float, float]
+    options: CollectionOptions
+    timings_s: dict[str, float] = field(default_factory=dict)
+    single_result: AnalysisResult | None = None
+
+
+# ------------------------------------------------------------------ one patch
+def _patch_options(patch: Patch, options: AnalysisOptions, single: bool) -> AnalysisOptions:
+    """The analysis options of ``patch``: its image is its core (unless one patch)."""
+    if single or options.image_size_m is not None:
+        return options
+    return dataclasses.replace(options, image_size_m=patch.size_m)
+
+
+def analyze_patch(
+    traces: Traces, patch: Patch, options: AnalysisOptions, *, single: bool = False
+) -> tuple[PatchResult, AnalysisResult]:
+    """Analyse one patch's traces with :func:`~sarmotion.pipeline.analyze` and slim it.
+
+    Parameters
+    ----------
+    traces : Traces
+        The patch's traces (:func:`~sarmotion.collection.extract_patches`).
+    patch : Patch
+        The patch.
+    options : AnalysisOptions
+        Analysis options (the image is set to the core).
+    single : bool
+        The patch is the whole region (today's analysis: options unchanged).
+
+    Returns
+    -------
+    (PatchResult, AnalysisResult)
+    """
+    from ..io.results import results_document
+
+    result = analyze(traces, _patch_options(patch, options, single))
+    doc = results_document(result)
+    movers = []
+    for m, entry in zip(result.movers, doc["movers"], strict=True):
+        b = m.bound
+        movers.append(
+            MoverRecord(
+                patch=patch.index,
+                position_m=np.asarray(m.estimate.position_m, float),
+                velocity_mps=np.asarray(m.velocity_mps, float),
+                sigma_range_m=float(b.range_position_m) if b is not None else math.inf,
+                sigma_range_speed_mps=float(b.range_speed_mps) if b is not None else math.inf,
+                snr_db=float(b.snr_db) if b is not None else -math.inf,
+                document=entry,
+            )
+        )
+    img = result.stationary_image
+    mag = img.magnitude / traces.n_pulses
+    peak = float(mag.max()) if mag.size else 0.0
+    stationary = []
+    for t in result.stationary:
+        if single or patch.contains(t.position_m):
+            stationary.append(
+                StationaryRecord(
+                    patch=patch.index,
+                    position_m=(float(t.position_m[0]), float(t.position_m[1])),
+                    level=peak * 10.0 ** (t.peak_db / 20.0),
+                )
+            )
+    x0, y0, x1, y1 = patch.core_m
+    gx, gy = img.grid.x_m, img.grid.y_m
+    okx = np.ones(gx.size, bool) if single else (gx >= x0) & (gx < x1)
+    oky = np.ones(gy.size, bool) if single else (gy >= y0) & (gy < y1)
+    image = PatchImage(
+        x_m=gx[okx], y_m=gy[oky], magnitude=mag[np.ix_(oky, okx)].astype(np.float32)
+    )
+    opts = result.options
+    slim = PatchResult(
+        index=patch.index,
+        movers=tuple(movers),
+        stationary=tuple(stationary),
+        listed=len(result.stationary),
+        capped=len(result.stationary) >= opts.max_stationary,
+        image=image,
+        method=result.method,
+        n_pulses=traces.n_pulses,
+        n_samples=traces.n_samples,
+        timings_s=dict(result.timings_s),
+    )
+    return slim, result
+
+
+def _task(
+    traces: Traces, patch: Patch, options: AnalysisOptions, single: bool, threads: int | None
+) -> PatchResult:
+    """One patch's analysis, numba's and BLAS's pools limited to ``threads``."""
+    if threads is None:
+        return analyze_patch(traces, patch, options, single=single)[0]
+    import numba
+    from threadpoolctl import threadpool_limits
+
+    previous = numba.get_num_threads()
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    try:
+        with threadpool_limits(limits=threads):
+            return analyze_patch(traces, patch, options, single=single)[0]
+    finally:
+        numba.set_num_threads(previous)
+
+
+# ---------------------------------------------------------------- collection
+def _groups(plan: PatchPlan, memory_mb: float) -> Iterator[list[Patch]]:
+    """Consecutive groups of patches whose traces (complex64) fit in ``memory_mb``."""
+    group: list[Patch] = []
+    used = 0.0
+    for p in plan.patches:
+        size = 8.0 * p.pulses.size * p.n_samples / 2**20
+        if group and used + size > memory_mb:
+            yield group
+            group, used = [], 0.0
+        group.append(p)
+        used += size
+    if group:
+        yield group
+
+
+def analyze_collection(
+    source: PulseBlocks | Traces,
+    options: CollectionOptions | None = None,
+    *,
+    region_m: ArrayLike | None = None,
+    plan: PatchPlan | None = None,
+    scheduler: str | Any | None = None,
+    n_workers: int | None = None,
+    processes: bool = False,
+    memory_mb: float = 1024.0,
+    progress: ProgressCallback | None = None,
+) -> CollectionResult:
+    """Analyse a whole collection patch by patch and merge the answers.
+
+    Parameters
+    ----------
+    source : PulseBlocks or Traces
+        The data (in-memory traces are served by :class:`~sarmotion.core.blocks.TracesBlocks`).
+    options : CollectionOptions, optional
+        Patch sizing, movers' speed, slow-time filter, block size, analysis options.
+    region_m : (4,) array_like, optional
+        ``(x0, y0, x1, y1)`` (m); default the data's unambiguous scene.
+    plan : PatchPlan, optional
+        A plan already made by :func:`plan_patches` (then ``region_m`` is ignored).
+    scheduler, n_workers, processes
+        Where the patches run (module notes).
+    memory_mb : float
+        Most memory (MiB) for the traces of the patches extracted in one pass.
+    progress : callable, optional
+        ``progress(stage, done, total)``.
+
+    Returns
+    -------
+    CollectionResult
+    """
+    opts = options or CollectionOptions()
+    src = TracesBlocks(source) if isinstance(source, Traces) else source
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    plan = plan if plan is not None else plan_patches(src, opts, region_m=region_m)
+    timings["plan"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    results: dict[int, PatchResult] = {}
+    single_result: AnalysisResult | None = None
+    if plan.single:
+        traces = src.traces if isinstance(src, TracesBlocks) else _read_all(src, opts.block_pulses)
+        slim, single_result = analyze_patch(traces, plan.patches[0], opts.analysis, single=True)
+        results[0] = slim
+        report(progress, "patches", 1, 1)
+    else:
+        for r in _run(src, plan, opts, scheduler, n_workers, processes, memory_mb, progress):
+            results[r.index] = r
+    timings["patches"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    merged = _merge(src, plan, opts, [results[k] for k in sorted(results)])
+    timings["merge"] = time.perf_counter() - t2
+    timings["total"] = time.perf_counter() - t0
+    return dataclasses.replace(merged, timings_s=timings, single_result=single_result)
+
+
+def _read_all(src: PulseBlocks, block_pulses: int) -> Traces:
+    data = np.empty((src.n_pulses, src.radar.n_samples), np.complex128)
+    for start, stop, block in src.blocks(block_pulses):
+        data[start:stop] = block
+    return Traces(
+        data=data,
+        trajectory=src.trajectory,
+        radar=src.radar,
+        reference_point_m=src.reference_point_m,
+        metadata=dict(src.metadata),
+    )
+
+
+def _run(
+    src: PulseBlocks,
+    plan: PatchPlan,
+    opts: CollectionOptions,
+    scheduler: str | Any | None,
+    n_workers: int | None,
+    processes: bool,
+    memory_mb: float,
+    progress: ProgressCallback | None,
+) -> Iterator[PatchResult]:
+    """Extract the patches group by group and analyse them; yield as they complete."""
+    total = len(plan.patches)
+    done = 0
+    if scheduler is None and n_workers == 0:
+        for group in _groups(plan, memory_mb):
+            for patch, traces in zip(
+                group, extract_patches(src, group, block_pulses=opts.block_pulses), strict=True
+            ):
+                yield analyze_patch(traces, patch, opts.analysis)[0]
+                done += 1
+                report(progress, "patches", done, total)
+        return
+    from distributed import Client, LocalCluster, as_completed
+
+    cores = os.cpu_count() or 1
+    with ExitStack() as stack:
+        if scheduler is None:
+            workers = cores if n_workers is None else int(n_workers)
+            if workers < 1:
+                raise ValueError(f"n_workers must be >= 0, got {n_workers!r}")
+            cluster = stack.enter_context(
+                LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=processes,
+                    dashboard_address=None,
+                    silence_logs=logging.ERROR,
+                    **({"host": "127.0.0.1"} if processes else {}),
+                )
+            )
+            client = stack.enter_context(Client(cluster))
+            threads: int | None = max(1, cores // workers)
+        elif isinstance(scheduler, str):
+            client = stack.enter_context(Client(scheduler))
+            threads = None
+        else:
+            client = scheduler
+            threads = None
+        log.info("patches on %s", client)
+        pending = as_completed()
+        futures = []
+        try:
+            for group in _groups(plan, memory_mb):
+                traces = extract_patches(src, group, block_pulses=opts.block_pulses)
+                for patch, tr in zip(group, traces, strict=True):
+                    f = client.submit(
+                        _task,
+                        tr,
+                        patch,
+                        opts.analysis,
+                        False,
+                        threads,
+                        pure=False,
+                        key=f"sarmotion-patch-{patch.index}-{id(plan)}",
+                    )
+                    futures.append(f)
+                    pending.add(f)
+                del traces
+                for f in _ready(pending):
+                    done += 1
+                    report(progress, "patches", done, total)
+                    yield f.result()
+            for f in pending:
+                done += 1
+                report(progress, "patches", done, total)
+                yield f.result()
+        finally:
+            client.cancel([f for f in futures if not f.done()])
+
+
+def _ready(pending: Any) -> list[Any]:
+    """The futures of ``pending`` already finished (without waiting)."""
+    return list(pending.next_batch(block=False)) if pending.has_ready() else []
+
+
+def _merge(
+    src: PulseBlocks, plan: PatchPlan, opts: CollectionOptions, results: list[PatchResult]
+) -> CollectionResult:
+    traj = src.trajectory
+    geom = look_geometry(traj, src.reference_point_m)
+    b = geom.ground_m_o
+    e_r = b / np.linalg.norm(b)
+    slant = src.radar.range_resolution_m
+    range_cell = slant / math.cos(geom.elevation_rad)
+    cross_cell = src.radar.wavelength_m * geom.range_m / (2.0 * traj.aperture_length_m)
+    analysed = _analysed(src, opts.analysis.sub_aperture_deg)
+    movers = merge_movers([m for r in results for m in r.movers], analysed, slant)
+    stationary = merge_stationary(
+        [t for r in results for t in r.stationary],
+        range_direction=e_r,
+        range_cell_m=range_cell,
+        cross_cell_m=cross_cell,
+    )
+    cap = opts.analysis.max_stationary * len(plan.patches)
+    dropped = max(0, len(stationary) - cap)
+    spacing = opts.analysis.spacing_m
+    x0, y0, x1, y1 = plan.region_m
+    if plan.single:
+        im = results[0].image
+        x0, x1, y0, y1 = im.x_m[0], im.x_m[-1] + spacing, im.y_m[0], im.y_m[-1] + spacing
+    spacing = max(spacing, max(x1 - x0, y1 - y0) / MOSAIC_MAX_PIXELS)
+    image, extent = mosaic([r.image for r in results], (x0, y0, x1, y1), spacing)
+    return CollectionResult(
+        plan=plan,
+        patches=tuple(results),
+        movers=tuple((m, tuple(p)) for m, p in movers),
+        stationary=tuple(stationary[:cap]),
+        stationary_dropped=dropped,
+        mosaic=image,
+        mosaic_extent_m=extent,
+        options=opts,
+    )
+
+
+def _analysed(src: PulseBlocks, sub_aperture_deg: float) -> Trajectory:
+    """The analysed pulses (original slow times: ``s = 0`` stays the aperture centre)."""
+
+    sl = _analysed_pulses(src, sub_aperture_deg)
+    traj = src.trajectory
+    return Trajectory(positions_m=traj.positions_m[sl], slow_times_s=traj.slow_times_s[sl])
