@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -16,6 +17,7 @@ from ..pipeline import analyze as run_analysis
 from ..report.html import write_report
 from ..separation import SeparationOptions
 from .autofocus import PGA_ITERATIONS, autofocus_options, read_focused
+from .collection import run_collection
 from .common import (
     InputError,
     Progress,
@@ -82,8 +84,11 @@ def run_analyze(
     lenient: bool = False,
     force: bool = False,
     sicd: bool = False,
+    read: tuple[Any, Any, Any] | None = None,
 ) -> None:
     """Analyse ``inputs`` and write ``out``/results.json, report.html and its figures.
+
+    ``read``: the inputs' ``(traces, simulation, autofocus result)`` when already read.
 
     With ``sicd``, also the stationary image as ``stationary.nitf`` and each mover's
     compensated image as ``mover-K.nitf`` (SICD, :func:`~sarmotion.io.sicd.write_sicd`).
@@ -94,15 +99,18 @@ def run_analyze(
     check_out(out, force=force, names=OUTPUTS, patterns=("mover-*.nitf",) if sicd else ())
     if autofocus is True:
         autofocus = "gotcha"
-    traces, sim, focus = read_focused(
-        inputs,
-        autofocus=autofocus or None,
-        pga_iterations=pga_iterations,
-        speed_mps=speed_mps,
-        snr_db=snr_db,
-        seed=seed,
-        lenient=lenient,
-    )
+    if read is not None:
+        traces, sim, focus = read
+    else:
+        traces, sim, focus = read_focused(
+            inputs,
+            autofocus=autofocus or None,
+            pga_iterations=pga_iterations,
+            speed_mps=speed_mps,
+            snr_db=snr_db,
+            seed=seed,
+            lenient=lenient,
+        )
     with Progress(enabled=progress) as bar:
         result = run_analysis(traces, options, progress=bar)
     truth = compare_with_truth(result, sim.scene) if sim is not None else None
@@ -224,6 +232,42 @@ def _write_sicd_images(result, stage: Path) -> None:
     help="Also write the stationary image and each mover's image as SICD files "
     "(OUT/stationary.nitf, OUT/mover-K.nitf).",
 )
+@click.option(
+    "--region",
+    type=float,
+    nargs=4,
+    default=None,
+    metavar="X0 Y0 X1 Y1",
+    help="Analyse this part of the scene (m); default the data's whole unambiguous scene. "
+    "A scene larger than one patch is cut into overlapping patches.",
+)
+@click.option(
+    "--patch-size",
+    "patch_size_m",
+    type=float,
+    default=None,
+    help="Side of each patch's core (m); default from the data's resolution and aperture.",
+)
+@click.option(
+    "--max-speed",
+    "max_speed_mps",
+    type=float,
+    default=15.0,
+    show_default=True,
+    help="Patches: largest ground speed of a mover (m/s) their margins are sized for.",
+)
+@click.option(
+    "--scheduler",
+    default=None,
+    help="Patches: address of a Dask scheduler (tcp://host:8786); default a local cluster.",
+)
+@click.option(
+    "--workers",
+    "n_workers",
+    type=int,
+    default=None,
+    help="Patches: local Dask workers (default one per core; 0: no Dask).",
+)
 @noise_options
 @click.pass_context
 def analyze(
@@ -244,18 +288,43 @@ def analyze(
     autofocus: str | None,
     pga_iterations: int,
     sicd: bool,
+    region: tuple[float, float, float, float] | None,
+    patch_size_m: float | None,
+    max_speed_mps: float,
+    scheduler: str | None,
+    n_workers: int | None,
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
     INPUTS: a built-in scene name or scene .toml (simulated), a native traces .h5 file,
     or GOTCHA .mat files. Writes OUT/results.json (schema sarmotion.results/1),
-    OUT/report.html (self-contained) and the report's figures as PNG.
+    OUT/report.html (self-contained) and the report's figures as PNG. A scene larger
+    than one patch (or any --region) is cut into patches, analysed on Dask and merged:
+    OUT/results.json (schema sarmotion.collection/1), report.html and mosaic.png.
     """
     options = _options(method, max_movers, size_m, trajectory, sub_aperture_deg, false_alarm_rate)
-    run_analyze(
+
+    def single(read: tuple[Any, Any, Any]) -> None:
+        run_analyze(
+            inputs,
+            out,
+            options,
+            progress=ctx.obj["progress"],
+            force=force,
+            sicd=sicd,
+            read=read,
+        )
+
+    run_collection(
         inputs,
         out,
         options,
+        region=region,
+        patch_size_m=patch_size_m,
+        max_speed_mps=max_speed_mps,
+        scheduler=scheduler,
+        n_workers=n_workers,
+        single=single,
         speed_mps=speed_mps,
         snr_db=snr_db,
         seed=seed,
@@ -264,7 +333,6 @@ def analyze(
         pga_iterations=pga_iterations,
         lenient=lenient,
         force=force,
-        sicd=sicd,
     )
 
 

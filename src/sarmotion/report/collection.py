@@ -1,0 +1,107 @@
+"""The whole scene of a collection: the stationary mosaic, the patches and the movers.
+
+Plotting layer. :func:`write_collection_report` saves ``mosaic.png`` (the stationary
+mosaic in dB, every patch's core outlined, each mover at its kept fit with its
+cross-range family drawn as a line clipped to the region) and a self-contained
+``report.html`` embedding it, with the movers' and patches' tables.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..collection import CollectionResult
+
+__all__ = ["mosaic_figure", "write_collection_report"]
+
+
+def _clip_line(p: np.ndarray, d: np.ndarray, box: tuple[float, float, float, float]):
+    """Ends of the line ``p + t d`` inside ``box = (x0, y0, x1, y1)``, or None."""
+    lo, hi = -np.inf, np.inf
+    x0, y0, x1, y1 = box
+    for k, (a, b) in enumerate(((x0, x1), (y0, y1))):
+        if abs(d[k]) < 1e-15:
+            if not a <= p[k] <= b:
+                return None
+            continue
+        t1, t2 = (a - p[k]) / d[k], (b - p[k]) / d[k]
+        lo, hi = max(lo, min(t1, t2)), min(hi, max(t1, t2))
+    if lo > hi:
+        return None
+    return p + lo * d, p + hi * d
+
+
+def mosaic_figure(result: CollectionResult) -> Figure:
+    """Mosaic (dB re its peak), patch cores, movers and their families clipped to the region."""
+    fig = Figure(figsize=(8, 8))
+    ax = fig.add_subplot(1, 1, 1)
+    img = result.mosaic
+    peak = float(img.max()) if img.size else 0.0
+    db = 20 * np.log10(np.maximum(img, 1e-12 * max(peak, 1e-300)) / max(peak, 1e-300))
+    ax.imshow(db, origin="lower", extent=result.mosaic_extent_m, cmap="gray", vmin=-40, vmax=0)
+    for p in result.plan.patches:
+        x0, y0, x1, y1 = p.core_m
+        ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:cyan", lw=0.6)
+        ax.text(0.5 * (x0 + x1), 0.5 * (y0 + y1), str(p.index), color="tab:cyan", fontsize=7,
+                ha="center", va="center")
+    region = result.plan.region_m
+    for k, (m, _) in enumerate(result.movers):
+        fam = np.asarray(m.document["cross_range_family"]["position_per_m"], float)
+        pos = np.asarray(m.position_m[:2], float)
+        ends = _clip_line(pos, fam, region) if np.linalg.norm(fam) > 0 else None
+        if ends is not None:
+            ax.plot([ends[0][0], ends[1][0]], [ends[0][1], ends[1][1]], color="tab:red", lw=0.8)
+        ax.plot(*pos, "o", mfc="none", color="tab:red")
+        ax.text(pos[0], pos[1], f" {k + 1}", color="tab:red", fontsize=9)
+    ax.set_xlim(region[0], region[2])
+    ax.set_ylim(region[1], region[3])
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title("stationary mosaic (dB), patch cores, movers and their cross-range families")
+    fig.tight_layout()
+    return fig
+
+
+def write_collection_report(
+    result: CollectionResult, directory: Path, *, document: dict[str, Any], title: str
+) -> None:
+    """Write ``mosaic.png`` and ``report.html`` into ``directory``."""
+    directory = Path(directory)
+    buf = io.BytesIO()
+    mosaic_figure(result).savefig(buf, format="png", dpi=110)
+    png = buf.getvalue()
+    (directory / "mosaic.png").write_bytes(png)
+    rows = []
+    for k, m in enumerate(document["movers"]):
+        x, y = m["position_m"]
+        ux, uy = m["velocity_mps"]
+        rows.append(
+            f"<tr><td>{k + 1}</td><td>({x:.2f}, {y:.2f})</td><td>({ux:.2f}, {uy:.2f})</td>"
+            f"<td>{m['range_speed_mps']:.2f}</td><td>{m['patch']}</td>"
+            f"<td>{', '.join(str(p) for p in m['patches'])}</td></tr>"
+        )
+    patches = [
+        f"<tr><td>{p['index']}</td><td>{', '.join(f'{v:.1f}' for v in p['core_m'])}</td>"
+        f"<td>{p['n_pulses']} x {p['n_samples']}</td><td>{p['decimation']}</td></tr>"
+        for p in document["plan"]["patches"]
+    ]
+    page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
+<style>body{{font-family:sans-serif;margin:2em}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
+</head><body><h1>{html.escape(title)}</h1>
+<p>{len(document["plan"]["patches"])} patch(es) of {document["plan"]["patch_size_m"]:.1f} m;
+{len(document["movers"])} mover(s); {len(document["stationary"])} stationary target(s) listed,
+{document["stationary_dropped"]} beyond the cap not listed.</p>
+<img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="mosaic">
+<h2>Movers</h2><table><tr><th>#</th><th>position (m)</th><th>velocity (m/s)</th>
+<th>range speed (m/s)</th><th>patch kept</th><th>found in patches</th></tr>{''.join(rows)}</table>
+<h2>Patches</h2><table><tr><th>patch</th><th>core x0, y0, x1, y1 (m)</th><th>pulses x samples</th>
+<th>decimation</th></tr>{''.join(patches)}</table></body></html>
+"""
+    (directory / "report.html").write_text(page)
