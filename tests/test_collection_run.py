@@ -1,0 +1,142 @@
+"""A two-patch collection end to end: a mover on the border, Dask workers, the command line."""
+
+from __future__ import annotations
+
+import json
+import logging
+
+import numpy as np
+import pytest
+
+from sarmotion.cli.main import EXIT_BAD_INPUT, run
+from sarmotion.collection import CollectionOptions, analyze_collection, plan_patches
+from sarmotion.core import Radar, Traces, Trajectory, range_speed, to_fast_time
+from sarmotion.core.blocks import TracesBlocks
+from sarmotion.imaging import resolution
+from sarmotion.motion import family_member
+from sarmotion.pipeline import AnalysisOptions
+from sarmotion.simulation import PointTarget, simulate_phase_history
+
+REGION = (-60.0, -25.0, 60.0, 25.0)
+OPTIONS = CollectionOptions(
+    analysis=AnalysisOptions(trajectory=False), patch_size_m=60.0, max_speed_mps=15.0
+)
+#: Stationary points, both cores; and a mover 2 m from the border x = 0 between them.
+STATIONARY = [(-40.0, -10.0), (-25.0, 12.0), (-8.0, -18.0), (20.0, 8.0), (35.0, -12.0), (48.0, 15.0)]
+MOVER = PointTarget(position_m=(2.0, 4.0), velocity_mps=(-6.0, 7.0), reflectivity=0.8j)
+
+
+@pytest.fixture(scope="module")
+def scene() -> Traces:
+    traj, radar = Trajectory.circular(), Radar()
+    targets = [PointTarget(position_m=p) for p in STATIONARY] + [MOVER]
+    ph = simulate_phase_history(targets, traj, radar, (0.0, 0.0, 0.0))
+    return Traces(
+        data=to_fast_time(ph),
+        trajectory=traj,
+        radar=radar,
+        reference_point_m=(0.0, 0.0, 0.0),
+        metadata={"source": "simulation", "scene": "two patches"},
+    )
+
+
+@pytest.fixture(scope="module")
+def default_result(scene):
+    return analyze_collection(scene, OPTIONS, region_m=REGION)
+
+
+def _family_error(traces: Traces, position, velocity, truth: PointTarget):
+    """(range position (m), range speed (m/s)) error with the truth slid along its family."""
+    cells = resolution(traces)
+    dy = float((np.asarray(position)[:2] - truth.position_m[:2]) @ cells.cross_range_direction)
+    p, v, _ = family_member(traces, truth.position_m, truth.velocity_mps, dy)
+    geom = traces.geometry
+    return (
+        float((np.asarray(position)[:2] - p[:2]) @ cells.range_direction),
+        range_speed(velocity, geom) - range_speed(v, geom),
+    )
+
+
+def test_two_patches_find_the_border_mover_once_and_every_stationary_point(scene, default_result):
+    res = default_result
+    assert len(res.plan.patches) == 2
+    assert [p.contains(MOVER.position_m) for p in res.plan.patches] == [False, True]
+    assert len(res.movers) == 1, [m.position_m for m, _ in res.movers]
+    (m, patches) = res.movers[0]
+    dx, du = _family_error(scene, m.position_m, m.velocity_mps, MOVER)
+    cells = resolution(scene)
+    # within the family-rule accuracy: a range cell, half a range-speed resolution
+    assert abs(dx) <= cells.ground_range_m
+    assert abs(du) <= 0.5 * scene.radar.range_resolution_m / (0.5 * np.ptp(scene.slow_times_s))
+    found = np.array([t.position_m for t in res.stationary])
+    cell = max(cells.ground_range_m, cells.cross_range_m)
+    for p in STATIONARY:
+        assert np.min(np.hypot(*(found - p).T)) <= cell, p
+    assert res.stationary_dropped == 0
+    assert res.mosaic.shape[0] > 0 and np.isfinite(res.mosaic).all()
+
+
+def test_distributed_process_workers_give_the_same_answers(scene, default_result):
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+        host="127.0.0.1",
+    ) as cluster, Client(cluster) as client:
+        res = analyze_collection(scene, OPTIONS, region_m=REGION, scheduler=client)
+    assert len(res.movers) == len(default_result.movers)
+    for (a, pa), (b, pb) in zip(res.movers, default_result.movers, strict=True):
+        assert pa == pb
+        assert np.allclose(a.position_m, b.position_m, atol=1e-6)
+        assert np.allclose(a.velocity_mps, b.velocity_mps, atol=1e-6)
+    assert np.allclose(
+        [t.position_m for t in res.stationary],
+        [t.position_m for t in default_result.stationary],
+        atol=1e-6,
+    )
+
+
+def test_command_line_collection_outputs(scene, tmp_path, capsys):
+    from sarmotion.io import save_traces
+
+    src = tmp_path / "two.h5"
+    save_traces(src, scene)
+    out = tmp_path / "out"
+    code = run(
+        ["analyze", str(src), "--out", str(out), "--region", *map(str, REGION),
+         "--patch-size", "60", "--workers", "0", "--no-trajectory"]
+    )
+    assert code == 0, capsys.readouterr().err
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["schema"] == "sarmotion.collection/1"
+    assert len(doc["plan"]["patches"]) == 2
+    assert all("patch" in m and m["patch"] in m["patches"] for m in doc["movers"])
+    assert doc["stationary_dropped"] == 0
+    assert (out / "report.html").exists() and (out / "mosaic.png").exists()
+
+
+@pytest.mark.parametrize(
+    "extra, pattern",
+    [
+        (["--region", "500", "0", "600", "10"], "--region"),
+        (["--patch-size", "0.2"], "resolution cell"),
+        (["--region", "10", "0", "0", "10"], "X0 < X1"),
+        (["--workers", "-1"], "--workers"),
+    ],
+)
+def test_bad_collection_input_is_one_line_and_exit_2(tmp_path, capsys, extra, pattern):
+    out = tmp_path / "out"
+    code = run(["analyze", "scene1", "--out", str(out), *extra])
+    err = capsys.readouterr().err.strip()
+    assert code == EXIT_BAD_INPUT
+    assert len(err.splitlines()) == 1 and pattern in err, err
+    assert not out.exists()
+
+
+def test_plan_of_the_test_scene_is_two_patches(scene):
+    plan = plan_patches(TracesBlocks(scene), OPTIONS, region_m=REGION)
+    assert [p.core_m for p in plan.patches] == [(-60.0, -25.0, 0.0, 25.0), (0.0, -25.0, 60.0, 25.0)]
