@@ -29,7 +29,8 @@ Everything is derived from the data (:func:`plan_patches`):
   the data's own pulse rate, where its image lands in cross range) falls on the core
   keeps its whole spectrum. The decimation ``q = floor(PRF / ((1 + guard) 2 f_pass))``
   (``guard = 0.3``, the sampling margin of the collections the analysis was validated
-  on); ``q = 1`` means no filter (the band is the data's).
+  on); the filter's stop band starts at ``(1 + 2 guard) f_pass``, and there is no filter
+  when that is above the Nyquist rate (the band is the data's).
 
 The patches' *extents* (core plus those margins) overlap by twice the margins, which
 exceed the largest displacement in range and the largest Doppler spread of a mover in
@@ -152,7 +153,7 @@ class Patch:
         Half-width ``f_pass`` of its slow-time band (Hz).
     taps : (n_taps,) ndarray
         Slow-time FIR filter (odd length, linear phase, unit gain at 0 Hz; ``[1]`` when
-        ``q = 1``).
+        the patch's band is the data's).
     pulses : (n_out,) ndarray of int
         The input pulses its output pulses sit on (each with the filter's full support).
     """
@@ -492,21 +493,23 @@ def _window_samples(half_s: float, dt: float, n_max: int) -> int:
 
 
 def _design(q: int, passband_hz: float, prf_hz: float, stopband_db: float) -> NDArray[np.float64]:
-    """Kaiser-window low-pass FIR for decimation by ``q`` (``[1.0]`` for ``q = 1``).
+    """Kaiser-window low-pass FIR of pass band ``|f| <= f_pass``, stop band ``|f| >= f_stop``.
 
-    Pass band ``|f| <= passband_hz``; stop band ``|f| >= prf/q - passband_hz``: what lies
-    between aliases outside the pass band after decimation. Ripple ``10^(-A/20)`` in both
-    bands (Kaiser's design formulae, :func:`scipy.signal.kaiserord`).
+    ``f_stop = (1 + 2 guard) f_pass``: for a decimation ``q`` the plan has ``prf / q >=
+    2 (1 + guard) f_pass``, so what lies between the bands aliases outside the pass band;
+    with ``q = 1`` the filter still removes the echoes of other patches' cores (and the
+    movers there) when ``f_stop`` is below the Nyquist rate ``prf / 2``; else ``[1.0]``
+    (the band is the data's). Ripple ``10^(-A/20)`` in both bands (Kaiser's design
+    formulae, :func:`scipy.signal.kaiserord`).
     """
-    if q == 1:
+    stop = (1.0 + 2.0 * BAND_GUARD) * passband_hz
+    if stop >= 0.5 * prf_hz:
         return np.ones(1)
     from scipy.signal import firwin, kaiserord
 
-    out_rate = prf_hz / q
-    width = out_rate - 2.0 * passband_hz
-    n_taps, beta = kaiserord(stopband_db, width / (0.5 * prf_hz))
+    n_taps, beta = kaiserord(stopband_db, (stop - passband_hz) / (0.5 * prf_hz))
     n_taps += 1 - n_taps % 2  # odd: a whole-sample delay
-    return firwin(n_taps, 0.5 * out_rate, window=("kaiser", beta), fs=prf_hz)
+    return firwin(n_taps, 0.5 * (stop + passband_hz), window=("kaiser", beta), fs=prf_hz)
 
 
 def _output_pulses(n_pulses: int, q: int, n_taps: int) -> NDArray[np.int64]:

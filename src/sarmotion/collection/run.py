@@ -113,8 +113,8 @@ class CollectionResult:
     movers : tuple of (MoverRecord, tuple of int)
         One per mover: the best-determined report and every patch that reported it.
     stationary : tuple of StationaryRecord
-        De-duplicated stationary targets, brightest first, at most ``max_stationary``
-        per patch in all.
+        De-duplicated stationary targets within ``stationary_threshold_db`` of the
+        brightest, brightest first, at most ``max_stationary`` per patch in all.
     stationary_dropped : int
         Stationary targets beyond that cap, not listed.
     mosaic : (ny, nx) ndarray
@@ -433,6 +433,12 @@ def _merge(
         range_cell_m=range_cell,
         cross_cell_m=cross_cell,
     )
+    # today's listing rule on the whole scene: within stationary_threshold_db of the
+    # brightest target of the mosaic (each patch applied it to its own brightest)
+    floor = max((t.level for t in stationary), default=0.0) * 10.0 ** (
+        opts.analysis.stationary_threshold_db / 20.0
+    )
+    stationary = [t for t in stationary if t.level >= floor]
     cap = opts.analysis.max_stationary * len(plan.patches)
     dropped = max(0, len(stationary) - cap)
     spacing = opts.analysis.spacing_m
