@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -25,6 +26,15 @@ __all__ = ["COLLECTION_OUTPUTS", "run_collection"]
 
 #: What the collection path writes into --out.
 COLLECTION_OUTPUTS = ("results.json", "report.html", "mosaic.png")
+
+
+def _quiet_dask() -> None:
+    """Dask's own scheduler and worker messages are not the analysis's: warnings only."""
+    import distributed  # noqa: F401  (configures its loggers on import)
+
+    for name in list(logging.root.manager.loggerDict):
+        if name == "distributed" or name.startswith("distributed."):
+            logging.getLogger(name).setLevel(logging.WARNING)
 
 
 def run_collection(
@@ -68,6 +78,7 @@ def run_collection(
         single(traces, sim)
         return
     check_out(out, force=force, names=COLLECTION_OUTPUTS)
+    _quiet_dask()
     with Progress(enabled=progress) as bar:
         result = analyze_collection(
             source, copts, plan=plan, scheduler=scheduler, n_workers=n_workers, progress=bar
