@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing as mp
+import os
 import resource
 import time
 from pathlib import Path
@@ -42,7 +43,7 @@ GUARD = 1.3
 def make_scene(side_m: float, seed: int):
     """(traces, stationary (n, 2), movers list of PointTarget) of the benchmark scene."""
     from sarmotion.collection import unambiguous_scene
-    from sarmotion.core import Radar, Trajectory, Traces, to_fast_time
+    from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
     from sarmotion.core.blocks import TracesBlocks
     from sarmotion.simulation import PointTarget, radar_with_range_window, simulate_phase_history
 
@@ -142,9 +143,7 @@ def run_whole(side_m: float, seed: int) -> dict:
     result = analyze(traces)
     wall = time.perf_counter() - t0
     fits = [(m.estimate.position_m, m.velocity_mps) for m in result.movers]
-    acc, false, found = score(
-        traces, fits, movers, [s.position_m for s in result.stationary], stat
-    )
+    acc, false, found = score(traces, fits, movers, [s.position_m for s in result.stationary], stat)
     return {
         "wall_s": wall,
         "rss_gb": _rss_gb(),
@@ -163,9 +162,7 @@ def run_patches(side_m: float, seed: int, workers: int | None) -> dict:
     result = analyze_collection(traces, n_workers=workers)
     wall = time.perf_counter() - t0
     fits = [(m.position_m, m.velocity_mps) for m, _ in result.movers]
-    acc, false, found = score(
-        traces, fits, movers, [s.position_m for s in result.stationary], stat
-    )
+    acc, false, found = score(traces, fits, movers, [s.position_m for s in result.stationary], stat)
     return {
         "wall_s": wall,
         "rss_gb": _rss_gb(),
@@ -191,6 +188,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=2027)
     parser.add_argument("--workers", type=int, default=None)
     parser.add_argument("--whole-max", type=float, default=400.0)
+    parser.add_argument(
+        "--methods", nargs="+", choices=["whole", "patches"], default=["whole", "patches"]
+    )
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     rows = []
@@ -203,11 +203,13 @@ def main() -> None:
             "n_stationary": len(stat),
         }
         del traces
-        if side <= args.whole_max:
+        if "whole" in args.methods and side <= args.whole_max:
             row["whole"] = _in_process(run_whole, side, args.seed)
-        row["patches"] = _in_process(run_patches, side, args.seed, args.workers)
-        row["patches"]["km2_per_hour"] = (side / 1000.0) ** 2 / row["patches"]["wall_s"] * 3600
+        if "patches" in args.methods:
+            row["patches"] = _in_process(run_patches, side, args.seed, args.workers)
+            row["patches"]["km2_per_hour"] = (side / 1000.0) ** 2 / row["patches"]["wall_s"] * 3600
         rows.append(row)
+        row["load_average"] = list(os.getloadavg())
         print(json.dumps(row), flush=True)
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)

@@ -115,8 +115,12 @@ def test_a_patch_rejects_stationary_echoes_outside_its_band():
     opts = CollectionOptions(patch_size_m=40.0, max_speed_mps=10.0)
     plan = plan_patches(src, opts)
     patch = next(p for p in plan.patches if p.contains((0.0, 0.0)))
-    far = PointTarget(position_m=(patch.centre_m[0], patch.centre_m[1] + 0.45 * np.ptp(
-        unambiguous_scene(src)[:, 1])))
+    far = PointTarget(
+        position_m=(
+            patch.centre_m[0],
+            patch.centre_m[1] + 0.45 * np.ptp(unambiguous_scene(src)[:, 1]),
+        )
+    )
     (got,) = extract_patches(TracesBlocks(_traces([far], radar, traj)), [patch])
     assert np.max(np.abs(got.data)) <= 2 * 10 ** (-opts.stopband_db / 20)
 
@@ -236,7 +240,7 @@ def test_stationary_duplicates_across_a_border_merge():
         StationaryRecord(patch=1, position_m=(50.1, 3.1), level=0.9),
         StationaryRecord(patch=1, position_m=(50.1, 9.0), level=0.5),
     ]
-    kept = merge_stationary(t, range_direction=np.array([1.0, 0.0]), range_cell_m=0.33,
-                            cross_cell_m=1.3)
+    kept = merge_stationary(
+        t, range_direction=np.array([1.0, 0.0]), range_cell_m=0.33, cross_cell_m=1.3
+    )
     assert [k.position_m for k in kept] == [(49.9, 3.0), (50.1, 9.0)]
-

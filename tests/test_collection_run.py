@@ -22,7 +22,14 @@ OPTIONS = CollectionOptions(
     analysis=AnalysisOptions(trajectory=False), patch_size_m=60.0, max_speed_mps=15.0
 )
 #: Stationary points, both cores; and a mover 2 m from the border x = 0 between them.
-STATIONARY = [(-40.0, -10.0), (-25.0, 12.0), (-8.0, -18.0), (20.0, 8.0), (35.0, -12.0), (48.0, 15.0)]
+STATIONARY = [
+    (-40.0, -10.0),
+    (-25.0, 12.0),
+    (-8.0, -18.0),
+    (20.0, 8.0),
+    (35.0, -12.0),
+    (48.0, 15.0),
+]
 MOVER = PointTarget(position_m=(2.0, 4.0), velocity_mps=(-6.0, 7.0), reflectivity=0.8j)
 
 
@@ -79,14 +86,17 @@ def test_two_patches_find_the_border_mover_once_and_every_stationary_point(scene
 def test_distributed_process_workers_give_the_same_answers(scene, default_result):
     from distributed import Client, LocalCluster
 
-    with LocalCluster(
-        n_workers=2,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-        host="127.0.0.1",
-    ) as cluster, Client(cluster) as client:
+    with (
+        LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+            host="127.0.0.1",
+        ) as cluster,
+        Client(cluster) as client,
+    ):
         res = analyze_collection(scene, OPTIONS, region_m=REGION, scheduler=client)
     assert len(res.movers) == len(default_result.movers)
     for (a, pa), (b, pb) in zip(res.movers, default_result.movers, strict=True):
@@ -107,8 +117,19 @@ def test_command_line_collection_outputs(scene, tmp_path, capsys):
     save_traces(src, scene)
     out = tmp_path / "out"
     code = run(
-        ["analyze", str(src), "--out", str(out), "--region", *map(str, REGION),
-         "--patch-size", "60", "--workers", "0", "--no-trajectory"]
+        [
+            "analyze",
+            str(src),
+            "--out",
+            str(out),
+            "--region",
+            *map(str, REGION),
+            "--patch-size",
+            "60",
+            "--workers",
+            "0",
+            "--no-trajectory",
+        ]
     )
     assert code == 0, capsys.readouterr().err
     doc = json.loads((out / "results.json").read_text())

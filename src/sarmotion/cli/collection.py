@@ -65,7 +65,11 @@ def run_collection(
         copts = CollectionOptions(analysis=options, patch_size_m=patch_size_m)
     with as_flags(speed_mps="--speed", snr_db="--snr-db"):
         traces, sim = read_inputs(
-            inputs, speed_mps=speed_mps, snr_db=snr_db, seed=seed, autofocus=autofocus,
+            inputs,
+            speed_mps=speed_mps,
+            snr_db=snr_db,
+            seed=seed,
+            autofocus=autofocus,
             lenient=lenient,
         )
     source = TracesBlocks(traces)
@@ -96,7 +100,11 @@ def run_collection(
     click.echo(
         f"wrote {out}/results.json, report.html and mosaic.png: {len(plan.patches)} patch(es), "
         f"{len(result.movers)} mover(s), {len(result.stationary)} stationary target(s)"
-        + (f" ({result.stationary_dropped} beyond the cap not listed)" if result.stationary_dropped else "")
+        + (
+            f" ({result.stationary_dropped} beyond the cap not listed)"
+            if result.stationary_dropped
+            else ""
+        )
         + f", {result.timings_s['total']:.1f} s"
     )
     for k, m in enumerate(doc["movers"]):

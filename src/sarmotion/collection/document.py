@@ -68,8 +68,6 @@ def collection_document(result: CollectionResult, source: PulseBlocks) -> dict[s
         "timings_s": {k: float(v) for k, v in result.timings_s.items()},
         "options": {**result.options.to_dict(), "analysis": result.options.analysis.to_dict()},
         "source": {
-            k: v
-            for k, v in source.metadata.items()
-            if isinstance(v, str | int | float | bool)
+            k: v for k, v in source.metadata.items() if isinstance(v, str | int | float | bool)
         },
     }

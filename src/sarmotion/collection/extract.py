@@ -71,9 +71,7 @@ class PatchBuilder:
         self._lo = n // 2 - patch.n_samples // 2
         self._hi = self._lo + patch.n_samples
         pos = source.trajectory.positions_m
-        self._delays = travel_time(pos, patch.centre_m) - travel_time(
-            pos, source.reference_point_m
-        )
+        self._delays = travel_time(pos, patch.centre_m) - travel_time(pos, source.reference_point_m)
         self._freqs = source.radar.frequencies_hz
         self._half = patch.taps.size // 2
         self._rows: NDArray[np.complex64] = np.zeros((0, patch.n_samples), np.complex64)

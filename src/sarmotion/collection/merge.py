@@ -197,8 +197,10 @@ def merge_stationary(
     range_cell_m: float,
     cross_cell_m: float,
 ) -> list[StationaryRecord]:
-    """One record per target: those within a resolution cell in range and cross range
-    merged, the brightest kept; brightest first.
+    """One record per target, brightest first.
+
+    Records within a resolution cell in range and in cross range of a brighter one are
+    the same target (module notes).
 
     Parameters
     ----------

@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import finite, integer, positive
+from .._validation import integer, positive
 from ..core.blocks import PulseBlocks
 from ..core.constants import C
 from ..core.geometry import look_geometry, travel_time
@@ -78,7 +78,7 @@ class RegionError(ValueError):
 
 @dataclass(frozen=True, kw_only=True)
 class CollectionOptions:
-    """Choices of the analysis of a whole collection (:func:`~sarmotion.collection.analyze_collection`).
+    """Choices of the analysis of a whole collection (:func:`~sarmotion.collection.run`).
 
     Attributes
     ----------
@@ -378,9 +378,7 @@ def plan_patches(
         m1 = _migration_per_m(source, e_c, z, analysed)
         size = 2.0 * MIGRATION_CELLS * radar.range_resolution_m / max(m1, 1e-12)
     if size < cell:
-        raise RegionError(
-            f"patch size {size:g} m is smaller than a resolution cell ({cell:.3g} m)"
-        )
+        raise RegionError(f"patch size {size:g} m is smaller than a resolution cell ({cell:.3g} m)")
 
     default_region = region_m is None
     if default_region:
@@ -513,8 +511,10 @@ def _design(q: int, passband_hz: float, prf_hz: float, stopband_db: float) -> ND
 
 
 def _output_pulses(n_pulses: int, q: int, n_taps: int) -> NDArray[np.int64]:
-    """Input pulses of the output pulses: every ``q``-th with the filter's full support,
-    placed symmetrically in the aperture."""
+    """Input pulses of the output pulses: every ``q``-th with the filter's full support.
+
+    They are placed symmetrically in the aperture.
+    """
     half = n_taps // 2
     usable = n_pulses - 2 * half
     if usable <= 0:
@@ -522,11 +522,3 @@ def _output_pulses(n_pulses: int, q: int, n_taps: int) -> NDArray[np.int64]:
     count = (usable - 1) // q + 1
     first = half + (usable - 1 - (count - 1) * q) // 2
     return first + q * np.arange(count, dtype=np.int64)
-
-
-def finite_region(values: ArrayLike) -> tuple[float, float, float, float]:
-    """``(x0, y0, x1, y1)`` as floats, each finite (m)."""
-    v = [finite(x, "region", unit="m") for x in np.asarray(values).reshape(-1)]
-    if len(v) != 4:
-        raise RegionError(f"region must be X0 Y0 X1 Y1 (m), got {len(v)} numbers")
-    return (v[0], v[1], v[2], v[3])

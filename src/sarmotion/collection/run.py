@@ -205,9 +205,7 @@ def analyze_patch(
     gx, gy = img.grid.x_m, img.grid.y_m
     okx = np.ones(gx.size, bool) if single else (gx >= x0) & (gx < x1)
     oky = np.ones(gy.size, bool) if single else (gy >= y0) & (gy < y1)
-    image = PatchImage(
-        x_m=gx[okx], y_m=gy[oky], magnitude=mag[np.ix_(oky, okx)].astype(np.float32)
-    )
+    image = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=mag[np.ix_(oky, okx)].astype(np.float32))
     opts = result.options
     slim = PatchResult(
         index=patch.index,
@@ -466,7 +464,6 @@ def _merge(
 
 def _analysed(src: PulseBlocks, sub_aperture_deg: float) -> Trajectory:
     """The analysed pulses (original slow times: ``s = 0`` stays the aperture centre)."""
-
     sl = _analysed_pulses(src, sub_aperture_deg)
     traj = src.trajectory
     return Trajectory(positions_m=traj.positions_m[sl], slow_times_s=traj.slow_times_s[sl])

@@ -49,8 +49,15 @@ def mosaic_figure(result: CollectionResult) -> Figure:
     for p in result.plan.patches:
         x0, y0, x1, y1 = p.core_m
         ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:cyan", lw=0.6)
-        ax.text(0.5 * (x0 + x1), 0.5 * (y0 + y1), str(p.index), color="tab:cyan", fontsize=7,
-                ha="center", va="center")
+        ax.text(
+            0.5 * (x0 + x1),
+            0.5 * (y0 + y1),
+            str(p.index),
+            color="tab:cyan",
+            fontsize=7,
+            ha="center",
+            va="center",
+        )
     region = result.plan.region_m
     for k, (m, _) in enumerate(result.movers):
         fam = np.asarray(m.document["cross_range_family"]["position_per_m"], float)
@@ -93,15 +100,16 @@ def write_collection_report(
         for p in document["plan"]["patches"]
     ]
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
-<style>body{{font-family:sans-serif;margin:2em}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
+<style>body{{font-family:sans-serif;margin:2em}}
+td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
 </head><body><h1>{html.escape(title)}</h1>
 <p>{len(document["plan"]["patches"])} patch(es) of {document["plan"]["patch_size_m"]:.1f} m;
 {len(document["movers"])} mover(s); {len(document["stationary"])} stationary target(s) listed,
 {document["stationary_dropped"]} beyond the cap not listed.</p>
 <img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="mosaic">
 <h2>Movers</h2><table><tr><th>#</th><th>position (m)</th><th>velocity (m/s)</th>
-<th>range speed (m/s)</th><th>patch kept</th><th>found in patches</th></tr>{''.join(rows)}</table>
+<th>range speed (m/s)</th><th>patch kept</th><th>found in patches</th></tr>{"".join(rows)}</table>
 <h2>Patches</h2><table><tr><th>patch</th><th>core x0, y0, x1, y1 (m)</th><th>pulses x samples</th>
-<th>decimation</th></tr>{''.join(patches)}</table></body></html>
+<th>decimation</th></tr>{"".join(patches)}</table></body></html>
 """
     (directory / "report.html").write_text(page)
