@@ -44,6 +44,7 @@ def run_collection(
     *,
     region: tuple[float, float, float, float] | None,
     patch_size_m: float | None,
+    max_speed_mps: float,
     scheduler: str | None,
     n_workers: int | None,
     single: Any,
@@ -61,8 +62,10 @@ def run_collection(
     """
     if n_workers is not None and n_workers < 0:
         raise InputError(f"--workers must be >= 0, got {n_workers}")
-    with as_flags(patch_size_m="--patch-size"):
-        copts = CollectionOptions(analysis=options, patch_size_m=patch_size_m)
+    with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
+        copts = CollectionOptions(
+            analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
+        )
     with as_flags(speed_mps="--speed", snr_db="--snr-db"):
         traces, sim = read_inputs(
             inputs,

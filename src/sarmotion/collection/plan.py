@@ -87,9 +87,13 @@ class CollectionOptions:
         ``image_size_m`` is set per patch to its core; ``max_stationary`` is per patch.
     patch_size_m : float or None
         Core side ``P`` (m); ``None``: from the data (module notes).
-    max_speed_mps : float or None
-        Largest ground speed of a mover (m/s) the margins are sized for; ``None``: the
-        largest ``|speed|`` of ``analysis.speed_range_mps``.
+    max_speed_mps : float
+        Largest ground speed of a mover (m/s) the patches' margins are sized for.
+        Default 15 m/s (54 km/h, town traffic): a margin is the mover's Doppler spread, which
+        grows with its range speed; at 30 m/s (the analysis's default search bound) a
+        GOTCHA-like patch's band would need most of the pulse rate, leaving no room for the
+        slow-time filter that keeps the other patches' echoes out. A faster mover is still
+        found in the patch where its Doppler centre falls, its spectrum cut by the filter.
     stopband_db : float
         Attenuation of the slow-time filter outside a patch's band (dB, > 0). Default
         60 dB; its pass-band ripple is the same ``10^(-A/20)``.
@@ -99,7 +103,7 @@ class CollectionOptions:
 
     analysis: AnalysisOptions = field(default_factory=AnalysisOptions)
     patch_size_m: float | None = None
-    max_speed_mps: float | None = None
+    max_speed_mps: float = 15.0
     stopband_db: float = 60.0
     block_pulses: int = 256
 
@@ -110,18 +114,14 @@ class CollectionOptions:
             )
         if self.patch_size_m is not None:
             positive(self.patch_size_m, "patch_size_m", unit="m")
-        if self.max_speed_mps is not None:
-            positive(self.max_speed_mps, "max_speed_mps", unit="m/s")
+        positive(self.max_speed_mps, "max_speed_mps", unit="m/s")
         positive(self.stopband_db, "stopband_db", unit="dB")
         integer(self.block_pulses, "block_pulses", minimum=1)
 
     @property
     def speed_mps(self) -> float:
         """The movers' largest ground speed (m/s)."""
-        if self.max_speed_mps is not None:
-            return float(self.max_speed_mps)
-        lo, hi = self.analysis.speed_range_mps
-        return float(max(abs(lo), abs(hi)))
+        return float(self.max_speed_mps)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict of the options."""
