@@ -22,6 +22,11 @@ separate process), throughput (km^2 per hour), movers accurate on their cross-ra
 within 3 ground-range cells and the range speed within 0.5 m/s), false movers (a fit
 matching no true mover), stationary targets found (a listed target within one resolution
 cell of a true one) and listed.
+
+The patches' margins are sized for the scene's movers (``max_speed_mps`` 15 m/s, the
+default). Threads against processes for the local cluster were compared on the
+two-patch scene of ``tests/test_collection_run.py`` cut into 8 patches of 30 m, 2 workers,
+alternated in one run (``--threads-vs-processes``).
 """
 
 from __future__ import annotations

@@ -11,9 +11,10 @@ targets de-duplicated, and the stationary mosaic (:mod:`~sarmotion.collection.me
 Where the tasks run (as for ``track``, :mod:`sarmotion.tracking.scale`):
 
 - ``scheduler=None``: a local ``distributed.LocalCluster`` of ``n_workers`` workers
-  (default one per core), one thread each, threads of this process by default
-  (``processes=True``: separate processes, each compiling numba's kernels again);
-  inside a task numba's and BLAS's pools are limited to the worker's share of the cores;
+  (default one per core), one thread each, threads of this process by default: measured
+  faster than processes (``processes=True``), which each load numba's kernels again and
+  receive their patches' traces pickled (``benchmarks/bench_collection.py`` notes); inside
+  a task numba's and BLAS's pools are limited to the worker's share of the cores;
 - ``scheduler="tcp://host:8786"`` or a ``distributed.Client``: that cluster's workers,
   which need sarmotion importable but not the input file (each task carries its
   patch's traces);
