@@ -182,6 +182,47 @@ def run_patches(side_m: float, seed: int, workers: int | None) -> dict:
     }
 
 
+def threads_vs_processes(rounds: int = 2) -> list[dict]:
+    """Wall time of the 8-patch two-core scene on 2 threads and 2 processes, alternated."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from sarmotion.collection import CollectionOptions, analyze_collection
+    from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
+    from sarmotion.pipeline import AnalysisOptions
+    from sarmotion.simulation import PointTarget, simulate_phase_history
+    from test_collection_run import MOVER, STATIONARY
+
+    traj, radar = Trajectory.circular(), Radar()
+    targets = [PointTarget(position_m=p) for p in STATIONARY] + [MOVER]
+    ph = simulate_phase_history(targets, traj, radar, (0.0, 0.0, 0.0))
+    tr = Traces(
+        data=to_fast_time(ph),
+        trajectory=traj,
+        radar=radar,
+        reference_point_m=(0.0, 0.0, 0.0),
+        metadata={"source": "simulation"},
+    )
+    opts = CollectionOptions(analysis=AnalysisOptions(trajectory=False), patch_size_m=30.0)
+    region = (-60.0, -25.0, 60.0, 25.0)
+    analyze_collection(tr, opts, region_m=region, n_workers=0)  # compile here first
+    rows = []
+    for _ in range(rounds):
+        for processes in (False, True):
+            t0 = time.perf_counter()
+            r = analyze_collection(tr, opts, region_m=region, n_workers=2, processes=processes)
+            rows.append(
+                {
+                    "workers": "processes" if processes else "threads",
+                    "patches": len(r.plan.patches),
+                    "wall_s": time.perf_counter() - t0,
+                    "load_average": os.getloadavg()[0],
+                }
+            )
+            print(json.dumps(rows[-1]), flush=True)
+    return rows
+
+
 def _in_process(fn, *args):
     with mp.get_context("spawn").Pool(1) as pool:
         return pool.apply(fn, args)
@@ -197,7 +238,11 @@ def main() -> None:
         "--methods", nargs="+", choices=["whole", "patches"], default=["whole", "patches"]
     )
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--threads-vs-processes", action="store_true")
     args = parser.parse_args()
+    if args.threads_vs_processes:
+        threads_vs_processes()
+        return
     rows = []
     for side in args.sizes:
         traces, stat, _ = make_scene(side, args.seed)
