@@ -17,9 +17,10 @@ from ..collection import (
     plan_patches,
 )
 from ..core.blocks import TracesBlocks
-from ..io import read_inputs, staged_directory, write_json
+from ..io import staged_directory, write_json
 from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
+from .autofocus import PGA_ITERATIONS, read_focused
 from .common import InputError, Progress, as_flags, check_out
 
 __all__ = ["COLLECTION_OUTPUTS", "run_collection"]
@@ -52,13 +53,16 @@ def run_collection(
     snr_db: float | None = None,
     seed: int = 0,
     progress: bool = False,
-    autofocus: bool = False,
+    autofocus: str | bool | None = None,
+    pga_iterations: int = PGA_ITERATIONS,
     lenient: bool = False,
     force: bool = False,
 ) -> None:
-    """Plan the patches of ``inputs``; one patch: ``single(traces, sim)``; else the collection.
+    """Plan the patches of ``inputs``; one patch: ``single(read)``; else the collection.
 
-    ``single`` is today's analysis of already-read inputs (it writes its own outputs).
+    ``single`` is today's analysis of the inputs already read (``read = (traces,
+    simulation, autofocus result)``); it writes its own outputs. ``autofocus`` as for
+    :func:`~sarmotion.cli.analyze.run_analyze`.
     """
     if n_workers is not None and n_workers < 0:
         raise InputError(f"--workers must be >= 0, got {n_workers}")
@@ -66,15 +70,17 @@ def run_collection(
         copts = CollectionOptions(
             analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
         )
-    with as_flags(speed_mps="--speed", snr_db="--snr-db"):
-        traces, sim = read_inputs(
-            inputs,
-            speed_mps=speed_mps,
-            snr_db=snr_db,
-            seed=seed,
-            autofocus=autofocus,
-            lenient=lenient,
-        )
+    if autofocus is True:
+        autofocus = "gotcha"
+    traces, sim, focus = read_focused(
+        inputs,
+        autofocus=autofocus or None,
+        pga_iterations=pga_iterations,
+        speed_mps=speed_mps,
+        snr_db=snr_db,
+        seed=seed,
+        lenient=lenient,
+    )
     source = TracesBlocks(traces)
     try:
         plan = plan_patches(source, copts, region_m=region)
@@ -82,7 +88,7 @@ def run_collection(
         text = str(exc).replace("patch size", "--patch-size").replace("region", "--region", 1)
         raise InputError(text) from None
     if plan.single and region is None:
-        single(traces, sim)
+        single((traces, sim, focus))
         return
     check_out(out, force=force, names=COLLECTION_OUTPUTS)
     _quiet_dask()
@@ -92,6 +98,8 @@ def run_collection(
         )
     doc = collection_document(result, source)
     doc["inputs"] = list(inputs)
+    if focus is not None:
+        doc["autofocus"] = focus.to_dict()
     with staged_directory(out) as stage:
         write_json(stage / "results.json", doc)
         write_collection_report(
