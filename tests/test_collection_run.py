@@ -83,6 +83,7 @@ def test_two_patches_find_the_border_mover_once_and_every_stationary_point(scene
     assert res.mosaic.shape[0] > 0 and np.isfinite(res.mosaic).all()
 
 
+@pytest.mark.filterwarnings("ignore:Port .* is already in use")
 def test_distributed_process_workers_give_the_same_answers(scene, default_result):
     from distributed import Client, LocalCluster
 
