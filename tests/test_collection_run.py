@@ -111,11 +111,13 @@ def test_distributed_process_workers_give_the_same_answers(scene, default_result
     )
 
 
-def test_command_line_collection_outputs(scene, tmp_path, capsys):
-    from sarmotion.io import save_traces
+@pytest.mark.parametrize("suffix", [".h5", ".cphd"])
+def test_command_line_collection_outputs(scene, tmp_path, capsys, suffix):
+    """Native and CPHD files go through their block readers: the same two patches."""
+    from sarmotion.io import save_traces, write_cphd
 
-    src = tmp_path / "two.h5"
-    save_traces(src, scene)
+    src = tmp_path / f"two{suffix}"
+    (save_traces if suffix == ".h5" else write_cphd)(src, scene)
     out = tmp_path / "out"
     code = run(
         [
@@ -136,6 +138,7 @@ def test_command_line_collection_outputs(scene, tmp_path, capsys):
     doc = json.loads((out / "results.json").read_text())
     assert doc["schema"] == "sarmotion.collection/1"
     assert len(doc["plan"]["patches"]) == 2
+    assert len(doc["movers"]) == 1
     assert all("patch" in m and m["patch"] in m["patches"] for m in doc["movers"])
     assert doc["stationary_dropped"] == 0
     assert (out / "report.html").exists() and (out / "mosaic.png").exists()

@@ -17,7 +17,8 @@ from ..collection import (
     plan_patches,
 )
 from ..core.blocks import TracesBlocks
-from ..io import staged_directory, write_json
+from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
+from ..io.native import check_hdf5_terminates
 from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
 from .autofocus import PGA_ITERATIONS, read_focused
@@ -36,6 +37,20 @@ def _quiet_dask() -> None:
     for name in list(logging.root.manager.loggerDict):
         if name == "distributed" or name.startswith("distributed."):
             logging.getLogger(name).setLevel(logging.WARNING)
+
+
+def _block_source(inputs: Sequence[str], lenient: bool) -> Any:
+    """A block reader for one CPHD or native traces file, else None."""
+    if len(inputs) != 1:
+        return None
+    path = Path(inputs[0])
+    suffix = path.suffix.lower()
+    if not path.exists() or suffix not in (".cphd", ".h5", ".hdf5"):
+        return None
+    if suffix == ".cphd":
+        return open_cphd_blocks(path, lenient=lenient)
+    check_hdf5_terminates(path)
+    return open_native_blocks(path, lenient=lenient)
 
 
 def run_collection(
@@ -72,24 +87,32 @@ def run_collection(
         )
     if autofocus is True:
         autofocus = "gotcha"
-    traces, sim, focus = read_focused(
-        inputs,
-        autofocus=autofocus or None,
-        pga_iterations=pga_iterations,
-        speed_mps=speed_mps,
-        snr_db=snr_db,
-        seed=seed,
-        lenient=lenient,
-    )
-    source = TracesBlocks(traces)
+
+    def read() -> tuple[Any, Any, Any]:
+        return read_focused(
+            inputs,
+            autofocus=autofocus or None,
+            pga_iterations=pga_iterations,
+            speed_mps=speed_mps,
+            snr_db=snr_db,
+            seed=seed,
+            lenient=lenient,
+        )
+
+    # a CPHD or native traces file is read block by block (unless autofocus needs it all)
+    source: Any = _block_source(inputs, lenient) if not autofocus else None
+    read_first = None if source is not None else read()
+    if source is None:
+        source = TracesBlocks(read_first[0])
     try:
         plan = plan_patches(source, copts, region_m=region)
     except RegionError as exc:
         text = str(exc).replace("patch size", "--patch-size").replace("region", "--region", 1)
         raise InputError(text) from None
     if plan.single and region is None:
-        single((traces, sim, focus))
+        single(read_first if read_first is not None else read())
         return
+    focus = read_first[2] if read_first is not None else None
     check_out(out, force=force, names=COLLECTION_OUTPUTS)
     _quiet_dask()
     with Progress(enabled=progress) as bar:
