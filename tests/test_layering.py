@@ -52,11 +52,13 @@ MAY_IMPORT: dict[str, set[str]] = {
     "io": BASE,
     "pipeline": SCIENCE,
     "tracking": SCIENCE | {"pipeline"},
-    "documents": SCIENCE | {"io", "pipeline", "tracking"},
-    "report": SCIENCE | {"io", "pipeline", "tracking", "documents"},
+    "collection": SCIENCE | {"pipeline"},
+    "documents": SCIENCE | {"io", "pipeline", "tracking", "collection"},
+    "report": SCIENCE | {"io", "pipeline", "tracking", "collection", "documents"},
     "paper.rank": BASE | {"simulation"},
-    "paper": SCIENCE | {"io", "pipeline", "tracking", "documents", "report", "paper.rank"},
-    "cli": SCIENCE | {"io", "pipeline", "tracking", "documents", "report", "paper"},
+    "paper": SCIENCE
+    | {"io", "pipeline", "tracking", "collection", "documents", "report", "paper.rank"},
+    "cli": SCIENCE | {"io", "pipeline", "tracking", "collection", "documents", "report", "paper"},
     "__main__": {"cli"},
 }
 

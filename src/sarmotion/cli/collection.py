@@ -17,6 +17,7 @@ from ..collection import (
     plan_patches,
 )
 from ..core.blocks import TracesBlocks
+from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
 from ..io.native import check_hdf5_terminates
 from ..pipeline import AnalysisOptions
@@ -37,6 +38,11 @@ def _quiet_dask() -> None:
     for name in list(logging.root.manager.loggerDict):
         if name == "distributed" or name.startswith("distributed."):
             logging.getLogger(name).setLevel(logging.WARNING)
+
+
+def mover_entries(result: Any) -> list[dict[str, Any]]:
+    """The ``sarmotion.results/1`` entries of an analysis's movers."""
+    return results_document(result)["movers"]
 
 
 def _block_source(inputs: Sequence[str], lenient: bool) -> Any:
@@ -117,7 +123,13 @@ def run_collection(
     _quiet_dask()
     with Progress(enabled=progress) as bar:
         result = analyze_collection(
-            source, copts, plan=plan, scheduler=scheduler, n_workers=n_workers, progress=bar
+            source,
+            copts,
+            plan=plan,
+            scheduler=scheduler,
+            n_workers=n_workers,
+            describe=mover_entries,
+            progress=bar,
         )
     doc = collection_document(result, source)
     doc["inputs"] = list(inputs)

@@ -32,7 +32,7 @@ import math
 import os
 import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from typing import Any
@@ -152,7 +152,12 @@ def _patch_options(patch: Patch, options: AnalysisOptions, single: bool) -> Anal
 
 
 def analyze_patch(
-    traces: Traces, patch: Patch, options: AnalysisOptions, *, single: bool = False
+    traces: Traces,
+    patch: Patch,
+    options: AnalysisOptions,
+    *,
+    single: bool = False,
+    describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None = None,
 ) -> tuple[PatchResult, AnalysisResult]:
     """Analyse one patch's traces with :func:`~sarmotion.pipeline.analyze` and slim it.
 
@@ -166,17 +171,18 @@ def analyze_patch(
         Analysis options (the image is set to the core).
     single : bool
         The patch is the whole region (today's analysis: options unchanged).
+    describe : callable, optional
+        ``describe(result)``: one JSON-ready entry per mover (the document layer's
+        ``sarmotion.results/1`` mover entries), kept as each record's ``document``.
 
     Returns
     -------
     (PatchResult, AnalysisResult)
     """
-    from ..io.results import results_document
-
     result = analyze(traces, _patch_options(patch, options, single))
-    doc = results_document(result)
+    entries = describe(result) if describe is not None else [{} for _ in result.movers]
     movers = []
-    for m, entry in zip(result.movers, doc["movers"], strict=True):
+    for m, entry in zip(result.movers, entries, strict=True):
         b = m.bound
         movers.append(
             MoverRecord(
@@ -224,11 +230,16 @@ def analyze_patch(
 
 
 def _task(
-    traces: Traces, patch: Patch, options: AnalysisOptions, single: bool, threads: int | None
+    traces: Traces,
+    patch: Patch,
+    options: AnalysisOptions,
+    single: bool,
+    threads: int | None,
+    describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None,
 ) -> PatchResult:
     """One patch's analysis, numba's and BLAS's pools limited to ``threads``."""
     if threads is None:
-        return analyze_patch(traces, patch, options, single=single)[0]
+        return analyze_patch(traces, patch, options, single=single, describe=describe)[0]
     import numba
     from threadpoolctl import threadpool_limits
 
@@ -236,7 +247,7 @@ def _task(
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
     try:
         with threadpool_limits(limits=threads):
-            return analyze_patch(traces, patch, options, single=single)[0]
+            return analyze_patch(traces, patch, options, single=single, describe=describe)[0]
     finally:
         numba.set_num_threads(previous)
 
@@ -267,6 +278,7 @@ def analyze_collection(
     n_workers: int | None = None,
     processes: bool = False,
     memory_mb: float = 1024.0,
+    describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None = None,
     progress: ProgressCallback | None = None,
 ) -> CollectionResult:
     """Analyse a whole collection patch by patch and merge the answers.
@@ -285,6 +297,9 @@ def analyze_collection(
         Where the patches run (module notes).
     memory_mb : float
         Most memory (MiB) for the traces of the patches extracted in one pass.
+    describe : callable, optional
+        ``describe(result)``: one JSON-ready entry per mover of a patch's analysis
+        (:func:`analyze_patch`).
     progress : callable, optional
         ``progress(stage, done, total)``.
 
@@ -303,11 +318,15 @@ def analyze_collection(
     single_result: AnalysisResult | None = None
     if plan.single:
         traces = src.traces if isinstance(src, TracesBlocks) else _read_all(src, opts.block_pulses)
-        slim, single_result = analyze_patch(traces, plan.patches[0], opts.analysis, single=True)
+        slim, single_result = analyze_patch(
+            traces, plan.patches[0], opts.analysis, single=True, describe=describe
+        )
         results[0] = slim
         report(progress, "patches", 1, 1)
     else:
-        for r in _run(src, plan, opts, scheduler, n_workers, processes, memory_mb, progress):
+        for r in _run(
+            src, plan, opts, scheduler, n_workers, processes, memory_mb, describe, progress
+        ):
             results[r.index] = r
     timings["patches"] = time.perf_counter() - t1
     t2 = time.perf_counter()
@@ -338,6 +357,7 @@ def _run(
     n_workers: int | None,
     processes: bool,
     memory_mb: float,
+    describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None,
     progress: ProgressCallback | None,
 ) -> Iterator[PatchResult]:
     """Extract the patches group by group and analyse them; yield as they complete."""
@@ -348,7 +368,7 @@ def _run(
             for patch, traces in zip(
                 group, extract_patches(src, group, block_pulses=opts.block_pulses), strict=True
             ):
-                yield analyze_patch(traces, patch, opts.analysis)[0]
+                yield analyze_patch(traces, patch, opts.analysis, describe=describe)[0]
                 done += 1
                 report(progress, "patches", done, total)
         return
@@ -395,6 +415,7 @@ def _run(
                         opts.analysis,
                         False,
                         threads,
+                        describe,
                         pure=False,
                         key=f"sarmotion-patch-{patch.index}-{id(plan)}",
                     )

@@ -60,7 +60,8 @@ def mosaic_figure(result: CollectionResult) -> Figure:
         )
     region = result.plan.region_m
     for k, (m, _) in enumerate(result.movers):
-        fam = np.asarray(m.document["cross_range_family"]["position_per_m"], float)
+        family = m.document.get("cross_range_family", {}).get("position_per_m", (0.0, 0.0))
+        fam = np.asarray(family, float)
         pos = np.asarray(m.position_m[:2], float)
         ends = _clip_line(pos, fam, region) if np.linalg.norm(fam) > 0 else None
         if ends is not None:
