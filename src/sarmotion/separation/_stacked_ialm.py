@@ -16,10 +16,9 @@ For ``A`` of shape ``(n, m)`` with ``n >= m`` and ``G = A^H A = V diag(sigma^2) 
     f(w) = max(1 - tau / sqrt(w), 0),
 
 since ``A V = U diag(sigma)``. One Hermitian eigen-decomposition of the ``m x m`` Gram
-matrix (LAPACK ``heevd``) and two products replace the SVD of ``A`` (``gesdd``):
-measured 0.67 against 1.11 ms per 117 x 64 complex window (one BLAS thread), and the
-batched elementwise steps save most of the per-call overhead of the rest of the
-iteration.
+matrix (LAPACK ``heevd``) and two products replace the SVD of ``A`` (``gesdd``), and
+the batched elementwise steps save most of the per-call overhead of the rest of the
+iteration (timings: ``docs/notes/rpca.md``, from ``benchmarks/bench_rpca.py -k gotcha``).
 
 Accuracy and the rule that guards it. The computed eigen-decomposition is exact for
 a Gram matrix perturbed by ``E`` with ``||E|| ~ m eps sigma_max^2`` (backward stability
@@ -32,10 +31,9 @@ whatever the two eigenvalues (``1 / sigma_i`` when ``sigma_i`` is large, ``sigma
     ||D_tau(A)_Gram - D_tau(A)|| <~ m eps sigma_max^2 / tau,
 
 relative to ``sigma_max`` that is ``m eps sigma_max / tau``: the condition number is
-not squared where it matters. Measured on 117 x 64 complex matrices with singular values
-from ``tau / 100`` to ``sigma_max`` and 16 of them clustered at ``tau``: 2e-14, 2e-13,
-3e-12, 3e-11, 9e-10 of ``sigma_max`` for ``sigma_max / tau`` = 1e2 ... 1e6, 16-70 times
-below the bound. The Gram route is used for a window while::
+not squared where it matters (``tests/test_rpca_stacked.py`` holds the route to this
+bound on matrices with singular values clustered at ``tau``). The Gram route is used for
+a window while::
 
     m eps sigma_max / tau <= _GRAM_ACCURACY * tol,
 
@@ -45,25 +43,13 @@ keeping the thresholding error a hundred times below the stopping tolerance; pas
 starts at ``1.25 / ||M||_2`` and grows 1.5x per iteration: about 37 iterations;
 GOTCHA windows stop after 13-15), 7e4 at ``tol = 1e-7`` (about 27 iterations).
 
-Where the time goes, and its floor
-----------------------------------
-Measured on a GOTCHA degree (13 windows of 117 x 64, ``eta`` x 2, ``tol = 1e-5``; 2-core
-AMD EPYC, OpenBLAS, one BLAS thread): the windows take 179-183 iterations in all, the
-same with the plain full-SVD IALM. Per window and iteration, ``heevd`` of the 64 x 64
-Gram matrix costs 0.50 ms, the Gram matrix and the two products 0.19 ms, the two fused
-elementwise kernels 0.05 ms; ``gesdd`` of the window costs 1.11 ms. The whole degree
-takes 0.16-0.18 s against 0.28-0.30 s for the plain IALM (1.6-1.8x), of which 0.09 s is
-``heevd`` alone: an exact thresholding per iteration along the IALM's own path cannot
-go below about 0.12 s (2.3x). Tried and not kept: single precision (``cgesdd`` and
-complex64 ``heevd`` are no faster at this size, and a complex64 Gram matrix misses the
-accuracy rule above by orders of magnitude); QR then a small SVD (the batched QR
-alone costs 0.38 ms); a warm-started Newton-Schulz polar factor (diverges: the previous
-inverse square root does not commute with the new Gram matrix); the thresholding split
-over two threads (0.92-1.25x, depending on the other core's load). The two
-elementwise kernels are compiled (numba, cached on disk): 0.05 ms per window and
-iteration against about 0.2 ms for the same steps in NumPy (25 ms per degree), at a
-one-off cost in a fresh process of 0.15 s to load them, plus 0.25 s to import numba
-where nothing else (the backprojection) has imported it yet.
+The cost
+--------
+Per window and iteration: one ``heevd`` of the ``m x m`` Gram matrix, the Gram matrix and
+two products, and two fused elementwise kernels (compiled with numba and cached on disk).
+An exact thresholding per iteration along the IALM's own path cannot cost less than the
+eigen-decompositions; what was measured, and what was tried and not kept, is in
+``docs/notes/rpca.md``.
 """
 
 from __future__ import annotations
