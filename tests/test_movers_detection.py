@@ -10,8 +10,6 @@ bound (cross-range coordinate held) is defined.
 import numpy as np
 import pytest
 
-from analysis_stages import detect
-from analysis_stages import family_errors as _family_errors
 from sarmotion.core import C, ground_velocity, range_speed
 from sarmotion.imaging import resolution
 from sarmotion.io import read_gotcha
@@ -28,13 +26,19 @@ from sarmotion.motion import (
     range_gradients,
     threshold_db,
 )
+from sarmotion.pipeline import AnalysisOptions, detect, estimate_movers
+from sarmotion.pipeline import family_errors as _family_errors
+from sarmotion.separation import SeparationOptions
 from sarmotion.simulation import PointTarget, inject, random_scene, simulate
 
 
 def _movers_stages(traces, method, size_m=None):
     """The analysis's separation, detection and estimation stages (default options)."""
-    d = detect(traces, method, size_m)
-    return d.sub, d.moving_sub, d.detection, d.movers()
+    options = AnalysisOptions(
+        separation=SeparationOptions(method=method), trajectory=False, image_size_m=size_m
+    )
+    d = detect(traces, options)
+    return d.sub, d.moving_sub, d.candidates, list(estimate_movers(d).movers)
 
 
 def _white_noise_bound(sub, truth, noise_variance_t):
