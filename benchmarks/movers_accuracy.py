@@ -213,7 +213,7 @@ def run_baseline(traces, image_size_m: float):
     )
     out = []
     for u in det.range_speeds.speeds_mps[:5]:
-        f = fit_point_mover(sub, sub.data, float(u))
+        f = fit_point_mover(sub, float(u))
         out.append({"position_m": f.position_m, "velocity_mps": f.velocity_mps})
     return out
 

@@ -134,7 +134,10 @@ def test_extract_mover_separates_two_crossing_movers(scene1):
         truth = next(t for t in scene.moving if abs(t.position_m[0] - m.position_m[0]) < 1)
         other = next(t for t in scene.moving if t is not truth)
         own = extract_mover(
-            sim.traces, sim.moving, position_m=m.position_m, velocity_mps=m.velocity_mps
+            sim.moving,
+            acquisition=sim.traces.acquisition,
+            position_m=m.position_m,
+            velocity_mps=m.velocity_mps,
         )
         clean = _alone(scene, truth).data
         rest = _alone(scene, other).data

@@ -32,7 +32,7 @@ from .geometry import (
 from .progress import ProgressCallback
 from .radar import PulseShape, Radar
 from .spectral import delay_phase, shift_fast_time, to_fast_time, to_frequency
-from .traces import Traces
+from .traces import Traces, as_traces
 
 __all__ = [
     "Acquisition",
@@ -45,6 +45,7 @@ __all__ = [
     "Trajectory",
     "Traces",
     "as_point",
+    "as_traces",
     "cross_range_speed",
     "delay_phase",
     "delta_tau",

@@ -13,7 +13,7 @@ from .geometry import LookGeometry, Trajectory
 from .radar import Radar
 from .spectral import to_fast_time, to_frequency
 
-__all__ = ["Traces"]
+__all__ = ["Traces", "as_traces"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False, init=False)
@@ -202,3 +202,33 @@ class Traces:
             acquisition=self.acquisition.sub_aperture(start, stop),
             metadata=self.metadata,
         )
+
+
+def as_traces(
+    data: Traces | ArrayLike, acquisition: Acquisition | None = None, *, name: str = "data"
+) -> Traces:
+    """``data`` on its acquisition: the signature rule "data first, the acquisition as a keyword".
+
+    Parameters
+    ----------
+    data : Traces or (n_pulses, n_samples) array_like
+        A :class:`Traces` (its own acquisition), or an array on ``acquisition``.
+    acquisition : Acquisition, optional
+        Required with an array; with a :class:`Traces` it must be omitted or be the
+        traces' own.
+    name : str
+        Parameter name in error messages.
+
+    Returns
+    -------
+    Traces
+    """
+    if isinstance(data, Traces):
+        if acquisition is not None and acquisition is not data.acquisition:
+            raise ValueError(f"{name} is a Traces on another acquisition than `acquisition`")
+        return data
+    if acquisition is None:
+        raise TypeError(f"{name} is an array: give its acquisition (acquisition=...)")
+    if isinstance(acquisition, Traces):
+        raise TypeError("acquisition must be an Acquisition (a Traces' .acquisition), not Traces")
+    return Traces(data=np.asarray(data), acquisition=acquisition)

@@ -82,20 +82,20 @@ def analyze(
         (:mod:`sarmotion.pipeline.movers`) and are not added to ``total``.
     """
     detection = detect(traces, options, progress=progress)
-    opts = detection.options
+    opts, acq = detection.options, traces.acquisition
     timings = dict(detection.timings_s)
     with timed(timings, "movers"):
         stage = estimate_movers(detection, progress=progress)
     movers = stage.movers
     with timed(timings, "trajectories"):
         if opts.trajectory:
-            movers = estimate_trajectories(traces, movers, progress=progress)
+            movers = estimate_trajectories(movers, acquisition=acq, progress=progress)
     with timed(timings, "images"):
         sep = detection.separation
         stat_img = stationary_image(traces, sep, movers, detection.image.grid, progress=progress)
-        movers = mover_images(traces, movers, stat_img, opts)
+        movers = mover_images(movers, stat_img, opts, acquisition=acq)
     with timed(timings, "stationary_targets"):
-        stationary = stationary_targets(stat_img, sep, traces, opts)
+        stationary = stationary_targets(stat_img, sep, opts, acquisition=acq)
     timings["total"] = float(sum(timings.values()))
     timings.update(stage.timings_s)
     return AnalysisResult(

@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.acquisition import Acquisition
 from ..core.progress import ProgressCallback
 from ..core.traces import Traces
 from ..imaging import Image, backproject, scene_grid
@@ -131,7 +132,7 @@ def detect(
         sep = separate(traces, prelim, opts.separation, progress=progress)
     with timed(timings, "range_speeds"):
         sub = traces.select_pulses(central.start, central.stop)
-        candidates = find_range_speeds(sub, sep.moving[central], opts)
+        candidates = find_range_speeds(sep.moving[central], opts, acquisition=sub.acquisition)
     result = DetectionResult(
         traces=traces,
         options=opts,
@@ -154,7 +155,7 @@ def preliminary_image(
 
 
 def find_range_speeds(
-    traces: Traces, moving: NDArray[np.complexfloating], options: AnalysisOptions
+    moving: NDArray[np.complexfloating], options: AnalysisOptions, *, acquisition: Acquisition
 ) -> RangeSpeedDetection:
     """Candidate range speeds: the ``g(u)`` peaks on ``moving`` that pass the detector.
 
@@ -165,10 +166,11 @@ def find_range_speeds(
     of a stationary target at the image's half-diagonal, and at least two range-speed
     resolutions (the stationary peak's main lobe). Slower candidates than the paper's
     ``u >> V R / L`` (``eq:AnnihCond``) are admitted because the focus test of the mover
-    stage rejects those a stationary point explains.
+    stage rejects those a stationary point explains. ``acquisition`` is that of
+    ``moving`` (the central sub-aperture).
     """
-    data = traces.with_data(moving)
-    geom = traces.geometry
+    data = Traces(data=moving, acquisition=acquisition)
+    geom = acquisition.geometry
     apparent = geom.speed_mps * (options.image_size_m / np.sqrt(2.0)) / geom.range_m
     detection = detect_range_speeds(
         data,

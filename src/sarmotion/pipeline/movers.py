@@ -35,10 +35,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..core.acquisition import Acquisition
 from ..core.geometry import cross_range_speed, ground_velocity, range_speed
 from ..core.progress import ProgressCallback, report
 from ..core.spectral import to_fast_time, to_frequency
-from ..core.traces import Traces
+from ..core.traces import Traces, as_traces
 from ..imaging import resolution
 from ..motion import (
     ApertureFit,
@@ -124,9 +125,22 @@ def estimate_movers(
     sub, moving_sub = detection.sub, np.asarray(detection.moving_sub)
     timings: dict[str, float] = {}
     with timed(timings, "movers.candidates"):
-        found = fit_candidates(sub, moving_sub, detection.candidates, opts, timings, progress)
+        found = fit_candidates(
+            moving_sub,
+            detection.candidates,
+            opts,
+            acquisition=sub.acquisition,
+            peak_width_mps=point_peak_width(sub) * range_speed_resolution(sub),
+            timings=timings,
+            progress=progress,
+        )
     with timed(timings, "movers.joint_refinement"):
-        separated = refine_jointly(sub, moving_sub, [f for f, _ in found], rounds=opts.joint_rounds)
+        separated = refine_jointly(
+            moving_sub,
+            [f for f, _ in found],
+            acquisition=sub.acquisition,
+            rounds=opts.joint_rounds,
+        )
     fits, kept, data_sub = list(separated), [None] * len(separated), moving_sub
     if refit and separated:
         with timed(timings, "movers.refit"):
@@ -139,18 +153,22 @@ def estimate_movers(
             [x[k] for k in keep] for x in (fits, separated, found, kept)
         )
     with timed(timings, "movers.records"):
-        movers = _records(sub, moving_sub, data_sub, found, separated, fits, kept, opts)
+        movers = _records(
+            moving_sub, data_sub, found, separated, fits, kept, opts, acquisition=sub.acquisition
+        )
     residual = np.array(detection.separation.moving, dtype=np.complex128)
-    traces = detection.traces
+    whole = detection.traces.acquisition
     out = []
     for k, mover in enumerate(movers):
         if not detection.whole_aperture:
             with timed(timings, "movers.whole_aperture"):
-                mover = on_whole_aperture(traces, residual, mover, detection.central)
+                mover = on_whole_aperture(
+                    residual, mover, acquisition=whole, central=detection.central
+                )
         with timed(timings, "movers.extraction"):
             own = extract_mover(
-                traces,
                 residual,
+                acquisition=whole,
                 position_m=mover.position_m,
                 velocity_mps=mover.velocity_mps,
                 half_window=opts.mover_half_window,
@@ -177,12 +195,11 @@ def _refit(
     with timed(timings, "movers.re_separation"):
         threshold = detection.options.separation.candidate_threshold_db
         data = data_without_stationary(sub, detection.image, full, threshold_db=threshold)
-    fits, kept = refit_in_cell(sub, data, full)
+    fits, kept = refit_in_cell(data, full, acquisition=sub.acquisition)
     return fits, list(kept), data
 
 
 def _records(
-    sub: Traces,
     moving_sub: NDArray[np.complexfloating],
     data_sub: NDArray[np.complexfloating],
     found: Sequence[tuple[PointFit, MoverEvidence]],
@@ -190,12 +207,15 @@ def _records(
     fits: Sequence[PointFit],
     kept: Sequence[bool | None],
     options: AnalysisOptions,
+    *,
+    acquisition: Acquisition,
 ) -> list[Mover]:
     """Step 4 for every mover: ``g_perp`` on the mover alone, the noise around it, its bound.
 
     ``g_perp`` is taken on ``S`` minus the other movers' final models; the noise on the
     data of the final fits (``D - L'`` after a refit, else ``S``) minus every model.
     """
+    sub = acquisition
     models = [point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in fits]
     zero = np.zeros(sub.shape, dtype=complex)
     left = data_sub - sum(models, zero)
@@ -204,13 +224,13 @@ def _records(
         others = sum((m for j, m in enumerate(models) if j != k), zero)
         out.append(
             mover_record(
-                sub,
                 moving_sub - others,
+                acquisition=sub,
                 evidence=found[k][1],
                 separated_fit=separated[k],
                 fit=fit,
                 refit_kept=kept[k],
-                noise_variance=_local_noise(sub, left, fit),
+                noise_variance=_local_noise(left, fit, acquisition=sub),
                 options=options,
             )
         )
@@ -218,10 +238,12 @@ def _records(
 
 
 def fit_candidates(
-    sub: Traces,
     moving: NDArray[np.complexfloating],
     detection: RangeSpeedDetection,
     options: AnalysisOptions,
+    *,
+    acquisition: Acquisition,
+    peak_width_mps: float,
     timings: dict[str, float] | None = None,
     progress: ProgressCallback | None = None,
 ) -> list[tuple[PointFit, MoverEvidence]]:
@@ -240,14 +262,19 @@ def fit_candidates(
 
     Parameters
     ----------
-    sub : Traces
-        The acquisition of ``moving`` (the central sub-aperture).
     moving : (n_pulses, n_samples) ndarray
-        ``S`` on it.
+        ``S`` on the central sub-aperture.
     detection : RangeSpeedDetection
         The first run of the detector on ``moving``.
     options : AnalysisOptions
         ``max_movers``, ``speed_range_mps``, ``min_focus_gain_db``, ``max_peak_width``.
+    acquisition : Acquisition
+        The acquisition of ``moving`` (the central sub-aperture).
+    peak_width_mps : float
+        Width of a point mover's ``g`` peak (m/s): a fit that close in range speed and
+        within a range cell of an accepted mover is what was left of it
+        (:func:`~sarmotion.motion.point_peak_width` of the data ``M`` times the
+        range-speed resolution).
     timings : dict, optional
         Adds the redetections' wall-clock time under ``movers.redetection`` (s).
     progress : callable, optional
@@ -259,6 +286,7 @@ def fit_candidates(
         The accepted candidates' fits and detection records, in the order accepted.
     """
     timings = {} if timings is None else timings
+    sub = acquisition
     residual = np.array(moving, dtype=np.complex128)
     current = detection
     tried: list[float] = []
@@ -273,14 +301,18 @@ def fit_candidates(
         if not untried:
             break
         k = untried[0]
-        u, statistic = float(rs.speeds_mps[k]), float(rs.peak_db[k])
+        u, statistic = float(rs.speeds_mps[k]), float(current.statistic_db[k])
         tried.append(u)
-        fit = fit_point_mover(sub, residual, u, cross_speed_range_mps=options.speed_range_mps)
-        if any(_same_trace(sub, fit, f) for f, _ in out):
+        fit = fit_point_mover(
+            residual, u, acquisition=sub, cross_speed_range_mps=options.speed_range_mps
+        )
+        if any(_same_trace(sub, fit, f, peak_width_mps) for f, _ in out):
             log.info("g(u) candidate at %.2f m/s: what a subtracted mover left", u)
             continue
         value = fit.amplitude * sub.n_pulses
-        why = stationary_explanation(sub, residual, fit.position_m, fit.velocity_mps, value)
+        why = stationary_explanation(
+            residual, fit.position_m, fit.velocity_mps, value, acquisition=sub
+        )
         if why.within_extent and why.focus_gain_db < options.min_focus_gain_db:
             log.info(
                 "g(u) candidate at %.2f m/s: a stationary point at (%.1f, %.1f) m explains it "
@@ -293,19 +325,16 @@ def fit_candidates(
         residual = residual - point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
         out.append((fit, _evidence(detection, statistic, float(current.widths[k]), why)))
         with timed(timings, "movers.redetection"):
-            current = _redetect(sub.with_data(residual), detection, options)
+            current = _redetect(Traces(data=residual, acquisition=sub), detection, options)
     return out
 
 
-def _same_trace(sub: Traces, a: PointFit, b: PointFit) -> bool:
-    """Whether two fits share a range cell at ``s = 0`` and the width of a ``g`` peak.
-
-    The width is that of a point mover's peak (:func:`~sarmotion.motion.point_peak_width`).
-    """
+def _same_trace(sub: Acquisition, a: PointFit, b: PointFit, width_mps: float) -> bool:
+    """Whether two fits share a range cell at ``s = 0`` and the width of a ``g`` peak (m/s)."""
     cells = resolution(sub)
     dx = abs(float((a.position_m[:2] - b.position_m[:2]) @ cells.range_direction))
     du = abs(a.range_speed_mps - b.range_speed_mps)
-    return dx < cells.ground_range_m and du < point_peak_width(sub) * range_speed_resolution(sub)
+    return dx < cells.ground_range_m and du < width_mps
 
 
 def _redetect(
@@ -338,9 +367,9 @@ def _evidence(
 
 
 def mover_record(
-    sub: Traces,
     alone: NDArray[np.complexfloating],
     *,
+    acquisition: Acquisition,
     evidence: MoverEvidence,
     separated_fit: PointFit,
     fit: PointFit,
@@ -352,11 +381,11 @@ def mover_record(
 
     Parameters
     ----------
-    sub : Traces
-        The sub-aperture the fit was made on.
     alone : (n_pulses, n_samples) ndarray
-        ``S`` there with the other movers' fits subtracted: ``g_perp`` (``eq:OBJ2``) is
-        taken on it at the fit's range speed and position, for comparison with the fit.
+        ``S`` with the other movers' fits subtracted: ``g_perp`` (``eq:OBJ2``) is taken
+        on it at the fit's range speed and position, for comparison with the fit.
+    acquisition : Acquisition
+        The sub-aperture the fit was made on.
     evidence, separated_fit, fit, refit_kept
         The mover's history so far (:class:`~sarmotion.pipeline.Mover`).
     noise_variance : float
@@ -369,8 +398,9 @@ def mover_record(
     Mover
         Its estimate is ``fit``; no traces, image or trajectory yet.
     """
+    sub = acquisition
     g_perp = estimate_cross_range_speed(
-        sub.with_data(alone),
+        Traces(data=alone, acquisition=sub),
         range_speed_mps=fit.range_speed_mps,
         position_m=fit.position_m,
         speed_range_mps=options.speed_range_mps,
@@ -394,7 +424,9 @@ def mover_record(
     )
 
 
-def _local_noise(sub: Traces, residual: NDArray[np.complexfloating], fit: PointFit) -> float:
+def _local_noise(
+    residual: NDArray[np.complexfloating], fit: PointFit, *, acquisition: Acquisition
+) -> float:
     """Noise variance around a mover as the matched filter sees it, on what the fits leave.
 
     Positions within 10 m of the fit, range speeds within 2 m/s and cross-range speeds
@@ -402,11 +434,15 @@ def _local_noise(sub: Traces, residual: NDArray[np.complexfloating], fit: PointF
     clutter residue is not white, and its level where the mover is sets the bound.
     """
     return matched_filter_noise_variance(
-        sub, residual, half_size_m=10.0, centre_m=fit.position_m, velocity_mps=fit.velocity_mps
+        residual,
+        acquisition=acquisition,
+        half_size_m=10.0,
+        centre_m=fit.position_m,
+        velocity_mps=fit.velocity_mps,
     )
 
 
-def _bound(sub: Traces, fit: PointFit, variance: float) -> PointBound:
+def _bound(sub: Acquisition, fit: PointFit, variance: float) -> PointBound:
     """Cramér–Rao bound of a fit at its amplitude and the measured noise variance.
 
     ``variance`` is per fast-time sample; the phase history's is ``n_samples`` times it
@@ -432,18 +468,18 @@ def _bound(sub: Traces, fit: PointFit, variance: float) -> PointBound:
 
 
 def on_whole_aperture(
-    traces: Traces, residual: NDArray[np.complexfloating], mover: Mover, central: slice
+    residual: NDArray[np.complexfloating], mover: Mover, *, acquisition: Acquisition, central: slice
 ) -> Mover:
     """Step 5: a (central sub-aperture's) estimate moved to ``s = 0`` and focused on all pulses.
 
     Parameters
     ----------
-    traces : Traces
-        The whole acquisition.
     residual : (n_pulses, n_samples) ndarray
         ``S`` minus the movers extracted so far (whole aperture).
     mover : Mover
         The mover as estimated on the pulses ``central``.
+    acquisition : Acquisition
+        The whole acquisition.
     central : slice
         Those pulses.
 
@@ -454,13 +490,16 @@ def on_whole_aperture(
         the estimate it gives.
     """
     fit: ApertureFit = refine_on_aperture(
-        traces.with_data(residual), mover.position_m, mover.velocity_mps, central=central
+        Traces(data=residual, acquisition=acquisition),
+        mover.position_m,
+        mover.velocity_mps,
+        central=central,
     )
-    geom = traces.geometry
+    geom = acquisition.geometry
     log.info(
         "whole-aperture focus %.4g -> %.4g (x n_pulses)",
-        fit.start_focus / traces.n_pulses,
-        fit.focus / traces.n_pulses,
+        fit.start_focus / acquisition.n_pulses,
+        fit.focus / acquisition.n_pulses,
     )
     return _with(
         mover,
@@ -478,9 +517,9 @@ def _with(mover: Mover, **changes: object) -> Mover:
 
 
 def extract_mover(
-    traces: Traces,
-    data: ArrayLike,
+    data: Traces | ArrayLike,
     *,
+    acquisition: Acquisition | None = None,
     position_m: ArrayLike,
     velocity_mps: ArrayLike,
     half_window: int | None = None,
@@ -496,10 +535,11 @@ def extract_mover(
 
     Parameters
     ----------
-    traces : Traces
-        The acquisition (geometry, frequencies, reference point).
-    data : (n_pulses, n_samples) array_like
+    data : Traces or (n_pulses, n_samples) array_like
         The traces the mover is taken from (e.g. the current moving residual).
+    acquisition : Acquisition, optional
+        Their acquisition (geometry, frequencies, reference point); required when
+        ``data`` is an array.
     position_m : (2,) or (3,) array_like
         Mover's location at ``s = 0`` (m).
     velocity_mps : (2,) array_like
@@ -513,10 +553,12 @@ def extract_mover(
     (n_pulses, n_samples) ndarray
         The mover's traces (data units); ``data`` minus it is the residual.
     """
-    d = np.asarray(data)
-    if d.shape != traces.shape:
-        raise ValueError(f"data must have the traces' shape {traces.shape}, got {d.shape}")
+    traces = as_traces(data, acquisition)
     part = aligned_constant_part(
-        traces, to_frequency(d), position_m, velocity_mps=velocity_mps, half_window=half_window
+        to_frequency(traces.data),
+        position_m,
+        acquisition=traces.acquisition,
+        velocity_mps=velocity_mps,
+        half_window=half_window,
     )
     return to_fast_time(part)

@@ -49,7 +49,7 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import C, Traces
+from ..core import Acquisition, C, Traces
 from ..imaging import Image, resolution
 from ..motion import (
     MatchedFilter,
@@ -72,14 +72,17 @@ log = logging.getLogger(__name__)
 
 
 def candidates_near_movers(
-    traces: Traces, points_m: NDArray[np.float64], fits: Sequence[PointFit], margin_m: float
+    traces: Acquisition | Traces,
+    points_m: NDArray[np.float64],
+    fits: Sequence[PointFit],
+    margin_m: float,
 ) -> NDArray[np.float64]:
     """The stationary points whose range history comes within ``margin_m`` of a mover's.
 
     Parameters
     ----------
-    traces : Traces
-        Acquisition (antenna positions and slow times; ``s = 0`` is the fits' time).
+    traces : Acquisition
+        Antenna positions and slow times (``s = 0`` is the fits' time).
     points_m : (k, 3) ndarray
         Stationary candidates (m).
     fits : sequence of PointFit
@@ -146,7 +149,7 @@ def refit_movers_on_data(
         return [], np.asarray(sub.data).astype(np.complex128)
     full = at_full_amplitude(sub, fits)
     data = data_without_stationary(sub, image, full, threshold_db=threshold_db)
-    kept, _ = refit_in_cell(sub, data, full, rounds=rounds)
+    kept, _ = refit_in_cell(data, full, acquisition=sub.acquisition, rounds=rounds)
     return kept, data
 
 
@@ -165,7 +168,7 @@ def at_full_amplitude(sub: Traces, fits: Sequence[PointFit]) -> list[PointFit]:
     list of PointFit
         The same fits, amplitude ``I / n_pulses`` on ``D`` (data units).
     """
-    mf = MatchedFilter(sub, np.asarray(sub.data))
+    mf = MatchedFilter(sub)
     return [
         replace(
             f,
@@ -228,7 +231,11 @@ def data_without_stationary(
 
 
 def refit_in_cell(
-    sub: Traces, data: NDArray[np.complexfloating], fits: Sequence[PointFit], *, rounds: int = 1
+    data: NDArray[np.complexfloating],
+    fits: Sequence[PointFit],
+    *,
+    acquisition: Acquisition,
+    rounds: int = 1,
 ) -> tuple[list[PointFit], list[bool]]:
     """Step 3: every mover re-fitted on ``data``, kept when it stays in its cell.
 
@@ -239,12 +246,12 @@ def refit_in_cell(
 
     Parameters
     ----------
-    sub : Traces
-        The acquisition of ``data`` (the sub-aperture).
     data : (n_pulses, n_samples) ndarray
         ``D - L'`` (:func:`data_without_stationary`).
     fits : sequence of PointFit
         The movers at full amplitude.
+    acquisition : Acquisition
+        The acquisition of ``data`` (the sub-aperture).
     rounds : int
         Sweeps of the re-fit over the movers.
 
@@ -255,7 +262,8 @@ def refit_in_cell(
     kept : list of bool
         Whether each re-fit was kept.
     """
-    out = refit_movers(sub, data, list(fits), rounds=rounds)
+    sub = acquisition
+    out = refit_movers(data, list(fits), acquisition=sub, rounds=rounds)
     cells = resolution(sub)
     res_u = range_speed_resolution(sub)
     final, kept = [], []

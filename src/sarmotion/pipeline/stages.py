@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..core.acquisition import Acquisition
 from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
 from ..errors import EstimationError
@@ -36,7 +37,7 @@ log = logging.getLogger(__name__)
 
 
 def stationary_targets(
-    image: Image, sep: Separation, traces: Traces, options: AnalysisOptions
+    image: Image, sep: Separation, options: AnalysisOptions, *, acquisition: Acquisition
 ) -> tuple[StationaryTarget, ...]:
     """Bright points of the stationary image, brightest first.
 
@@ -57,7 +58,7 @@ def stationary_targets(
     if sep.method == "combined" and len(sep.stationary_points_m):
         points = [tuple(p[:2]) for p in sep.stationary_points_m]
     else:
-        cells = resolution(traces)
+        cells = resolution(acquisition)
         cell = max(cells.ground_range_m, cells.cross_range_m)
         points = [(x, y) for x, y, _ in image.peaks(max_targets, min_separation_m=cell)]
     left, right, bottom, top = image.grid.extent
@@ -74,7 +75,10 @@ def stationary_targets(
 
 
 def estimate_trajectories(
-    traces: Traces, movers: Sequence[Mover], *, progress: ProgressCallback | None = None
+    movers: Sequence[Mover],
+    *,
+    acquisition: Acquisition,
+    progress: ProgressCallback | None = None,
 ) -> tuple[Mover, ...]:
     """Each mover with its trajectory by the phase-space algorithm, from its own traces.
 
@@ -86,7 +90,7 @@ def estimate_trajectories(
         trajectory: TrajectoryEstimate | None = None
         try:
             trajectory = estimate_trajectory(
-                traces.with_data(mover.traces),
+                Traces(data=mover.traces, acquisition=acquisition),
                 mover.position_m,
                 velocity_guess_mps=mover.velocity_mps,
             )
@@ -114,7 +118,11 @@ def stationary_image(
 
 
 def mover_images(
-    traces: Traces, movers: Sequence[Mover], stationary: Image, options: AnalysisOptions
+    movers: Sequence[Mover],
+    stationary: Image,
+    options: AnalysisOptions,
+    *,
+    acquisition: Acquisition,
 ) -> tuple[Mover, ...]:
     """Each mover with its image (``eq:imagecompu`` at its velocity) and that image's peak.
 
@@ -129,7 +137,8 @@ def mover_images(
             size_m=options.mover_image_size_m,
             spacing_m=options.spacing_m,
         )
-        img = backproject(traces.with_data(mover.traces), grid, velocity_mps=mover.velocity_mps)
+        own = Traces(data=mover.traces, acquisition=acquisition)
+        img = backproject(own, grid, velocity_mps=mover.velocity_mps)
         x, y, v = img.peak(refine=True)
         out.append(
             dataclasses.replace(
