@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,6 +47,8 @@ class DetectionResult:
     central : slice
         The pulses of the central sub-aperture the movers are detected and estimated on
         (``options.sub_aperture_deg``); every pulse for a narrow aperture.
+    sub : Traces
+        ``M`` on those pulses, slow time re-centred on them (``traces.select_pulses``).
     image : Image
         The preliminary image ``eq:image`` of ``M``.
     separation : Separation
@@ -62,15 +63,11 @@ class DetectionResult:
     traces: Traces
     options: AnalysisOptions
     central: slice
+    sub: Traces
     image: Image
     separation: Separation
     candidates: RangeSpeedDetection
     timings_s: dict[str, float] = field(default_factory=dict)
-
-    @cached_property
-    def sub(self) -> Traces:
-        """The central sub-aperture's data ``M`` (slow time re-centred on it)."""
-        return self.traces.select_pulses(self.central.start, self.central.stop)
 
     @property
     def moving_sub(self) -> NDArray[np.complexfloating]:
@@ -133,17 +130,16 @@ def detect(
     with timed(timings, "range_speeds"):
         sub = traces.select_pulses(central.start, central.stop)
         candidates = find_range_speeds(sep.moving[central], opts, acquisition=sub.acquisition)
-    result = DetectionResult(
+    return DetectionResult(
         traces=traces,
         options=opts,
         central=central,
+        sub=sub,
         image=prelim,
         separation=sep,
         candidates=candidates,
         timings_s=timings,
     )
-    result.__dict__["sub"] = sub  # the cached sub-aperture: the one detection ran on
-    return result
 
 
 def preliminary_image(
