@@ -9,9 +9,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .acquisition import Acquisition
-from .geometry import LookGeometry, Trajectory
+from .geometry import LookGeometry, Trajectory, delta_tau
 from .radar import Radar
-from .spectral import to_fast_time, to_frequency
+from .spectral import shift_fast_time, to_fast_time, to_frequency
 
 __all__ = ["Traces", "as_traces"]
 
@@ -188,6 +188,20 @@ class Traces:
             acquisition=self.acquisition,
             metadata={**self.metadata, **metadata},
         )
+
+    def referenced_to(self, reference_point_m: ArrayLike) -> Traces:
+        """The same traces range-compressed on another reference point ``rho_n`` (m).
+
+        ``D_n(s, t) = D(s, t + tau(s, rho_n) - tau(s, rho_o))`` (the carrier phase
+        included, :func:`~sarmotion.core.spectral.shift_fast_time`) on
+        :meth:`Acquisition.with_reference_point`. The shift is circular over the
+        fast-time window: a target whose delay relative to ``rho_n`` leaves the window
+        wraps around, so ``rho_n`` should lie well inside the scene the window covers.
+        """
+        acquisition = self.acquisition.with_reference_point(reference_point_m)
+        delays = delta_tau(self.positions_m, acquisition.reference_point_m, self.reference_point_m)
+        data = shift_fast_time(self.data, delays, frequencies_hz=self.frequencies_hz)
+        return Traces(data=data, acquisition=acquisition, metadata=self.metadata)
 
     def select_pulses(self, start: int, stop: int) -> Traces:
         """Pulses ``start:stop`` with slow time re-centred (a sub-aperture).
