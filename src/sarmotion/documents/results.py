@@ -16,7 +16,9 @@ The schema name stays ``sarmotion.results/1``: ``detection``, and per mover
 ``detection``, ``standard_errors``, ``snr_db``, ``amplitude`` and
 ``g_perp_cross_range_speed_mps``, were added; no key was removed or changed meaning
 except ``g_peak_db``, now the ``g(u)`` peak over its *local* floor (the detector's
-statistic) instead of over the global median.
+statistic) instead of over the global median. ``timings_s`` also holds
+``movers.<step>`` entries, the mover stage's steps (:mod:`sarmotion.pipeline.movers`),
+which ``total`` does not count.
 """
 
 from __future__ import annotations

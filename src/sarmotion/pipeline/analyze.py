@@ -31,6 +31,12 @@
    ``eq:imagecompu`` from its own traces compensated at its estimated velocity;
 7. **stationary targets**: bright points of the stationary image.
 
+Steps 1-3 are :func:`sarmotion.pipeline.detect`, step 4 is
+:func:`sarmotion.pipeline.estimate_movers` (its named steps, each timed, in
+:mod:`sarmotion.pipeline.movers`, with the re-fit of :mod:`sarmotion.pipeline.refit`),
+steps 5-7 are in :mod:`sarmotion.pipeline.stages`. Each mover is one
+:class:`~sarmotion.pipeline.Mover` record from step 4 on.
+
 The extraction of step 4 was chosen by measurement on Scene 1 (see
 :func:`sarmotion.pipeline.movers.extract_mover`): the windowed slow-time mean leaves
 less of the mover in the residual than the annihilator ``Q^{u, rho}`` and costs one

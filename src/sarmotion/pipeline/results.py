@@ -181,7 +181,9 @@ class AnalysisResult:
     stationary : tuple of StationaryTarget
         Bright points of the stationary image.
     timings_s : dict of str to float
-        Wall-clock time per stage (s).
+        Wall-clock time per stage (s) and ``total``, their sum; the ``movers.<step>``
+        entries break the ``movers`` stage down (:mod:`sarmotion.pipeline.movers`) and
+        are not in ``total``.
     options : AnalysisOptions
         The options the analysis ran with, every data-dependent default filled.
     """
