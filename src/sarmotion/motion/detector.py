@@ -230,7 +230,7 @@ class StationaryExplanation:
     focus_gain_db: float
 
 
-def alias_free_extent_m(traces: Traces) -> float:
+def alias_free_extent_m(traces: Acquisition | Traces) -> float:
     """Cross-range extent free of azimuth aliasing, ``lambda L / (2 dx)`` (m)."""
     dx = float(np.median(np.linalg.norm(np.diff(traces.positions_m, axis=0), axis=1)))
     return float(traces.radar.wavelength_m * traces.geometry.range_m / (2.0 * dx))

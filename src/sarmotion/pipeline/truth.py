@@ -16,6 +16,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..core.acquisition import Acquisition
 from ..core.geometry import cross_range_speed, range_speed
 from ..core.traces import Traces
 from ..imaging import resolution
@@ -183,7 +184,7 @@ class _Motion(Protocol):
     def velocity_mps(self) -> Any: ...
 
 
-def family_errors(traces: Traces, estimate: _Motion, truth: _Motion) -> np.ndarray:
+def family_errors(traces: Acquisition | Traces, estimate: _Motion, truth: _Motion) -> np.ndarray:
     """Errors of ``estimate`` on the truth's cross-range family at the estimate's cross range.
 
     The truth is slid along its own (exact) family
@@ -192,7 +193,7 @@ def family_errors(traces: Traces, estimate: _Motion, truth: _Motion) -> np.ndarr
 
     Parameters
     ----------
-    traces : Traces
+    traces : Acquisition or Traces
         The acquisition the estimate was made on (its geometry and resolution).
     estimate, truth
         Objects with ``position_m`` ((2,) or (3,), m) and ``velocity_mps`` ((2,), m/s),
