@@ -420,7 +420,6 @@ def mover_record(
         bound=_bound(sub, fit, noise_variance),
         family_position_per_m=family[0],
         family_velocity_per_m=family[1],
-        traces=np.zeros((0, 0), dtype=np.complex128),
     )
 
 

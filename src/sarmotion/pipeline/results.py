@@ -110,8 +110,9 @@ class Mover:
         (:func:`sarmotion.motion.family_direction`): ``position + t a``, ``velocity +
         t b`` fit the data as well for ``t`` metres of cross-range offset (m/m and
         (m/s)/m). The data of a few degrees do not fix ``t`` (:mod:`sarmotion.motion.aperture`).
-    traces : (n_pulses, n_samples) ndarray
-        The mover's own separated traces ``D_q`` (data units).
+    traces : (n_pulses, n_samples) ndarray or None
+        The mover's own separated traces ``D_q`` (data units, whole aperture); None
+        before the extraction step.
     image : Image or None
         Its image compensated at the estimated velocity (``eq:imagecompu``).
     image_peak_m : (2,) ndarray or None
@@ -135,7 +136,7 @@ class Mover:
     bound: PointBound
     family_position_per_m: NDArray[np.float64]
     family_velocity_per_m: NDArray[np.float64]
-    traces: NDArray[np.complexfloating]
+    traces: NDArray[np.complexfloating] | None = None
     image: Image | None = None
     image_peak_m: NDArray[np.float64] | None = None
     image_peak_db: float | None = None
