@@ -1,5 +1,7 @@
 """The acquisition apart from its data: shared geometry, sub-apertures, re-referencing."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -75,8 +77,11 @@ def test_data_first_and_the_acquisition_as_a_keyword(traces):
         as_traces(traces.data, traces)
     with pytest.raises(ValueError, match="another acquisition"):
         as_traces(traces, acq.sub_aperture(0, 10))
-    with pytest.raises(TypeError, match="not both"):
-        Traces(data=traces.data, acquisition=acq, radar=traces.radar)
+    turned = dataclasses.replace(traces, reference_point_m=[1.0, 2.0, 0.0])
+    assert turned.trajectory is traces.trajectory and turned.acquisition is not acq
+    np.testing.assert_array_equal(turned.reference_point_m, [1.0, 2.0, 0.0])
+    with pytest.raises(TypeError, match="give acquisition"):
+        Traces(data=traces.data, radar=traces.radar)
     with pytest.raises(ValueError, match="pulses"):
         Traces(data=traces.data[:5], acquisition=acq)
     assert isinstance(acq, Acquisition) and acq.shape == traces.shape

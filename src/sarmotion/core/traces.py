@@ -35,6 +35,7 @@ class Traces:
         Complex traces (complex64 or complex128).
     acquisition : Acquisition, optional
         The acquisition; or give ``trajectory``, ``radar`` and ``reference_point_m``.
+        With both, the parts given replace the acquisition's (a new acquisition).
     trajectory : Trajectory
         Antenna positions (m) and slow times (s), one per pulse.
     radar : Radar
@@ -67,10 +68,18 @@ class Traces:
             acquisition = Acquisition(
                 trajectory=trajectory, radar=radar, reference_point_m=reference_point_m
             )
-        elif any(p is not None for p in parts):
-            raise TypeError("give acquisition or its parts, not both")
-        if not isinstance(acquisition, Acquisition):
+        elif not isinstance(acquisition, Acquisition):
             raise TypeError(f"acquisition must be an Acquisition, got {type(acquisition).__name__}")
+        elif any(p is not None for p in parts):  # e.g. dataclasses.replace(t, trajectory=...)
+            acquisition = Acquisition(
+                trajectory=acquisition.trajectory if trajectory is None else trajectory,
+                radar=acquisition.radar if radar is None else radar,
+                reference_point_m=(
+                    acquisition.reference_point_m
+                    if reference_point_m is None
+                    else reference_point_m
+                ),
+            )
         d = np.asarray(data)
         if d.ndim != 2:
             raise ValueError(f"data must have shape (n_pulses, n_samples), got {d.shape}")
