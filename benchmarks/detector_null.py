@@ -9,8 +9,7 @@ the local-floor statistic of candidates measured on data without movers
 (``NULL_TAIL``: ``t_0`` = 1.34 dB, ``s`` = 0.60 dB, ``p_0`` = 0.1). This script measures
 that distribution again, on seeds of its own (``--seed``, default 31), in the three
 populations of the module notes, each scene through the analysis's own separation and
-detection stages (``preliminary_image``, ``separate``, ``find_range_speeds`` of
-``sarmotion.pipeline.stages``, default options, central degree):
+detection stages (:func:`sarmotion.pipeline.detect`, default options, central degree):
 
 ``real, RPCA``           the four real GOTCHA degrees one at a time and together;
 ``simulated, RPCA``      ``--scenes`` random scenes of 10-80 unit point targets, white
@@ -67,20 +66,14 @@ def _scene(kind: str, index: int, seed: int):
 
 def candidates(job: tuple[str, int, int]) -> dict:
     """The null statistics of one scene: every candidate beyond the stationary band."""
-    from sarmotion.motion import central_sub_aperture
-    from sarmotion.pipeline import AnalysisOptions
-    from sarmotion.pipeline.stages import find_range_speeds, preliminary_image
-    from sarmotion.separation import SeparationOptions, separate
+    from sarmotion.pipeline import AnalysisOptions, detect
+    from sarmotion.separation import SeparationOptions
 
     kind, index, seed = job
     start = time.perf_counter()
     traces, method = _scene(kind, index, seed)
     opts = AnalysisOptions(separation=SeparationOptions(method=method), trajectory=False)
-    opts = opts.resolved(traces)
-    central = central_sub_aperture(traces, opts.sub_aperture_deg)
-    sub = traces.select_pulses(central.start, central.stop)
-    sep = separate(traces, preliminary_image(traces, opts), opts.separation)
-    det = find_range_speeds(sub, sep.moving[central], opts)
+    det = detect(traces, opts).candidates
     st = det.statistics
     keep = np.abs(st.speeds_mps) >= MIN_SPEED_MPS
     return {

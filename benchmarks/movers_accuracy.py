@@ -19,9 +19,8 @@ on other seeds, see ``sarmotion.motion.detector``). Scenes:
 ``null``     the four real degrees one at a time and together (central degree), and
              simulated clutter without movers.
 
-For each scene, in the same run: the analysis (``preliminary_image``, ``separate``,
-``find_range_speeds``, ``estimate_movers`` of ``sarmotion.pipeline.stages``, default
-options, with the preliminary image, as ``analyze`` calls them: its movers' final refit
+For each scene, in the same run: the analysis (``sarmotion.pipeline.detect`` and
+``estimate_movers``, default options, as ``analyze`` calls them: its movers' final refit
 on the data minus a stationary estimate made without them,
 ``sarmotion.pipeline.refit``; their fits on the separated traces before the refit are
 scored too) and the *baseline*: ``g(u)`` on all traces (no separation), the same local-floor
@@ -168,34 +167,18 @@ def run_analysis(traces, method: str):
     Returns the sub-aperture, the estimates, the detection, the moving part and, when the
     analysis refitted its movers, their fits on the separated traces before the refit.
     """
-    from sarmotion.core import ground_velocity
-    from sarmotion.motion import central_sub_aperture
-    from sarmotion.pipeline import AnalysisOptions
-    from sarmotion.pipeline.stages import estimate_movers, find_range_speeds, preliminary_image
-    from sarmotion.separation import SeparationOptions, separate
+    from sarmotion.pipeline import AnalysisOptions, detect, estimate_movers
+    from sarmotion.separation import SeparationOptions
 
     opts = AnalysisOptions(separation=SeparationOptions(method=method), trajectory=False)
-    opts = opts.resolved(traces)
-    central = central_sub_aperture(traces, opts.sub_aperture_deg)
-    sub = traces.select_pulses(central.start, central.stop)
-    prelim = preliminary_image(traces, opts)
-    sep = separate(traces, prelim, opts.separation)
-    detection = find_range_speeds(sub, sep.moving[central], opts)
-    fits, _ = estimate_movers(traces, sep.moving, detection, opts, central=central, image=prelim)
+    found = detect(traces, opts)
+    movers = estimate_movers(found).movers
     out, first = [], []
-    for f in fits:
+    for f in movers:
         b = f.bound
-        ml = [h for h in f.estimate.history if h.get("stage") == "maximum likelihood"]
-        if ml and "refit" in {h.get("stage") for h in f.estimate.history}:
-            h = ml[0]
-            first.append(
-                {
-                    "position_m": np.asarray(h["position_m"]),
-                    "velocity_mps": ground_velocity(
-                        h["range_speed_mps"], h["cross_range_speed_mps"], traces.geometry
-                    ),
-                }
-            )
+        if f.refit_kept is not None:  # the refit ran: score the fit on S too
+            s = f.separated_fit
+            first.append({"position_m": s.position_m, "velocity_mps": s.velocity_mps})
         out.append(
             {
                 "position_m": f.fit.position_m,
@@ -203,10 +186,11 @@ def run_analysis(traces, method: str):
                 "statistic_db": f.evidence.statistic_db,
                 "sd": [b.range_position_m, b.range_speed_mps, b.cross_range_speed_mps],
                 "snr_db": b.snr_db,
-                "g_perp_mps": f.estimate.cross_curve.speed_mps,
+                "g_perp_mps": f.g_perp.speed_mps,
             }
         )
-    return sub, out, detection, sep.moving[central], first if len(first) == len(out) else None
+    first = first if len(first) == len(out) else None
+    return found.sub, out, found.candidates, found.moving_sub, first
 
 
 def run_baseline(traces, image_size_m: float):
@@ -229,7 +213,7 @@ def run_baseline(traces, image_size_m: float):
     )
     out = []
     for u in det.range_speeds.speeds_mps[:5]:
-        f = fit_point_mover(sub, sub.data, float(u))
+        f = fit_point_mover(sub, float(u))
         out.append({"position_m": f.position_m, "velocity_mps": f.velocity_mps})
     return out
 

@@ -13,14 +13,16 @@ distribution.
 import numpy as np
 import pytest
 
-from analysis_stages import detect
 from sarmotion.io import read_gotcha
 from sarmotion.motion import NULL_TAIL
+from sarmotion.pipeline import AnalysisOptions, detect
+from sarmotion.separation import SeparationOptions
 from sarmotion.simulation import random_scene, simulate
 
 
 def _null_statistics(traces, method: str) -> np.ndarray:
-    st = detect(traces, method).detection.statistics
+    options = AnalysisOptions(separation=SeparationOptions(method=method), trajectory=False)
+    st = detect(traces, options).candidates.statistics
     return st.statistic_db[np.abs(st.speeds_mps) >= 1.1]
 
 

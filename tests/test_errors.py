@@ -56,23 +56,35 @@ def test_exit_status_follows_the_class(tmp_path, capsys, monkeypatch, raised, st
 
 def test_trajectory_stage_skips_only_an_estimation_failure(monkeypatch, caplog):
     """The pipeline goes on without a trajectory the estimator cannot give; a defect stops it."""
-    from types import SimpleNamespace
-
-    from sarmotion.pipeline import stages
+    from sarmotion.pipeline import Mover, stages
     from sarmotion.simulation import load_scene, simulate
 
     traces = simulate(load_scene("hyperbola")).traces
-    fit = SimpleNamespace(
-        estimate=SimpleNamespace(position_m=np.zeros(3), velocity_mps=np.zeros(2)),
+    mover = Mover(
+        position_m=np.zeros(3),
+        velocity_mps=np.zeros(2),
+        range_speed_mps=0.0,
+        cross_range_speed_mps=0.0,
+        evidence=None,
+        separated_fit=None,
+        fit=None,
+        refit_kept=None,
+        g_perp=None,
+        aperture=None,
+        bound=None,
+        family_position_per_m=np.zeros(2),
+        family_velocity_per_m=np.zeros(2),
         traces=traces.data,
     )
+    acquisition = traces.acquisition
 
     def no_answer(*args, **kwargs):
         raise EstimationError("sub_aperture_pulses must be an integer in [5, 4], got 9")
 
     monkeypatch.setattr(stages, "estimate_trajectory", no_answer)
     with caplog.at_level("WARNING"):
-        assert stages.estimate_trajectories(traces, [fit]) == [None]
+        (out,) = stages.estimate_trajectories([mover], acquisition=acquisition)
+    assert out.trajectory is None
     assert "trajectory of mover 1 not estimated" in caplog.text
 
     def defect(*args, **kwargs):
@@ -80,7 +92,7 @@ def test_trajectory_stage_skips_only_an_estimation_failure(monkeypatch, caplog):
 
     monkeypatch.setattr(stages, "estimate_trajectory", defect)
     with pytest.raises(ValueError, match="broadcast"):
-        stages.estimate_trajectories(traces, [fit])
+        stages.estimate_trajectories([mover], acquisition=acquisition)
 
 
 def test_traces_too_short_for_the_estimator_are_an_estimation_error():

@@ -25,7 +25,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis_stages import detect, family_errors
 from sarmotion.core import cross_range_speed, ground_velocity, range_speed
 from sarmotion.motion import (
     central_sub_aperture,
@@ -35,7 +34,8 @@ from sarmotion.motion import (
     range_speed_resolution,
     refine_on_aperture,
 )
-from sarmotion.pipeline import AnalysisOptions, analyze
+from sarmotion.pipeline import AnalysisOptions, analyze, detect, estimate_movers, family_errors
+from sarmotion.separation import SeparationOptions
 from sarmotion.simulation import random_scene, simulate
 
 CROSS_SPEED_TOL = 0.5  # m/s, under the cross-range-speed resolution of a degree (0.74)
@@ -74,7 +74,7 @@ def test_fit_of_a_fast_mover_alone_is_on_its_main_lobe(seed, aperture_deg):
     # the start as the g(u) detector gives it: within half a range-speed resolution
     offset = np.random.default_rng(seed).uniform(-0.5, 0.5) * range_speed_resolution(sub)
     start = range_speed(truth.velocity_mps, sub.geometry) + offset
-    fit = fit_point_mover(sub, sub.data, start)
+    fit = fit_point_mover(sub, start)
     err = family_errors(sub, fit, truth)
     assert abs(err[2]) < CROSS_SPEED_TOL, (seed, err)
     assert not fit.ambiguous, (seed, fit.lobe_ratio)
@@ -91,12 +91,13 @@ IN_CLUTTER = [(1040 + k, 1.0) for k in range(8)] + [(1048 + k, 2.0) for k in ran
 def test_fast_mover_in_clutter_is_found_once_on_its_main_lobe(seed, aperture_deg):
     sim = fast_mover_scene(seed, aperture_deg, 10)
     truth = sim.scene.moving[0]
-    det = detect(sim.traces, "rpca")
-    movers = det.movers()
-    assert len(movers) == 1, (seed, [m.estimate.velocity_mps for m in movers])
+    options = AnalysisOptions(separation=SeparationOptions(method="rpca"), trajectory=False)
+    det = detect(sim.traces, options)
+    movers = estimate_movers(det).movers
+    assert len(movers) == 1, (seed, [m.velocity_mps for m in movers])
     err = family_errors(det.sub, movers[0].fit, truth)
     assert abs(err[2]) < CROSS_SPEED_TOL, (seed, err)
-    err = family_errors(det.traces, movers[0].estimate, truth)
+    err = family_errors(det.traces, movers[0], truth)
     assert abs(err[2]) < CROSS_SPEED_TOL, (seed, "final", err)
 
 
@@ -108,8 +109,8 @@ def test_analyze_declares_a_fast_mover_once_on_its_main_lobe(seed, aperture_deg,
     sim = fast_mover_scene(seed, aperture_deg, n_stationary)
     truth = sim.scene.moving[0]
     result = analyze(sim.traces, AnalysisOptions(trajectory=False))
-    assert len(result.movers) == 1, (seed, [m.estimate.velocity_mps for m in result.movers])
-    err = family_errors(sim.traces, result.movers[0].estimate, truth)
+    assert len(result.movers) == 1, (seed, [m.velocity_mps for m in result.movers])
+    err = family_errors(sim.traces, result.movers[0], truth)
     assert abs(err[2]) < CROSS_SPEED_TOL, (seed, err)
 
 
@@ -137,7 +138,7 @@ def test_the_same_range_history_is_one_mover():
     sim = fast_mover_scene(1060, 1.0, 0)
     tr, truth = sim.traces, sim.scene.moving[0]
     geom = tr.geometry
-    fit = fit_point_mover(tr, tr.data, range_speed(truth.velocity_mps, geom))
+    fit = fit_point_mover(tr, range_speed(truth.velocity_mps, geom))
     p, v, _ = family_member(tr, fit.position_m, fit.velocity_mps, 21.0)
     copy = _fit_like(fit, p, v, geom, 0.3 * fit.amplitude)
     assert duplicate_fits(tr, [copy, fit]) == [0]
@@ -157,7 +158,7 @@ def test_two_near_equal_lobes_are_reported():
     geom = tr.geometry
     ur = range_speed(truth.velocity_mps, geom)
     up = cross_range_speed(truth.velocity_mps, geom)
-    single = fit_point_mover(tr, tr.data, ur)
+    single = fit_point_mover(tr, ur)
     assert not single.ambiguous, single.lobe_ratio
     velocities = [truth.velocity_mps, ground_velocity(ur, up + 4.0, geom)]
     pair = random_scene(
@@ -166,7 +167,7 @@ def test_two_near_equal_lobes_are_reported():
         trajectory_spec=sim.scene.trajectory_spec,
     )
     both = simulate(pair, snr_db=20.0, rng=1061)
-    fit = fit_point_mover(both.traces, both.traces.data, ur)
+    fit = fit_point_mover(both.traces, ur)
     assert fit.ambiguous, fit.lobe_ratio
     # each maximum at one mover's cross-range speed (on its family at the fit's cross range)
     truths = sorted(
@@ -195,7 +196,7 @@ def test_the_local_fits_start_within_a_doppler_resolution(seed):
     tr, truth = sim.traces, sim.scene.moving[0]
     geom = tr.geometry
     ur = range_speed(truth.velocity_mps, geom)
-    search = _global_cross_search(tr, tr.data, ur, np.arange(-12.0, 12.0, 0.37))
+    search = _global_cross_search(tr, ur, np.arange(-12.0, 12.0, 0.37))
     i = int(np.argmax(search.values))
     pos, u_r, u_p = _model_start(tr, search.delay_s[i], ur + search.residual_mps[i], search.grid[i])
     start = SimpleNamespace(position_m=pos, velocity_mps=ground_velocity(u_r, u_p, geom))

@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import pytest
 
-from analysis_stages import detect, family_errors
 from sarmotion.io import read_gotcha
+from sarmotion.pipeline import AnalysisOptions, detect, estimate_movers, family_errors
+from sarmotion.separation import SeparationOptions
 from sarmotion.simulation import PointTarget, inject
 
 SCENES = {
@@ -46,8 +47,9 @@ SCENES = {
 def test_found_movers_are_on_their_lobe(gotcha_files, name):
     degree, spec = SCENES[name]
     movers = [PointTarget(position_m=[*p, 0.0], velocity_mps=v, reflectivity=a) for p, v, a in spec]
-    det = detect(inject(read_gotcha(gotcha_files[degree : degree + 1]), movers), "rpca")
-    fits = det.movers()
+    options = AnalysisOptions(separation=SeparationOptions(method="rpca"), trajectory=False)
+    det = detect(inject(read_gotcha(gotcha_files[degree : degree + 1]), movers), options)
+    fits = estimate_movers(det).movers
     assert fits, "no mover found"
     for f in fits:
         truth = min(movers, key=lambda m: abs(family_errors(det.sub, f.fit, m)[1]))

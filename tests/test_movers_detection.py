@@ -10,8 +10,6 @@ bound (cross-range coordinate held) is defined.
 import numpy as np
 import pytest
 
-from analysis_stages import detect
-from analysis_stages import family_errors as _family_errors
 from sarmotion.core import C, ground_velocity, range_speed
 from sarmotion.imaging import resolution
 from sarmotion.io import read_gotcha
@@ -28,13 +26,19 @@ from sarmotion.motion import (
     range_gradients,
     threshold_db,
 )
+from sarmotion.pipeline import AnalysisOptions, detect, estimate_movers
+from sarmotion.pipeline import family_errors as _family_errors
+from sarmotion.separation import SeparationOptions
 from sarmotion.simulation import PointTarget, inject, random_scene, simulate
 
 
 def _movers_stages(traces, method, size_m=None):
     """The analysis's separation, detection and estimation stages (default options)."""
-    d = detect(traces, method, size_m)
-    return d.sub, d.moving_sub, d.detection, d.movers()
+    options = AnalysisOptions(
+        separation=SeparationOptions(method=method), trajectory=False, image_size_m=size_m
+    )
+    d = detect(traces, options)
+    return d.sub, d.moving_sub, d.candidates, list(estimate_movers(d).movers)
 
 
 def _white_noise_bound(sub, truth, noise_variance_t):
@@ -121,9 +125,9 @@ def test_bound_is_reached_by_the_fit_in_white_noise():
             rng.standard_normal(clean.shape) + 1j * rng.standard_normal(clean.shape)
         )
         fit = fit_point_mover(
-            clean,
             clean.data + noise,
             range_speed(truth.velocity_mps, geom),
+            acquisition=clean.acquisition,
             cross_speed_range_mps=(3.0, 9.0),
         )
         errs.append(_family_errors(clean, fit, truth))
@@ -296,7 +300,7 @@ def test_matched_filter_and_model_agree():
     geom = traces.geometry
     pos, vel, a = np.array([2.0, 1.0, 0.0]), ground_velocity(3.0, 5.0, geom), 0.3 - 0.4j
     data = point_model(traces, pos, vel, a)
-    value = MatchedFilter(traces, data).responses(pos[None], vel[None])[0]
+    value = MatchedFilter(data, acquisition=traces.acquisition).responses(pos[None], vel[None])[0]
     assert value == pytest.approx(a * traces.n_pulses, rel=1e-9)
 
 
@@ -328,7 +332,7 @@ def test_matched_filter_compiled_sums_match_the_direct_sum():
     data = point_model(traces, pos0, vel0, 0.3 - 0.4j) + noise
     pos = pos0[None] + np.c_[gen.uniform(-20, 20, (40, 2)), np.zeros(40)]
     vel = vel0[None] + gen.uniform(-10, 10, (40, 2))
-    got = MatchedFilter(traces, data).responses(pos, vel)
+    got = MatchedFilter(data, acquisition=traces.acquisition).responses(pos, vel)
     want = _matched_filter_direct(traces, data, pos, vel)
     w = traces.radar.spectral_weights()
     scale = np.abs(traces.with_data(data).phase_history() * w).sum() / np.sum(w**2)

@@ -131,7 +131,7 @@ def test_number_of_movers(scene1, moving):
     truth = np.sort([range_speed(t.velocity_mps, geometry) for t in scene1.scene.moving])
     assert found.n_movers == 2
     np.testing.assert_allclose(np.sort(found.speeds_mps), truth, atol=0.2)
-    assert np.all(found.peak_db > 15)
+    assert np.all(found.over_floor_db > 15)
     # One mover alone.
     alone = _alone(scene1.scene, scene1.scene.moving[0])
     assert estimate_range_speeds(alone).n_movers == 1
@@ -223,7 +223,7 @@ def test_estimate_velocity_recovers_a_single_mover(scene1):
     np.testing.assert_allclose(
         est.velocity_mps, ground_velocity(u, u_perp, alone.geometry), atol=0.5
     )
-    assert est.peak_db > 20
+    assert est.over_floor_db > 20
     assert est.range_curve.grid_mps.shape == est.range_curve.objective.shape
 
 

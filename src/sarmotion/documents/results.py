@@ -16,7 +16,9 @@ The schema name stays ``sarmotion.results/1``: ``detection``, and per mover
 ``detection``, ``standard_errors``, ``snr_db``, ``amplitude`` and
 ``g_perp_cross_range_speed_mps``, were added; no key was removed or changed meaning
 except ``g_peak_db``, now the ``g(u)`` peak over its *local* floor (the detector's
-statistic) instead of over the global median.
+statistic) instead of over the global median. ``timings_s`` also holds
+``movers.<step>`` entries, the mover stage's steps (:mod:`sarmotion.pipeline.movers`),
+which ``total`` does not count.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..motion import NULL_TAIL, azimuth_span_deg
-from ..pipeline import AnalysisResult, MoverResult, TruthComparison
+from ..pipeline import AnalysisResult, Mover, TruthComparison
 
 __all__ = ["RESULTS_SCHEMA", "results_document"]
 
@@ -59,7 +61,7 @@ def results_document(
         "detection": _detection(result),
         "movers": [_mover(m) for m in result.movers],
         "stationary": [
-            {"position_m": list(s.position_m), "peak_db": float(s.peak_db)}
+            {"position_m": list(s.position_m), "peak_db": float(s.level_db)}
             for s in result.stationary
         ],
         "timings_s": {k: float(v) for k, v in result.timings_s.items()},
@@ -76,46 +78,41 @@ def results_document(
     return doc
 
 
-def _mover(m: MoverResult) -> dict[str, Any]:
-    e = m.estimate
+def _mover(m: Mover) -> dict[str, Any]:
     entry: dict[str, Any] = {
-        "position_m": [float(v) for v in e.position_m[:2]],
-        "velocity_mps": [float(v) for v in e.velocity_mps],
-        "range_speed_mps": float(e.range_speed_mps),
-        "cross_range_speed_mps": float(e.cross_range_speed_mps),
-        "peak_db": float(m.peak_db),
-        "g_peak_db": float(e.peak_db),
+        "position_m": [float(v) for v in m.position_m[:2]],
+        "velocity_mps": [float(v) for v in m.velocity_mps],
+        "range_speed_mps": float(m.range_speed_mps),
+        "cross_range_speed_mps": float(m.cross_range_speed_mps),
+        "peak_db": float(m.image_peak_db),
+        "g_peak_db": float(m.evidence.statistic_db),
         "image_peak_m": [float(v) for v in m.image_peak_m],
         "cross_range_family": {
             "position_per_m": [float(v) for v in m.family_position_per_m],
             "velocity_mps_per_m": [float(v) for v in m.family_velocity_per_m],
         },
     }
-    if m.evidence is not None:
-        ev = m.evidence
-        entry["detection"] = {
-            "statistic_db": float(ev.statistic_db),
-            "threshold_db": float(ev.threshold_db),
-            "false_alarm_rate": float(ev.false_alarm_rate),
-            "p_value": float(ev.p_value),
-            "width_resolutions": float(ev.width_resolutions),
-            "focus_gain_db": float(ev.focus_gain_db),
-            "stationary_point_m": [float(v) for v in ev.stationary_point_m],
-            "stationary_within_extent": bool(ev.stationary_within_extent),
-        }
-    if m.bound is not None:
-        b = m.bound
-        entry["standard_errors"] = {
-            "range_position_m": b.range_position_m,
-            "range_speed_mps": b.range_speed_mps,
-            "cross_range_speed_mps": b.cross_range_speed_mps,
-            "amplitude": b.amplitude,
-            "kind": "Cramér–Rao bound at the measured SNR, cross-range coordinate held",
-        }
-        entry["snr_db"] = b.snr_db
-    if m.fit is not None:
-        entry["amplitude"] = [float(m.fit.amplitude.real), float(m.fit.amplitude.imag)]
-        entry["g_perp_cross_range_speed_mps"] = float(m.estimate.cross_curve.speed_mps)
+    ev, b = m.evidence, m.bound
+    entry["detection"] = {
+        "statistic_db": float(ev.statistic_db),
+        "threshold_db": float(ev.threshold_db),
+        "false_alarm_rate": float(ev.false_alarm_rate),
+        "p_value": float(ev.p_value),
+        "width_resolutions": float(ev.width_resolutions),
+        "focus_gain_db": float(ev.focus_gain_db),
+        "stationary_point_m": [float(v) for v in ev.stationary_point_m],
+        "stationary_within_extent": bool(ev.stationary_within_extent),
+    }
+    entry["standard_errors"] = {
+        "range_position_m": b.range_position_m,
+        "range_speed_mps": b.range_speed_mps,
+        "cross_range_speed_mps": b.cross_range_speed_mps,
+        "amplitude": b.amplitude,
+        "kind": "Cramér–Rao bound at the measured SNR, cross-range coordinate held",
+    }
+    entry["snr_db"] = b.snr_db
+    entry["amplitude"] = [float(m.fit.amplitude.real), float(m.fit.amplitude.imag)]
+    entry["g_perp_cross_range_speed_mps"] = float(m.g_perp.speed_mps)
     if m.trajectory is not None:
         knots = m.trajectory.knot_times_s
         entry["trajectory"] = {

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import positive as _positive
-from ..core import Traces, as_point, look_geometry
+from ..core import Traces, as_point
+from ..core.acquisition import Acquisition, Resolution
 from ._bp_common import DEFAULT_UPSAMPLE
 from .backprojection import backproject_points
 from .grid import Image
@@ -18,49 +18,15 @@ __all__ = ["Resolution", "resolution", "width_3db"]
 
 
 # ===================================================================== resolution
-@dataclass(frozen=True, kw_only=True, eq=False)
-class Resolution:
-    """Theoretical resolution of a stationary point (paper ``sect:scales``).
-
-    Attributes
-    ----------
-    slant_range_m : float
-        ``c / (2 B)`` (m).
-    ground_range_m : float
-        ``c / (2 B) / cos(elevation)`` (m), along :attr:`range_direction`.
-    cross_range_m : float
-        ``lambda_o L / (2 a)`` (m), along :attr:`cross_range_direction`.
-    range_direction : (2,) ndarray
-        Unit ground vector: the ground projection of ``m_o``, normalised.
-    cross_range_direction : (2,) ndarray
-        Unit ground vector perpendicular to :attr:`range_direction` (rotated +90 deg).
-    elevation_rad : float
-        Elevation of the antenna at ``s = 0`` seen from the point (rad).
-    range_m : float
-        ``L = |r(0) - rho|`` (m).
-    aperture_m : float
-        Aperture length ``a`` (m): the path flown from the first to the last pulse.
-    wavelength_m : float
-        ``lambda_o`` (m).
-    """
-
-    slant_range_m: float
-    ground_range_m: float
-    cross_range_m: float
-    range_direction: NDArray[np.float64]
-    cross_range_direction: NDArray[np.float64]
-    elevation_rad: float
-    range_m: float
-    aperture_m: float
-    wavelength_m: float
-
-
-def resolution(traces: Traces, *, point_m: ArrayLike | None = None) -> Resolution:
+def resolution(traces: Traces | Acquisition, *, point_m: ArrayLike | None = None) -> Resolution:
     """Slant-range, ground-range and cross-range resolution of a stationary point.
+
+    At the reference point it is the acquisition's, computed once
+    (:attr:`~sarmotion.core.Acquisition.resolution`).
 
     Parameters
     ----------
-    traces : Traces
+    traces : Traces or Acquisition
         The acquisition (radar bandwidth and carrier, trajectory).
     point_m : (2,) or (3,) array_like, optional
         The point ``rho`` (m); defaults to the reference point ``rho_o``.
@@ -69,29 +35,11 @@ def resolution(traces: Traces, *, point_m: ArrayLike | None = None) -> Resolutio
     -------
     Resolution
     """
-    if not isinstance(traces, Traces):
+    if isinstance(traces, Traces):
+        traces = traces.acquisition
+    if not isinstance(traces, Acquisition):
         raise TypeError(f"traces must be a Traces object, got {type(traces).__name__}")
-    rho = traces.reference_point_m if point_m is None else as_point(point_m, name="point_m")
-    geo = look_geometry(traces.trajectory, rho)
-    b = geo.ground_m_o
-    nb = float(np.linalg.norm(b))
-    if nb < 1e-9:
-        raise ValueError("the antenna is above the point (zenith look): ground range undefined")
-    rng_dir = b / nb
-    slant = float(traces.radar.range_resolution_m)
-    a = traces.trajectory.aperture_length_m
-    lam = float(traces.radar.wavelength_m)
-    return Resolution(
-        slant_range_m=slant,
-        ground_range_m=slant / math.cos(geo.elevation_rad),
-        cross_range_m=lam * geo.range_m / (2.0 * a),
-        range_direction=rng_dir,
-        cross_range_direction=np.array([-rng_dir[1], rng_dir[0]]),
-        elevation_rad=geo.elevation_rad,
-        range_m=geo.range_m,
-        aperture_m=a,
-        wavelength_m=lam,
-    )
+    return traces.resolution if point_m is None else traces.resolution_at(point_m)
 
 
 def width_3db(

@@ -74,7 +74,7 @@ from .location import MoverLocation, locate_mover
 from .phase_space import TrajectoryEstimate, estimate_trajectory, trajectory_error
 from .range_speed import RangeSpeeds, estimate_range_speeds, range_speed_objective
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
-from .velocity import MoverEstimate, estimate_velocity
+from .velocity import EstimationStep, MoverEstimate, estimate_velocity
 from .wigner import WignerRidge, wigner_ridge, wigner_slow_time
 
 __all__ = [
@@ -93,6 +93,7 @@ __all__ = [
     # the paper's estimators
     "MoverLocation",
     "locate_mover",
+    "EstimationStep",
     "MoverEstimate",
     "estimate_velocity",
     "TrajectoryEstimate",

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares, minimize
 
-from ..core import C, Traces, as_point, target_positions, travel_time
+from ..core import Acquisition, C, Traces, as_point, target_positions, travel_time
 from ..core.ascent import ResponseDerivatives, newton_ascent
 from ..core.spectral import FrequencyPlanes
 from ..imaging import pulse_responses, resolution
@@ -85,14 +85,16 @@ def azimuth_span_deg(traces: Traces) -> float:
     return float(np.degrees(np.arccos(np.clip(cos_span, -1.0, 1.0))))
 
 
-def ranges_m(traces: Traces, position_m: ArrayLike, velocity_mps: ArrayLike) -> NDArray[np.float64]:
+def ranges_m(
+    traces: Acquisition | Traces, position_m: ArrayLike, velocity_mps: ArrayLike
+) -> NDArray[np.float64]:
     """Range ``|r(s) - rho - s u|`` of a uniform mover at every pulse (m), shape (n_pulses,)."""
     where = target_positions(position_m, velocity_mps, traces.slow_times_s)
     return 0.5 * C * travel_time(traces.positions_m, where)
 
 
 def family_member(
-    traces: Traces,
+    traces: Acquisition | Traces,
     position_m: ArrayLike,
     velocity_mps: ArrayLike,
     cross_offset_m: float,
@@ -101,7 +103,7 @@ def family_member(
 
     Parameters
     ----------
-    traces : Traces
+    traces : Acquisition or Traces
         The (sub-)aperture over which the range histories must agree; its ``s = 0`` is
         the time of ``position_m``.
     position_m : (2,) or (3,) array_like
@@ -141,7 +143,7 @@ def family_member(
 
 
 def family_direction(
-    traces: Traces, position_m: ArrayLike, velocity_mps: ArrayLike
+    traces: Acquisition | Traces, position_m: ArrayLike, velocity_mps: ArrayLike
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Tangent of the family at an estimate: change per metre of cross-range offset.
 

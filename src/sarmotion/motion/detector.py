@@ -75,10 +75,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import C, Traces, range_speed
+from ..core import Acquisition, C, Traces, as_traces, range_speed
 from ..imaging import refine_location, resolution
 from .aperture import family_member
-from .range_speed import RangeSpeeds, estimate_range_speeds, range_speed_objective
+from .range_speed import RangeSpeeds, _over_floor_db, estimate_range_speeds, range_speed_objective
 from .speed_resolution import range_speed_resolution
 
 __all__ = [
@@ -230,18 +230,19 @@ class StationaryExplanation:
     focus_gain_db: float
 
 
-def alias_free_extent_m(traces: Traces) -> float:
+def alias_free_extent_m(traces: Acquisition | Traces) -> float:
     """Cross-range extent free of azimuth aliasing, ``lambda L / (2 dx)`` (m)."""
     dx = float(np.median(np.linalg.norm(np.diff(traces.positions_m, axis=0), axis=1)))
     return float(traces.radar.wavelength_m * traces.geometry.range_m / (2.0 * dx))
 
 
 def stationary_explanation(
-    traces: Traces,
-    data: ArrayLike,
+    data: Traces | ArrayLike,
     position_m: ArrayLike,
     velocity_mps: ArrayLike,
     value: complex,
+    *,
+    acquisition: Acquisition | None = None,
 ) -> StationaryExplanation:
     """The zero-range-speed member of a fit's family, refined as a stationary point.
 
@@ -252,9 +253,7 @@ def stationary_explanation(
 
     Parameters
     ----------
-    traces : Traces
-        Acquisition of about a degree.
-    data : (n_pulses, n_samples) array_like
+    data : Traces or (n_pulses, n_samples) array_like
         The data the candidate was fitted on.
     position_m : (3,) array_like
         Fitted position (m).
@@ -262,12 +261,14 @@ def stationary_explanation(
         Fitted ground velocity (m/s).
     value : complex
         Matched filter at the fit (data units times ``n_pulses``).
+    acquisition : Acquisition, optional
+        The acquisition of ``data`` (about a degree); required when it is an array.
 
     Returns
     -------
     StationaryExplanation
     """
-    tr = traces.with_data(np.asarray(data))
+    tr = as_traces(data, acquisition)
     geom = tr.geometry
 
     def speed_at(dy: float) -> tuple[float, NDArray[np.float64]]:
@@ -322,10 +323,9 @@ class RangeSpeedDetection:
     Attributes
     ----------
     range_speeds : RangeSpeeds
-        ``g`` on its grid; ``speeds_mps``, ``peak_values`` and ``peak_db`` are the
+        ``g`` on its grid; ``speeds_mps``, ``peak_values`` and ``over_floor_db`` are the
         candidates that passed the statistic, speed and shape tests, by decreasing
-        statistic (``peak_db`` is the statistic, re the local floor), ``floor`` the
-        global median.
+        statistic; ``floor`` is the global median.
     statistics : PeakStatistics
         Every candidate of the curve.
     threshold_db : float
@@ -337,6 +337,8 @@ class RangeSpeedDetection:
     max_width : float
         Widest accepted peak (range-speed resolutions): the caller's factor times
         :func:`point_peak_width`.
+    statistic_db : (k,) ndarray
+        The statistic of the accepted candidates: each peak over its local floor (dB).
     widths : (k,) ndarray
         Half-height widths of the accepted candidates (resolutions).
     floor_curve : (n_grid,) ndarray
@@ -349,6 +351,7 @@ class RangeSpeedDetection:
     false_alarm_rate: float
     min_speed_mps: float
     max_width: float
+    statistic_db: NDArray[np.float64]
     widths: NDArray[np.float64]
     floor_curve: NDArray[np.float64]
 
@@ -421,7 +424,7 @@ def detect_range_speeds(
     accepted = RangeSpeeds(
         speeds_mps=stats.speeds_mps[idx],
         peak_values=stats.values[idx],
-        peak_db=stats.statistic_db[idx],
+        over_floor_db=_over_floor_db(stats.values[idx], curve.floor),
         floor=curve.floor,
         resolution_mps=res,
         grid_mps=curve.grid_mps,
@@ -434,6 +437,7 @@ def detect_range_speeds(
         false_alarm_rate=float(false_alarm_rate),
         min_speed_mps=float(min_speed_mps),
         max_width=widest,
+        statistic_db=stats.statistic_db[idx],
         widths=stats.width_resolutions[idx],
         floor_curve=local_floor(curve.grid_mps, curve.objective, res),
     )

@@ -63,9 +63,11 @@ from scipy.optimize import least_squares, minimize
 from threadpoolctl import threadpool_limits
 
 from ..core import (
+    Acquisition,
     C,
     Traces,
     as_point,
+    as_traces,
     cross_range_speed,
     ground_velocity,
     range_direction_velocity,
@@ -127,14 +129,16 @@ class MatchedFilter:
 
     Parameters
     ----------
-    traces : Traces
-        Acquisition (geometry, frequencies, reference point, pulse spectrum).
-    data : (n_pulses, n_samples) array_like
-        The traces filtered (e.g. the moving residual); default ``traces.data``.
+    data : Traces or (n_pulses, n_samples) array_like
+        The traces filtered (e.g. the moving residual).
+    acquisition : Acquisition, optional
+        Their acquisition (geometry, frequencies, reference point, pulse spectrum);
+        required when ``data`` is an array.
     """
 
-    def __init__(self, traces: Traces, data: ArrayLike | None = None) -> None:
-        d = traces if data is None else traces.with_data(np.asarray(data))
+    def __init__(self, data: Traces | ArrayLike, *, acquisition: Acquisition | None = None) -> None:
+        d = as_traces(data, acquisition)
+        traces = d.acquisition
         w = traces.radar.spectral_weights()
         self.weighted = np.ascontiguousarray(d.phase_history() * w[None, :], dtype=np.complex128)
         self.norm = float(np.sum(w**2))
@@ -263,9 +267,7 @@ class _Profile:
         return out
 
 
-def _global_cross_search(
-    traces: Traces, data: NDArray, range_speed_mps: float, grid: NDArray[np.float64]
-) -> _Profile:
+def _global_cross_search(d: Traces, range_speed_mps: float, grid: NDArray[np.float64]) -> _Profile:
     """Profile of ``max |I|`` over range and residual range speed for each ``u_p`` of ``grid``.
 
     The profile is in the units of ``|I|`` (``a n_pulses`` for a mover of reflectivity
@@ -274,7 +276,6 @@ def _global_cross_search(
     The residual range speed is compensated by its phase at the carrier: a lower bound
     of ``|I|`` at the motion of the same range history, not ``|I|`` itself.
     """
-    d = traces.with_data(data)
     al = _Aligner(d, d.reference_point_m)
     geom = d.geometry
     # fast-time window: the aligned trace of the g(u) peak, +- 12 samples (1.4 m at GOTCHA)
@@ -357,7 +358,7 @@ def _model_start(
 
 
 def _local_fit(
-    traces: Traces,
+    traces: Acquisition | Traces,
     mf: MatchedFilter,
     position_m: NDArray[np.float64],
     range_speed_mps: float,
@@ -415,10 +416,10 @@ def _local_fit(
 
 
 def fit_point_mover(
-    traces: Traces,
-    data: ArrayLike,
+    data: Traces | ArrayLike,
     range_speed_mps: float,
     *,
+    acquisition: Acquisition | None = None,
     cross_speed_range_mps: tuple[float, float] = (-30.0, 30.0),
     step_mps: float | None = None,
 ) -> PointFit:
@@ -426,13 +427,14 @@ def fit_point_mover(
 
     Parameters
     ----------
-    traces : Traces
-        Acquisition of about a degree (its ``s = 0`` is the time of the position).
-    data : (n_pulses, n_samples) array_like
+    data : Traces or (n_pulses, n_samples) array_like
         Traces holding the mover, stationary targets and other movers removed.
     range_speed_mps : float
         The ``g(u)`` peak (m/s); refined on ``g`` within half a range-speed resolution
         first, then by the Doppler search within ``+- lambda PRF / 4``.
+    acquisition : Acquisition, optional
+        Acquisition of about a degree (its ``s = 0`` is the time of the position);
+        required when ``data`` is an array.
     cross_speed_range_mps : (float, float)
         The cross-range speeds searched globally (m/s).
     step_mps : float, optional
@@ -446,8 +448,7 @@ def fit_point_mover(
         ``lobe_ratio`` and ``other_cross_range_speed_mps`` say whether another lobe of
         the likelihood came near its maximum.
     """
-    d = np.asarray(data)
-    tr = traces.with_data(d)
+    tr = as_traces(data, acquisition)
     res_u = range_speed_resolution(tr)
     al = _Aligner(tr, tr.reference_point_m)
 
@@ -459,8 +460,8 @@ def fit_point_mover(
     res_c = cross_range_speed_resolution(tr)
     step = 0.5 * res_c if step_mps is None else float(step_mps)
     grid = lo + step * np.arange(int(np.floor((hi - lo) / step)) + 1)
-    search = _global_cross_search(tr, d, u0, grid)
-    mf = MatchedFilter(tr, d)
+    search = _global_cross_search(tr, u0, grid)
+    mf = MatchedFilter(tr)
     # Local maxima one Doppler resolution apart in range speed trade it against metres
     # per second of cross-range speed (one degree of aperture): from the profile's
     # largest maximum the local fit starts at its range speed and one resolution either
@@ -505,7 +506,7 @@ def fit_point_mover(
     )
 
 
-def duplicate_fits(traces: Traces, fits: Sequence[PointFit]) -> list[int]:
+def duplicate_fits(traces: Acquisition | Traces, fits: Sequence[PointFit]) -> list[int]:
     """Indices of the fits that repeat a stronger one: the same range history.
 
     Two point movers whose ranges ``|r(s) - rho - s u|`` differ by less than a
@@ -541,9 +542,9 @@ def duplicate_fits(traces: Traces, fits: Sequence[PointFit]) -> list[int]:
 
 
 def point_model(
-    traces: Traces, position_m: ArrayLike, velocity_mps: ArrayLike, amplitude: complex
+    traces: Acquisition | Traces, position_m: ArrayLike, velocity_mps: ArrayLike, amplitude: complex
 ) -> NDArray[np.complex128]:
-    """Traces of one point mover on the acquisition of ``traces`` (``eq:MOD1``).
+    """Traces of one point mover on the acquisition ``traces`` (``eq:MOD1``).
 
     Returns
     -------
@@ -564,17 +565,21 @@ def point_model(
 
 
 def refine_jointly(
-    traces: Traces, data: ArrayLike, fits: Sequence[PointFit], *, rounds: int = 2
+    data: Traces | ArrayLike,
+    fits: Sequence[PointFit],
+    *,
+    acquisition: Acquisition | None = None,
+    rounds: int = 2,
 ) -> list[PointFit]:
     """Re-fit every mover locally on ``data`` minus the other movers' models, ``rounds`` times.
 
     The alternating (coordinate-wise) maximisation of the joint likelihood of several
     point movers (:func:`refit_movers` on the data the fits were made on); one mover is
-    returned unchanged.
+    returned unchanged. ``acquisition`` is required when ``data`` is an array.
     """
     if len(fits) < 2:
         return list(fits)
-    return refit_movers(traces, data, fits, rounds=rounds)
+    return refit_movers(data, fits, acquisition=acquisition, rounds=rounds)
 
 
 def noise_variance(residual: ArrayLike) -> float:
@@ -588,9 +593,9 @@ def noise_variance(residual: ArrayLike) -> float:
 
 
 def matched_filter_noise_variance(
-    traces: Traces,
-    data: ArrayLike,
+    data: Traces | ArrayLike,
     *,
+    acquisition: Acquisition | None = None,
     half_size_m: float,
     speed_range_mps: tuple[float, float] = (-30.0, 30.0),
     centre_m: ArrayLike | None = None,
@@ -610,8 +615,10 @@ def matched_filter_noise_variance(
     target does not count) gives ``sigma_P^2``, returned per fast-time sample
     (``/ n_samples``). Unlike the median of the residual samples it counts the residue
     of stationary clutter, which RPCA leaves sparse (most samples exactly zero); drawn
-    around a mover it measures the interference where that mover is.
+    around a mover it measures the interference where that mover is. ``acquisition`` is
+    required when ``data`` is an array.
     """
+    traces = as_traces(data, acquisition)
     gen = np.random.default_rng(seed)
     geom = traces.geometry
     centre = traces.reference_point_m if centre_m is None else as_point(centre_m, name="centre_m")
@@ -626,13 +633,17 @@ def matched_filter_noise_variance(
         spread = np.asarray(speed_spread_mps, dtype=np.float64)
         speeds = np.array([ur, up])[None, :] + gen.uniform(-1.0, 1.0, (n_draws, 2)) * spread
     vel = np.array([ground_velocity(a, b, geom) for a, b in speeds])
-    mf = MatchedFilter(traces, data)
+    mf = MatchedFilter(traces)
     level = float(np.median(np.abs(mf.responses(pos, vel)) ** 2) / np.log(2.0))
     return level * mf.norm / traces.n_pulses / traces.n_samples
 
 
 def refit_movers(
-    traces: Traces, data: ArrayLike, fits: Sequence[PointFit], *, rounds: int = 1
+    data: Traces | ArrayLike,
+    fits: Sequence[PointFit],
+    *,
+    acquisition: Acquisition | None = None,
+    rounds: int = 1,
 ) -> list[PointFit]:
     """Re-fit every mover locally on ``data`` minus the other movers' models.
 
@@ -641,15 +652,16 @@ def refit_movers(
     :mod:`sarmotion.pipeline.refit`). The other movers' models use the amplitudes of
     ``fits``; each re-fitted mover's amplitude is the matched filter on ``data`` at its
     new parameters. ``rounds`` sweeps (the alternating maximisation of the joint
-    likelihood).
+    likelihood). ``acquisition`` is required when ``data`` is an array.
     """
-    d = np.asarray(data)
+    given = as_traces(data, acquisition)
+    traces, d = given.acquisition, given.data
     out = list(fits)
     models = [point_model(traces, f.position_m, f.velocity_mps, f.amplitude) for f in out]
     for _ in range(int(rounds)):
         for k, f in enumerate(out):
             others = sum((m for j, m in enumerate(models) if j != k), np.zeros_like(d))
-            mf = MatchedFilter(traces, d - others)
+            mf = MatchedFilter(d - others, acquisition=traces)
             pos, ur, up, value = _local_fit(
                 traces, mf, f.position_m, f.range_speed_mps, f.cross_range_speed_mps
             )

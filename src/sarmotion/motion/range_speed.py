@@ -90,8 +90,10 @@ class RangeSpeeds:
         Refined peak locations of ``g`` (m/s), strongest peak first.
     peak_values : (n_movers,) ndarray
         ``g`` at those speeds (trace units).
-    peak_db : (n_movers,) ndarray
-        ``20 log10(peak / floor)`` (dB; ``g`` is a sum of moduli, an amplitude).
+    over_floor_db : (n_movers,) ndarray
+        ``20 log10(peak_values / floor)`` over the global floor :attr:`floor` (dB; ``g``
+        is a sum of moduli, an amplitude). Not the detector's statistic, which is over
+        the *local* floor (:class:`~sarmotion.motion.RangeSpeedDetection`).
     floor : float
         Median of ``g`` over the coarse grid: the robust level of the misaligned traces,
         clutter and noise (trace units).
@@ -105,7 +107,7 @@ class RangeSpeeds:
 
     speeds_mps: NDArray[np.float64]
     peak_values: NDArray[np.float64]
-    peak_db: NDArray[np.float64]
+    over_floor_db: NDArray[np.float64]
     floor: float
     resolution_mps: float
     grid_mps: NDArray[np.float64]
@@ -228,14 +230,20 @@ def estimate_range_speeds(
         speeds.append(u)
         values.append(val)
     vals = np.asarray(values, dtype=np.float64)
-    peak_db = 20.0 * np.log10(vals / floor) if floor > 0 else np.full(vals.size, np.inf)
-    log.debug("range speeds %s (peak/floor %s dB)", speeds, peak_db)
+    over_floor_db = _over_floor_db(vals, floor)
+    log.debug("range speeds %s (peak/floor %s dB)", speeds, over_floor_db)
     return RangeSpeeds(
         speeds_mps=np.asarray(speeds, dtype=np.float64),
         peak_values=vals,
-        peak_db=peak_db,
+        over_floor_db=over_floor_db,
         floor=floor,
         resolution_mps=res,
         grid_mps=grid,
         objective=curve,
     )
+
+
+def _over_floor_db(values: NDArray[np.float64], floor: float) -> NDArray[np.float64]:
+    """``20 log10(values / floor)`` (dB); infinite for a zero floor."""
+    v = np.asarray(values, dtype=np.float64)
+    return 20.0 * np.log10(v / floor) if floor > 0 else np.full(v.size, np.inf)

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from ..core import Traces
-from ._aligned import _aperture_time_s, _check_traces
+from ..core import Acquisition, Traces
+from ._aligned import _aperture_time_s
 
 __all__ = ["range_speed_resolution", "cross_range_speed_resolution"]
 
 
-def range_speed_resolution(traces: Traces) -> float:
+def range_speed_resolution(traces: Acquisition | Traces) -> float:
     """Range-speed resolution of ``g`` (m/s): ``(c / 2B) / (T / 2)``.
 
     A range-speed error ``du`` tilts the aligned trace so that its ends move by
@@ -18,7 +18,7 @@ def range_speed_resolution(traces: Traces) -> float:
 
     Parameters
     ----------
-    traces : Traces
+    traces : Acquisition or Traces
         Supplies the bandwidth and the slow times.
 
     Returns
@@ -26,11 +26,11 @@ def range_speed_resolution(traces: Traces) -> float:
     float
         Resolution (m/s).
     """
-    _check_traces(traces)
+    _check_acquisition(traces)
     return traces.radar.range_resolution_m / (0.5 * _aperture_time_s(traces))
 
 
-def cross_range_speed_resolution(traces: Traces) -> float:
+def cross_range_speed_resolution(traces: Acquisition | Traces) -> float:
     """Cross-range-speed resolution of ``g_perp`` (m/s): ``lambda L / (8 V (T / 2)^2)``.
 
     A cross-range-speed error ``du_perp`` changes the range acceleration of the target by
@@ -41,7 +41,7 @@ def cross_range_speed_resolution(traces: Traces) -> float:
 
     Parameters
     ----------
-    traces : Traces
+    traces : Acquisition or Traces
         Supplies wavelength, range ``L``, platform speed ``V`` and slow times.
 
     Returns
@@ -49,7 +49,16 @@ def cross_range_speed_resolution(traces: Traces) -> float:
     float
         Resolution (m/s).
     """
-    _check_traces(traces)
+    _check_acquisition(traces)
     g = traces.geometry
     half = 0.5 * _aperture_time_s(traces)
     return traces.radar.wavelength_m * g.range_m / (8.0 * g.speed_mps * half**2)
+
+
+def _check_acquisition(traces: object) -> None:
+    if isinstance(traces, Traces):
+        traces = traces.acquisition
+    if not isinstance(traces, Acquisition):
+        raise TypeError(f"traces must be a sarmotion Traces, got {type(traces).__name__}")
+    if traces.n_pulses < 3:
+        raise ValueError(f"traces must hold at least 3 pulses, got {traces.n_pulses}")

@@ -85,10 +85,33 @@ from .location import locate_mover
 from .range_speed import RangeSpeeds, estimate_range_speeds
 from .speed_resolution import range_speed_resolution
 
-__all__ = ["MoverEstimate", "estimate_velocity"]
+__all__ = ["EstimationStep", "MoverEstimate", "estimate_velocity"]
 
 
 # =============================================================== pipeline
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EstimationStep:
+    """The estimate after one step of :func:`estimate_velocity`.
+
+    Attributes
+    ----------
+    step : str
+        ``"g"`` (range speed), ``"locate"`` (location), ``"g_perp"`` (cross-range
+        speed) or ``"round k"`` (the k-th alternation, from 1).
+    range_speed_mps : float
+        ``u^e`` after the step (m/s).
+    position_m : (3,) ndarray
+        ``rho^e`` after the step (m).
+    cross_range_speed_mps : float or None
+        ``u_perp^e`` after the step (m/s); None before the ``g_perp`` step.
+    """
+
+    step: str
+    range_speed_mps: float
+    position_m: NDArray[np.float64]
+    cross_range_speed_mps: float | None
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class MoverEstimate:
     """Location and ground velocity of one mover (:func:`estimate_velocity`).
@@ -107,8 +130,9 @@ class MoverEstimate:
         ``u_perp`` (``eq:crangeu``), m/s.
     peak_value : float
         ``g`` at the final range speed, location and cross-range speed (trace units).
-    peak_db : float
-        ``20 log10(peak_value / floor)`` with the floor of the first, coarse ``g`` (dB).
+    over_floor_db : float
+        ``20 log10(peak_value / floor)`` with the global floor of the first, coarse ``g``
+        (dB).
     image_value : complex
         Exact compensated image at the estimate (``eq:imagecompu``), data units times
         ``n_pulses``.
@@ -116,9 +140,8 @@ class MoverEstimate:
         The coarse ``g(u)`` of the first stage and its strongest peak.
     cross_curve : CrossRangeSpeed
         The last ``g_perp`` search.
-    history : tuple of dict
-        One entry per stage (``"g"``, ``"locate"``, ``"g_perp"``, ``"round k"``) with the
-        estimates it produced.
+    history : tuple of EstimationStep
+        The estimate after each step (``"g"``, ``"locate"``, ``"g_perp"``, ``"round k"``).
     """
 
     position_m: NDArray[np.float64]
@@ -126,11 +149,11 @@ class MoverEstimate:
     range_speed_mps: float
     cross_range_speed_mps: float
     peak_value: float
-    peak_db: float
+    over_floor_db: float
     image_value: complex
     range_curve: RangeSpeeds
     cross_curve: CrossRangeSpeed
-    history: tuple[dict[str, object], ...]
+    history: tuple[EstimationStep, ...]
 
 
 def estimate_velocity(
@@ -230,19 +253,19 @@ def estimate_velocity(
         u = float(curve.speeds_mps[0])
     else:
         u, _ = _refine_max(_g_scalar(tr, rho, None), u_hint, 2.0 * res, 1e-3)
-    history: list[dict[str, object]] = [{"stage": "g", "range_speed_mps": u}]
+    history = [_step("g", u, rho, None)]
 
     # 2. location
     if not known:
         rho = locate_mover(tr, u, centre_m=ref, search_half_size_m=search_half_size_m).position_m
-        history.append({"stage": "locate", "position_m": rho.copy()})
+        history.append(_step("locate", u, rho, None))
 
     # 3. cross-range speed
     cross = estimate_cross_range_speed(
         tr, range_speed_mps=u, position_m=rho, speed_range_mps=cross_range, **g_perp_form
     )
     up = cross.speed_mps
-    history.append({"stage": "g_perp", "cross_range_speed_mps": up})
+    history.append(_step("g_perp", u, rho, up))
 
     # 4. alternations
     rho, u, up, cross = _alternate(
@@ -267,7 +290,7 @@ def estimate_velocity(
         range_speed_mps=u,
         cross_range_speed_mps=up,
         peak_value=peak,
-        peak_db=float(20.0 * np.log10(peak / curve.floor)) if curve.floor > 0 else np.inf,
+        over_floor_db=float(20.0 * np.log10(peak / curve.floor)) if curve.floor > 0 else np.inf,
         image_value=value,
         range_curve=curve,
         cross_curve=cross,
@@ -286,7 +309,7 @@ def _alternate(
     n_alternations: int,
     search_half_size_m: float,
     g_perp_form: dict[str, Any],
-    history: list[dict[str, object]],
+    history: list[EstimationStep],
 ) -> tuple[NDArray[np.float64], float, float, CrossRangeSpeed]:
     """Stage 4 of :func:`estimate_velocity`: rounds of location (or range speed) and u_perp.
 
@@ -315,15 +338,17 @@ def _alternate(
             **g_perp_form,
         )
         up = cross.speed_mps
-        history.append(
-            {
-                "stage": f"round {k + 1}",
-                "range_speed_mps": u,
-                "position_m": rho.copy(),
-                "cross_range_speed_mps": up,
-            }
-        )
+        history.append(_step(f"round {k + 1}", u, rho, up))
     return rho, u, up, cross
+
+
+def _step(step: str, u: float, rho: NDArray[np.float64], up: float | None) -> EstimationStep:
+    return EstimationStep(
+        step=step,
+        range_speed_mps=float(u),
+        position_m=np.array(rho, dtype=np.float64),
+        cross_range_speed_mps=None if up is None else float(up),
+    )
 
 
 def _g_scalar(

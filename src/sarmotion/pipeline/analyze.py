@@ -9,7 +9,7 @@
    (``eq:OBJg``) on ``S`` are candidates; each is tested by its height over the local
    floor of ``g`` against the threshold of a stated false-alarm rate (set from the
    statistic's measured distribution on data without movers), and by its width;
-4. **movers** (:func:`sarmotion.pipeline.stages.estimate_movers`), strongest first, each
+4. **movers** (:func:`sarmotion.pipeline.estimate_movers`), strongest first, each
    on ``S`` minus the movers already fitted: the maximum-likelihood range position,
    range speed and cross-range speed (:func:`sarmotion.motion.fit_point_mover`: the
    coherent matched filter, searched globally in cross-range speed); a candidate that a
@@ -31,8 +31,14 @@
    ``eq:imagecompu`` from its own traces compensated at its estimated velocity;
 7. **stationary targets**: bright points of the stationary image.
 
+Steps 1-3 are :func:`sarmotion.pipeline.detect`, step 4 is
+:func:`sarmotion.pipeline.estimate_movers` (its named steps, each timed, in
+:mod:`sarmotion.pipeline.movers`, with the re-fit of :mod:`sarmotion.pipeline.refit`),
+steps 5-7 are in :mod:`sarmotion.pipeline.stages`. Each mover is one
+:class:`~sarmotion.pipeline.Mover` record from step 4 on.
+
 The extraction of step 4 was chosen by measurement on Scene 1 (see
-:func:`sarmotion.pipeline.stages.extract_mover`): the windowed slow-time mean leaves
+:func:`sarmotion.pipeline.movers.extract_mover`): the windowed slow-time mean leaves
 less of the mover in the residual than the annihilator ``Q^{u, rho}`` and costs one
 transform pair.
 
@@ -43,30 +49,16 @@ in s.
 
 from __future__ import annotations
 
-import logging
-import time
-from collections.abc import Iterator
-from contextlib import contextmanager
-
 from ..core.progress import ProgressCallback
 from ..core.traces import Traces
-from ..motion import azimuth_span_deg, central_sub_aperture
-from ..separation import separate
+from ._timing import timed
+from .detection import detect
+from .movers import estimate_movers
 from .options import AnalysisOptions
 from .results import AnalysisResult
-from .stages import (
-    estimate_movers,
-    estimate_trajectories,
-    find_range_speeds,
-    mover_results,
-    preliminary_image,
-    stationary_image,
-    stationary_targets,
-)
+from .stages import estimate_trajectories, mover_images, stationary_image, stationary_targets
 
 __all__ = ["analyze"]
-
-log = logging.getLogger(__name__)
 
 
 def analyze(
@@ -91,67 +83,37 @@ def analyze(
     Returns
     -------
     AnalysisResult
+        Its ``timings_s`` holds each stage's wall-clock time (s) and ``total``, their
+        sum; the ``movers.<step>`` entries break ``movers`` down
+        (:mod:`sarmotion.pipeline.movers`) and are not added to ``total``.
     """
-    if not isinstance(traces, Traces):
-        raise TypeError(f"traces must be a sarmotion Traces, got {type(traces).__name__}")
-    if options is not None and not isinstance(options, AnalysisOptions):
-        raise TypeError(
-            f"options must be an AnalysisOptions (AnalysisOptions(**mapping) builds one from "
-            f"a dict), got {type(options).__name__}"
-        )
-    opts = (options or AnalysisOptions()).resolved(traces)
-    timings: dict[str, float] = {}
-    central = central_sub_aperture(traces, opts.sub_aperture_deg)
-    if central != slice(0, traces.n_pulses):
-        log.info(
-            "aperture of %.1f degrees: movers estimated on pulses %d-%d, refined on all",
-            azimuth_span_deg(traces),
-            central.start,
-            central.stop - 1,
-        )
-    with _timed(timings, "preliminary_image"):
-        prelim = preliminary_image(traces, opts, progress=progress)
-    with _timed(timings, "separation"):
-        sep = separate(traces, prelim, opts.separation, progress=progress)
-    with _timed(timings, "range_speeds"):
-        sub = traces.select_pulses(central.start, central.stop)
-        detection = find_range_speeds(sub, sep.moving[central], opts)
-    with _timed(timings, "movers"):
-        fits, residual = estimate_movers(
-            traces, sep.moving, detection, opts, central=central, image=prelim, progress=progress
-        )
-    with _timed(timings, "trajectories"):
-        trajs = (
-            estimate_trajectories(traces, fits, progress=progress)
-            if opts.trajectory
-            else [None] * len(fits)
-        )
-    with _timed(timings, "images"):
-        stat_img = stationary_image(traces, sep, fits, prelim.grid, progress=progress)
-        movers = mover_results(traces, fits, trajs, stat_img, opts)
-    with _timed(timings, "stationary_targets"):
-        stationary = stationary_targets(stat_img, sep, traces, opts)
+    detection = detect(traces, options, progress=progress)
+    opts, acq = detection.options, traces.acquisition
+    timings = dict(detection.timings_s)
+    with timed(timings, "movers"):
+        stage = estimate_movers(detection, progress=progress)
+    movers = stage.movers
+    with timed(timings, "trajectories"):
+        if opts.trajectory:
+            movers = estimate_trajectories(movers, acquisition=acq, progress=progress)
+    with timed(timings, "images"):
+        sep = detection.separation
+        stat_img = stationary_image(traces, sep, movers, detection.image.grid, progress=progress)
+        movers = mover_images(movers, stat_img, opts, acquisition=acq)
+    with timed(timings, "stationary_targets"):
+        stationary = stationary_targets(stat_img, sep, opts, acquisition=acq)
     timings["total"] = float(sum(timings.values()))
+    timings.update(stage.timings_s)
     return AnalysisResult(
         traces=traces,
         separation=sep,
-        range_speeds=detection.range_speeds,
-        detection=detection,
+        range_speeds=detection.candidates.range_speeds,
+        detection=detection.candidates,
         movers=movers,
-        residual=residual,
-        preliminary_image=prelim,
+        residual=stage.residual,
+        preliminary_image=detection.image,
         stationary_image=stat_img,
         stationary=stationary,
         timings_s=timings,
         options=opts,
     )
-
-
-@contextmanager
-def _timed(timings: dict[str, float], stage: str) -> Iterator[None]:
-    """Add the wall-clock time of the ``with`` block to ``timings[stage]`` (s)."""
-    start = time.perf_counter()
-    try:
-        yield
-    finally:
-        timings[stage] = timings.get(stage, 0.0) + time.perf_counter() - start

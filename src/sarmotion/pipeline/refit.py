@@ -49,11 +49,10 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import C, Traces
+from ..core import Acquisition, C, Traces
 from ..imaging import Image, resolution
 from ..motion import (
     MatchedFilter,
-    MoverEstimate,
     PointFit,
     point_model,
     range_speed_resolution,
@@ -61,20 +60,29 @@ from ..motion import (
 )
 from ..separation import default_half_window, separate_combined, stationary_candidates
 
-__all__ = ["refit_movers_on_data", "candidates_near_movers", "with_refit_history"]
+__all__ = [
+    "refit_movers_on_data",
+    "at_full_amplitude",
+    "data_without_stationary",
+    "refit_in_cell",
+    "candidates_near_movers",
+]
 
 log = logging.getLogger(__name__)
 
 
 def candidates_near_movers(
-    traces: Traces, points_m: NDArray[np.float64], fits: Sequence[PointFit], margin_m: float
+    traces: Acquisition | Traces,
+    points_m: NDArray[np.float64],
+    fits: Sequence[PointFit],
+    margin_m: float,
 ) -> NDArray[np.float64]:
     """The stationary points whose range history comes within ``margin_m`` of a mover's.
 
     Parameters
     ----------
-    traces : Traces
-        Acquisition (antenna positions and slow times; ``s = 0`` is the fits' time).
+    traces : Acquisition
+        Antenna positions and slow times (``s = 0`` is the fits' time).
     points_m : (k, 3) ndarray
         Stationary candidates (m).
     fits : sequence of PointFit
@@ -111,6 +119,9 @@ def refit_movers_on_data(
 ) -> tuple[list[PointFit], NDArray[np.complex128]]:
     """The movers re-fitted on the data minus a stationary estimate without them (notes).
 
+    The three steps of the module notes in one call: :func:`at_full_amplitude`,
+    :func:`data_without_stationary`, :func:`refit_in_cell`.
+
     Parameters
     ----------
     sub : Traces
@@ -134,17 +145,70 @@ def refit_movers_on_data(
     data : (n_pulses, n_samples) ndarray
         ``D - L'``: the data the re-fit was made on (the movers in it at full amplitude).
     """
-    d = np.asarray(sub.data)
     if not len(fits):
-        return [], d.astype(np.complex128)
-    mf = MatchedFilter(sub, d)
-    full = [
-        replace(f, amplitude=complex(mf.responses(f.position_m[None], f.velocity_mps[None])[0]))
+        return [], np.asarray(sub.data).astype(np.complex128)
+    full = at_full_amplitude(sub, fits)
+    data = data_without_stationary(sub, image, full, threshold_db=threshold_db)
+    kept, _ = refit_in_cell(data, full, acquisition=sub.acquisition, rounds=rounds)
+    return kept, data
+
+
+def at_full_amplitude(sub: Traces, fits: Sequence[PointFit]) -> list[PointFit]:
+    """Step 1: each fit with its amplitude from the matched filter on the data ``D``.
+
+    Parameters
+    ----------
+    sub : Traces
+        The data ``D`` (the sub-aperture the fits were made on).
+    fits : sequence of PointFit
+        The fits on the moving part.
+
+    Returns
+    -------
+    list of PointFit
+        The same fits, amplitude ``I / n_pulses`` on ``D`` (data units).
+    """
+    mf = MatchedFilter(sub)
+    return [
+        replace(
+            f,
+            amplitude=complex(mf.responses(f.position_m[None], f.velocity_mps[None])[0])
+            / sub.n_pulses,
+        )
         for f in fits
     ]
-    full = [replace(f, amplitude=f.amplitude / sub.n_pulses) for f in full]
+
+
+def data_without_stationary(
+    sub: Traces, image: Image, fits: Sequence[PointFit], *, threshold_db: float
+) -> NDArray[np.complex128]:
+    """Step 2: ``D - L'``, ``L'`` a stationary estimate of ``D`` without the movers.
+
+    ``L'`` is the image-guided point estimate (:func:`~sarmotion.separation.separate_combined`)
+    of ``D`` minus the fits' models, on the candidates of ``image`` above
+    ``threshold_db`` whose range history comes within ``2 half_window`` fast-time
+    samples of a mover's (:func:`candidates_near_movers`); with no such candidate
+    ``L' = 0``.
+
+    Parameters
+    ----------
+    sub : Traces
+        The data ``D``.
+    image : Image
+        Preliminary image of the acquisition.
+    fits : sequence of PointFit
+        The movers at full amplitude (:func:`at_full_amplitude`).
+    threshold_db : float
+        Candidate level, dB re the image's peak.
+
+    Returns
+    -------
+    (n_pulses, n_samples) ndarray
+        ``D - L'`` (data units).
+    """
+    d = np.asarray(sub.data)
     models = sum(
-        (point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in full),
+        (point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in fits),
         np.zeros(sub.shape, dtype=np.complex128),
     )
     grid = image.grid
@@ -158,46 +222,57 @@ def refit_movers_on_data(
     )
     half = default_half_window(sub)
     margin = 2.0 * half * C * sub.radar.sample_interval_s / 2.0
-    near = candidates_near_movers(sub, cand, full, margin)
-    data = d.astype(np.complex128)
-    if len(near):
-        sep = separate_combined(sub.with_data(d - models), points_m=near, half_window=half)
-        data = d - sep.stationary
+    near = candidates_near_movers(sub, cand, fits, margin)
     log.info("refit: %d of %d stationary candidates near the movers' traces", len(near), len(cand))
-    out = refit_movers(sub, data, full, rounds=rounds)
+    if not len(near):
+        return d.astype(np.complex128)
+    sep = separate_combined(sub.with_data(d - models), points_m=near, half_window=half)
+    return d - sep.stationary
+
+
+def refit_in_cell(
+    data: NDArray[np.complexfloating],
+    fits: Sequence[PointFit],
+    *,
+    acquisition: Acquisition,
+    rounds: int = 1,
+) -> tuple[list[PointFit], list[bool]]:
+    """Step 3: every mover re-fitted on ``data``, kept when it stays in its cell.
+
+    Each mover is re-fitted locally with the others' models subtracted
+    (:func:`~sarmotion.motion.refit_movers`); a re-fit that moves the range position by
+    a ground-range cell or the range speed by a range-speed resolution keeps the fit it
+    started from.
+
+    Parameters
+    ----------
+    data : (n_pulses, n_samples) ndarray
+        ``D - L'`` (:func:`data_without_stationary`).
+    fits : sequence of PointFit
+        The movers at full amplitude.
+    acquisition : Acquisition
+        The acquisition of ``data`` (the sub-aperture).
+    rounds : int
+        Sweeps of the re-fit over the movers.
+
+    Returns
+    -------
+    fits : list of PointFit
+        The final fits, in the order of ``fits``.
+    kept : list of bool
+        Whether each re-fit was kept.
+    """
+    sub = acquisition
+    out = refit_movers(data, list(fits), acquisition=sub, rounds=rounds)
     cells = resolution(sub)
     res_u = range_speed_resolution(sub)
-    kept = []
-    for first, new in zip(full, out, strict=True):
+    final, kept = [], []
+    for first, new in zip(fits, out, strict=True):
         dx = abs(float((new.position_m[:2] - first.position_m[:2]) @ cells.range_direction))
         du = abs(new.range_speed_mps - first.range_speed_mps)
-        if dx < cells.ground_range_m and du < res_u:
-            kept.append(new)
-        else:
+        ok = dx < cells.ground_range_m and du < res_u
+        if not ok:
             log.info("refit left the mover's range cell or speed: the fit on S is kept")
-            # (with its amplitude on D, that of the data returned)
-            kept.append(first)
-    return kept, data
-
-
-def with_refit_history(est: MoverEstimate, on_s: PointFit, fit: PointFit) -> MoverEstimate:
-    """``est``, made from the re-fit ``fit``, with the fit on the moving part in its history.
-
-    The ``"maximum likelihood"`` stage holds ``on_s``, a ``"refit"`` stage follows.
-    """
-
-    def stage(f: PointFit) -> dict:
-        return {
-            "position_m": f.position_m.tolist(),
-            "range_speed_mps": f.range_speed_mps,
-            "cross_range_speed_mps": f.cross_range_speed_mps,
-            "amplitude": abs(f.amplitude),
-        }
-
-    history = tuple(
-        {"stage": "maximum likelihood", **stage(on_s)}
-        if h.get("stage") == "maximum likelihood"
-        else h
-        for h in est.history
-    )
-    return replace(est, history=(*history, {"stage": "refit", **stage(fit)}))
+        final.append(new if ok else first)
+        kept.append(ok)
+    return final, kept

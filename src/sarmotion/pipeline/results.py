@@ -10,7 +10,8 @@ from numpy.typing import NDArray
 from ..core.traces import Traces
 from ..imaging import Image
 from ..motion import (
-    MoverEstimate,
+    ApertureFit,
+    CrossRangeSpeed,
     PointBound,
     PointFit,
     RangeSpeedDetection,
@@ -20,7 +21,7 @@ from ..motion import (
 from ..separation import Separation
 from .options import AnalysisOptions
 
-__all__ = ["MoverEvidence", "MoverResult", "StationaryTarget", "AnalysisResult"]
+__all__ = ["MoverEvidence", "Mover", "StationaryTarget", "AnalysisResult"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -30,8 +31,8 @@ class MoverEvidence:
     Attributes
     ----------
     statistic_db : float
-        ``g(u)`` peak over its local floor (dB), re-measured after the stronger movers
-        were subtracted.
+        ``g(u)`` peak over its local floor (dB), the detector's statistic, re-measured
+        after the stronger movers were subtracted.
     threshold_db : float
         Threshold it passed (dB).
     false_alarm_rate : float
@@ -62,61 +63,84 @@ class MoverEvidence:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class MoverResult:
-    """One mover found by :func:`analyze`.
+class Mover:
+    """One mover, from its detection to its image: the record :func:`analyze` returns.
+
+    The mover stage (:func:`~sarmotion.pipeline.estimate_movers`) makes it with
+    everything but the image and the trajectory; the later stages add those
+    (:func:`dataclasses.replace`). Its history is typed: the detection test
+    (:attr:`evidence`), the fit on the separated traces (:attr:`separated_fit`), the
+    re-fit on the data (:attr:`fit`, :attr:`refit_kept`), ``g_perp`` at the fit
+    (:attr:`g_perp`) and the focus on the whole aperture (:attr:`aperture`).
 
     Attributes
     ----------
-    estimate : MoverEstimate
-        Location at ``s = 0`` (m) and ground velocity (m/s), with the ``g`` and
-        ``g_perp`` curves (:func:`sarmotion.motion.estimate_velocity`).
-    traces : (n_pulses, n_samples) ndarray
-        The mover's own separated traces ``D_q`` (data units).
-    image : Image
-        Its image compensated at the estimated velocity (``eq:imagecompu``).
-    image_peak_m : (2,) ndarray
-        Sub-pixel position of the brightest pixel of :attr:`image` (m).
-    peak_db : float
-        Image peak relative to the brightest pixel of the stationary image (dB).
+    position_m : (3,) ndarray
+        Location at ``s = 0`` (m), data frame: the whole-aperture focus when there is
+        one, else the final fit.
+    velocity_mps : (2,) ndarray
+        Ground velocity ``(ux, uy)`` (m/s), idem.
+    range_speed_mps, cross_range_speed_mps : float
+        ``u . m_o`` (``eq:rangeu``) and ``u_perp`` (``eq:crangeu``) of that velocity
+        in the acquisition's geometry (m/s).
+    evidence : MoverEvidence
+        The detection test it passed.
+    separated_fit : PointFit
+        The maximum-likelihood fit on the separated traces ``S`` of the sub-aperture it
+        was estimated on, jointly refined with the other movers.
+    fit : PointFit
+        The final fit on that sub-aperture: the re-fit on the data minus a stationary
+        estimate made without the movers (:mod:`sarmotion.pipeline.refit`) when it was
+        kept, else :attr:`separated_fit` (with its amplitude measured on the data when
+        the re-fit ran).
+    refit_kept : bool or None
+        Whether the re-fit was kept; ``None`` when no re-fit ran.
+    g_perp : CrossRangeSpeed
+        ``g_perp`` (``eq:OBJ2``) at the fit's range speed and position, on the mover
+        alone (the others' fits subtracted), for comparison with the fit.
+    aperture : ApertureFit or None
+        The estimate moved to the whole aperture's ``s = 0`` and focused on all pulses;
+        ``None`` when the sub-aperture is the whole aperture.
+    bound : PointBound
+        Cramér–Rao bound of its range position, range and cross-range speeds and
+        amplitude at its measured SNR, on the sub-aperture (:mod:`sarmotion.motion.bounds`):
+        its standard errors.
     family_position_per_m, family_velocity_per_m : (2,) ndarray
         Tangent of the family of motions with the same traces
         (:func:`sarmotion.motion.family_direction`): ``position + t a``, ``velocity +
         t b`` fit the data as well for ``t`` metres of cross-range offset (m/m and
         (m/s)/m). The data of a few degrees do not fix ``t`` (:mod:`sarmotion.motion.aperture`).
+    traces : (n_pulses, n_samples) ndarray or None
+        The mover's own separated traces ``D_q`` (data units, whole aperture); None
+        before the extraction step.
+    image : Image or None
+        Its image compensated at the estimated velocity (``eq:imagecompu``).
+    image_peak_m : (2,) ndarray or None
+        Sub-pixel position of the brightest pixel of :attr:`image` (m).
+    image_peak_db : float or None
+        That peak relative to the brightest pixel of the stationary image (dB).
     trajectory : TrajectoryEstimate or None
         Phase-space trajectory, if requested.
-    evidence : MoverEvidence or None
-        The detection test it passed.
-    bound : PointBound or None
-        Cramér–Rao bound of its range position, range and cross-range speeds and
-        amplitude at its measured SNR, on the sub-aperture it was estimated on
-        (:mod:`sarmotion.motion.bounds`): its standard errors.
-    fit : PointFit or None
-        The maximum-likelihood fit on that sub-aperture (with the global
-        cross-range-speed profile).
     """
 
-    estimate: MoverEstimate
-    traces: NDArray[np.complexfloating]
-    image: Image
-    image_peak_m: NDArray[np.float64]
-    peak_db: float
+    position_m: NDArray[np.float64]
+    velocity_mps: NDArray[np.float64]
+    range_speed_mps: float
+    cross_range_speed_mps: float
+    evidence: MoverEvidence
+    separated_fit: PointFit
+    fit: PointFit
+    refit_kept: bool | None
+    g_perp: CrossRangeSpeed
+    aperture: ApertureFit | None
+    bound: PointBound
     family_position_per_m: NDArray[np.float64]
     family_velocity_per_m: NDArray[np.float64]
+    traces: NDArray[np.complexfloating] | None = None
+    image: Image | None = None
+    image_peak_m: NDArray[np.float64] | None = None
+    image_peak_db: float | None = None
     trajectory: TrajectoryEstimate | None = None
-    evidence: MoverEvidence | None = None
-    bound: PointBound | None = None
-    fit: PointFit | None = None
-
-    @property
-    def position_m(self) -> NDArray[np.float64]:
-        """Location at ``s = 0`` (m), ``(x, y)``."""
-        return self.estimate.position_m[:2]
-
-    @property
-    def velocity_mps(self) -> NDArray[np.float64]:
-        """Ground velocity ``(ux, uy)`` (m/s)."""
-        return self.estimate.velocity_mps
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -127,12 +151,12 @@ class StationaryTarget:
     ----------
     position_m : (float, float)
         Position ``(x, y)`` (m).
-    peak_db : float
-        Level relative to the brightest pixel of the stationary image (dB).
+    level_db : float
+        ``20 log10(|I(rho)| / max |I|)`` on the stationary image (dB, <= 0).
     """
 
     position_m: tuple[float, float]
-    peak_db: float
+    level_db: float
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -149,7 +173,7 @@ class AnalysisResult:
         ``g(u)`` on ``S`` and the candidates that passed its statistical test.
     detection : RangeSpeedDetection or None
         The test: every candidate's statistic, the threshold and its false-alarm rate.
-    movers : tuple of MoverResult
+    movers : tuple of Mover
         The movers, in the order they were separated (strongest first).
     residual : (n_pulses, n_samples) ndarray
         ``S`` minus every mover's traces.
@@ -158,7 +182,9 @@ class AnalysisResult:
     stationary : tuple of StationaryTarget
         Bright points of the stationary image.
     timings_s : dict of str to float
-        Wall-clock time per stage (s).
+        Wall-clock time per stage (s) and ``total``, their sum; the ``movers.<step>``
+        entries break the ``movers`` stage down (:mod:`sarmotion.pipeline.movers`) and
+        are not in ``total``.
     options : AnalysisOptions
         The options the analysis ran with, every data-dependent default filled.
     """
@@ -167,7 +193,7 @@ class AnalysisResult:
     separation: Separation
     range_speeds: RangeSpeeds
     detection: RangeSpeedDetection | None = None
-    movers: tuple[MoverResult, ...]
+    movers: tuple[Mover, ...]
     residual: NDArray[np.complexfloating]
     preliminary_image: Image
     stationary_image: Image

@@ -12,17 +12,25 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
+from ..core.acquisition import Acquisition
 from ..core.geometry import cross_range_speed, range_speed
+from ..core.traces import Traces
 from ..imaging import resolution
-from ..motion import trajectory_error
+from ..motion import family_member, trajectory_error
 from ..simulation import Scene
-from .results import AnalysisResult, MoverResult
+from .results import AnalysisResult, Mover
 
-__all__ = ["TrueMover", "MoverErrors", "TruthComparison", "compare_with_truth"]
+__all__ = [
+    "TrueMover",
+    "MoverErrors",
+    "TruthComparison",
+    "compare_with_truth",
+    "family_errors",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -120,7 +128,7 @@ def compare_with_truth(result: AnalysisResult, scene: Scene) -> TruthComparison:
     errors: list[MoverErrors | None] = []
     tol = 4.0 * result.range_speeds.resolution_mps
     for m in result.movers:
-        u = m.estimate.range_speed_mps
+        u = m.range_speed_mps
         cands = [(abs(t.range_speed_mps - u), i) for i, t in enumerate(truth) if i not in used]
         cands = [c for c in cands if c[0] <= tol]
         if not cands:
@@ -132,10 +140,10 @@ def compare_with_truth(result: AnalysisResult, scene: Scene) -> TruthComparison:
     return TruthComparison(truth=truth, errors=tuple(errors))
 
 
-def _errors(result: AnalysisResult, m: MoverResult, t: TrueMover) -> MoverErrors:
+def _errors(result: AnalysisResult, m: Mover, t: TrueMover) -> MoverErrors:
     res = resolution(result.traces)
     e_r, e_c = res.range_direction, res.cross_range_direction
-    e = m.estimate
+    e = m
     dp = np.asarray(e.position_m[:2]) - np.asarray(t.position_m)
     di = np.asarray(m.image_peak_m) - np.asarray(t.position_m)
     offset = -float(dp @ e_c) / float(m.family_position_per_m @ e_c)
@@ -163,4 +171,49 @@ def _errors(result: AnalysisResult, m: MoverResult, t: TrueMover) -> MoverErrors
         family_position_m=float(np.hypot(*fp)),
         family_velocity_mps=float(np.hypot(*fv)),
         **traj,
+    )
+
+
+class _Motion(Protocol):
+    """A location at ``s = 0`` (m) and a ground velocity (m/s)."""
+
+    @property
+    def position_m(self) -> Any: ...
+
+    @property
+    def velocity_mps(self) -> Any: ...
+
+
+def family_errors(traces: Acquisition | Traces, estimate: _Motion, truth: _Motion) -> np.ndarray:
+    """Errors of ``estimate`` on the truth's cross-range family at the estimate's cross range.
+
+    The truth is slid along its own (exact) family
+    (:func:`~sarmotion.motion.family_member`) to the estimate's cross-range coordinate,
+    where a fit's Cramér–Rao bound is defined (cross-range coordinate held).
+
+    Parameters
+    ----------
+    traces : Acquisition or Traces
+        The acquisition the estimate was made on (its geometry and resolution).
+    estimate, truth
+        Objects with ``position_m`` ((2,) or (3,), m) and ``velocity_mps`` ((2,), m/s),
+        e.g. a :class:`~sarmotion.motion.PointFit` and a
+        :class:`~sarmotion.simulation.PointTarget`.
+
+    Returns
+    -------
+    (3,) ndarray
+        Estimate minus truth: range position (m), range speed and cross-range speed (m/s).
+    """
+    geom = traces.geometry
+    cells = resolution(traces)
+    pos = np.asarray(estimate.position_m, dtype=np.float64)
+    dy = float((pos[:2] - np.asarray(truth.position_m)[:2]) @ cells.cross_range_direction)
+    p, v, _ = family_member(traces, truth.position_m, truth.velocity_mps, dy)
+    return np.array(
+        [
+            float((pos[:2] - p[:2]) @ cells.range_direction),
+            range_speed(estimate.velocity_mps, geom) - range_speed(v, geom),
+            cross_range_speed(estimate.velocity_mps, geom) - cross_range_speed(v, geom),
+        ]
     )

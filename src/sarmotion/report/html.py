@@ -100,7 +100,7 @@ def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = 
         )
         ax.axvspan(-det.min_speed_mps, det.min_speed_mps, color="0.9", lw=0)
     for k, m in enumerate(result.movers):
-        u = m.estimate.range_speed_mps
+        u = m.range_speed_mps
         ax.axvline(u, color=_COLOURS[k % 6], ls="--", lw=1, label=f"mover {k + 1}: {u:.2f} m/s")
     if truth:
         for t in truth["truth"]:
@@ -117,7 +117,7 @@ def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = 
 
 def _cross_panel(ax: Any, k: int, m: Any, truth: dict[str, Any] | None) -> None:
     """One mover's ``g_perp`` and maximum-likelihood profile against the cross-range speed."""
-    cc = m.estimate.cross_curve
+    cc = m.g_perp
     ax.plot(cc.grid_mps, cc.objective / cc.objective.max(), color="k", lw=1.0, label="g_perp")
     ax.axvline(cc.speed_mps, color="k", ls=":", lw=1, label=f"g_perp min {cc.speed_mps:.2f} m/s")
     if m.fit is not None:
@@ -129,7 +129,7 @@ def _cross_panel(ax: Any, k: int, m: Any, truth: dict[str, Any] | None) -> None:
             lw=1.0,
             label="ML profile",
         )
-    up = m.estimate.cross_range_speed_mps
+    up = m.cross_range_speed_mps
     sd = f" +- {m.bound.cross_range_speed_mps:.2g}" if m.bound is not None else ""
     ax.axvline(up, color=_COLOURS[k % 6], ls="--", lw=1, label=f"ML {up:.2f}{sd} m/s")
     if truth and truth["errors"][k] is not None:
@@ -149,7 +149,7 @@ def images_figure(result: AnalysisResult) -> Figure:
     """
     g = result.preliminary_image.grid
     found = [s.position_m for s in result.stationary]
-    movers = [tuple(m.position_m) for m in result.movers]
+    movers = [tuple(m.position_m[:2]) for m in result.movers]
     return image_figure(
         [
             ("preliminary image |I| (eq:image)", result.preliminary_image.values),
@@ -175,7 +175,7 @@ def movers_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None
             x_m=g.x_m,
             y_m=g.y_m,
             title=f"mover {k + 1}, u = ({u[0]:.2f}, {u[1]:.2f}) m/s",
-            markers=[tuple(m.position_m)],
+            markers=[tuple(m.position_m[:2])],
         )
         if truth and truth["errors"][k] is not None:
             name = truth["errors"][k]["matched"]

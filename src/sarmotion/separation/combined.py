@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import ProgressCallback, Traces, delay_phase, to_fast_time, to_frequency
+from ..core import Acquisition, ProgressCallback, Traces, delay_phase, to_fast_time, to_frequency
 from ..core.progress import report
 from ..imaging import refine_location
 from .candidates import doppler_contrast_db, stationary_candidates
@@ -28,17 +28,17 @@ log = logging.getLogger(__name__)
 __all__ = ["separate_combined", "aligned_constant_part", "default_half_window"]
 
 
-def default_half_window(traces: Traces) -> int:
+def default_half_window(traces: Acquisition | Traces) -> int:
     """Three compressed-pulse lengths ``3 / (B dt)`` in fast-time samples (at least 1)."""
     pulse_samples = 1.0 / (traces.radar.bandwidth_hz * traces.radar.sample_interval_s)
     return max(1, int(np.ceil(3.0 * pulse_samples)))
 
 
 def aligned_constant_part(
-    traces: Traces,
     spectrum: ArrayLike,
     point_m: ArrayLike,
     *,
+    acquisition: Acquisition,
     velocity_mps: ArrayLike | None = None,
     half_window: int | None = None,
 ) -> NDArray[np.complex128]:
@@ -53,12 +53,12 @@ def aligned_constant_part(
 
     Parameters
     ----------
-    traces : Traces
-        The acquisition (geometry, frequencies, reference point).
     spectrum : (n_pulses, n_samples) array_like
         Phase history of the data the part is taken from (``to_frequency(data)``).
     point_m : (2,) or (3,) array_like
         ``rho`` at ``s = 0`` (m).
+    acquisition : Acquisition
+        The acquisition of ``spectrum`` (geometry, frequencies, reference point).
     velocity_mps : (2,) array_like, optional
         ``u`` (m/s); ``None`` for a stationary point.
     half_window : int, optional
@@ -69,6 +69,7 @@ def aligned_constant_part(
     (n_pulses, n_samples) ndarray
         Phase history of the part (subtract it from ``spectrum`` to remove the target).
     """
+    traces = acquisition.acquisition if isinstance(acquisition, Traces) else acquisition
     P = np.asarray(spectrum)
     if P.shape != traces.shape:
         raise ValueError(f"spectrum must have the traces' shape {traces.shape}, got {P.shape}")
@@ -179,7 +180,7 @@ def separate_combined(
             )
             if accepted:
                 spectrum = spectrum - aligned_constant_part(
-                    traces, spectrum, p, half_window=half_window
+                    spectrum, p, acquisition=traces.acquisition, half_window=half_window
                 )
                 locations[i] = p
                 if sweep == 0:

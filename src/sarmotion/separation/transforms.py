@@ -72,6 +72,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import (
+    Acquisition,
     Traces,
     as_point,
     delay_phase,
@@ -95,13 +96,13 @@ Annihilator = Literal["difference", "difference2", "savgol", "mean"]
 
 
 def travel_time_delays(
-    traces: Traces, point_m: ArrayLike, *, velocity_mps: ArrayLike | None = None
+    traces: Acquisition | Traces, point_m: ArrayLike, *, velocity_mps: ArrayLike | None = None
 ) -> NDArray[np.float64]:
     """``dtau(s, rho + s u) = tau(s, rho + s u) - tau(s, rho_o)`` for every pulse (s).
 
     Parameters
     ----------
-    traces : Traces
+    traces : Acquisition or Traces
         Supplies the antenna positions, slow times and ``rho_o``.
     point_m : (2,) or (3,) array_like
         ``rho`` at ``s = 0`` (m).

@@ -285,11 +285,11 @@ def analyze_sub_aperture(
         Detection(
             position_m=np.asarray(m.position_m, dtype=np.float64)[:2].copy(),
             velocity_mps=np.asarray(m.velocity_mps, dtype=np.float64).copy(),
-            range_speed_mps=float(m.estimate.range_speed_mps),
-            cross_range_speed_mps=float(m.estimate.cross_range_speed_mps),
+            range_speed_mps=float(m.range_speed_mps),
+            cross_range_speed_mps=float(m.cross_range_speed_mps),
             family_position_per_m=np.asarray(m.family_position_per_m, dtype=np.float64),
             family_velocity_per_m=np.asarray(m.family_velocity_per_m, dtype=np.float64),
-            peak_db=float(m.peak_db),
+            peak_db=float(m.image_peak_db),
             traces=m.traces,
         )
         for m in result.movers

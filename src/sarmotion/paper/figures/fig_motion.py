@@ -185,7 +185,7 @@ def _paper_final_separation(ctx: _Context) -> dict[str, Any]:
         tr = sim.traces
         res = ctx.scene1_analysis
         first = next(m for m in res.movers if _match(ctx, m) == 1)
-        rho, u = first.position_m, first.velocity_mps
+        rho, u = first.position_m[:2], first.velocity_mps
         aligned = transform_plus(tr.with_data(res.separation.moving), rho, velocity_mps=u)
         sep = separate_rpca(aligned, window=None, tol=1e-4, max_iter=300)
         m1 = transform_minus(aligned.with_data(sep.stationary), rho, velocity_mps=u).data

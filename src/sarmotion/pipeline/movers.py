@@ -1,0 +1,563 @@
+"""The mover stage of the analysis, as named steps.
+
+:func:`estimate_movers` takes what :func:`~sarmotion.pipeline.detect` found and, on the
+central sub-aperture:
+
+1. **candidates** (:func:`fit_candidates`): strongest first, each candidate of the
+   range-speed test is fitted by maximum likelihood on ``S`` minus the movers already
+   accepted, rejected when a stationary point explains it, and the detector runs again
+   on what the accepted ones leave (**redetection**);
+2. **joint refinement** (:func:`~sarmotion.motion.refine_jointly`): each mover re-fitted
+   with the others subtracted;
+3. **refit** (:mod:`sarmotion.pipeline.refit`): the movers at their amplitude on the
+   data, a stationary estimate of the data made without them (**re-separation**), and
+   each re-fitted on the data minus it; a fit that repeats a stronger one's range
+   history (:func:`~sarmotion.motion.duplicate_fits`) is the same mover and is dropped;
+4. **records** (:func:`mover_record`): ``g_perp`` at each fit, the noise level around
+   it, its Cramér–Rao bound and its cross-range family;
+5. **whole aperture** (:func:`~sarmotion.motion.refine_on_aperture`): for a wide
+   aperture, each estimate moved to the aperture's ``s = 0`` and focused on all pulses;
+6. **extraction** (:func:`extract_mover`): each mover's own traces taken from the
+   residual in turn.
+
+Each step's wall-clock time is in :attr:`MoverStage.timings_s` under ``movers.<step>``;
+the redetection is part of the candidates' time and the re-separation part of the
+refit's. Positions in m (data frame), speeds in m/s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.acquisition import Acquisition
+from ..core.geometry import cross_range_speed, ground_velocity, range_speed
+from ..core.progress import ProgressCallback, report
+from ..core.spectral import to_fast_time, to_frequency
+from ..core.traces import Traces, as_traces
+from ..imaging import resolution
+from ..motion import (
+    ApertureFit,
+    PointBound,
+    PointFit,
+    RangeSpeedDetection,
+    StationaryExplanation,
+    detect_range_speeds,
+    duplicate_fits,
+    estimate_cross_range_speed,
+    family_direction,
+    fit_point_mover,
+    matched_filter_noise_variance,
+    point_model,
+    point_mover_bound,
+    point_peak_width,
+    range_gradients,
+    range_speed_resolution,
+    refine_jointly,
+    refine_on_aperture,
+    stationary_explanation,
+)
+from ..separation import aligned_constant_part
+from ._timing import timed
+from .detection import DetectionResult
+from .options import AnalysisOptions
+from .refit import at_full_amplitude, data_without_stationary, refit_in_cell
+from .results import Mover, MoverEvidence
+
+__all__ = [
+    "MoverStage",
+    "estimate_movers",
+    "fit_candidates",
+    "mover_record",
+    "extract_mover",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class MoverStage:
+    """What :func:`estimate_movers` returns.
+
+    Attributes
+    ----------
+    movers : tuple of Mover
+        The movers, strongest first, without image or trajectory.
+    residual : (n_pulses, n_samples) ndarray
+        ``S`` minus every mover's traces (whole aperture).
+    timings_s : dict of str to float
+        Wall-clock time of each step (s), keys ``movers.<step>`` (module docstring).
+    """
+
+    movers: tuple[Mover, ...]
+    residual: NDArray[np.complex128]
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+
+def estimate_movers(
+    detection: DetectionResult,
+    *,
+    refit: bool = True,
+    progress: ProgressCallback | None = None,
+) -> MoverStage:
+    """Maximum-likelihood movers with their bounds, then extracted (module docstring).
+
+    Parameters
+    ----------
+    detection : DetectionResult
+        The separation and the range-speed test (:func:`~sarmotion.pipeline.detect`).
+    refit : bool
+        Whether step 3 runs (default, as in :func:`~sarmotion.pipeline.analyze`);
+        ``False`` stops at the fits on the separated traces.
+    progress : callable, optional
+        ``progress("movers", done, total)`` as candidates are tried.
+
+    Returns
+    -------
+    MoverStage
+    """
+    opts = detection.options
+    sub, moving_sub = detection.sub, np.asarray(detection.moving_sub)
+    timings: dict[str, float] = {}
+    with timed(timings, "movers.candidates"):
+        found = fit_candidates(
+            moving_sub,
+            detection.candidates,
+            opts,
+            acquisition=sub.acquisition,
+            peak_width_mps=point_peak_width(sub) * range_speed_resolution(sub),
+            timings=timings,
+            progress=progress,
+        )
+    with timed(timings, "movers.joint_refinement"):
+        separated = refine_jointly(
+            moving_sub,
+            [f for f, _ in found],
+            acquisition=sub.acquisition,
+            rounds=opts.joint_rounds,
+        )
+    fits, kept, data_sub = list(separated), [None] * len(separated), moving_sub
+    if refit and separated:
+        with timed(timings, "movers.refit"):
+            fits, kept, data_sub = _refit(sub, detection, separated, timings)
+    drop = set(duplicate_fits(sub, fits))  # one mover is not declared twice
+    if drop:
+        log.info("%d fit(s) repeat a stronger mover's range history: merged", len(drop))
+        keep = [k for k in range(len(fits)) if k not in drop]
+        fits, separated, found, kept = (
+            [x[k] for k in keep] for x in (fits, separated, found, kept)
+        )
+    with timed(timings, "movers.records"):
+        movers = _records(
+            moving_sub, data_sub, found, separated, fits, kept, opts, acquisition=sub.acquisition
+        )
+    residual = np.array(detection.separation.moving, dtype=np.complex128)
+    whole = detection.traces.acquisition
+    out = []
+    for k, mover in enumerate(movers):
+        if not detection.whole_aperture:
+            with timed(timings, "movers.whole_aperture"):
+                mover = on_whole_aperture(
+                    residual, mover, acquisition=whole, central=detection.central
+                )
+        with timed(timings, "movers.extraction"):
+            own = extract_mover(
+                residual,
+                acquisition=whole,
+                position_m=mover.position_m,
+                velocity_mps=mover.velocity_mps,
+                half_window=opts.mover_half_window,
+            )
+        residual = residual - own
+        out.append(_with(mover, traces=own))
+        log.info(
+            "mover %d: position (%.2f, %.2f) m, velocity (%.2f, %.2f) m/s",
+            k + 1,
+            *mover.position_m[:2],
+            *mover.velocity_mps,
+        )
+    return MoverStage(movers=tuple(out), residual=residual, timings_s=timings)
+
+
+def _refit(
+    sub: Traces,
+    detection: DetectionResult,
+    separated: Sequence[PointFit],
+    timings: dict[str, float],
+) -> tuple[list[PointFit], list[bool | None], NDArray[np.complex128]]:
+    """Step 3: the fits at full amplitude, ``D - L'`` (timed) and the re-fit on it."""
+    full = at_full_amplitude(sub, separated)
+    with timed(timings, "movers.re_separation"):
+        threshold = detection.options.separation.candidate_threshold_db
+        data = data_without_stationary(sub, detection.image, full, threshold_db=threshold)
+    fits, kept = refit_in_cell(data, full, acquisition=sub.acquisition)
+    return fits, list(kept), data
+
+
+def _records(
+    moving_sub: NDArray[np.complexfloating],
+    data_sub: NDArray[np.complexfloating],
+    found: Sequence[tuple[PointFit, MoverEvidence]],
+    separated: Sequence[PointFit],
+    fits: Sequence[PointFit],
+    kept: Sequence[bool | None],
+    options: AnalysisOptions,
+    *,
+    acquisition: Acquisition,
+) -> list[Mover]:
+    """Step 4 for every mover: ``g_perp`` on the mover alone, the noise around it, its bound.
+
+    ``g_perp`` is taken on ``S`` minus the other movers' final models; the noise on the
+    data of the final fits (``D - L'`` after a refit, else ``S``) minus every model.
+    """
+    sub = acquisition
+    models = [point_model(sub, f.position_m, f.velocity_mps, f.amplitude) for f in fits]
+    zero = np.zeros(sub.shape, dtype=complex)
+    left = data_sub - sum(models, zero)
+    out = []
+    for k, fit in enumerate(fits):
+        others = sum((m for j, m in enumerate(models) if j != k), zero)
+        out.append(
+            mover_record(
+                moving_sub - others,
+                acquisition=sub,
+                evidence=found[k][1],
+                separated_fit=separated[k],
+                fit=fit,
+                refit_kept=kept[k],
+                noise_variance=_local_noise(left, fit, acquisition=sub),
+                options=options,
+            )
+        )
+    return out
+
+
+def fit_candidates(
+    moving: NDArray[np.complexfloating],
+    detection: RangeSpeedDetection,
+    options: AnalysisOptions,
+    *,
+    acquisition: Acquisition,
+    peak_width_mps: float,
+    timings: dict[str, float] | None = None,
+    progress: ProgressCallback | None = None,
+) -> list[tuple[PointFit, MoverEvidence]]:
+    """Fit the candidates one at a time, strongest first, each on what the others leave.
+
+    The strongest untried candidate is fitted (:func:`~sarmotion.motion.fit_point_mover`)
+    and rejected when a stationary point explains it
+    (:func:`~sarmotion.motion.stationary_explanation`); otherwise its fitted traces are
+    subtracted and the detector runs again on the residual (a second mover within a
+    resolution of the first, hidden under its peak, then stands out; a shoulder of the
+    subtracted peak falls to the floor). The threshold stays the first run's. A fit
+    within a range cell and a ``g`` peak's width of an accepted mover is what the
+    point model could not subtract of it (RPCA keeps a distorted 15-40 % of a mover's
+    amplitude in ``S``: on a real degree with two strong injected movers such remnants
+    made a third "mover" 0.3 m/s and 0.2 m from one of them), not a new mover.
+
+    Parameters
+    ----------
+    moving : (n_pulses, n_samples) ndarray
+        ``S`` on the central sub-aperture.
+    detection : RangeSpeedDetection
+        The first run of the detector on ``moving``.
+    options : AnalysisOptions
+        ``max_movers``, ``speed_range_mps``, ``min_focus_gain_db``, ``max_peak_width``.
+    acquisition : Acquisition
+        The acquisition of ``moving`` (the central sub-aperture).
+    peak_width_mps : float
+        Width of a point mover's ``g`` peak (m/s): a fit that close in range speed and
+        within a range cell of an accepted mover is what was left of it
+        (:func:`~sarmotion.motion.point_peak_width` of the data ``M`` times the
+        range-speed resolution).
+    timings : dict, optional
+        Adds the redetections' wall-clock time under ``movers.redetection`` (s).
+    progress : callable, optional
+        ``progress("movers", done, total)``.
+
+    Returns
+    -------
+    list of (PointFit, MoverEvidence)
+        The accepted candidates' fits and detection records, in the order accepted.
+    """
+    timings = {} if timings is None else timings
+    sub = acquisition
+    residual = np.array(moving, dtype=np.complex128)
+    current = detection
+    tried: list[float] = []
+    out: list[tuple[PointFit, MoverEvidence]] = []
+    res = detection.range_speeds.resolution_mps
+    while len(out) < options.max_movers:
+        rs = current.range_speeds
+        untried = [
+            k for k, u in enumerate(rs.speeds_mps) if all(abs(u - t) > 0.5 * res for t in tried)
+        ]
+        report(progress, "movers", len(tried), len(tried) + len(untried))
+        if not untried:
+            break
+        k = untried[0]
+        u, statistic = float(rs.speeds_mps[k]), float(current.statistic_db[k])
+        tried.append(u)
+        fit = fit_point_mover(
+            residual, u, acquisition=sub, cross_speed_range_mps=options.speed_range_mps
+        )
+        if any(_same_trace(sub, fit, f, peak_width_mps) for f, _ in out):
+            log.info("g(u) candidate at %.2f m/s: what a subtracted mover left", u)
+            continue
+        value = fit.amplitude * sub.n_pulses
+        why = stationary_explanation(
+            residual, fit.position_m, fit.velocity_mps, value, acquisition=sub
+        )
+        if why.within_extent and why.focus_gain_db < options.min_focus_gain_db:
+            log.info(
+                "g(u) candidate at %.2f m/s: a stationary point at (%.1f, %.1f) m explains it "
+                "(focus gain %.2f dB)",
+                u,
+                *why.position_m[:2],
+                why.focus_gain_db,
+            )
+            continue
+        residual = residual - point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
+        out.append((fit, _evidence(detection, statistic, float(current.widths[k]), why)))
+        with timed(timings, "movers.redetection"):
+            current = _redetect(Traces(data=residual, acquisition=sub), detection, options)
+    return out
+
+
+def _same_trace(sub: Acquisition, a: PointFit, b: PointFit, width_mps: float) -> bool:
+    """Whether two fits share a range cell at ``s = 0`` and the width of a ``g`` peak (m/s)."""
+    cells = resolution(sub)
+    dx = abs(float((a.position_m[:2] - b.position_m[:2]) @ cells.range_direction))
+    du = abs(a.range_speed_mps - b.range_speed_mps)
+    return dx < cells.ground_range_m and du < width_mps
+
+
+def _redetect(
+    traces: Traces, first: RangeSpeedDetection, options: AnalysisOptions
+) -> RangeSpeedDetection:
+    """The detector on a residual, with the first run's threshold and speed floor."""
+    return detect_range_speeds(
+        traces,
+        speed_range_mps=options.speed_range_mps,
+        threshold=first.threshold_db,
+        min_speed_mps=first.min_speed_mps,
+        max_width=options.max_peak_width,
+    )
+
+
+def _evidence(
+    detection: RangeSpeedDetection, statistic: float, width: float, why: StationaryExplanation
+) -> MoverEvidence:
+    """The detection record of an accepted candidate."""
+    return MoverEvidence(
+        statistic_db=statistic,
+        threshold_db=detection.threshold_db,
+        false_alarm_rate=detection.false_alarm_rate,
+        p_value=detection.false_alarm_probability(statistic),
+        width_resolutions=width,
+        focus_gain_db=why.focus_gain_db,
+        stationary_point_m=(float(why.position_m[0]), float(why.position_m[1])),
+        stationary_within_extent=why.within_extent,
+    )
+
+
+def mover_record(
+    alone: NDArray[np.complexfloating],
+    *,
+    acquisition: Acquisition,
+    evidence: MoverEvidence,
+    separated_fit: PointFit,
+    fit: PointFit,
+    refit_kept: bool | None,
+    noise_variance: float,
+    options: AnalysisOptions,
+) -> Mover:
+    """Step 4: the :class:`~sarmotion.pipeline.Mover` of a sub-aperture fit.
+
+    Parameters
+    ----------
+    alone : (n_pulses, n_samples) ndarray
+        ``S`` with the other movers' fits subtracted: ``g_perp`` (``eq:OBJ2``) is taken
+        on it at the fit's range speed and position, for comparison with the fit.
+    acquisition : Acquisition
+        The sub-aperture the fit was made on.
+    evidence, separated_fit, fit, refit_kept
+        The mover's history so far (:class:`~sarmotion.pipeline.Mover`).
+    noise_variance : float
+        Noise variance per fast-time sample around the mover (data units squared).
+    options : AnalysisOptions
+        ``speed_range_mps`` of the ``g_perp`` search.
+
+    Returns
+    -------
+    Mover
+        Its estimate is ``fit``; no traces, image or trajectory yet.
+    """
+    sub = acquisition
+    g_perp = estimate_cross_range_speed(
+        Traces(data=alone, acquisition=sub),
+        range_speed_mps=fit.range_speed_mps,
+        position_m=fit.position_m,
+        speed_range_mps=options.speed_range_mps,
+    )
+    family = family_direction(sub, fit.position_m, fit.velocity_mps)
+    return Mover(
+        position_m=np.asarray(fit.position_m, dtype=np.float64).copy(),
+        velocity_mps=np.asarray(fit.velocity_mps, dtype=np.float64).copy(),
+        range_speed_mps=fit.range_speed_mps,
+        cross_range_speed_mps=fit.cross_range_speed_mps,
+        evidence=evidence,
+        separated_fit=separated_fit,
+        fit=fit,
+        refit_kept=refit_kept,
+        g_perp=g_perp,
+        aperture=None,
+        bound=_bound(sub, fit, noise_variance),
+        family_position_per_m=family[0],
+        family_velocity_per_m=family[1],
+    )
+
+
+def _local_noise(
+    residual: NDArray[np.complexfloating], fit: PointFit, *, acquisition: Acquisition
+) -> float:
+    """Noise variance around a mover as the matched filter sees it, on what the fits leave.
+
+    Positions within 10 m of the fit, range speeds within 2 m/s and cross-range speeds
+    within 5 m/s of its own (:func:`~sarmotion.motion.matched_filter_noise_variance`):
+    clutter residue is not white, and its level where the mover is sets the bound.
+    """
+    return matched_filter_noise_variance(
+        residual,
+        acquisition=acquisition,
+        half_size_m=10.0,
+        centre_m=fit.position_m,
+        velocity_mps=fit.velocity_mps,
+    )
+
+
+def _bound(sub: Acquisition, fit: PointFit, variance: float) -> PointBound:
+    """Cramér–Rao bound of a fit at its amplitude and the measured noise variance.
+
+    ``variance`` is per fast-time sample; the phase history's is ``n_samples`` times it
+    (:mod:`sarmotion.motion.bounds`).
+    """
+    geom = sub.geometry
+    grads = range_gradients(
+        sub.positions_m,
+        sub.slow_times_s,
+        fit.position_m,
+        fit.velocity_mps,
+        range_direction=resolution(sub).range_direction,
+        range_basis_mps=ground_velocity(1.0, 0.0, geom),
+        cross_basis_mps=ground_velocity(0.0, 1.0, geom),
+    )
+    return point_mover_bound(
+        grads,
+        sub.frequencies_hz,
+        sub.radar.spectral_weights(),
+        amplitude=max(abs(fit.amplitude), 1e-300),
+        noise_variance=max(sub.n_samples * variance, 1e-300),
+    )
+
+
+def on_whole_aperture(
+    residual: NDArray[np.complexfloating], mover: Mover, *, acquisition: Acquisition, central: slice
+) -> Mover:
+    """Step 5: a (central sub-aperture's) estimate moved to ``s = 0`` and focused on all pulses.
+
+    Parameters
+    ----------
+    residual : (n_pulses, n_samples) ndarray
+        ``S`` minus the movers extracted so far (whole aperture).
+    mover : Mover
+        The mover as estimated on the pulses ``central``.
+    acquisition : Acquisition
+        The whole acquisition.
+    central : slice
+        Those pulses.
+
+    Returns
+    -------
+    Mover
+        With its whole-aperture focus (:attr:`~sarmotion.pipeline.Mover.aperture`) and
+        the estimate it gives.
+    """
+    fit: ApertureFit = refine_on_aperture(
+        Traces(data=residual, acquisition=acquisition),
+        mover.position_m,
+        mover.velocity_mps,
+        central=central,
+    )
+    geom = acquisition.geometry
+    log.info(
+        "whole-aperture focus %.4g -> %.4g (x n_pulses)",
+        fit.start_focus / acquisition.n_pulses,
+        fit.focus / acquisition.n_pulses,
+    )
+    return _with(
+        mover,
+        position_m=fit.position_m,
+        velocity_mps=fit.velocity_mps,
+        range_speed_mps=range_speed(fit.velocity_mps, geom),
+        cross_range_speed_mps=cross_range_speed(fit.velocity_mps, geom),
+        aperture=fit,
+    )
+
+
+def _with(mover: Mover, **changes: object) -> Mover:
+    """``mover`` with ``changes`` (:func:`dataclasses.replace`)."""
+    return dataclasses.replace(mover, **changes)  # type: ignore[arg-type]
+
+
+def extract_mover(
+    data: Traces | ArrayLike,
+    *,
+    acquisition: Acquisition | None = None,
+    position_m: ArrayLike,
+    velocity_mps: ArrayLike,
+    half_window: int | None = None,
+) -> NDArray[np.complex128]:
+    """Step 6: one mover's own traces from ``data``, its ``s``-independent part in its frame.
+
+    ``T_+^{u, rho}`` (``eq:TTu+``) at the estimate ``(rho, u)`` brings the mover's trace
+    to ``t = 0`` with a phase independent of ``s``: in that frame it is rank one and
+    constant in slow time, while the other movers' and the residual clutter's traces
+    still cross the window obliquely. The mover's part is the slow-time mean of the
+    aligned traces in the fast-time window ``|t| <= half_window`` samples (the
+    projection on ``s``-independent traces there), mapped back by ``T_-^{u, rho}``.
+
+    Parameters
+    ----------
+    data : Traces or (n_pulses, n_samples) array_like
+        The traces the mover is taken from (e.g. the current moving residual).
+    acquisition : Acquisition, optional
+        Their acquisition (geometry, frequencies, reference point); required when
+        ``data`` is an array.
+    position_m : (2,) or (3,) array_like
+        Mover's location at ``s = 0`` (m).
+    velocity_mps : (2,) array_like
+        Mover's ground velocity (m/s).
+    half_window : int, optional
+        Half-width of the window (fast-time samples); default three compressed-pulse
+        lengths ``3 / (B dt)`` (as :func:`sarmotion.separation.separate_combined`).
+
+    Returns
+    -------
+    (n_pulses, n_samples) ndarray
+        The mover's traces (data units); ``data`` minus it is the residual.
+    """
+    traces = as_traces(data, acquisition)
+    part = aligned_constant_part(
+        to_frequency(traces.data),
+        position_m,
+        acquisition=traces.acquisition,
+        velocity_mps=velocity_mps,
+        half_window=half_window,
+    )
+    return to_fast_time(part)
