@@ -17,7 +17,7 @@ threads, default one per core; 0: in process) and, up to ``--whole-max`` m,
 ``pipeline.analyze`` on the whole scene (today's analysis, its default image). Reported:
 wall time, peak RSS of the process (``ru_maxrss``; the whole-scene run goes first in a
 separate process), throughput (km^2 per hour), movers accurate on their cross-range family
-(``tests/analysis_stages.py``'s rule: the truth slid along its own family,
+(``sarmotion.pipeline.family_errors``' rule: the truth slid along its own family,
 ``motion.family_member``, to the fit's cross range; accurate when the range position is
 within 3 ground-range cells and the range speed within 0.5 m/s), false movers (a fit
 matching no true mover), stationary targets found (a listed target within one resolution
@@ -147,7 +147,7 @@ def run_whole(side_m: float, seed: int) -> dict:
     t0 = time.perf_counter()
     result = analyze(traces)
     wall = time.perf_counter() - t0
-    fits = [(m.estimate.position_m, m.velocity_mps) for m in result.movers]
+    fits = [(m.position_m, m.velocity_mps) for m in result.movers]
     acc, false, found = score(traces, fits, movers, [s.position_m for s in result.stationary], stat)
     return {
         "wall_s": wall,

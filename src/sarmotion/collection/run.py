@@ -187,7 +187,7 @@ def analyze_patch(
         movers.append(
             MoverRecord(
                 patch=patch.index,
-                position_m=np.asarray(m.estimate.position_m, float),
+                position_m=np.asarray(m.position_m, float),
                 velocity_mps=np.asarray(m.velocity_mps, float),
                 sigma_range_m=float(b.range_position_m) if b is not None else math.inf,
                 sigma_range_speed_mps=float(b.range_speed_mps) if b is not None else math.inf,
@@ -205,7 +205,7 @@ def analyze_patch(
                 StationaryRecord(
                     patch=patch.index,
                     position_m=(float(t.position_m[0]), float(t.position_m[1])),
-                    level=peak * 10.0 ** (t.peak_db / 20.0),
+                    level=peak * 10.0 ** (t.level_db / 20.0),
                 )
             )
     x0, y0, x1, y1 = patch.core_m
