@@ -94,7 +94,7 @@ __all__ = [
     "matched_filter_noise_variance",
 ]
 
-#: Pulse-frequency terms per chunk of parameter sets in :meth:`MatchedFilter.responses`.
+#: Pulse-frequency products in one chunk of parameter sets in :meth:`MatchedFilter.responses`.
 _CHUNK = 1 << 21
 
 #: Units of the Newton ascent in :func:`_local_fit`: about an eighth of a resolution in
