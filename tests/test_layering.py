@@ -34,7 +34,7 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = "sarmotion"
 
-BASE = {"core", "_validation", "_version", "_limits", "errors"}
+BASE = {"core", "_validation", "_version", "_limits", "_cluster", "errors"}
 SCIENCE_LOW = BASE | {"simulation", "imaging"}
 SCIENCE = SCIENCE_LOW | {"separation", "motion"}
 
@@ -43,6 +43,7 @@ MAY_IMPORT: dict[str, set[str]] = {
     "core": {"_validation", "_version", "_limits", "errors"},
     "_validation": set(),
     "_limits": set(),
+    "_cluster": set(),
     "_version": set(),
     "errors": set(),
     "simulation": BASE,

@@ -31,7 +31,6 @@ import logging
 import math
 import os
 import time
-import warnings
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass, field
@@ -372,7 +371,9 @@ def _run(
                 done += 1
                 report(progress, "patches", done, total)
         return
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import Client, as_completed
+
+    from .._cluster import local_cluster
 
     cores = os.cpu_count() or 1
     with ExitStack() as stack:
@@ -380,19 +381,7 @@ def _run(
             workers = cores if n_workers is None else int(n_workers)
             if workers < 1:
                 raise ValueError(f"n_workers must be >= 0, got {n_workers!r}")
-            with warnings.catch_warnings():
-                # the scheduler's metrics server falls back to a free port: not a concern
-                warnings.filterwarnings("ignore", message="Port .* is already in use")
-                cluster = stack.enter_context(
-                    LocalCluster(
-                        n_workers=workers,
-                        threads_per_worker=1,
-                        processes=processes,
-                        dashboard_address=None,
-                        silence_logs=logging.ERROR,
-                        **({"host": "127.0.0.1"} if processes else {}),
-                    )
-                )
+            cluster = stack.enter_context(local_cluster(workers, processes=processes))
             client = stack.enter_context(Client(cluster))
             threads: int | None = max(1, cores // workers)
         elif isinstance(scheduler, str):
