@@ -84,7 +84,7 @@ def test_two_patches_find_the_border_mover_once_and_every_stationary_point(scene
 
 
 @pytest.mark.filterwarnings("ignore:Port .* is already in use")
-def test_distributed_process_workers_give_the_same_answers(scene, default_result):
+def test_distributed_process_workers_give_the_same_answers(scene, default_result, tmp_path):
     from distributed import Client, LocalCluster
 
     with (
@@ -95,6 +95,7 @@ def test_distributed_process_workers_give_the_same_answers(scene, default_result
             dashboard_address=None,
             silence_logs=logging.ERROR,
             host="127.0.0.1",
+            local_directory=str(tmp_path),
         ) as cluster,
         Client(cluster) as client,
     ):
