@@ -85,9 +85,11 @@ def test_two_patches_find_the_border_mover_once_and_every_stationary_point(scene
 
 @pytest.mark.filterwarnings("ignore:Port .* is already in use")
 def test_distributed_process_workers_give_the_same_answers(scene, default_result, tmp_path):
+    import dask
     from distributed import Client, LocalCluster
 
     with (
+        dask.config.set({"temporary-directory": str(tmp_path)}),
         LocalCluster(
             n_workers=2,
             threads_per_worker=1,
