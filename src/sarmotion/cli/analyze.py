@@ -297,7 +297,7 @@ def analyze(
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
     INPUTS: a built-in scene name or scene .toml (simulated), a native traces .h5 file,
-    or GOTCHA .mat files. Writes OUT/results.json (schema sarmotion.results/1),
+    GOTCHA .mat files or a CPHD .cphd file. Writes OUT/results.json (schema sarmotion.results/1),
     OUT/report.html (self-contained) and the report's figures as PNG. A scene larger
     than one patch (or any --region) is cut into patches, analysed on Dask and merged:
     OUT/results.json (schema sarmotion.collection/1), report.html and mosaic.png.

@@ -135,7 +135,7 @@ def image(
     device: str,
     force: bool,
 ) -> None:
-    """Backprojection image of INPUTS: a scene, native traces or GOTCHA .mat files.
+    """Backprojection image of INPUTS: a scene, native traces, GOTCHA .mat or CPHD files.
 
     Each pixel sums the traces at its round-trip travel time over the aperture [eq:image].
     Writes OUT/image.png (dB, peak-normalised), OUT/image.h5 (complex image with its axes)

@@ -82,7 +82,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "image": (
         "image",
-        "Backprojection image of INPUTS: a scene, native traces or GOTCHA .mat files.",
+        "Backprojection image of INPUTS: a scene, native traces, GOTCHA .mat or CPHD files.",
     ),
     "inject": (
         "inject",
