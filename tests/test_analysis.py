@@ -27,6 +27,7 @@ from sarmotion.cli import run
 from sarmotion.documents import RESULTS_SCHEMA, results_document
 from sarmotion.imaging import point_response, resolution
 from sarmotion.io import read_gotcha, write_gotcha
+from sarmotion.motion.likelihood import NEAR_EQUAL_LOBES
 from sarmotion.pipeline import AnalysisOptions, analyze, compare_with_truth, extract_mover
 from sarmotion.separation import SeparationOptions
 from sarmotion.simulation import PointTarget, Scene, inject, load_scene, random_scene, simulate
@@ -158,6 +159,9 @@ def test_results_json_document(scene1):
         assert {"position_m", "velocity_mps", "range_speed_mps", "cross_range_speed_mps"} <= set(m)
         assert len(m["position_m"]) == 2 and len(m["velocity_mps"]) == 2
         assert m["errors"]["range_speed_mps"] is not None
+        # Scene 1's movers are isolated: one lobe of the likelihood stands above the rest
+        lobes = m["likelihood_lobes"]
+        assert lobes["ambiguous"] is False and 0.0 <= lobes["lobe_ratio"] < NEAR_EQUAL_LOBES
     assert all(len(s["position_m"]) == 2 and s["peak_db"] <= 0 for s in doc["stationary"])
 
 

@@ -7,7 +7,8 @@ false-alarm rate, the measured null tail, every candidate), ``movers`` (position
 velocity_mps, range and cross-range speeds, peak levels, ``detection`` (statistic,
 threshold, false-alarm rate, p-value, width, focus gain), ``standard_errors`` (the
 Cramér–Rao bound at the measured SNR), ``snr_db``, ``amplitude``,
-``g_perp_cross_range_speed_mps``, ``cross_range_family``, ``trajectory``),
+``g_perp_cross_range_speed_mps``, ``likelihood_lobes``, ``cross_range_family``,
+``trajectory``),
 ``stationary``, ``timings_s``, ``options``, ``source``; for simulated inputs also
 ``truth``, per-mover ``errors``, ``false_movers`` and ``missed_movers``
 (:mod:`sarmotion.pipeline.truth`).
@@ -18,7 +19,11 @@ The schema name stays ``sarmotion.results/1``: ``detection``, and per mover
 except ``g_peak_db``, now the ``g(u)`` peak over its *local* floor (the detector's
 statistic) instead of over the global median. ``timings_s`` also holds
 ``movers.<step>`` entries, the mover stage's steps (:mod:`sarmotion.pipeline.movers`),
-which ``total`` does not count.
+which ``total`` does not count. Per mover, ``likelihood_lobes`` was added: whether the
+matched filter's likelihood has a second maximum on another lobe within
+``motion.likelihood.NEAR_EQUAL_LOBES`` of the fit's ``|I|`` (``ambiguous``), the ratio of
+the best other lobe's ``|I|`` to the fit's (``lobe_ratio``) and that lobe's cross-range
+speed (m/s, null when there is none).
 """
 
 from __future__ import annotations
@@ -113,6 +118,16 @@ def _mover(m: Mover) -> dict[str, Any]:
     entry["snr_db"] = b.snr_db
     entry["amplitude"] = [float(m.fit.amplitude.real), float(m.fit.amplitude.imag)]
     entry["g_perp_cross_range_speed_mps"] = float(m.g_perp.speed_mps)
+    lobes = m.separated_fit  # the global search over cross-range speed ran on S
+    entry["likelihood_lobes"] = {
+        "ambiguous": bool(lobes.ambiguous),
+        "lobe_ratio": float(lobes.lobe_ratio),
+        "other_cross_range_speed_mps": (
+            None
+            if lobes.other_cross_range_speed_mps is None
+            else float(lobes.other_cross_range_speed_mps)
+        ),
+    }
     if m.trajectory is not None:
         knots = m.trajectory.knot_times_s
         entry["trajectory"] = {
