@@ -19,7 +19,6 @@ from ..collection import (
 from ..core.blocks import TracesBlocks
 from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
-from ..io.native import check_hdf5_terminates
 from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
 from .autofocus import PGA_ITERATIONS, read_focused
@@ -55,7 +54,6 @@ def _block_source(inputs: Sequence[str], lenient: bool) -> Any:
         return None
     if suffix == ".cphd":
         return open_cphd_blocks(path, lenient=lenient)
-    check_hdf5_terminates(path)
     return open_native_blocks(path, lenient=lenient)
 
 

@@ -13,7 +13,6 @@ from pathlib import Path
 
 from ..core.traces import Traces
 from ..io import DataError, load_traces, read_cphd, read_gotcha
-from ..io.native import check_hdf5_terminates
 from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
 
 __all__ = ["is_scene_reference", "read_inputs"]
@@ -80,7 +79,6 @@ def read_inputs(
     if suffixes == {".h5"} or suffixes == {".hdf5"}:
         if len(inputs) != 1:
             raise DataError("give one native traces file (.h5) at a time")
-        check_hdf5_terminates(first)
         return load_traces(first, lenient=lenient), None
     if suffixes == {".mat"}:
         traces = read_gotcha(
