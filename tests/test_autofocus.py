@@ -120,6 +120,18 @@ def test_pga_on_simulated_points_recovers_the_error():
     )
 
 
+def test_pga_finds_no_error_on_a_focused_point_at_the_centre():
+    # One noiseless point at the image centre, no phase error: the back-transform with
+    # the exact delays returns the point's phase history, constant, so the estimate is
+    # zero up to the stopping tolerance. Linearised (kappa_j (y - y_t)), it left the
+    # chirp k_o (y - y_t)^2 / R along the range line, which the window truncates into an
+    # even phase on the edge pulses: a quadratic bias.
+    tr = simulate(point_scene([(0.0, 0.0)])).traces
+    result = pga(tr)
+    residual = without_line(result.phase_error_rad, tr.slow_times_s)
+    assert np.sqrt(np.mean(residual**2)) < result.tol_rad
+
+
 def test_focus_mover_refocuses_a_defocused_mover():
     scene = Scene(
         name="mover",

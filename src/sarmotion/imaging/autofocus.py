@@ -31,13 +31,19 @@ cross-range cells) and the image along the line is
 ``k_o = omega_o / c``. When the pulses are evenly spaced in look angle (small aperture:
 ``kappa_j`` linear in ``j``) this is the Fourier series of ``exp(i phi)``: the phase
 error convolves every range line with the same kernel, its transform. Conversely the
-per-pulse phase history of the target is recovered by the transform back,
+per-pulse phase history of the target is recovered by the transform back, taken with the
+exact delay differences rather than their linearisation,
 
-    G_j = sum_{|y - y_t| <= W/2} I(y) exp(-i kappa_j (y - y_t)) ~ a exp(i phi_j),
+    G_j = sum_{|y - y_t| <= W/2} I(y) exp(-i omega_o (dtau_j(rho_y) - dtau_j(rho_t)))
+        ~ a exp(i phi_j),
 
-smoothed over pulses by the window's transform. ``kappa_j`` is evaluated exactly at each
-line's peak (it drifts by the angle the scene subtends, ~1 % across 100 m at 10 km, which
-over a 10 m window is a fraction of a radian at the aperture edges).
+``rho_y`` the pixel at ``y`` on the line and ``rho_t`` the sub-pixel peak, smoothed over
+pulses by the window's transform. The exact form matters: the linearised phase
+``kappa_j (y - y_t)`` leaves the second-order term ``k_o (y - y_t)^2 / R`` (``R`` the
+range), a chirp along the line that the window truncates. The truncation puts an even
+phase on the pulses near the aperture edges, of order ``k_o (W / 2)^2 / R`` (0.5 rad
+for a 10 m window at 10 km), which is the same for every line and so does not average
+out: it is a quadratic bias of the estimate even for one isolated, noiseless point.
 
 Iteration
 ---------
@@ -73,7 +79,7 @@ When the assumptions hold
   ``j``, the range envelope of a target stays within its range cell across a window, and
   one cross-range axis describes the whole aperture (at 4 degrees the keystone of the
   polar support spreads ``kappa_j`` by the fractional bandwidth, which the exact
-  ``kappa_j`` here absorbs at the centre frequency only).
+  delays here absorb at the centre frequency only).
 - The image holds dominant point-like scatterers in many range lines, above the clutter
   in the window: their phase histories are the signal, clutter the noise. A scene with
   no bright scatterer is refused.
@@ -195,15 +201,27 @@ def _rotated(traces: Traces, centre: NDArray[np.float64], rot: NDArray[np.float6
     )
 
 
-def _kappa(
-    traces: Traces, point: NDArray[np.float64], velocity: NDArray[np.float64]
+def _phase(
+    traces: Traces,
+    point: NDArray[np.float64],
+    shift: NDArray[np.float64],
+    dist: NDArray[np.float64],
+    velocity: NDArray[np.float64],
 ) -> NDArray[np.float64]:
-    """``kappa_j = -2 k_o (m_j . e_y)`` (rad/m) at ``point`` in the rotated frame."""
+    """Phases ``omega_o (dtau_j(rho) - dtau_j(point))`` (rad), shape ``(n_pulses, n_dist)``.
+
+    ``rho = point + shift + dist e_y`` in the rotated frame (``shift`` (2,) m, ``dist``
+    (n_dist,) m); ``velocity`` (3,) m/s moves ``point`` with slow time (a mover's image).
+    """
     where = point[None, :] + traces.slow_times_s[:, None] * velocity[None, :]
-    m = traces.positions_m - where
-    m /= np.linalg.norm(m, axis=1)[:, None]
+    rel = traces.positions_m - where  # (n_pulses, 3), target to antenna
+    r0 = np.linalg.norm(rel, axis=1)
+    shifted = np.repeat(rel[:, None, :], dist.size, axis=1)
+    shifted[:, :, 0] -= shift[0]
+    shifted[:, :, 1] -= shift[1] + dist[None, :]
+    r = np.linalg.norm(shifted, axis=2)
     k_o = 2.0 * np.pi * traces.radar.carrier_hz / C
-    return -2.0 * k_o * m[:, 1]
+    return 2.0 * k_o * (r - r0[:, None])
 
 
 def _remove_linear(phi: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -353,13 +371,17 @@ def pga(
         offsets = np.arange(-half, half + 1)
         for row, n in enumerate(chosen):
             k = int(peak_idx[n])
-            fy, _ = parabolic_peak(mags, k, int(n))  # sub-pixel peak along y
+            fy, fx = parabolic_peak(mags, k, int(n))  # sub-pixel peak along y and x
             y_hat = grid.y_m[0] + fy * dy
-            idx = (k + offsets) % ny  # centre shift (circular, as on a Fourier axis)
-            dist = grid.y_m[0] + (k + offsets) * dy - y_hat
-            point = np.array([grid.x_m[n], y_hat, 0.0])
-            kappa = _kappa(work, point, vel_rot)
-            g[row] = np.exp(-1j * np.outer(kappa, dist)) @ lines[n, idx]
+            x_hat = grid.x_m[0] + fx * dx
+            # Centre shift: the window's pixels that lie in the image (a backprojected
+            # image is not periodic, so a window is cut at the image's edge, not wrapped).
+            idx = k + offsets
+            idx = idx[(idx >= 0) & (idx < ny)]
+            dist = grid.y_m[0] + idx * dy - y_hat
+            point = np.array([x_hat, y_hat, 0.0])
+            shift = np.array([grid.x_m[n] - x_hat, 0.0])
+            g[row] = np.exp(-1j * _phase(work, point, shift, dist, vel_rot)) @ lines[n, idx]
         if kernel == "eigenvector":
             _, _, vh = np.linalg.svd(g, full_matrices=False)
             raw = np.unwrap(np.angle(vh[0]))
