@@ -16,7 +16,7 @@ from ..pipeline import AnalysisOptions, compare_with_truth
 from ..pipeline import analyze as run_analysis
 from ..report.html import write_report
 from ..separation import SeparationOptions
-from .autofocus import PGA_ITERATIONS, autofocus_options, read_focused
+from .autofocus import ReadOptions, autofocus_options
 from .collection import run_collection
 from .common import (
     InputError,
@@ -75,42 +75,25 @@ def run_analyze(
     out: Path,
     options: AnalysisOptions,
     *,
-    speed_mps: float = 70.0,
-    snr_db: float | None = None,
-    seed: int = 0,
+    reading: ReadOptions | None = None,
     progress: bool = False,
-    autofocus: str | bool | None = None,
-    pga_iterations: int = PGA_ITERATIONS,
-    lenient: bool = False,
     force: bool = False,
     sicd: bool = False,
     read: tuple[Any, Any, Any] | None = None,
 ) -> None:
     """Analyse ``inputs`` and write ``out``/results.json, report.html and its figures.
 
-    ``read``: the inputs' ``(traces, simulation, autofocus result)`` when already read.
+    ``reading``: how the inputs are read (:class:`~.autofocus.ReadOptions`, its defaults
+    when ``None``): ``autofocus="gotcha"`` applies GOTCHA's stored corrections, ``"pga"``
+    phase-gradient autofocus (its phase error goes in the document and report). ``read``:
+    the inputs' ``(traces, simulation, autofocus result)`` when already read.
 
     With ``sicd``, also the stationary image as ``stationary.nitf`` and each mover's
     compensated image as ``mover-K.nitf`` (SICD, :func:`~sarmotion.io.sicd.write_sicd`).
-
-    ``autofocus``: ``"gotcha"`` (or ``True``) applies GOTCHA's stored corrections,
-    ``"pga"`` phase-gradient autofocus (its phase error goes in the document and report).
     """
+    reading = ReadOptions() if reading is None else reading
     check_out(out, force=force, names=OUTPUTS, patterns=("mover-*.nitf",) if sicd else ())
-    if autofocus is True:
-        autofocus = "gotcha"
-    if read is not None:
-        traces, sim, focus = read
-    else:
-        traces, sim, focus = read_focused(
-            inputs,
-            autofocus=autofocus or None,
-            pga_iterations=pga_iterations,
-            speed_mps=speed_mps,
-            snr_db=snr_db,
-            seed=seed,
-            lenient=lenient,
-        )
+    traces, sim, focus = read if read is not None else reading.read(inputs)
     with Progress(enabled=progress) as bar:
         result = run_analysis(traces, options, progress=bar)
     truth = compare_with_truth(result, sim.scene) if sim is not None else None
@@ -325,13 +308,15 @@ def analyze(
         scheduler=scheduler,
         n_workers=n_workers,
         single=single,
-        speed_mps=speed_mps,
-        snr_db=snr_db,
-        seed=seed,
+        reading=ReadOptions(
+            speed_mps=speed_mps,
+            snr_db=snr_db,
+            seed=seed,
+            lenient=lenient,
+            autofocus=autofocus,
+            pga_iterations=pga_iterations,
+        ),
         progress=ctx.obj["progress"],
-        autofocus=autofocus,
-        pga_iterations=pga_iterations,
-        lenient=lenient,
         force=force,
     )
 

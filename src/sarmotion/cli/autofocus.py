@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import click
@@ -13,7 +14,7 @@ from ..simulation import Simulation
 from .common import InputError, as_flags
 from .inputs import read_inputs
 
-__all__ = ["autofocus_options", "read_focused"]
+__all__ = ["ReadOptions", "autofocus_options", "read_focused"]
 
 #: Default most PGA iterations.
 PGA_ITERATIONS = 10
@@ -73,3 +74,49 @@ def read_focused(
     except ValueError as exc:
         raise InputError(f"--autofocus pga: {exc}") from None
     return result.traces, sim, result
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReadOptions:
+    """How ``analyze`` reads its inputs: the options of :func:`read_focused`, one record.
+
+    Attributes
+    ----------
+    speed_mps : float
+        GOTCHA: platform speed that sets slow time (m/s).
+    snr_db : float, optional
+        Scenes: add white noise at this SNR (dB).
+    seed : int
+        Scenes: noise seed.
+    lenient : bool
+        Files: log a broken plausibility rule as a warning instead of refusing the file.
+    autofocus : {"gotcha", "pga"} or None
+        Focus correction; ``True`` means ``"gotcha"`` (the flag's earlier meaning).
+    pga_iterations : int
+        ``"pga"``: most iterations.
+    """
+
+    speed_mps: float = 70.0
+    snr_db: float | None = None
+    seed: int = 0
+    lenient: bool = False
+    autofocus: str | None = None
+    pga_iterations: int = PGA_ITERATIONS
+
+    def __post_init__(self) -> None:
+        if self.autofocus is True:
+            object.__setattr__(self, "autofocus", "gotcha")
+
+    def read(
+        self, inputs: Sequence[str]
+    ) -> tuple[Traces, Simulation | None, AutofocusResult | None]:
+        """``(traces, simulation, autofocus result)`` of ``inputs`` (:func:`read_focused`)."""
+        return read_focused(
+            inputs,
+            autofocus=self.autofocus or None,
+            pga_iterations=self.pga_iterations,
+            speed_mps=self.speed_mps,
+            snr_db=self.snr_db,
+            seed=self.seed,
+            lenient=self.lenient,
+        )

@@ -21,7 +21,7 @@ from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
 from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
-from .autofocus import PGA_ITERATIONS, read_focused
+from .autofocus import ReadOptions
 from .common import InputError, Progress, as_flags, check_out
 
 __all__ = ["COLLECTION_OUTPUTS", "run_collection"]
@@ -68,43 +68,29 @@ def run_collection(
     scheduler: str | None,
     n_workers: int | None,
     single: Any,
-    speed_mps: float = 70.0,
-    snr_db: float | None = None,
-    seed: int = 0,
+    reading: ReadOptions | None = None,
     progress: bool = False,
-    autofocus: str | bool | None = None,
-    pga_iterations: int = PGA_ITERATIONS,
-    lenient: bool = False,
     force: bool = False,
 ) -> None:
     """Plan the patches of ``inputs``; one patch: ``single(read)``; else the collection.
 
     ``single`` is today's analysis of the inputs already read (``read = (traces,
-    simulation, autofocus result)``); it writes its own outputs. ``autofocus`` as for
-    :func:`~sarmotion.cli.analyze.run_analyze`.
+    simulation, autofocus result)``); it writes its own outputs. ``reading``: how the
+    inputs are read, as for :func:`~sarmotion.cli.analyze.run_analyze`.
     """
+    reading = ReadOptions() if reading is None else reading
     if n_workers is not None and n_workers < 0:
         raise InputError(f"--workers must be >= 0, got {n_workers}")
     with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
         copts = CollectionOptions(
             analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
         )
-    if autofocus is True:
-        autofocus = "gotcha"
 
     def read() -> tuple[Any, Any, Any]:
-        return read_focused(
-            inputs,
-            autofocus=autofocus or None,
-            pga_iterations=pga_iterations,
-            speed_mps=speed_mps,
-            snr_db=snr_db,
-            seed=seed,
-            lenient=lenient,
-        )
+        return reading.read(inputs)
 
     # a CPHD or native traces file is read block by block (unless autofocus needs it all)
-    source: Any = _block_source(inputs, lenient) if not autofocus else None
+    source: Any = _block_source(inputs, reading.lenient) if not reading.autofocus else None
     read_first = None if source is not None else read()
     if source is None:
         source = TracesBlocks(read_first[0])

@@ -148,7 +148,7 @@ def _run_ffbp(
     factorisation would not save work. The float32 kernel on sub-grids (``exact_for``)
     computes the pixels the rotated path cannot resample.
     """
-    from .ffbp import ffbp_values
+    from .ffbp import FfbpPulses, ffbp_values
 
     quarter_scale = _quarter_scale(st)
     if tile_shape(st.eff_positions, grid.x_m, grid.y_m, quarter_scale) is None:
@@ -168,11 +168,14 @@ def _run_ffbp(
         )  # fmt: skip
         return re[0] + 1j * im[0]
 
-    values, info = ffbp_values(
-        table.values, st.eff_positions, st.ref_ranges, traces.reference_point_m,
-        np.asarray(grid.x_m), np.asarray(grid.y_m), constants=constants, n_up=table.n_up,
+    pulses = FfbpPulses(
+        table_values=table.values, positions=st.eff_positions, ref_ranges=st.ref_ranges,
+        reference_point_m=traces.reference_point_m, constants=constants, n_up=table.n_up,
         carrier_hz=st.carrier_hz, bandwidth_hz=float(traces.radar.bandwidth_hz),
-        tile_for=tile_for, alpha=alpha, progress=progress, exact_for=exact_for,
+    )  # fmt: skip
+    values, info = ffbp_values(
+        pulses, np.asarray(grid.x_m), np.asarray(grid.y_m), tile_for=tile_for, alpha=alpha,
+        progress=progress, exact_for=exact_for,
     )  # fmt: skip
     if values is None:
         values, variant = _run_numba(st, traces, grid, progress)

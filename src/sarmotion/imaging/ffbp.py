@@ -78,7 +78,7 @@ sub-images; here the sub-images share the image columns and a common demodulatio
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numba
 import numpy as np
@@ -87,7 +87,7 @@ from numpy.typing import NDArray
 from ..core import C, ProgressCallback
 from . import _ffbp_kernels as _kernels
 
-__all__ = ["ffbp_values"]
+__all__ = ["FfbpPulses", "ffbp_values"]
 
 #: Taps of the half-sample interpolation filter (even). On GOTCHA at ``alpha = 1.3``, 10
 #: taps measured 0.7-1.1 dB above 8 (1024^2, 2048^2): less than raising ``alpha`` by 0.1.
@@ -396,18 +396,63 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
 
 
 # ========================================================================= driver
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FfbpPulses:
+    """The pulses as the factorisation reads them: trace table and float64 geometry.
+
+    One frame for all of them: the rotated path turns ``positions`` and
+    ``reference_point_m`` with its grid (:meth:`in_frame`); ranges, hence the table, the
+    reference ranges and the demodulation, do not change.
+
+    Attributes
+    ----------
+    table_values : (n_pulses, 1 + 3 (n_up + 2)) ndarray
+        Trace table (:attr:`~._bp_table.TraceTable.values`).
+    positions : (n_pulses, 3) ndarray
+        Effective antenna positions ``r(s_j) - s_j u`` (m), float64.
+    ref_ranges : (n_pulses,) ndarray
+        ``|r(s_j) - rho_o|`` (m).
+    reference_point_m : (3,) ndarray
+        ``rho_o`` (m), float64.
+    constants : (float, float, float)
+        ``(idx_scale, idx_offset, quarter_scale)`` of the table.
+    n_up : int
+        Upsampled samples per pulse.
+    carrier_hz, bandwidth_hz : float
+        ``nu_o`` and ``B`` (Hz).
+    """
+
+    table_values: NDArray[np.uint64]
+    positions: NDArray[np.float64]
+    ref_ranges: NDArray[np.float64]
+    reference_point_m: NDArray[np.float64]
+    constants: tuple[float, float, float]
+    n_up: int
+    carrier_hz: float
+    bandwidth_hz: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "positions", np.asarray(self.positions, np.float64))
+        object.__setattr__(
+            self, "reference_point_m", np.asarray(self.reference_point_m, np.float64)
+        )
+
+    @property
+    def band_hz(self) -> tuple[float, float]:
+        """``(nu_o - B/2, nu_o + B/2)`` (Hz)."""
+        return (self.carrier_hz - 0.5 * self.bandwidth_hz,
+                self.carrier_hz + 0.5 * self.bandwidth_hz)  # fmt: skip
+
+    def in_frame(self, positions: NDArray, reference_point_m: NDArray) -> FfbpPulses:
+        """The same pulses with the antennas and ``rho_o`` given in another frame."""
+        return replace(self, positions=positions, reference_point_m=reference_point_m)
+
+
 def ffbp_values(
-    table_values: NDArray[np.uint64],
-    positions: NDArray[np.float64],
-    ref_ranges: NDArray[np.float64],
-    reference_point_m: NDArray[np.float64],
+    pulses: FfbpPulses,
     x_m: NDArray[np.float64],
     y_m: NDArray[np.float64],
     *,
-    constants: tuple[float, float, float],
-    n_up: int,
-    carrier_hz: float,
-    bandwidth_hz: float,
     tile_for,
     alpha: float = DEFAULT_ALPHA,
     progress: ProgressCallback | None = None,
@@ -427,22 +472,10 @@ def ffbp_values(
 
     Parameters
     ----------
-    table_values : (n_pulses, 1 + 3 (n_up + 2)) ndarray
-        Trace table (:attr:`~._bp_table.TraceTable.values`).
-    positions : (n_pulses, 3) ndarray
-        Effective antenna positions ``r(s_j) - s_j u`` (m).
-    ref_ranges : (n_pulses,) ndarray
-        ``|r(s_j) - rho_o|`` (m).
-    reference_point_m : (3,) ndarray
-        ``rho_o`` (m).
+    pulses : FfbpPulses
+        Trace table and geometry of the pulses.
     x_m, y_m : ndarray
         Grid axes (m), uniform.
-    constants : (float, float, float)
-        ``(idx_scale, idx_offset, quarter_scale)`` of the table.
-    n_up : int
-        Upsampled samples per pulse.
-    carrier_hz, bandwidth_hz : float
-        ``nu_o`` and ``B`` (Hz).
     tile_for : callable
         ``tile_for(positions, u_m, v_m) -> (rows, cols)``, the tile of the exact kernel
         (the leaves use its float32 arithmetic, so its bounds).
@@ -465,28 +498,21 @@ def ffbp_values(
     """
     x = np.asarray(x_m, np.float64)
     y = np.asarray(y_m, np.float64)
-    pos = np.asarray(positions, np.float64)
-    rho_o = np.asarray(reference_point_m, np.float64)
-    kw = dict(constants=constants, n_up=n_up, carrier_hz=carrier_hz,
-              bandwidth_hz=bandwidth_hz, tile_for=tile_for, alpha=alpha)  # fmt: skip
-    budget = 0.7 * pos.shape[0]  # pixel-pulses per pixel of exact on the same pixels
-    values, info = _aligned_values(table_values, pos, ref_ranges, rho_o, x, y,
-                                   budget=budget, progress=progress, **kw)  # fmt: skip
+    kw = dict(tile_for=tile_for, alpha=alpha, progress=progress)
+    budget = 0.7 * pulses.positions.shape[0]  # pixel-pulses per pixel of exact, same pixels
+    values, info = _aligned_values(pulses, x, y, budget=budget, **kw)
     if values is not None:
         return values, info
     if exact_for is not None and x.size > 1 and y.size > 1:
-        values, info = _rotated_values(table_values, pos, ref_ranges, rho_o, x, y,
-                                       budget=budget, progress=progress, exact_for=exact_for,
-                                       **kw)  # fmt: skip
+        values, info = _rotated_values(pulses, x, y, budget=budget, exact_for=exact_for, **kw)
         if values is not None:
             return values, info
     return None, {"path": "exact", "fallback": "exact (the factorisation would not save work here)"}
 
 
 def _aligned_values(
-    table_values, pos, ref_ranges, rho_o, x, y, *, constants, n_up, carrier_hz, bandwidth_hz,
-    tile_for, alpha, budget, progress, demodulated=False, admit=None,
-):  # fmt: skip
+    pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progress, demodulated=False, admit=None
+):
     """The factorisation on the grid's own columns (the ``"axis-aligned"`` path).
 
     ``None`` as values when it would cost more than ``budget`` pixel-pulses per pixel of
@@ -494,6 +520,9 @@ def _aligned_values(
     values are ``J`` (complex64, not remodulated) on the used columns only,
     ``info["first_column"]`` the first one's index.
     """
+    table_values, pos, ref_ranges = pulses.table_values, pulses.positions, pulses.ref_ranges
+    rho_o, constants, n_up = pulses.reference_point_m, pulses.constants, pulses.n_up
+    carrier_hz = pulses.carrier_hz
     look = np.array([x.mean(), y.mean()]) - pos.mean(axis=0)[:2]
     transpose = abs(look[1]) > abs(look[0])
     if transpose:  # u = y, v = x: swap the coordinates of everything
@@ -513,8 +542,7 @@ def _aligned_values(
         return (out.T if transpose else out), info
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
     us = np.ascontiguousarray(x[k_lo:k_hi])
-    f_lo = carrier_hz - 0.5 * bandwidth_hz
-    f_hi = carrier_hz + 0.5 * bandwidth_hz
+    f_lo, f_hi = pulses.band_hz
     c_best, bounds, plans = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz, alpha)
     info["cost_pixel_pulses"] = float(c_best)
     if not (c_best <= budget * y.size * us.size if admit is None else admit(c_best)):
@@ -622,10 +650,7 @@ def fractional_filters(band: float, taps: int | None = None) -> NDArray[np.float
     return table
 
 
-def _rotated_values(
-    table_values, pos, ref_ranges, rho_o, x, y, *, constants, n_up, carrier_hz, bandwidth_hz,
-    tile_for, alpha, budget, progress, exact_for,
-):  # fmt: skip
+def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progress, exact_for):
     """The ``"rotated"`` path: factorise on a grid turned to the look direction, resample.
 
     Frame: ``u`` along the look direction from the aperture centre ``c`` to the grid
@@ -644,6 +669,8 @@ def _rotated_values(
     model (:data:`_TREE_COST`, :data:`_RESAMPLE_COST`, :data:`_EDGE_COST`) predicts more
     than :data:`_ROTATED_BUDGET` of exact backprojection on the requested grid.
     """
+    pos, ref_ranges, rho_o = pulses.positions, pulses.ref_ranges, pulses.reference_point_m
+    constants, n_up, carrier_hz = pulses.constants, pulses.n_up, pulses.carrier_hz
     n_pulses = pos.shape[0]
     centre = pos.mean(axis=0)
     ox, oy = float(x.mean()), float(y.mean())
@@ -659,8 +686,7 @@ def _rotated_values(
     py = np.array([y[0], y.mean(), y[-1]])
     pu, pv = turn(*np.meshgrid(px, py))
     probes = np.column_stack([pu.ravel(), pv.ravel()])
-    f_lo = carrier_hz - 0.5 * bandwidth_hz
-    f_hi = carrier_hz + 0.5 * bandwidth_hz
+    f_lo, f_hi = pulses.band_hz
     c_r = pos_r.mean(axis=0)
     lo_v, hi_v = _pulse_bands(pos_r, f_lo, f_hi, carrier_hz, c_r, probes)
     lo_u, hi_u = _pulse_bands(pos_r[:, [1, 0, 2]], f_lo, f_hi, carrier_hz, c_r[[1, 0, 2]],
@@ -694,9 +720,8 @@ def _rotated_values(
             progress(stage, done, n + 1)
 
     j, info = _aligned_values(
-        table_values, pos_r, ref_ranges, rho_r, us, vs, constants=constants, n_up=n_up,
-        carrier_hz=carrier_hz, bandwidth_hz=bandwidth_hz, tile_for=tile_for, alpha=alpha,
-        budget=budget, progress=inner_progress, demodulated=True, admit=admit,
+        pulses.in_frame(pos_r, rho_r), us, vs, tile_for=tile_for, alpha=alpha, budget=budget,
+        progress=inner_progress, demodulated=True, admit=admit,
     )  # fmt: skip
     if j is None:
         return None, info
