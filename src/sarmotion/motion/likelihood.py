@@ -199,6 +199,11 @@ class MatchedFilter:
 class PointFit:
     """One mover's maximum-likelihood fit (:func:`fit_point_mover`).
 
+    A part of the analysis's mover record, not an alternative to it:
+    :class:`~sarmotion.pipeline.Mover` holds two (``separated_fit`` and ``fit``) beside
+    the detection evidence, ``g_perp``, the whole-aperture focus, bounds, traces and image.
+    This holds the fit alone, with the global cross-range search and the lobe ambiguity.
+
     Attributes
     ----------
     position_m : (3,) ndarray

@@ -116,6 +116,12 @@ class EstimationStep:
 class MoverEstimate:
     """Location and ground velocity of one mover (:func:`estimate_velocity`).
 
+    Distinct from the analysis's mover record (:class:`~sarmotion.pipeline.Mover`, built on
+    the maximum-likelihood fit, :class:`~sarmotion.motion.PointFit`): this is the result
+    of the alternating ``g`` -> locate -> ``g_perp`` estimator, with its curves and the
+    estimate after each step; the tracker uses it at a known position (the first
+    scenario) and the paper's figures plot it. It holds no evidence, bound or image.
+
     Attributes
     ----------
     position_m : (3,) ndarray

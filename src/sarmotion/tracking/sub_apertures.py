@@ -25,7 +25,7 @@ from ..core import Traces
 from ..imaging import ImageGrid, resolution
 from ..motion import azimuth_span_deg
 from ..motion.speed_resolution import cross_range_speed_resolution, range_speed_resolution
-from ..pipeline import AnalysisOptions, analyze
+from ..pipeline import AnalysisOptions, Mover, analyze
 
 __all__ = [
     "MAX_OVERLAP",
@@ -163,6 +163,12 @@ def check_sub_apertures(
 class Detection:
     """One mover found in one sub-aperture (the second scenario: position and velocity).
 
+    The tracker's projection of the analysis's :class:`~sarmotion.pipeline.Mover`
+    (:meth:`from_mover`, the one place it is made): the fields the tracker reads, the
+    position on the ground at the sub-aperture's centre time. It leaves out the Mover's
+    fits, evidence, bounds, image and trajectory, so that what each Dask worker returns
+    and what the tracker keeps over a whole pass stays small.
+
     Attributes
     ----------
     position_m : (2,) ndarray
@@ -191,6 +197,20 @@ class Detection:
     family_velocity_per_m: NDArray[np.float64]
     peak_db: float
     traces: NDArray[np.complexfloating] | None
+
+    @classmethod
+    def from_mover(cls, mover: Mover) -> Detection:
+        """The detection of an analysis's mover (its position at ``s = 0``, on the ground)."""
+        return cls(
+            position_m=np.asarray(mover.position_m, dtype=np.float64)[:2].copy(),
+            velocity_mps=np.asarray(mover.velocity_mps, dtype=np.float64).copy(),
+            range_speed_mps=float(mover.range_speed_mps),
+            cross_range_speed_mps=float(mover.cross_range_speed_mps),
+            family_position_per_m=np.asarray(mover.family_position_per_m, dtype=np.float64),
+            family_velocity_per_m=np.asarray(mover.family_velocity_per_m, dtype=np.float64),
+            peak_db=float(mover.image_peak_db),
+            traces=mover.traces,
+        )
 
     def light(self) -> Detection:
         """The same detection without its traces."""
@@ -281,19 +301,7 @@ def analyze_sub_aperture(
     result = analyze(traces, options)
     geom = traces.geometry
     cells = resolution(traces)
-    detections = tuple(
-        Detection(
-            position_m=np.asarray(m.position_m, dtype=np.float64)[:2].copy(),
-            velocity_mps=np.asarray(m.velocity_mps, dtype=np.float64).copy(),
-            range_speed_mps=float(m.range_speed_mps),
-            cross_range_speed_mps=float(m.cross_range_speed_mps),
-            family_position_per_m=np.asarray(m.family_position_per_m, dtype=np.float64),
-            family_velocity_per_m=np.asarray(m.family_velocity_per_m, dtype=np.float64),
-            peak_db=float(m.image_peak_db),
-            traces=m.traces,
-        )
-        for m in result.movers
-    )
+    detections = tuple(Detection.from_mover(m) for m in result.movers)
     magnitude = np.abs(result.stationary_image.values)
     top = float(magnitude.max())
     with np.errstate(divide="ignore"):
