@@ -2,7 +2,7 @@
 
 A tree level is one parallel region: its leaves (exact backprojection tiles, demodulated as
 they are written) and its merges (parents from the level below) are independent tasks of
-one ``prange``. On a shared 2-core machine each region ends in a barrier that waits for a
+one ``prange``. Each region ends in a barrier, which on a busy machine waits for a
 descheduled thread, so the number of regions, not only the arithmetic, sets the time.
 
 Sub-images are ``(images, rows v, columns u)`` float32 planes ``re``, ``im``; image ``i``

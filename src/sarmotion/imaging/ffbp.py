@@ -42,33 +42,31 @@ cross-range band along ``v`` (the root's children then sit at the spacing their 
 allows). ``J`` is band-limited there, so every requested pixel is ``J`` interpolated by a
 separable 8 x 6-tap least-squares filter (tabulated at 256 fractional positions), then
 remodulated. One exception: at the ends of the fast-time window each pulse's contribution
-steps to 0 along ``u``, which no band-limited interpolation reproduces (GOTCHA turned 45
-degrees, 1024^2: 39.9 dB with those pixels resampled); pixels where some pulse's window
-ends within the filter's reach are computed by exact backprojection (7 % of a 1024^2 or
-2048^2 GOTCHA image). The path runs when a measured time model predicts at most 80 % of
-exact (1024^2 and larger on GOTCHA); otherwise ``method="ffbp"`` runs exact
-backprojection.
+steps to 0 along ``u``, which no band-limited interpolation reproduces; pixels where some
+pulse's window ends within the filter's reach are computed by exact backprojection. The
+path runs when a time model (:data:`_TREE_COST`, :data:`_RESAMPLE_COST`,
+:data:`_EDGE_COST`, fitted to timings of ``benchmarks/bench_backprojection.py``) predicts
+at most 80 % of exact; otherwise ``method="ffbp"`` runs exact backprojection.
 
 Evaluation: the nodes of all strips at one depth of the tree are one parallel region
 (:mod:`._ffbp_kernels`): leaf tiles and merged rows are tasks of the same loop, and the
-image rows of every strip one last region. On the shared 2-core machine every region ends
-in a barrier that waits for a descheduled thread, so the number of regions (about the
-depth, 7 at 2048 x 2048), not only the arithmetic, sets the time.
+image rows of every strip one last region. Every region ends in a barrier, which on a busy
+machine waits for a descheduled thread, so the number of regions (about the depth, 7 at
+2048 x 2048) is kept to one per level.
 
-Accuracy. Every figure here is the signal-to-error ratio against the exact sum
-(:func:`~sarmotion.imaging.exact_sum.exact_sum`, no interpolation), on 65536 seeded pixels
+Accuracy. The specification is 40 dB of signal-to-error ratio against the exact sum
+(:func:`~sarmotion.imaging.exact_sum.exact_sum`, no interpolation), on seeded pixels
 (``benchmarks/bench_backprojection.py``); exact backprojection is some 87 dB from it, so the
 figures are FFBP's own error. That error comes from the interpolations: it grows as
 ``alpha`` falls and with the number of levels. The default ``alpha = 1.4`` is the smallest
-multiple of 0.1 for which every GOTCHA geometry measured (4 degrees at 0.1, 0.25 and 0.5 m,
-512^2 to 2048^2; two and one degrees at 1024^2 and 2048^2) stays 3 dB above the 40 dB
-specification. GOTCHA 4 degrees at 0.25 m, 512^2, 1024^2, 2048^2: 56.0, 45.8, 44.9 dB.
-Columns whose pixels no pulse's fast-time window reaches are zero, as in exact
-backprojection. The rotated path adds the resampling's error to the factorisation's
+multiple of 0.1 for which every GOTCHA geometry benchmarked (4 degrees at 0.1, 0.25 and
+0.5 m, 512^2 to 2048^2; two and one degrees at 1024^2 and 2048^2) stays 3 dB above the
+specification. Columns whose pixels no pulse's fast-time window reaches are zero, as in
+exact backprojection. The rotated path adds the resampling's error to the factorisation's
 (independent, they add in power; the filter's response error is at most 6.5e-3 at the
-``u`` band's edges, 6e-4 along ``v``): GOTCHA turned 30 and 45 degrees, 1024^2: 54.0,
-55.8 dB. Simulated points (four targets, one moving, 20 dB SNR) at 0 and 30 degree looks,
-1024^2: 52.2, 51.6 dB.
+``u`` band's edges, 6e-4 along ``v``). ``tests/test_ffbp_oblique.py`` and
+``tests/test_fast_imaging.py`` hold the specification on simulated points and GOTCHA at
+several look directions; the figures per geometry are in ``docs/notes/ffbp.md``.
 
 References: L. M. H. Ulander, H. Hellsten, G. Stenström, "Synthetic-aperture radar
 processing using fast factorized back-projection", IEEE Trans. AES 39(3), 2003 (polar
@@ -89,8 +87,8 @@ from . import _ffbp_kernels as _kernels
 
 __all__ = ["FfbpPulses", "ffbp_values"]
 
-#: Taps of the half-sample interpolation filter (even). On GOTCHA at ``alpha = 1.3``, 10
-#: taps measured 0.7-1.1 dB above 8 (1024^2, 2048^2): less than raising ``alpha`` by 0.1.
+#: Taps of the half-sample interpolation filter (even). More taps gain less accuracy than
+#: raising ``alpha`` by 0.1 at the same cost (``docs/notes/ffbp.md``).
 TAPS = 8
 #: Oversampling of every sub-image's band along ``v``.
 DEFAULT_ALPHA = 1.4
@@ -172,8 +170,8 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
     A node splits in two when both halves' bands fit twice its ``v`` spacing and two leaves
     plus the merge cost less than the node as a leaf (rows times pulses, a merged row
     :data:`_MERGE_COST` pulses); otherwise it is a leaf. The second rule also keeps the
-    tree shallow: every level of interpolation adds error (a 64 m motion-compensated image
-    split down to 2-pulse leaves: 34 dB; with the rule 46.5 dB). Level ``d + 1`` lists the
+    tree shallow: every level of interpolation adds error (a tree split down to 2-pulse
+    leaves misses the 40 dB specification, ``docs/notes/ffbp.md``). Level ``d + 1`` lists the
     children of the split nodes of level ``d``, in order. All nodes of a level share one
     grid.
     """
@@ -346,7 +344,8 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
     A narrower strip sees the look direction turn less, which lowers the band floor and
     lets the leaves grow; each strip pays its own interpolation margins. Returns
     ``(cost, bounds, [(levels, n_sub), ...])``; the cost is in pixel-pulses of the leaves
-    plus ~2 per merged sample (measured), the root's merge counted on the image rows only.
+    plus :data:`_MERGE_COST` per merged sample (two children read, half the rows
+    interpolated), the root's merge counted on the image rows only.
     """
     n_pulses, nv_ = pos.shape[0], y.size
     centre = pos.mean(axis=0)
@@ -595,19 +594,18 @@ N_EDGE_PULSES = 5
 EDGE_MARGIN = 2.0
 #: Oversampling of the demodulated image's band on the rotated grid along ``u`` (range),
 #: and along ``v`` in multiples of ``alpha``: 2.05 alpha makes the root one image row per
-#: row (``n`` = 1) with its children at the coarsest spacing their band allows. GOTCHA
-#: rotated to 45 degrees, 1024^2: (2.0, 2.0 / 1.4) 48.9 dB, cost 1.42e8 pixel-pulses;
-#: (1.6, 2.05) 49.1 dB, 1.11e8; (1.3, 2.05) with 10 taps 44.6 dB, 0.90e8; (1.3, 2.0 / 1.4)
-#: 39.2 dB.
+#: row (``n`` = 1) with its children at the coarsest spacing their band allows; 1.6 along
+#: ``u`` is the least that keeps the 40 dB specification with margin (alternatives in
+#: ``docs/notes/ffbp.md``).
 RESAMPLE_OVERSAMPLING = (1.6, 2.05)
 #: Phases of the tabulated resampling filters (linearly interpolated between).
 _RESAMPLE_PHASES = 256
-#: Time model of the rotated path, in exact backprojection's pixel-pulses (GOTCHA rotated
-#: to 45 degrees, 2048^2, load 0.8): a pixel-pulse of the factorisation's cost model 1.75
-#: (0.22 s for 2.65e8), a requested pixel 73 (resampling 0.124 s and edge search 0.036 s
-#: for 4.2e6 pixels, exact 4.7e-10 s per pixel-pulse), an exact pixel-pulse of the edge
-#: zone 1.7 (sub-grids of 32 rows). It predicted 1.03x, 1.45x, 1.95x at 512^2, 1024^2,
-#: 2048^2 against 0.99x, 1.35-1.48x, 2.2x measured.
+#: Time model of the rotated path, in exact backprojection's pixel-pulses: the time of a
+#: pixel-pulse of the factorisation's cost model, of a requested pixel (resampling and
+#: edge search) and of an exact pixel-pulse of the edge zone (sub-grids of 32 rows), each
+#: over the time of an exact pixel-pulse. Ratios of timings, so independent of the
+#: machine's speed to first order; fitted on GOTCHA rotated to 45 degrees
+#: (``benchmarks/bench_backprojection.py``, ``docs/notes/ffbp.md``).
 _TREE_COST = 1.75
 _RESAMPLE_COST = 73.0
 _EDGE_COST = 1.7
@@ -754,10 +752,11 @@ def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32
 
     Near an end of the fast-time window each pulse's contribution steps to 0 along the
     range axis: the demodulated image is not band-limited there, and interpolating it
-    across the step costs ~1/beta of the step (GOTCHA at 45 degrees, 1024^2: 41 dB with
-    these pixels resampled). A pixel is near an end when, over 9 pulses spread on the
-    aperture, ``[min d_j - margin, max d_j + margin]`` holds one (``margin`` the filter's
-    reach). Rows in blocks of ``block``; columns in runs, gaps under ``block`` closed.
+    across the step costs ~1/beta of the step (the image falls to the 40 dB specification
+    with these pixels resampled, ``docs/notes/ffbp.md``). A pixel is near an end when, over
+    :data:`N_EDGE_PULSES` pulses spread on the aperture, ``[min d_j - margin, max d_j +
+    margin]`` holds one (``margin`` the filter's reach). Rows in blocks of ``block``;
+    columns in runs, gaps under ``block`` closed.
     """
     idx_scale, idx_offset, _ = constants
     d_lo = (1.0 - idx_offset) / idx_scale

@@ -43,7 +43,8 @@ def point_response(
         Compensated ground velocity (m/s).
     phase_history : (n_pulses, n_samples) array_like or FrequencyPlanes, optional
         ``traces.phase_history()`` if already computed (saves a transform), or its
-        :class:`~sarmotion.core.spectral.FrequencyPlanes` (3x faster sums, for searches).
+        :class:`~sarmotion.core.spectral.FrequencyPlanes` (frequency-major: faster when
+        many sums run over the same rows, as in searches).
 
     Returns
     -------
@@ -91,8 +92,8 @@ def pulse_responses(
         ``(1 / n_samples) sum_f P(s, f) exp(2i pi f delta_tau(s, rho(s)))`` for the
         ``k`` selected pulses, data units. The sums over ``f`` run compiled, the phasors
         advancing by a fixed rotation along the (uniform) frequency axis
-        (:func:`sarmotion.core.spectral.phased_row_sums`; 7x faster than forming
-        :func:`sarmotion.core.spectral.delay_phase`, same values to ~1e-13).
+        (:func:`sarmotion.core.spectral.phased_row_sums`: no complex exponential per term,
+        the same values as forming :func:`sarmotion.core.spectral.delay_phase` to ~1e-13).
     """
     P = _phase_history(traces, phase_history)
     rho = as_point(position_m, name="position_m")
@@ -181,7 +182,7 @@ def refine_location(
     """
     P = _phase_history(traces, phase_history)
     if not isinstance(P, FrequencyPlanes):
-        P = FrequencyPlanes(P)  # many sums of the same rows: frequency-major, 3x faster
+        P = FrequencyPlanes(P)  # many sums of the same rows: frequency-major, contiguous
     p0 = as_point(point_m, name="point_m")
     ant = traces.positions_m
     shift = np.zeros((traces.n_pulses, 3))

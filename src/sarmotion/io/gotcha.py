@@ -27,7 +27,7 @@ platform speed (:meth:`sarmotion.core.geometry.Trajectory.from_positions`).
 
 In sarmotion the phase history becomes :class:`~sarmotion.core.traces.Traces` (pulses along
 the first axis) with the conventions of :mod:`sarmotion.core.spectral`; see
-the notes below for the plausibility rules and the measured choices (phase reference,
+the notes below for the plausibility rules and the conventions chosen (phase reference,
 autofocus sign), and :func:`write_gotcha` for the reverse direction.
 
 Plausibility rules
@@ -35,69 +35,68 @@ Plausibility rules
 :func:`read_gotcha` refuses a file that breaks one of these rules with a one-line
 :class:`~sarmotion.io.errors.DataError` naming the file, the field, the pulse and the
 rule (``lenient=True``, ``--lenient`` on the command line, logs a warning instead, for
-unusual but genuine data). The margins are measured on the four files of pass 1 HH and
-on the built-in scenes written by :func:`write_gotcha`:
+unusual but genuine data). Each tolerance is set from the float32 rounding of the
+files' fields or from what a real platform can do, well above what pass 1 HH and the
+built-in scenes written by :func:`write_gotcha` reach (their margins:
+``docs/notes/gotcha.md``):
 
 Envelope
     The antenna is above the ground plane (``z > 0``) and 10 m to 1000 km from the scene
-    centre (pass 1: 10158 m).
+    centre.
 Track
     The antenna moves by more than 0 and at most 2.5 median pulse spacings per pulse (as
     between files: one missing pulse allowed), and each position lies within 1 % of the
-    spacing of the midpoint of its two neighbours (the second difference). Measured:
-    0.10 % (float32 rounding of 7 km coordinates, 1 mm against 1.055 m); the built-in
-    scenes 0.015 %; a real aircraft at 70 m/s and 1 m spacing would need 5 g to bend
-    its track by 1 %.
+    spacing of the midpoint of its two neighbours (the second difference): ten times the
+    float32 rounding of 7 km coordinates (about 1 mm against a 1 m spacing), and a real
+    aircraft at 70 m/s and 1 m spacing would need 5 g to bend its track by 1 %.
 Continuity
     Consecutive files follow each other as pulses within a file do: the second
     differences of the last two pulses of a file and the first two of the next are at
-    most 1 % of the median spacing (a file shifted by 1 m, or a missing pulse, breaks it;
-    measured on pass 1: at most 0.07 % at the three junctions).
+    most 1 % of the median spacing (a file shifted by 1 m, or a missing pulse, breaks it).
 Signal
     ``fp`` is not all zero (refused even leniently: no echo) and not constant (a fill).
 Angles
     ``th`` and ``phi`` agree with the azimuth and elevation of ``x, y, z`` to 0.01 deg
-    (measured: 2.8e-7 and 3.2e-6 deg).
+    (float32 angles and positions agree to about 1e-5 deg; a mislabelled field is off by
+    degrees).
 Range reference
     ``r0`` agrees with ``|r(s)|`` to float32 rounding, ``2 eps_32 |r|`` (2.4 mm at
     10 km: half an ulp of ``r0`` plus up to ``sqrt(3)`` half-ulps of the positions).
-    Measured: at most 0.74 mm. Leniently, a file beyond it is re-referenced exactly from
+    Leniently, a file beyond it is re-referenced exactly from
     ``r0`` to ``|r(s)|`` (``metadata["phase_reference"]`` says so).
 Dynamic range
     No sample of ``fp`` exceeds 1000 times the median magnitude of the file (60 dB). A
     deramped phase history spreads each reflector over every frequency, so its samples
-    are even: measured at most 4.3 times the median on pass 1 and 15.2 on the built-in
-    scenes (the Gaussian pulse's taper); a corrupted float32 exponent multiplies a sample
-    by 2**(2**k).
+    are even (a tapered pulse spectrum, as the built-in scenes' Gaussian pulse, raises
+    the ratio by its taper only); a corrupted float32 exponent multiplies a sample by
+    2**(2**k).
 
-Measured choices
-----------------
+Conventions
+-----------
 Frequency grid
     ``freq`` is float32 in the files (steps of 1471488 Hz and 1470464 Hz alternate from
-    rounding). ``f0`` and ``df`` are fitted by least squares in float64 (pass 1:
-    ``f0 = 9288080720 Hz``, ``df = 1471301.06 Hz``; largest deviation 514 Hz); the
-    carrier is ``f0 + (n // 2) df`` and the bandwidth ``n df``.
+    rounding). ``f0`` and ``df`` are fitted by least squares in float64 (deviations up to
+    float32's rounding of ~9.6 GHz, a few hundred Hz); the carrier is ``f0 + (n // 2) df``
+    and the bandwidth ``n df``.
 Phase reference
     ``fp`` is referenced to the file's ``r0``, float32, which differs from ``|r(s)|``
-    computed from the float64-converted positions by 0.30-0.33 mm rms (float32 rounding
-    of both; 0.12 rad at 9.6 GHz). The data are *kept* as they are, i.e. taken as
-    referenced to ``|r(s) - 0|`` of the positions. Measured on the 4 degrees of pass 1 HH
-    (469 pulses, backprojection on a 100 m x 100 m grid at 0.2 m and on 4 m x 4 m grids
-    at 0.02 m around the two calibration reflectors): keeping ``r0`` gives image entropy
-    8.952 against 9.025 re-referenced, and reflector peaks 0.8 % and 0.9 % higher
-    (1.0654e-2 vs 1.0570e-2, 5.435e-3 vs 5.387e-3): ``fp`` was formed with the exact
-    ``r0``, whose float32 rounding is noise, while the rounding of the positions cancels
-    between ``|r - rho|`` and ``|r|`` for pixels near the centre.
+    computed from the float64-converted positions by the float32 rounding of both (a
+    fraction of a millimetre, a tenth of a radian at 9.6 GHz). The data are *kept* as they
+    are, i.e. taken as referenced to ``|r(s) - 0|`` of the positions: ``fp`` was formed
+    with the exact ``r0``, whose float32 rounding is noise, while the rounding of the
+    positions cancels between ``|r - rho|`` and ``|r|`` for pixels near the centre. The
+    kept reference focuses better (lower entropy, higher reflector peaks;
+    ``tests/test_io_gotcha.py::test_kept_r0_reference_focuses_better_than_re_referenced``,
+    figures in ``docs/notes/gotcha.md``).
 Autofocus sign
     AFRL's MATLAB convention: the reference range becomes ``r0 + r_correct`` and the
     phase history is multiplied by ``exp(+1j ph_correct)``; here that is
-    ``P *= exp(+1j ph_correct) exp(-1j 4 pi f / c r_correct)``. Measured on the same
-    images, flipping one of the two signs defocuses (entropy 11.64, reflector peaks
-    divided by 11); flipping both gives entropy 9.352 and peaks 7 % lower; AFRL's sign
-    gives entropy 9.115 and peaks 1.0706e-2 and 5.269e-3. On these 4 degrees it does
-    *not* sharpen the uncorrected image (entropy 9.115 vs 8.952; peaks +0.5 % and
-    -3.1 %) and it moves the image by about (-0.4, -0.6) m (mean ``r_correct`` 0.289 m,
-    plus a linear phase trend), hence the default False.
+    ``P *= exp(+1j ph_correct) exp(-1j 4 pi f / c r_correct)``: flipping either sign
+    defocuses the reflectors, and this sign focuses best of the four
+    (``tests/test_io_gotcha.py::test_autofocus_sign``). On pass 1 the correction does
+    *not* sharpen the uncorrected image and it moves the image by a fraction of a metre
+    (``r_correct`` is a range offset plus a linear phase trend), hence the default False
+    (figures in ``docs/notes/gotcha.md``).
 """
 
 from __future__ import annotations
@@ -141,11 +140,11 @@ PathLike = str | os.PathLike[str]
 DEFAULT_NAME_PATTERN = "data_3dsar_pass1_az{index:03d}_HH.mat"
 
 #: Largest deviation of ``freq`` from its least-squares uniform grid, as a fraction of the
-#: step. The AFRL grid deviates by 514 Hz = 3.5e-4 steps (float32 rounding of ~9.6 GHz).
+#: step: float32 rounds ~9.6 GHz to 512 Hz, 3.5e-4 of GOTCHA's 1.47 MHz step; 1e-2 is 30x that.
 _GRID_TOL = 1e-2
 
 #: Largest ``|r0 - |r|| / |r|``: float32 rounding of r0 (half an ulp, eps/2 relative) and
-#: of the three coordinates (up to sqrt(3) eps/2); measured at most 7.3e-8 on pass 1.
+#: of the three coordinates (up to sqrt(3) eps/2), with a factor 2 of margin.
 _R0_TOL_REL = 2.0 * float(np.finfo(np.float32).eps)
 
 #: Largest disagreement of ``th``/``phi`` with the positions' azimuth/elevation (deg).
@@ -620,7 +619,7 @@ def read_gotcha(
     The files are checked (shapes, finite values, the plausibility rules of the module
     notes), put in flight (azimuth) order whatever the order given, checked to share one
     frequency grid and to follow each other without gaps or repeats, and concatenated
-    along slow time. The measured choices (phase reference, autofocus sign) are in the
+    along slow time. The conventions chosen (phase reference, autofocus sign) are in the
     module notes.
 
     Parameters
@@ -754,12 +753,11 @@ def write_gotcha(
     Every file is written to a temporary file in ``directory`` and renamed onto its
     name only when all files are complete: on error nothing half-written remains.
 
-    float32 positions (measured): a simulated 1-degree GOTCHA aperture written and read
-    back moves the positions by at most 0.24 mm (half a float32 step at 7 km), yet its
-    backprojected point targets keep their peak position and value (see
-    ``tests/test_io_gotcha.py``): the rounding is common to ``|r - rho|`` and ``|r|``
-    and cancels in the differential range. float32 positions are thus kept, as in the
-    originals, for compatibility with GOTCHA tools.
+    float32 positions: a write and read moves the positions by at most half a float32
+    step (0.24 mm at 7 km), yet backprojected point targets keep their peak position and
+    value (``tests/test_io_gotcha.py::test_round_trip_simulated_scene``): the rounding is
+    common to ``|r - rho|`` and ``|r|`` and cancels in the differential range. float32
+    positions are thus kept, as in the originals, for compatibility with GOTCHA tools.
     """
     if not isinstance(traces, Traces):
         raise TypeError(f"traces must be a Traces object, got {type(traces).__name__}")

@@ -2,8 +2,8 @@
 
 scipy's compiled reader trusts the element headers of a file: a corrupted header (a
 complex flag without an imaginary part, a dimension larger than the data) can make it
-read past the data and crash the interpreter (measured with scipy 1.17: one flipped bit
-in the array flags of ``data.x`` of a GOTCHA-like file is a segmentation fault). This
+read past the data and crash the interpreter (a single flipped bit in the array flags
+of a GOTCHA file's ``data.x`` can: ``docs/notes/readers.md``). This
 module walks the element tree of the file in pure Python and refuses, with a one-line
 reason, every element that does not fit inside its parent or whose declared dimensions
 do not match its bytes. A file that passes is safe to hand to scipy.

@@ -3,7 +3,8 @@
 Each rule raises a one-line :class:`~sarmotion.io.errors.DataError` naming the file, the
 field, the pulse and the rule, or, with ``lenient=True`` (``--lenient`` on the command
 line), logs the same line as a warning for unusual but genuine data. The thresholds and
-what they were measured on are documented in :mod:`sarmotion.io.gotcha` (notes). An
+why are documented in :mod:`sarmotion.io.gotcha` (notes), the data's margins in
+``docs/notes/gotcha.md``. An
 all-zero phase history is refused even leniently.
 """
 

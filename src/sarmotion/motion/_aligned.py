@@ -202,7 +202,7 @@ class _Aligner:
         receives only those fast-time samples, shape (n_chunk, n', n_columns). Up to
         :data:`_MAX_DFT_COLUMNS` of them are computed by a matrix product with the
         columns of the inverse DFT instead of the FFT (the same values to float32
-        rounding; 17 columns of a GOTCHA degree 1.5x faster than the 848-point FFT).
+        rounding; a few columns cost less than the whole inverse FFT).
         """
         out = np.empty(velocities.shape[0])
         basis = None
@@ -263,10 +263,10 @@ class _Aligner:
 def _columns(x: NDArray[np.complex64], basis: NDArray[np.complex64]) -> NDArray[np.complex64]:
     """``x @ basis`` over the last axis as one matrix product.
 
-    Callers limit BLAS to one thread around their loops (``threadpool_limits``, ~0.1 ms
-    each time, so not per product): measured 0.85 ms for (936, 424) x (424, 25) in
-    complex64 on one thread, 10 ms with the default threads on the shared 2-core machine
-    (load 5).
+    Callers limit BLAS to one thread around their loops (``threadpool_limits`` costs
+    about as much as a product, so it is set once per loop, not per product): a product
+    this small gains nothing from BLAS threads, and on a busy machine their barriers wait
+    for descheduled threads (timings in ``docs/notes/motion.md``).
     """
     y = np.ascontiguousarray(x).reshape(-1, x.shape[-1]) @ basis
     return y.reshape(x.shape[:-1] + (basis.shape[1],))
@@ -363,8 +363,8 @@ def _sum_abs_max(x):  # pragma: no cover - compiled
 
 
 #: Fewest trials worth a parallel region in :func:`_shifted_sum_abs_max`. A region ends in
-#: a barrier; on a busy 2-core machine it waits for a descheduled thread (measured 5-8 ms
-#: for one trial, load 2, against ~0.15 ms of arithmetic), so the refinements' single
+#: a barrier; on a busy machine it waits for a descheduled thread, which costs far more
+#: than one trial's arithmetic (``docs/notes/motion.md``), so the refinements' single
 #: trials run on the calling thread.
 _MIN_PARALLEL_TRIALS = 16
 
@@ -374,8 +374,8 @@ def _shifted_sum_abs_max(table, shifts, out):
 
     ``x_j(m + p/P + w/P)`` is ``(1 - w) table[j, p, m] + w table[j, p + 1, m]``
     (``0 <= w < 1``), indices circular in ``m``; single precision throughout (sums of a
-    few hundred moduli: rounding ~1e-5 of ``g`` at most, 6e-7 measured against float64
-    sums on Scene 1, far below the interpolation's 1.2e-3 bound; 1.6x faster). Trials
+    few hundred moduli: rounding ~1e-5 of ``g`` at most, far below the interpolation's
+    1.2e-3 bound; ``tests/test_aligned_fast.py`` checks it against float64). Trials
     over the threads when there are at least :data:`_MIN_PARALLEL_TRIALS`.
     """
     if shifts.shape[0] >= _MIN_PARALLEL_TRIALS:

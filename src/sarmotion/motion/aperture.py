@@ -13,11 +13,11 @@ its tangent, which :mod:`sarmotion.pipeline` reports with each mover.
 **Circular flight does not lift it over a few degrees.** Expanding the range history of
 a circular flight (angular rate ``w = V / R_h``) around ``s = 0``, the member at offset
 ``dy`` matches the true one up to the cubic term ``(2/3) R_h w^3 dy s^3`` of the squared
-range, i.e. a range difference of about ``R_h w^3 dy s^3 / (3 L)``. Measured on Scene
-1's mover 2 (family fitted on the central degree, largest range difference over the
-whole aperture): 0.0004 mm at 1 degree and 0.07 mm at 4 degrees for ``dy = 10`` m, 1.2
-mm at 10 degrees, 32 mm (one wavelength) only at 30 degrees. A cross-range error of
-2.5 m thus costs less than 1/400 of a wavelength over the 4 degrees of a GOTCHA file:
+range, i.e. a range difference of about ``R_h w^3 dy s^3 / (3 L)``: it grows as the
+cube of the aperture, and for ``dy = 10`` m at GOTCHA's geometry it stays a small
+fraction of a millimetre over 4 degrees and reaches a wavelength only at tens of degrees
+(Scene 1's mover 2: ``docs/notes/motion.md``). A cross-range error of metres thus costs
+a negligible fraction of a wavelength over the 4 degrees of a GOTCHA file:
 the data of a few degrees cannot place a mover in cross range, whatever the estimator;
 only a location known from elsewhere (the paper's first scenario, ``position_m`` of
 :func:`sarmotion.motion.estimate_velocity`) or tens of degrees of uniform motion can.
@@ -208,11 +208,10 @@ def refine_on_aperture(
     them, then a Newton ascent (:func:`sarmotion.core.ascent.newton_ascent`) in the same
     units).
     Each width's estimate is within the next one's capture range: a cross-range speed
-    error of 0.2 m/s is most of a cycle of quadratic phase over 4 degrees, and a single
-    4-degree search from a 1-degree estimate was measured to stop at 0.36 of the focus
-    on such a local maximum. The grid matters on real clutter: GOTCHA's 4 degrees with an
-    injected mover, whose central-degree ``g_perp`` was 1.8 m/s off, ended 1.66 m/s off
-    without it and 0.33 m/s off with it. The cross-range coordinate is held: the data
+    error of 0.2 m/s is most of a cycle of quadratic phase over 4 degrees, so a single
+    4-degree search from a 1-degree estimate can stop on a local maximum of the focus.
+    The grid matters on real clutter, where the central degree's ``g_perp`` can be off by
+    more than a resolution (``docs/notes/motion.md``). The cross-range coordinate is held: the data
     do not fix it (module notes) and a free search would only wander along the family.
 
     Parameters
@@ -234,7 +233,7 @@ def refine_on_aperture(
     -------
     ApertureFit
     """
-    # many sums of the same rows: frequency-major planes (3x faster, same sums)
+    # many sums of the same rows: frequency-major planes (contiguous reads, same sums)
     P = FrequencyPlanes(traces.phase_history() if phase_history is None else phase_history)
     sub = traces.select_pulses(*central.indices(traces.n_pulses)[:2])
     s_c = float(np.mean(traces.slow_times_s[central]) - np.mean(sub.slow_times_s))
@@ -257,8 +256,8 @@ def refine_on_aperture(
     start_focus = -cost(q)
     # Initial steps: about a quarter cycle of round-trip phase at the window's ends from the
     # range drift and from the quadratic range error: 0.002 m/s / T and 0.2 m/s / T^2 (T
-    # window half-length, s; measured on Scene 1: 0.005 m/s over 2 degrees already costs
-    # 3/4 of the focus), and 1 cm of range.
+    # window half-length, s), and 1 cm of range; the focus falls steeply with these errors
+    # (docs/notes/motion.md).
     dt = float(np.median(np.diff(traces.slow_times_s)))
     res_c = cross_range_speed_resolution(sub)  # scales as 1 / T^2
     while True:

@@ -8,48 +8,31 @@ is a candidate. Its statistic is the peak over a *local* floor,
 ``delta_u`` the range-speed resolution (:func:`range_speed_resolution`). The median of
 the ring ignores the candidate's own peak and a neighbour or two; the local floor
 follows the broad swell of the misaligned traces of stationary residue, which a global
-median does not (on a real GOTCHA degree separated by RPCA such swells at 3 m/s stand
-8 dB above the global median and 1 dB above the local floor).
+median does not (such swells stand several dB above the global median on a real GOTCHA
+degree separated by RPCA, and about 1 dB above the local floor).
 
-**Null distribution** (no mover). Measured on the statistic of every candidate with
-``|u| >= 1.1`` m/s: the four real GOTCHA degrees one at a time and together (central
-degree), separated by RPCA (528 candidates), and 25 simulated scenes of 10-80 point
-targets with noise at 0-30 dB SNR separated by the combined method (1569) and by RPCA
-(1090). Quantiles 50/90/99/99.9 % and maximum (dB):
-
-==================  ====  ====  ====  ====  ====
-population          50 %  90 %  99 %  99.9  max
-==================  ====  ====  ====  ====  ====
-real GOTCHA, RPCA   0.22  1.00  1.69  2.75  3.46
-simulated, RPCA     0.26  1.34  2.68  3.34  3.70
-simulated, combined 0.10  0.36  0.68  1.33  2.12
-all                 0.14  0.89  2.13  3.17  3.70
-==================  ====  ====  ====  ====  ====
-
-Above its 90 % quantile ``t_0`` the tail is exponential, ``P(T > t) = 0.1
-exp(-(t - t_0) / s)``; the heaviest (simulated clutter, RPCA) has ``t_0 = 1.34`` dB,
-``s = 0.60`` dB. With ``N`` candidates per ``g(u)`` (about 110 over +-30 m/s on a GOTCHA
-degree) the per-scene false-alarm rate ``alpha`` is met by :func:`threshold_db`
-``= t_0 + s ln(0.1 N / alpha)``: 5.5 dB for ``alpha = 1 %`` (0.2 % for the pooled
-tail). The threshold is the one stated principle; the two tests below only remove
-candidates.
-
-``benchmarks/detector_null.py`` measures the distribution again (table in
-``benchmarks/results/detector_null.md``). On its own seeds (31: 25 simulated scenes per
-method, 6242 candidates with the real degrees) the simulated RPCA tail is lighter than
-the one above (90 % quantile 0.55 dB, mean excess 0.33 dB; largest 3.47 dB) and 0.05 %
-of all candidates pass the model's 1 % point (2.72 dB), none its 0.1 % point: the model
-is conservative, and no scene's largest candidate reached its threshold.
+**Null distribution** (no mover). The threshold comes from the distribution of ``T``
+over every candidate with ``|u| >= 1.1`` m/s on data without movers: the real GOTCHA
+degrees separated by RPCA, and simulated point clutter (10-80 targets, 0-30 dB SNR)
+separated by the combined method and by RPCA. Above its 90 % quantile ``t_0`` the tail
+is exponential, ``P(T > t) = p_0 exp(-(t - t_0) / s)`` with ``p_0 = 0.1``; the model
+(:data:`NULL_TAIL`) takes the heaviest of these populations, so that it is
+conservative for the others. With ``N`` candidates per ``g(u)`` (about 110 over +-30 m/s
+on a GOTCHA degree) the per-scene false-alarm rate ``alpha`` is met by
+:func:`threshold_db` ``= t_0 + s ln(p_0 N / alpha)``, about 5.5 dB for ``alpha = 1 %``.
+The threshold is the one stated principle; the two tests below only remove candidates.
+``benchmarks/detector_null.py`` measures the distribution again on seeds of its own
+(quantiles, tail fits and the check on held-out seeds: ``docs/notes/detector.md``).
 
 **Shape.** A point mover's ``g`` peak has the half-height width of
 :func:`point_peak_width`: its aligned trace tilts by ``du s`` in range, so
 ``g(u + du) / g(u)`` is the slow-time mean of the compressed-pulse envelope at
 ``2 du s / c`` (2.1 resolutions for the GOTCHA rect spectrum, 4.25 for the paper's
-Gaussian pulse). Measured on the coarse grid: injected movers 1.5-3.0 (GOTCHA), Scene 1's
-4.0 (Gaussian); the residue of stationary clutter near the stationary band is broad,
-7-12 (3.3-5.7 point widths); two movers within 3 resolutions merge into one peak up to
-2.5 point widths. Candidates wider than ``max_width`` point widths (the analysis uses
-2.5) are rejected.
+Gaussian pulse). On the coarse grid a mover's peak is one to a point width and a half,
+and two movers within 3 resolutions merge into one peak up to 2.5 point widths, while
+the residue of stationary clutter near the stationary band is broader (three point
+widths and more; figures in ``docs/notes/detector.md``). Candidates wider than
+``max_width`` point widths (the analysis uses 2.5, between the two) are rejected.
 
 **Focus gain against a stationary explanation.** Over one degree a mover's range history
 is shared by a one-parameter family of uniform motions (:mod:`sarmotion.motion.aperture`);
@@ -97,8 +80,9 @@ __all__ = [
     "stationary_explanation",
 ]
 
-#: Exponential tail of the null statistic above its 90 % quantile (module notes): the
-#: heaviest measured population, simulated point clutter separated by RPCA.
+#: Exponential tail of the null statistic above its 90 % quantile (module notes): that of
+#: the heaviest population, simulated point clutter separated by RPCA
+#: (``benchmarks/detector_null.py``, ``docs/notes/detector.md``).
 NULL_TAIL = {"t0_db": 1.34, "scale_db": 0.60, "p0": 0.10}
 
 
@@ -186,7 +170,7 @@ def peak_statistics(
 def threshold_db(false_alarm_rate: float, n_candidates: int) -> float:
     """Statistic threshold for a per-scene false-alarm rate (module notes).
 
-    ``t_0 + s ln(p_0 N / alpha)`` with the measured tail :data:`NULL_TAIL`: ``N``
+    ``t_0 + s ln(p_0 N / alpha)`` with the null tail :data:`NULL_TAIL`: ``N``
     candidates, each beyond the threshold with probability ``alpha / N``.
     """
     if not 0.0 < false_alarm_rate < 1.0:
@@ -199,7 +183,7 @@ def threshold_db(false_alarm_rate: float, n_candidates: int) -> float:
 def false_alarm_probability(statistic_db: float, n_candidates: int) -> float:
     """Probability that the largest of ``N`` null candidates reaches ``statistic_db``.
 
-    The union bound ``min(1, N p_0 exp(-(T - t_0) / s))`` of the measured tail, valid
+    The union bound ``min(1, N p_0 exp(-(T - t_0) / s))`` of the null tail, valid
     above ``t_0``; the per-scene significance of a detection.
     """
     t = NULL_TAIL

@@ -44,18 +44,17 @@ speed is then unbiased.
 All speeds are in m/s, positions in m, times in s, phases in float64 reduced exactly to
 ``[-1/2, 1/2]`` cycles before the complex exponential.
 
-Measured (:func:`estimate_velocity`)
+Accuracy (:func:`estimate_velocity`)
 ------------------------------------
-Measured on Scene 1, one mover at a time, noise-free: stage 3 gives ``u`` to 0.03 m/s
-(mover 2's family offset, module notes), ``u_perp`` to 0.006 m/s, the range to 1.3 cm;
-after the round both ranges are within 2 mm and nothing else changes that matters.
-With noise (0 and -10 dB SNR, five seeds, both movers) the round improves the range
-location ~5x and the fit of the estimated trajectory to the trace (compensated image
-of the clean trace at the estimate over that at the truth: 0.97 -> 0.99 at 0 dB,
-0.81 -> 0.94 at -10 dB), while the ``u_perp`` component alone moves slightly farther
-from the truth (rms 0.18 -> 0.21 m/s, 0.45 -> 0.70 m/s): the round lands on the
-family point of the (noisy) range speed, whose ``u_perp`` differs from the truth by
-~0.1 m/s per metre along the family. Further rounds change nothing.
+Noise-free, stage 3 places the range to about a centimetre and ``u_perp`` to a few
+mm/s; ``u`` is off by the family offset of the cross range it settles on (module
+notes). The round then brings the range to a few millimetres. With noise the round
+improves the range location and the fit of the estimated trajectory to the trace,
+while the ``u_perp`` component alone may move farther from the truth: the round lands
+on the family point of the (noisy) range speed, whose ``u_perp`` differs from the truth
+by about 0.1 m/s per metre along the family. Further rounds change nothing.
+``tests/test_velocity.py`` asserts these on Scene 1; the figures are in
+``docs/notes/motion.md``.
 """
 
 from __future__ import annotations

@@ -45,8 +45,7 @@ class AnalysisOptions:
     false_alarm_rate : float
         Per-scene false-alarm rate of the mover detector, in (0, 1). Default 0.01: the
         threshold on the ``g(u)`` peak over its local floor is set from the statistic's
-        measured null distribution (:mod:`sarmotion.motion.detector`; 5.5 dB on a
-        GOTCHA degree).
+        null distribution on data without movers (:mod:`sarmotion.motion.detector`).
     threshold_db : float or None
         Threshold on that statistic (dB), overriding ``false_alarm_rate``; ``None``
         (default) derives it from the rate.
@@ -54,13 +53,14 @@ class AnalysisOptions:
         Widest ``g(u)`` peak accepted as a mover, at half height above the local floor,
         in widths of a noise-free point mover's peak
         (:func:`~sarmotion.motion.point_peak_width`: 2.1 range-speed resolutions for
-        GOTCHA). Default 2.5: movers measured 0.7-1.4 such widths, two movers within 3
-        resolutions merge into one peak up to 2.5, the residue of stationary clutter
-        measured 3.3-5.7.
+        GOTCHA). Default 2.5: two movers within 3 resolutions merge into one peak up to
+        2.5 such widths, a single mover's is narrower and the residue of stationary
+        clutter wider (``docs/notes/detector.md``).
     min_focus_gain_db : float
         Least gain of a mover's matched filter over the best stationary point with the
         same range history, when that point lies within the alias-free cross-range
-        extent (dB). Default 1 dB: stationary targets measured 0.00-0.14 dB.
+        extent (dB). Default 1 dB: a stationary target's gain is 0 up to the search
+        tolerance, well under 1 dB (``docs/notes/detector.md``).
     joint_rounds : int
         Rounds of joint maximum-likelihood refinement of all movers, each with the
         others' fitted traces subtracted (>= 0). Default 2.

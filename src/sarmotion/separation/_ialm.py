@@ -147,18 +147,17 @@ def rpca(
         Singular value thresholding by a full LAPACK SVD (``"full"``), by a partial
         PROPACK SVD of the predicted number of singular values above the threshold
         (``"partial"``; grows the prediction until one computed value falls below the
-        threshold, so the thresholding is exact), or the faster of the two as measured
-        on the target sizes (``"auto"``, see Notes). All three give the same iterates up
+        threshold, so the thresholding is exact), or the one expected faster at this
+        size and predicted rank (``"auto"``, see Notes). All three give the same iterates up
         to rounding.
     solver : {"ialm", "accaltproj"}
         ``"ialm"``: principal component pursuit as above. ``"accaltproj"``: accelerated
         alternating projections (:mod:`sarmotion.separation.accaltproj`), a non-convex
         fixed-rank solver: ``eta`` scales its threshold (``beta = default_beta * eta /
         default_eta``), ``mu``, ``rho`` and ``svd`` are unused. On low-rank + sparse data
-        it recovers the same ``L`` and ``S`` 10-50x faster than the full-SVD IALM; on real
-        GOTCHA clutter (far from low rank, IALM's ``L`` has full rank) it leaves more
-        clutter in ``S`` (measured on a degree with two injected movers, windows of 64,
-        ``eta`` x 2: 4 dB of clutter reduction against IALM's 14 dB), so IALM stays the
+        it recovers the same ``L`` and ``S`` much faster than the full-SVD IALM; on real
+        GOTCHA clutter (far from low rank, IALM's ``L`` has full rank) its fixed rank
+        leaves much more clutter in ``S`` (``docs/notes/rpca.md``), so IALM stays the
         default.
     rank : int, optional
         ``solver="accaltproj"``: rank of ``L``; default estimated from the data
@@ -184,18 +183,16 @@ def rpca(
     predicted from the previous iteration (``r + 1`` after ``r`` values survived the
     threshold, ``r + round(0.05 min(n_pulses, n_samples))`` after a miss), starts 10.
     ``svd="auto"`` uses it iff ``min(n_pulses, n_samples) >= 96`` and
-    ``sv <= 0.2 min(n_pulses, n_samples)``, and the full LAPACK SVD otherwise. Measured on
-    the project's 2-core machine (per-SVD table in ``_use_partial``): LAPACK always wins
-    on 117 x 32 windows, the two tie at 117 x 64, and PROPACK wins 1.2-8x per SVD from
-    117 x 128 up while ``sv <= 0.2 min``. End-to-end IALM on rank-5 + 5 %-sparse complex
-    data, full / auto: 117 x 424 154 / 72 ms, 117 x 1024 269 / 117 ms, 468 x 424
-    1780 / 320 ms, 468 x 1024 3540 / 900 ms (1 OpenBLAS thread).
+    ``sv <= 0.2 min(n_pulses, n_samples)``, and the full LAPACK SVD otherwise: a Lanczos
+    run pays off only when few singular values are sought from a matrix large enough
+    (timings per size in ``docs/notes/rpca.md``, ``benchmarks/bench_rpca.py``).
 
-    With ``tol >= 1e-5`` the full SVDs run in single precision: on the 4 GOTCHA degrees
-    with two injected movers (469 x 424, ``tol = 1e-4`` as in the analysis) the same 13
-    iterations, ``S`` within 1.6e-6 of the double-precision run (relative), the clutter
-    left in ``S`` the same to 1e-6 dB, 1.44x faster end to end on a loaded machine (the
-    partial SVDs stay in double precision). Smaller tolerances keep double precision.
+    With ``tol >= 1e-5`` the full SVDs run in single precision: its rounding, ~1e-7
+    relative, stays two orders below the stopping tolerance, so the iterates and ``S``
+    agree with the double-precision run to about a hundredth of the tolerance
+    (``tests/test_rpca.py::test_single_precision_svds_keep_the_decomposition``;
+    figures in ``docs/notes/rpca.md``). The partial SVDs stay in
+    double precision; smaller tolerances keep double precision.
     """
     eta, tol, max_iter = _check_options(eta=eta, tol=tol, max_iter=max_iter, svd=svd)
     if mu is not None:

@@ -48,7 +48,7 @@ The cost
 Per window and iteration: one ``heevd`` of the ``m x m`` Gram matrix, the Gram matrix and
 two products, and two fused elementwise kernels (compiled with numba and cached on disk).
 An exact thresholding per iteration along the IALM's own path cannot cost less than the
-eigen-decompositions; what was measured, and what was tried and not kept, is in
+eigen-decompositions; the timings and the alternatives considered are in
 ``docs/notes/rpca.md``.
 """
 

@@ -33,9 +33,10 @@ _SVD_MODES = ("auto", "full", "partial")
 
 #: Initial number of singular values predicted by the partial-SVD heuristic (Lin et al.).
 _SV_INITIAL = 10
-#: Smallest Lanczos basis size given to PROPACK. scipy's default ``10 k`` fails to converge
-#: for ``k <= 6`` on IALM iterates of 468 x 424 (measured); PROPACK stops as soon as the
-#: ``k`` values converge, so a larger cap costs nothing when it is not needed.
+#: Smallest Lanczos basis size given to PROPACK. scipy's default ``10 k`` can fail to
+#: converge for small ``k`` on IALM iterates (seen at 468 x 424, ``k <= 6``); PROPACK
+#: stops as soon as the ``k`` values converge, so a larger cap costs nothing when it is
+#: not needed.
 _PROPACK_MIN_KMAX = 100
 #: ``svd="auto"``: PROPACK only for matrices with ``min(shape) >= _AUTO_MIN_SIZE`` ...
 _AUTO_MIN_SIZE = 96
@@ -120,11 +121,10 @@ def _assemble(
 def _full_svd(a: NDArray, *, single: bool = False) -> tuple[NDArray, NDArray[np.float64], NDArray]:
     """Thin SVD (LAPACK gesdd), singular values in decreasing order.
 
-    A wide matrix is decomposed through its (tall) adjoint: measured 1.2x faster for a
-    117 x 1024 complex matrix with 1 OpenBLAS thread (1.5-3x with 2 threads on a busy
-    machine), no slower at 117 x 128 to 468 x 1024. ``single``: decomposed in single
-    precision (complex64/float32) and returned in ``a``'s precision; measured 2.2x
-    faster on a 469 x 424 complex matrix (78 against 171 ms, one thread, loaded machine).
+    A wide matrix is decomposed through its (tall) adjoint, which LAPACK handles faster
+    and never slower at the sizes of windowed RPCA. ``single``: decomposed in single
+    precision (complex64/float32) and returned in ``a``'s precision, about twice as fast
+    (timings in ``docs/notes/rpca.md``).
     """
     work = a.astype(np.complex64 if a.dtype.kind == "c" else np.float32) if single else a
     if a.shape[1] > a.shape[0]:
@@ -166,32 +166,16 @@ def _partial_svd(
 def _use_partial(n_min: int, k: int) -> bool:
     """The ``svd="auto"`` rule: PROPACK for ``k`` values iff ``n_min >= 96`` and ``k <= 0.2 n_min``.
 
-    Decided by measurement on the project's 2-core machine (AMD EPYC, OpenBLAS 0.3.31,
-    scipy 1.17), timing one thin SVD of a mid-run IALM iterate ``X = M - S + Y / mu`` of a
-    complex rank-``(k - 1)`` + 5 %-sparse matrix: LAPACK ``gesdd`` (all values) against
-    PROPACK for the ``k`` leading triplets (what the rank prediction asks for). Best of
-    5 runs; gesdd in ms, then the ratio PROPACK time / gesdd time at ``k / n_min``; 2
-    OpenBLAS threads (default) and, in brackets, ``OPENBLAS_NUM_THREADS=1``::
-
-        shape       gesdd ms      k/n_min: 0.03        0.10        0.20        0.30        0.40
-        117 x 32    0.29 (0.30)       2.1 (2.0)   1.8 (1.6)   1.6 (1.7)   2.0 (2.0)   2.2 (2.5)
-        117 x 64    1.4  (0.95)      0.71 (0.67) 0.68 (0.95) 0.52 (0.76) 0.88 (1.3)  0.95 (1.3)
-        117 x 128   3.8-7 (3.2)      0.21 (0.33) 0.22 (0.38) 0.38 (0.50) 0.32 (0.79) 1.1  (1.3)
-        117 x 424   8-14 (7.5)       0.31 (0.34) 0.41 (0.35) 0.51 (0.47) 0.65 (0.59) 1.3  (0.88)
-        117 x 1024  12-14 (16)       0.38 (0.36) 0.42 (0.31) 0.71 (0.39) 0.98 (0.58) 1.3  (0.82)
-        468 x 424   53-58 (83)       0.13 (0.14) 0.41 (0.19) 0.85 (0.59) 1.6  (0.85) 2.4  (1.0)
-        468 x 1024  144-215 (230)    0.12 (0.12) 0.22 (0.28) 0.59 (0.72) 1.3  (0.65) 2.0  (1.3)
-
-    So for the windows of 32 samples a full SVD always wins (PROPACK has a fixed
-    overhead of ~0.3 ms), at 64 the gain is marginal (end-to-end IALM on 117 x 64, rank
-    5: 21.6 ms full, 21.8 ms partial) and from ~100 up PROPACK wins by 1.2-8x as long as
-    ``k <= 0.2 n_min``; beyond ``~0.3 n_min`` LAPACK wins again. End-to-end IALM, rank-5
-    + 5 % sparse, 1 thread, full / partial: 117 x 128 68 / 29 ms, 117 x 424 154 / 72 ms,
-    117 x 1024 269 / 117 ms, 468 x 424 1780 / 320 ms, 468 x 1024 3540 / 900 ms.
-
-    Caveat measured on the same machine: when other processes keep both cores busy, the
-    2-thread OpenBLAS ``gesdd`` can slow down 10-100x (e.g. 117 x 128: 3 ms -> 0.2-1 s)
-    while PROPACK degrades far less; setting ``OPENBLAS_NUM_THREADS=1`` avoids it.
+    A Lanczos run (PROPACK) for the ``k`` leading triplets has a fixed overhead and a cost
+    that grows with ``k``; LAPACK ``gesdd`` computes all values at a cost that grows with
+    the matrix. So a full SVD wins on narrow windows (32 samples), the two tie near 64,
+    and PROPACK wins from about 100 up while ``k`` is a small fraction of ``n_min``;
+    beyond about a third of ``n_min`` LAPACK wins again. The thresholds sit inside those
+    regions: timings of one thin SVD of mid-run IALM iterates per shape and ``k / n_min``,
+    and end-to-end IALM, are in ``docs/notes/rpca.md`` (``benchmarks/bench_rpca.py``).
+    A multi-threaded BLAS ``gesdd`` can slow down by orders of magnitude when other
+    processes keep the cores busy, while PROPACK degrades far less: the callers run with
+    one BLAS thread (:func:`_single_threaded_blas`).
     """
     return n_min >= _AUTO_MIN_SIZE and k <= _AUTO_MAX_FRACTION * n_min
 
@@ -211,8 +195,9 @@ class _Thresholder:
     Holds the predicted number ``sv`` of singular values above the next threshold (Lin et
     al.: ``sv = r + 1`` after ``r`` values survived, ``sv = r + round(0.05 n_min)`` when
     the prediction was too small) and the last left singular vectors, whose sum (plus a
-    fixed seeded perturbation) starts the next Lanczos run: measured 20-30 % fewer
-    PROPACK seconds on 117 x 424 to 468 x 1024 iterates than a random start.
+    fixed seeded perturbation) starts the next Lanczos run: consecutive iterates share
+    their leading subspace, so Lanczos converges in fewer steps than from a random start
+    (``docs/notes/rpca.md``).
     """
 
     def __init__(self, shape: tuple[int, int], mode: str, *, single: bool = False) -> None:
@@ -267,11 +252,10 @@ class _Thresholder:
 def _single_threaded_blas(func: Callable[..., _T]) -> Callable[..., _T]:
     """Run ``func`` with one BLAS thread.
 
-    The SVDs here are small (117 x 32 to 468 x 1024). With OpenBLAS's default two
-    threads on the 2-core machines this project targets, windowed RPCA of Scene 1
-    (window 64) took 3.1-18 s right after a numba-parallel backprojection or beside another
-    busy process, against 0.43 s with one thread (measured in one process); a single
-    thread is also as fast on an idle machine at these sizes.
+    The SVDs here are small (117 x 32 to 468 x 1024): BLAS threads gain nothing at these
+    sizes on an idle machine, and on a busy one (or right after a numba-parallel region)
+    their barriers wait for descheduled threads and multiply the time several-fold
+    (``docs/notes/rpca.md``).
     """
 
     @functools.wraps(func)

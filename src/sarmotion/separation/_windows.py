@@ -175,18 +175,18 @@ def choose_window(
     ``w`` is ``f(w) = max_i rank_i / min(n_pulses, w)``. Return the *largest* ``w`` with
     ``f(w) <= max_rank_fraction`` (every window low-rank relative to its size, the regime
     of exact recovery). If there is none, the data are not low-rank at any of these
-    scales and ``f`` no longer discriminates (it was 0.34-0.47 for every ``w`` on the
-    built-in scenes); the rule then returns the largest candidate ``w <= n_pulses`` (or
-    ``min_window``): the widest window whose default ``eta`` keeps the value
-    ``1 / sqrt(n_pulses)``, since a wider window lowers ``eta`` and, measured on those
-    scenes, pushes stationary echoes into ``S``. A zero matrix returns ``max_window``.
+    scales and ``f`` no longer discriminates (as on the built-in scenes); the rule then
+    returns the largest candidate ``w <= n_pulses`` (or ``min_window``): the widest
+    window whose default ``eta`` keeps the value ``1 / sqrt(n_pulses)``, since a wider
+    window lowers ``eta`` and pushes stationary echoes into ``S``. A zero matrix returns
+    ``max_window``.
 
     The rule is empirical. Checked on rank-5 + 5 %-sparse 200 x 300 data (returns 300,
     the whole matrix), on column blocks of rank 2-3 with 5 % spikes (returns 64-128,
     where windowed RPCA recovers ``S``), and on the built-in ``example1``, ``example2``
-    and ``scene1`` simulations with and without noise (returns 64; relative errors of
-    ``S`` over windows of 16/32/64/128/424 samples were 0.46/0.35/0.24/0.28/1.4,
-    0.86/0.86/0.79/0.89/4.6 and 0.59/0.58/0.56/0.55/2.5). A window length predicted
+    and ``scene1`` simulations with and without noise (returns 64, at or next to the
+    window of least error in ``S``; ``tests/test_rpca.py``, errors per window in
+    ``docs/notes/rpca.md``). A window length predicted
     from the scene geometry (the paper's rank analysis) can be passed to
     :func:`windowed_rpca` instead.
 
@@ -309,10 +309,9 @@ def windowed_rpca(
     ``tol / 100`` by falling back to ``gesdd``). On the four GOTCHA degrees with two
     injected movers (117 x 424, windows of 64, ``eta`` x 2, ``tol = 1e-5``) it gives the
     per-window iterations and ``S`` of the textbook full-SVD IALM to 3e-14 (relative),
-    hence the same clutter left in ``S`` and mover coverage, 1.6-1.7x faster than it
-    with one BLAS thread (2.8-28x against it on OpenBLAS's default two threads, a
-    spread due to those threads on a busy 2-core machine); the floor of this path is in
-    that module's notes.
+    hence the same clutter left in ``S`` and mover coverage, faster (timings against it,
+    with one and with two BLAS threads, in ``docs/notes/rpca.md``); the floor of this
+    path is in that module's notes.
 
     Principal component pursuit's minimiser on those windows has a full-rank ``L``
     (``sigma_min / sigma_max`` 0.016-0.15 in every window), as has IALM's last iterate;

@@ -25,11 +25,10 @@ is the number of singular values of ``M - S_0`` above the Gavish-Donoho threshol
 ``omega(beta) median(sigma)`` (at least 1), as in
 :func:`sarmotion.separation.rpca.choose_window`.
 
-Measured (2-core machine, one BLAS thread): rank-5 + 5 %-sparse complex matrices recover to
-the same ~1e-7 errors as IALM at ``tol = 1e-7``, 117 x 424 and 468 x 424 in a few ms to tens
-of ms (``benchmarks/bench_rpca.py``). On real GOTCHA clutter, which is far from low rank,
-it is not a substitute for principal component pursuit: see
-:func:`sarmotion.separation.rpca.rpca` (``solver``) for the measured separation quality.
+On low-rank + sparse complex matrices it recovers the same ``L`` and ``S`` as IALM at
+the same tolerance, much faster (``benchmarks/bench_rpca.py``, ``docs/notes/rpca.md``). On
+real GOTCHA clutter, which is far from low rank, it is not a substitute for principal
+component pursuit: see :func:`sarmotion.separation.rpca.rpca` (``solver``).
 """
 
 from __future__ import annotations
@@ -113,9 +112,9 @@ def _largest_singular_value(m: NDArray, rng: np.random.Generator) -> float:
 def _singular_values(a: NDArray) -> NDArray[np.float64]:
     """All singular values, decreasing, from the eigenvalues of the smaller Gram matrix.
 
-    1.4x cheaper than LAPACK's values-only SVD at 468 x 424 (34 against 49 ms); squaring
-    the condition number only blurs values below ~1e-8 sigma_1, which the rank rule does
-    not look at.
+    Cheaper than LAPACK's values-only SVD (one Hermitian eigenproblem of the smaller side,
+    ``docs/notes/rpca.md``); squaring the condition number only blurs values below ~1e-8
+    sigma_1, which the rank rule does not look at.
     """
     g = a.conj().T @ a if a.shape[0] >= a.shape[1] else a @ a.conj().T
     lam = np.linalg.eigvalsh(g)[::-1]

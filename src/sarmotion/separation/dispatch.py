@@ -28,17 +28,17 @@ METHODS = ("combined", "rpca", "annihilation")
 
 
 def default_method(traces: Traces) -> str:
-    """Separation method for ``traces``, chosen by measurement.
+    """Separation method for ``traces``: the one suited to its kind of clutter.
 
     ``"combined"`` for simulated point scenes, ``"rpca"`` for measured data.
 
     Notes
     -----
-    Scene 1 with ``combined``: ``||S - S_true|| / ||S_true||`` = 0.13, both movers
-    within 0.03 m/s. On a GOTCHA degree with two injected movers, ``rpca``
-    (``eta_scale = 2``) leaves their ``g`` peaks 23.6 and 21.9 dB above the floor
-    against 13.3 and 11.0 dB for ``combined`` (distributed clutter is not a set of
-    points) and takes 0.4 s instead of 19 s; ``annihilation`` there lost one mover.
+    ``combined`` models the stationary scene as a set of points, which a simulated scene
+    is; measured clutter is distributed, not a set of points, and robust PCA leaves the
+    movers' ``g`` peaks far higher above the floor there, in a fraction of the time
+    (figures in ``docs/notes/separation.md``, from ``tests/test_separation.py`` and
+    ``tests/test_separation_gotcha.py``).
     """
     return "combined" if traces.metadata.get("source") == "simulation" else "rpca"
 

@@ -32,34 +32,12 @@ gives ``N = 100`` filters for 117 pulses). :func:`annihilate` therefore
   is a combination of differences, exactly zero on traces that do not depend on ``s`` in
   the filter's frame.
 
-Measured on Scene 1 with the 100 filters from the preliminary image (0.25 m grid); per
-pulse, the energy of ``Q S_true`` and of ``Q L_true`` re the largest per-pulse energy of
-``Q S_true``:
-
-=====================================================  ==========  ==========  =======
-end rows                                               movers,     stationary  S/C
-                                                       min (dB)    max (dB)    (dB)
-=====================================================  ==========  ==========  =======
-forward only, last difference repeated in the          -1088       -23.0       30.4
-filter's frame (before: 37 of 117 pulses lose the
-movers)
-alternated, repeated in the filter's frame             -24.6       -38.2       46.1
-alternated, repeated in the frame of ``rho_o``         -31.2       -44.0       52.0
-alternated, extrapolated in the frame of ``rho_o``     -36.5       -57.5       65.7
-(this module)
-edge-free reference (forward only on a 337-pulse       -8.6        -176        178
-aperture, central 117 pulses kept)
-=====================================================  ==========  ==========  =======
-
-The choice among the three alternated end rows was made on the worst case over Scene 1 on
-0.25 m and 0.5 m grids and three random 20-target scenes with Scene 1's movers (seeds
-101-103): with extrapolation the stationary residue stays below -56 dB everywhere and the
-movers stay within 40 dB of their maximum on every pulse but one end pulse of one draw
-(-42.9 dB); repeating in the frame of ``rho_o`` leaves -40.7 dB and loses a mover pulse to
--51.7 dB. Central differences leave -16.0 dB. On ``filter10`` and ``filter30`` (10 and 30
-filters at the exact locations) the signal-to-clutter ``||Q S||^2 / ||Q L||^2`` is 38.6
-and 61.1 dB (forward only: 26.4 and 32.3 dB; with every pulse's stencil complete: 135
-and 174 dB). What remains is the end of the aperture, not the filter: ``N`` composed
+Of the end rows considered (forward differences only; alternated differences with the
+last difference repeated in the filter's frame or in the frame of ``rho_o``, or
+extrapolated in the frame of ``rho_o``), the last keeps the stationary residue lowest and
+the movers' energy highest on every pulse, on Scene 1 and on seeded random scenes with
+its movers (``tests/test_transforms.py``; the table in ``docs/notes/separation.md``).
+What remains is the end of the aperture, not the filter: ``N`` composed
 differences on ``n`` pulses have only ``n - N`` complete stencils, and no choice of end
 rows makes the others exact.
 """

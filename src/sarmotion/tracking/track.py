@@ -98,8 +98,8 @@ def track(
         Local workers (default one per core; 0: no Dask; at most 4 per core,
         :data:`~sarmotion.tracking.scale.MAX_WORKERS_PER_CORE`).
     processes : bool
-        Local workers as processes, or threads of this process (default; measured
-        faster, :mod:`sarmotion.tracking.scale`).
+        Local workers as processes, or threads of this process (default: no pickled
+        traces and numba's kernels loaded once, :mod:`sarmotion.tracking.scale`).
     dashboard_address : str, optional
         ``"host:port"`` of the local cluster's dashboard; default none.
     progress : callable, optional

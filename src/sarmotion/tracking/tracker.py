@@ -26,20 +26,20 @@ on the nearest road replaces the family: ``R_p`` becomes the road fix's covarian
 the family term goes; a road parallel to the family leaves the measurement free. Of
 the roads a family line crosses, only those along which the member's velocity runs
 count (its speed across the road within three cross-range-speed resolutions: on real
-clutter the side maxima of ``g_perp`` put single-degree cross-range speeds up to 2.7
-resolutions, 2 m/s, off), and of those the crossing nearest the track's prediction (or
-the detection, for a new track). A vehicle on a road moves along it: the road-fixed velocity
-measurement is fused with the pseudo-measurement "speed across the road 0 +-
-``road_cross_speed_std_mps``" (information form).
+clutter the side maxima of ``g_perp`` can put a single degree's cross-range speed a few
+resolutions off, ``docs/notes/tracking.md``), and of those the crossing nearest the
+track's prediction (or the detection, for a new track). A vehicle on a road moves along
+it: the road-fixed velocity measurement is fused with the pseudo-measurement "speed
+across the road 0 +- ``road_cross_speed_std_mps``" (information form).
 
 Because the family is degenerate over tens of degrees of a circular pass (1/220 of a
 wavelength for 10 m over 4 degrees), the detections of one mover in successive
 sub-apertures are not independent draws along their families: the estimator places
 each near the reference cross range whatever the truth. Averaging them would shrink the
 cross-range uncertainty by the square root of their number without bringing the track
-any nearer the truth (measured on GOTCHA with an injected mover 18-20 m off: the
-filter's cross-range standard deviation fell from 30 to 15 m over four sub-apertures
-while the error stayed at 18-20 m). Only a track's first detection therefore sets its
+any nearer the truth (on GOTCHA with an injected mover off the reference cross range,
+the filter's standard deviation halves over four sub-apertures while the error stays:
+``docs/notes/tracking.md``). Only a track's first detection therefore sets its
 position along the family, with ``sigma_f``; its updates carry ``100 sigma_f`` there,
 i.e. no information along the family. ``position_std_m`` thus stays as large as the data
 make it, and without roads each state carries its family.
@@ -463,8 +463,8 @@ class Tracker:
         own = self.traces.select_pulses(sub.pulses.start, sub.pulses.stop).with_data(det.traces)
         # Searched within four resolutions of the family member's speeds: the member's
         # velocity already carries the move along the family, and four cross-range-speed
-        # resolutions (3 m/s over a GOTCHA degree) cover g_perp's side maxima on clutter.
-        # (Over the whole (-30, 30) m/s the same estimate took 1.8 s instead of 0.28 s.)
+        # resolutions (3 m/s over a GOTCHA degree) cover g_perp's side maxima on clutter;
+        # the search's cost grows with its span (docs/notes/tracking.md).
         u = float(velocity @ sub.look_direction[:2])
         up = float(velocity @ sub.cross_range_speed_row)
         du, dup = 4.0 * sub.range_speed_resolution_mps, 4.0 * sub.cross_range_speed_resolution_mps
