@@ -8,10 +8,12 @@ movers, trajectory estimation and focused imaging.
 
 The names a user starts with are here: :func:`analyze` with :class:`AnalysisOptions`,
 :func:`read_gotcha`, :func:`load_scene` and :func:`simulate`, :func:`backproject`,
-:class:`Traces` and :class:`Scene`. The subpackages, in the order data flow through them:
-``core`` (radar, geometry, traces), ``simulation``, ``io``, ``imaging``, ``separation``,
-``motion``, ``pipeline``, ``tracking``, ``documents``, ``report``, ``paper``, ``cli``. A
-module imports only from the layers below its own (``tests/test_layering.py`` states the
+:class:`Traces` and :class:`Scene`; an analysis is printed with ``print(result)`` (one
+line) or ``print(result.summary())`` and written with :func:`save` (what ``sarmotion
+analyze --out`` writes) or :func:`save_report` (the HTML report alone). The
+subpackages, in the order data flow through them: ``core`` (radar, geometry, traces),
+``simulation``, ``io``, ``imaging``, ``separation``, ``motion``, ``pipeline``,
+``tracking``, ``documents``, ``report``, ``paper``, ``cli``. A module imports only from the layers below its own (``tests/test_layering.py`` states the
 layers); :mod:`sarmotion.errors` holds the exceptions every layer raises.
 """
 
@@ -25,6 +27,7 @@ if TYPE_CHECKING:
     from .imaging import backproject
     from .io import read_gotcha
     from .pipeline import AnalysisOptions, analyze
+    from .report.analysis import save, save_report
     from .simulation import Scene, load_scene, simulate
 
 # The names are imported on first use (PEP 562): ``import sarmotion`` and the command
@@ -37,6 +40,8 @@ _LAZY = {
     "backproject": ".imaging",
     "load_scene": ".simulation",
     "read_gotcha": ".io",
+    "save": ".report.analysis",
+    "save_report": ".report.analysis",
     "simulate": ".simulation",
 }
 
@@ -49,6 +54,8 @@ __all__ = [
     "backproject",
     "load_scene",
     "read_gotcha",
+    "save",
+    "save_report",
     "simulate",
 ]
 

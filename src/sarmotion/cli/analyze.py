@@ -8,13 +8,11 @@ from typing import Any
 
 import click
 
-from ..documents.results import results_document
-from ..imaging.quality import point_quality
-from ..io import DataError, staged_directory, write_json
+from ..io import DataError
 from ..io.sicd import write_sicd
-from ..pipeline import AnalysisOptions, compare_with_truth
+from ..pipeline import AnalysisOptions
 from ..pipeline import analyze as run_analysis
-from ..report.html import write_report
+from ..report.analysis import ANALYSIS_OUTPUTS, save
 from ..separation import SeparationOptions
 from .autofocus import ReadOptions, autofocus_options
 from .collection import run_collection
@@ -30,17 +28,7 @@ from .common import (
     speed_option,
 )
 
-OUTPUTS = (
-    "results.json",
-    "report.html",
-    "traces.png",
-    "objectives.png",
-    "images.png",
-    "movers.png",
-    "trajectories.png",
-    "autofocus.png",
-    "stationary.nitf",
-)
+OUTPUTS = ANALYSIS_OUTPUTS
 
 __all__ = ["analyze", "demo"]
 
@@ -96,23 +84,14 @@ def run_analyze(
     traces, sim, focus = read if read is not None else reading.read(inputs)
     with Progress(enabled=progress) as bar:
         result = run_analysis(traces, options, progress=bar)
-    truth = compare_with_truth(result, sim.scene) if sim is not None else None
-    doc = results_document(result, truth=truth)
-    doc["inputs"] = list(inputs)
-    doc["point_quality"] = _stationary_quality(result)
-    if focus is not None:
-        doc["autofocus"] = focus.to_dict()
-    with staged_directory(out) as stage:
-        write_json(stage / "results.json", doc)
-        write_report(
-            result,
-            stage,
-            document=doc,
-            title=f"sarmotion analysis: {', '.join(Path(i).name for i in inputs)}",
-            inputs=inputs,
-        )
-        if sicd:
-            _write_sicd_images(result, stage)
+    doc = save(
+        result,
+        out,
+        scene=sim.scene if sim is not None else None,
+        inputs=inputs,
+        autofocus=focus.to_dict() if focus is not None else None,
+        also=(lambda stage: _write_sicd_images(result, stage)) if sicd else None,
+    )
     click.echo(
         f"wrote {out}/results.json, report.html and figures: {len(result.movers)} mover(s), "
         f"{len(result.stationary)} stationary target(s), {result.timings_s['total']:.1f} s"
@@ -124,22 +103,6 @@ def run_analyze(
             f"  mover {k + 1}: position ({x:.2f}, {y:.2f}) m, velocity ({ux:.2f}, {uy:.2f}) "
             f"m/s, range speed {m['range_speed_mps']:.2f} m/s"
         )
-
-
-#: Brightest stationary targets whose point-target quality the report lists.
-QUALITY_TARGETS = 3
-
-
-def _stationary_quality(result) -> list[dict]:
-    """IRW, PSLR and ISLR of the brightest stationary targets, on the stationary traces."""
-    stationary = result.traces.with_data(result.stationary_traces)
-    out = []
-    for target in result.stationary[:QUALITY_TARGETS]:
-        try:
-            out.append(point_quality(stationary, target.position_m).to_dict())
-        except ValueError as exc:
-            out.append({"position_m": list(target.position_m), "error": str(exc)})
-    return out
 
 
 def _write_sicd_images(result, stage: Path) -> None:

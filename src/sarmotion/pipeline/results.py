@@ -17,11 +17,26 @@ from ..motion import (
     RangeSpeedDetection,
     RangeSpeeds,
     TrajectoryEstimate,
+    azimuth_span_deg,
 )
 from ..separation import Separation
 from .options import AnalysisOptions
 
-__all__ = ["MoverEvidence", "Mover", "StationaryTarget", "AnalysisResult"]
+__all__ = ["MoverEvidence", "Mover", "StationaryTarget", "AnalysisResult", "fixed"]
+
+
+def fixed(value: float, digits: int = 2) -> str:
+    """``value`` with ``digits`` decimals, never ``-0.00``: a value that rounds to zero is 0.
+
+    For text a person reads (console lines, summaries): a coordinate of ``-4e-25`` m is
+    printed ``0.00``, not ``-0.00``.
+    """
+    text = f"{float(value):.{digits}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+
+
+def _pair(v: NDArray[np.float64] | tuple[float, ...], digits: int = 2) -> str:
+    return f"({fixed(v[0], digits)}, {fixed(v[1], digits)})"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -142,6 +157,15 @@ class Mover:
     image_peak_db: float | None = None
     trajectory: TrajectoryEstimate | None = None
 
+    def __repr__(self) -> str:
+        """One line: position at ``s = 0``, velocity, range and cross-range speeds, statistic."""
+        return (
+            f"Mover(position_m={_pair(self.position_m)}, velocity_mps={_pair(self.velocity_mps)}, "
+            f"range_speed_mps={fixed(self.range_speed_mps)}, "
+            f"cross_range_speed_mps={fixed(self.cross_range_speed_mps)}, "
+            f"statistic_db={fixed(self.evidence.statistic_db, 1)})"
+        )
+
 
 @dataclass(frozen=True, kw_only=True)
 class StationaryTarget:
@@ -200,6 +224,91 @@ class AnalysisResult:
     stationary: tuple[StationaryTarget, ...]
     timings_s: dict[str, float]
     options: AnalysisOptions
+
+    def __repr__(self) -> str:
+        """One line: pulses, samples, movers, stationary targets, method and total time."""
+        return (
+            f"AnalysisResult({self.traces.n_pulses} pulses x {self.traces.n_samples} samples, "
+            f"{len(self.movers)} mover(s), {len(self.stationary)} stationary target(s), "
+            f"method {self.method!r}, timings_s['total'] = "
+            f"{self.timings_s.get('total', float('nan')):.2f} s)"
+        )
+
+    def summary(self) -> str:
+        """The analysis in a few lines of text: what the data fix and what they do not.
+
+        The acquisition and the frame; each mover's range offset, range speed and
+        cross-range speed with their standard errors (Cramér–Rao bound at the measured
+        SNR, :class:`~sarmotion.motion.PointBound`) and its detection statistic against
+        the threshold; the stationary targets; what is known of the movers' cross-range
+        positions; the time the stages took.
+
+        Frame: ground coordinates ``(x, y)`` (m) of the scene; the range direction is
+        ``b``, the ground projection of ``m_o`` (from the reference point towards the
+        antenna at ``s = 0``), normalised, and the cross-range direction is ``b`` turned
+        by +90 degrees. A mover's range offset is ``(position - rho_o) . b`` and its range
+        speed ``u . m_o`` (``eq:rangeu``): both positive towards the radar (a positive
+        range speed closes the range).
+        """
+        tr = self.traces
+        geometry = tr.geometry
+        b = np.asarray(geometry.ground_m_o, dtype=np.float64)
+        b = b / np.linalg.norm(b)
+        rho_o = np.asarray(tr.reference_point_m, dtype=np.float64)[:2]
+        span = float(azimuth_span_deg(tr))
+        lines = [
+            f"sarmotion analysis: {tr.n_pulses} pulses x {tr.n_samples} samples, "
+            f"{span:.2f} deg of azimuth, separation {self.method!r}",
+            f"frame: ground x, y (m); reference point {_pair(rho_o)} m; range direction "
+            f"b = {_pair(b, 3)} (towards the radar), cross range {_pair((-b[1], b[0]), 3)}",
+        ]
+        det = self.detection
+        test = (
+            f" (detector: statistic >= {fixed(det.threshold_db, 1)} dB, false-alarm rate "
+            f"{det.false_alarm_rate:g} per scene)"
+            if det is not None
+            else ""
+        )
+        lines.append(f"{len(self.movers)} mover(s){test}" + (":" if self.movers else ""))
+        for k, m in enumerate(self.movers):
+            offset = float(np.dot(np.asarray(m.position_m[:2]) - rho_o, b))
+            sd = m.bound
+            err = (
+                (
+                    f" +- {sd.range_position_m:.2g}",
+                    f" +- {sd.range_speed_mps:.2g}",
+                    f" +- {sd.cross_range_speed_mps:.2g}",
+                )
+                if sd is not None
+                else ("", "", "")
+            )
+            lines.append(
+                f"  mover {k + 1}: range offset {fixed(offset)}{err[0]} m, range speed "
+                f"{fixed(m.range_speed_mps)}{err[1]} m/s, cross-range speed "
+                f"{fixed(m.cross_range_speed_mps)}{err[2]} m/s, statistic "
+                f"{fixed(m.evidence.statistic_db, 1)} dB"
+            )
+            lines.append(
+                f"    position at s = 0 {_pair(m.position_m)} m, velocity "
+                f"{_pair(m.velocity_mps)} m/s: one member of the family position + t "
+                f"{_pair(m.family_position_per_m, 3)}, velocity + t "
+                f"{_pair(m.family_velocity_per_m, 3)} (t: m of cross-range offset)"
+            )
+        if self.movers:
+            lines.append(
+                "  cross range: not known. The data fix each mover's range offset and speeds; "
+                "every member of its family fits them as well, and the position listed is the "
+                "member at the reference point's cross range, not a measurement."
+            )
+        brightest = (
+            f" (brightest at {_pair(self.stationary[0].position_m)} m)" if self.stationary else ""
+        )
+        lines.append(f"{len(self.stationary)} stationary target(s){brightest}")
+        lines.append(
+            f"time: {self.timings_s.get('total', float('nan')):.2f} s in the analysis stages "
+            "(timings_s)"
+        )
+        return "\n".join(lines)
 
     @property
     def stationary_traces(self) -> NDArray[np.complexfloating]:
