@@ -19,7 +19,6 @@ from sarmotion.cli.main import run
 from sarmotion.core.geometry import range_speed
 from sarmotion.io.staging import OutputError
 
-
 #: A number printed as minus zero: "-0.00" not followed by another digit.
 NEGATIVE_ZERO = re.compile(r"-0\.0+(?![0-9])")
 

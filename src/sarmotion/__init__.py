@@ -13,8 +13,9 @@ line) or ``print(result.summary())`` and written with :func:`save` (what ``sarmo
 analyze --out`` writes) or :func:`save_report` (the HTML report alone). The
 subpackages, in the order data flow through them: ``core`` (radar, geometry, traces),
 ``simulation``, ``io``, ``imaging``, ``separation``, ``motion``, ``pipeline``,
-``tracking``, ``documents``, ``report``, ``paper``, ``cli``. A module imports only from the layers below its own (``tests/test_layering.py`` states the
-layers); :mod:`sarmotion.errors` holds the exceptions every layer raises.
+``tracking``, ``documents``, ``report``, ``paper``, ``cli``. A module imports only from
+the layers below its own (``tests/test_layering.py`` states the layers);
+:mod:`sarmotion.errors` holds the exceptions every layer raises.
 """
 
 from importlib import import_module
