@@ -21,12 +21,15 @@ from .common import (
     Progress,
     as_flags,
     check_out,
+    false_alarm_rate_option,
     force_option,
     lenient_option,
+    method_option,
     noise_options,
     out_option,
     speed_option,
 )
+from .inputs import FRAME_HELP, INPUTS_HELP
 
 OUTPUTS = ANALYSIS_OUTPUTS
 
@@ -125,27 +128,13 @@ def _write_sicd_images(result, stage: Path) -> None:
             raise InputError(f"--sicd {name}: {exc}") from None
 
 
-@click.command()
+@click.command(epilog=f"{INPUTS_HELP}\n\n{FRAME_HELP}")
 @click.argument("inputs", nargs=-1, required=True)
 @out_option("Output directory: results.json, report.html and its figures.")
 @force_option
-@click.option(
-    "--method",
-    type=click.Choice(["auto", "combined", "rpca", "annihilation"]),
-    default="auto",
-    show_default=True,
-    help="How the stationary and moving echoes are separated. auto: combined for "
-    "simulated scenes, rpca (eta x 2) for measured data.",
-)
+@method_option
 @click.option("--max-movers", type=int, default=5, show_default=True, help="Most movers sought.")
-@click.option(
-    "--false-alarm-rate",
-    type=float,
-    default=0.01,
-    show_default=True,
-    help="Per-scene false-alarm rate of the mover detector; sets the threshold on the "
-    "g(u) peak over its local floor from the statistic's measured null distribution.",
-)
+@false_alarm_rate_option
 @speed_option
 @lenient_option
 @autofocus_options
@@ -242,8 +231,7 @@ def analyze(
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
-    INPUTS: a built-in scene name or scene .toml (simulated), a native traces .h5 file,
-    GOTCHA .mat files or a CPHD .cphd file. Writes OUT/results.json (schema sarmotion.results/1),
+    Writes OUT/results.json (schema sarmotion.results/1),
     OUT/report.html (self-contained) and the report's figures as PNG. A scene larger
     than one patch (or any --region) is cut into patches, analysed on Dask and merged:
     OUT/results.json (schema sarmotion.collection/1), report.html and mosaic.png.
@@ -288,7 +276,7 @@ def analyze(
 DEMO_OUT = Path("sarmotion-demo")
 
 
-@click.command()
+@click.command(epilog=FRAME_HELP)
 @out_option(
     "Output directory. At the default, an earlier demo's output (its results.json) is "
     "replaced, so the demo can be run again; elsewhere an existing output needs --force.",

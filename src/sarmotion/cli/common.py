@@ -25,8 +25,10 @@ __all__ = [
     "check_out",
     "dask_logging",
     "extent_grid",
+    "false_alarm_rate_option",
     "force_option",
     "lenient_option",
+    "method_option",
     "noise_options",
     "out_option",
     "speed_option",
@@ -202,6 +204,25 @@ def _check_writable(out: Path, *, is_file: bool) -> None:
     for w in where:
         if not os.access(w, os.W_OK | os.X_OK):
             raise InputError(f"--out {out}: cannot write in {w} (permission denied)")
+
+
+method_option = click.option(
+    "--method",
+    type=click.Choice(["auto", "combined", "rpca", "annihilation"]),
+    default="auto",
+    show_default=True,
+    help="How the stationary and moving echoes are separated. auto: combined for "
+    "simulated scenes, rpca (eta x 2) for measured data.",
+)
+
+false_alarm_rate_option = click.option(
+    "--false-alarm-rate",
+    type=float,
+    default=0.01,
+    show_default=True,
+    help="Per-scene false-alarm rate of the mover detector; sets the threshold on the "
+    "g(u) peak over its local floor from the statistic's measured null distribution.",
+)
 
 
 #: Platform speeds (m/s) accepted by --speed: from a ground-based rail SAR (mm/s to cm/s)

@@ -17,11 +17,12 @@ from .common import (
     out_option,
     speed_option,
 )
+from .inputs import INPUTS_HELP
 
 __all__ = ["convert"]
 
 
-@click.command()
+@click.command(epilog=INPUTS_HELP)
 @click.argument("inputs", nargs=-1, required=True)
 @click.option(
     "--to",

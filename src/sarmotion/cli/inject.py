@@ -21,7 +21,7 @@ from .common import (
     speed_option,
 )
 from .image import MAX_GROUND_SPEED_MPS
-from .inputs import read_inputs
+from .inputs import FRAME_HELP, INPUTS_HELP, read_inputs
 
 __all__ = ["inject"]
 
@@ -31,8 +31,17 @@ MAX_OFFSET_M = 1e4
 
 
 def _parse_target(text: str) -> Any:
+    """``(PointTarget, amplitude, in_db)`` from ``X,Y[,UX,UY[,AMP]]``.
+
+    ``AMP`` is in data units, or in dB relative to the default amplitude when it ends
+    in ``dB`` (``-6dB``); ``None`` when absent.
+    """
+    fields = text.split(",")
+    in_db = len(fields) == 5 and fields[4].strip().lower().endswith("db")
+    if in_db:
+        fields[4] = fields[4].strip()[:-2]
     try:
-        values = [float(v) for v in text.split(",")]
+        values = [float(v) for v in fields]
     except ValueError:
         raise InputError(f"--target {text!r}: expected numbers X,Y[,UX,UY[,AMP]]") from None
     if len(values) not in (2, 4, 5) or not np.all(np.isfinite(values)):
@@ -40,17 +49,20 @@ def _parse_target(text: str) -> Any:
     x, y = values[:2]
     u = values[2:4] if len(values) >= 4 else [0.0, 0.0]
     amp = values[4] if len(values) == 5 else None
-    if amp is not None and amp <= 0:
-        raise InputError(f"--target {text!r}: AMP must be > 0 (data units), got {amp:g}")
+    if amp is not None and not in_db and amp <= 0:
+        raise InputError(
+            f"--target {text!r}: AMP must be > 0 (data units), or in dB with a dB suffix, "
+            f"got {amp:g}"
+        )
     if max(abs(x), abs(y)) > MAX_OFFSET_M or np.hypot(*u) > MAX_GROUND_SPEED_MPS:
         raise InputError(
             f"--target {text!r}: X, Y must be within {MAX_OFFSET_M:g} m of the reference point "
             f"and the speed at most {MAX_GROUND_SPEED_MPS:g} m/s"
         )
-    return PointTarget(position_m=[x, y], velocity_mps=u), amp
+    return PointTarget(position_m=[x, y], velocity_mps=u), amp, in_db
 
 
-@click.command()
+@click.command(epilog=f"{INPUTS_HELP}\n\n{FRAME_HELP}")
 @click.argument("inputs", nargs=-1, required=True)
 @click.option(
     "--target",
@@ -58,9 +70,12 @@ def _parse_target(text: str) -> Any:
     multiple=True,
     required=True,
     metavar="X,Y[,UX,UY[,AMP]]",
-    help="Point target to add: position at s = 0 (m), ground velocity (m/s), "
-    "amplitude in data units (default: the median over pulses of max|D|). "
-    "Repeat for several targets.",
+    help="Point target to add: position at s = 0 (m), ground velocity (m/s) and "
+    "amplitude. AMP with a dB suffix (e.g. -6dB) is relative to the default amplitude: "
+    "the median over the pulses of the brightest sample's modulus, max|D| (0dB: as bright "
+    "as a typical pulse's strongest echo). A bare AMP is in data units: the modulus of "
+    "the input's complex samples as stored (GOTCHA's fp, the CPHD signal, a native "
+    "file's traces). Repeat for several targets.",
 )
 @out_option("Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
 @force_option
@@ -84,13 +99,13 @@ def inject(
     default_amp = float(np.median(np.abs(traces.data).max(axis=1)))
     parsed = []
     for text in targets:
-        t, amp = _parse_target(text)
+        t, amp, in_db = _parse_target(text)
+        if amp is None:
+            amp = default_amp
+        elif in_db:
+            amp = default_amp * 10.0 ** (amp / 20.0)
         parsed.append(
-            PointTarget(
-                position_m=t.position_m,
-                velocity_mps=t.velocity_mps,
-                reflectivity=default_amp if amp is None else amp,
-            )
+            PointTarget(position_m=t.position_m, velocity_mps=t.velocity_mps, reflectivity=amp)
         )
     result = run(traces, parsed)
     if native:

@@ -15,12 +15,59 @@ from ..core.traces import Traces
 from ..io import DataError, load_traces, read_cphd, read_gotcha
 from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
 
-__all__ = ["is_scene_reference", "read_inputs"]
+__all__ = ["FRAME_HELP", "INPUTS_HELP", "is_scene_reference", "read_inputs"]
+
+#: What a command's INPUTS may be, for its help (the epilog of image, analyze, track, ...).
+INPUTS_HELP = (
+    "INPUTS: a built-in scene ("
+    + ", ".join(builtin_scene_names())
+    + ") or a scene .toml file, simulated with its ground truth; a native traces .h5 file; "
+    "GOTCHA .mat files (consecutive files form one acquisition) or a directory of them; or "
+    "a CPHD .cphd file."
+)
+
+#: The frame and the sign conventions, in words, for the help of the commands that
+#: report positions and speeds (the geometry: :class:`sarmotion.core.geometry.LookGeometry`).
+FRAME_HELP = (
+    "Frame: ground coordinates x, y (m) of the data, around the reference point. Range is "
+    "measured along the line of sight projected on the ground, cross range across it, "
+    "along the flight path; for the built-in scenes and GOTCHA's first degrees the radar lies "
+    "towards +x (x is range) and flies along +y (y is cross range). A range speed is "
+    "positive towards the radar (the range closes) and negative away from it. Labels such "
+    "as eq:image or sect:RPCA name equations and sections of the paper (Borcea, Callaghan "
+    "& Papanicolaou) by their LaTeX labels."
+)
 
 
 def is_scene_reference(text: str) -> bool:
     """True for a built-in scene name or a path ending in ``.toml``."""
     return text in builtin_scene_names() or text.lower().endswith(".toml")
+
+
+def expand_directories(inputs: Sequence[str]) -> list[str]:
+    """``inputs`` with a directory replaced by its GOTCHA ``.mat`` files, sorted by name.
+
+    GOTCHA's files are named by azimuth (``..._az001_HH.mat``), so name order is
+    acquisition order. As ``sarmotion paper --gotcha`` reads a directory.
+
+    Raises
+    ------
+    DataError
+        A directory that holds no ``.mat`` file.
+    """
+    out: list[str] = []
+    for p in inputs:
+        path = Path(p)
+        if path.is_dir():
+            files = sorted(str(f) for f in path.glob("*.mat") if f.is_file())
+            if not files:
+                raise DataError(
+                    f"{p}: a directory of inputs must hold GOTCHA .mat files; none found"
+                )
+            out += files
+        else:
+            out.append(p)
+    return out
 
 
 def read_inputs(
@@ -39,8 +86,8 @@ def read_inputs(
     Parameters
     ----------
     inputs : sequence of str
-        One scene name or ``.toml``; or one native ``.h5``; or one or more GOTCHA ``.mat``;
-        or one CPHD ``.cphd``.
+        One scene name or ``.toml``; or one native ``.h5``; or one or more GOTCHA ``.mat``
+        or directories of them (:func:`expand_directories`); or one CPHD ``.cphd``.
     speed_mps : float
         GOTCHA: platform speed that sets slow time (m/s).
     autofocus : bool
@@ -74,7 +121,12 @@ def read_inputs(
         return sim.traces, sim
     for p in inputs:
         if not Path(p).exists():
-            raise DataError(f"input not found: {p}")
+            raise DataError(
+                f"input not found: {p} (no such file; the built-in scenes are "
+                f"{', '.join(builtin_scene_names())})"
+            )
+    inputs = expand_directories(inputs)
+    first = inputs[0]
     suffixes = {Path(p).suffix.lower() for p in inputs}
     if suffixes == {".h5"} or suffixes == {".hdf5"}:
         if len(inputs) != 1:

@@ -26,7 +26,8 @@ __all__ = ["paper"]
     "only",
     multiple=True,
     metavar="LABEL",
-    help="Build only this figure (e.g. fig:rpcaEx2b or rpcaEx2b); repeatable.",
+    help="Build only this figure, named by its LaTeX label in the paper (e.g. fig:rpcaEx2b "
+    "or rpcaEx2b); repeatable.",
 )
 @click.option(
     "--gotcha",
@@ -34,9 +35,10 @@ __all__ = ["paper"]
     type=click.Path(exists=True, path_type=Path),
     multiple=True,
     envvar="SARMOTION_GOTCHA_DIR",
-    help="GOTCHA .mat files, or a directory of them, for fig:setup (the acquisition "
-    "geometry); default $SARMOTION_GOTCHA_DIR. Without them fig:setup draws the nominal "
-    "GOTCHA circle.",
+    help="GOTCHA .mat files, or a directory of them, for the paper's fig:setup (the "
+    "acquisition geometry); default $SARMOTION_GOTCHA_DIR, else shared/data/gotcha or "
+    "../shared/data/gotcha from the current directory. Without them the paper's fig:setup "
+    "draws the nominal GOTCHA circle.",
 )
 @click.option("--quick", is_flag=True, help="Reduced sizes (coarser grids, fewer sweep values).")
 @click.option("--list", "list_only", is_flag=True, help="List the figure labels and exit.")
@@ -52,7 +54,8 @@ def paper(
 ) -> None:
     """Regenerate every figure of the paper, with the numbers behind it.
 
-    Each figure is named after its LaTeX label (fig:rpcaEx2b -> fig_rpcaEx2b.png) and
+    Each figure is named after its LaTeX label in the paper (fig:rpcaEx2b ->
+    fig_rpcaEx2b.png) and
     index.html shows it beside the paper's caption and a line of what it shows
     numerically (e.g. windowed vs whole-matrix RPCA error).
     """

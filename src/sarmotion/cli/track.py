@@ -13,6 +13,7 @@ from ..documents.tracks import tracks_document
 from ..io import staged_directory, write_json
 from ..pipeline import AnalysisOptions
 from ..report.tracks import write_tracks_report
+from ..separation import SeparationOptions
 from ..tracking import TrackingOptions, sub_aperture_slices
 from ..tracking import track as run_tracking
 from ..tracking.scale import check_workers
@@ -23,12 +24,14 @@ from .common import (
     as_flags,
     check_out,
     dask_logging,
+    false_alarm_rate_option,
     force_option,
     lenient_option,
+    method_option,
     out_option,
     speed_option,
 )
-from .inputs import read_inputs
+from .inputs import FRAME_HELP, INPUTS_HELP, read_inputs
 
 __all__ = ["track"]
 
@@ -36,7 +39,7 @@ __all__ = ["track"]
 OUTPUTS = ("tracks.json", "tracks.png", "report.html")
 
 
-@click.command()
+@click.command(epilog=f"{INPUTS_HELP}\n\n{FRAME_HELP}")
 @click.argument("inputs", nargs=-1, required=True)
 @out_option("Output directory: tracks.json, tracks.png and report.html.")
 @force_option
@@ -99,6 +102,8 @@ OUTPUTS = ("tracks.json", "tracks.png", "report.html")
     show_default=True,
     help="Most movers sought per sub-aperture.",
 )
+@method_option
+@false_alarm_rate_option
 @click.option(
     "--size",
     "size_m",
@@ -122,6 +127,8 @@ def track(
     n_workers: int | None,
     threads: bool,
     max_movers: int,
+    method: str,
+    false_alarm_rate: float,
     size_m: float | None,
     speed_mps: float,
     force: bool,
@@ -129,8 +136,7 @@ def track(
 ) -> None:
     """Follow the movers of INPUTS across overlapping sub-apertures.
 
-    INPUTS: GOTCHA .mat files (consecutive files form one acquisition), a CPHD file,
-    a native traces .h5 file, or a scene. Each sub-aperture is analysed as by `sarmotion
+    Each sub-aperture is analysed as by `sarmotion
     analyze` (on Dask: a local cluster, or --scheduler); the detections are associated
     into tracks (Stone Soup), each track's prediction being the known position of its
     next detection. Writes OUT/tracks.json (schema sarmotion.tracks/1), tracks.png and
@@ -138,7 +144,13 @@ def track(
     """
     try:
         options = TrackingOptions(
-            analysis=AnalysisOptions(max_movers=max_movers, image_size_m=size_m, trajectory=False),
+            analysis=AnalysisOptions(
+                separation=SeparationOptions(method=None if method == "auto" else method),
+                max_movers=max_movers,
+                image_size_m=size_m,
+                trajectory=False,
+                false_alarm_rate=false_alarm_rate,
+            ),
             sub_aperture_deg=sub_aperture_deg,
             overlap=overlap,
         )
@@ -149,6 +161,7 @@ def track(
             ("overlap", "--overlap"),
             ("max_movers", "--max-movers"),
             ("image_size_m", "--size"),
+            ("false_alarm_rate", "--false-alarm-rate"),
         ):
             if text.startswith(name + " "):
                 raise InputError(flag + text[len(name) :]) from None
@@ -210,6 +223,20 @@ def track(
         f"wrote {out}/tracks.json, tracks.png and report.html: {len(result.tracks)} track(s) "
         f"over {len(result.sub_apertures)} sub-aperture(s), {result.timings_s['total']:.1f} s"
     )
+    n_detections = sum(s["n_detections"] for s in doc["sub_apertures"])
+    least = options.min_detections
+    if len(result.tracks) == 0 and n_detections:
+        fewer = (
+            f"; this input gives {len(slices)} sub-aperture(s): a longer acquisition or a "
+            "shorter --sub-aperture gives more"
+            if len(slices) < least
+            else ""
+        )
+        click.echo(
+            f"  {n_detections} detection(s) in {len(slices)} sub-aperture(s), none followed: a "
+            f"track needs at least {least} detections of one mover in different "
+            f"sub-apertures{fewer}"
+        )
     for t in doc["tracks"]:
         first, last = t["states"][0], t["states"][-1]
         on_road = sum(1 for s in t["states"] if s.get("road", {}).get("fixed"))
