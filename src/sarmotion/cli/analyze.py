@@ -8,6 +8,7 @@ from typing import Any
 
 import click
 
+from ..core.text import fixed
 from ..io import DataError
 from ..io.sicd import write_sicd
 from ..pipeline import AnalysisOptions
@@ -30,6 +31,7 @@ from .common import (
     speed_option,
 )
 from .inputs import FRAME_HELP, INPUTS_HELP
+from .main import elapsed_s
 
 OUTPUTS = ANALYSIS_OUTPUTS
 
@@ -97,14 +99,16 @@ def run_analyze(
     )
     click.echo(
         f"wrote {out}/results.json, report.html and figures: {len(result.movers)} mover(s), "
-        f"{len(result.stationary)} stationary target(s), {result.timings_s['total']:.1f} s"
+        f"{len(result.stationary)} stationary target(s); analysis "
+        f"{result.timings_s['total']:.1f} s, {elapsed_s():.1f} s in all (start-up, reading "
+        "and figures included)"
     )
     for k, m in enumerate(doc["movers"]):
-        x, y = m["position_m"]
-        ux, uy = m["velocity_mps"]
+        x, y = (fixed(v) for v in m["position_m"])
+        ux, uy = (fixed(v) for v in m["velocity_mps"])
         click.echo(
-            f"  mover {k + 1}: position ({x:.2f}, {y:.2f}) m, velocity ({ux:.2f}, {uy:.2f}) "
-            f"m/s, range speed {m['range_speed_mps']:.2f} m/s"
+            f"  mover {k + 1}: position ({x}, {y}) m, velocity ({ux}, {uy}) "
+            f"m/s, range speed {fixed(m['range_speed_mps'])} m/s"
         )
 
 

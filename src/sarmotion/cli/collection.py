@@ -17,12 +17,14 @@ from ..collection import (
     plan_patches,
 )
 from ..core.blocks import TracesBlocks
+from ..core.text import fixed
 from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
 from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
 from .autofocus import ReadOptions
 from .common import InputError, Progress, as_flags, check_out
+from .main import elapsed_s
 
 __all__ = ["COLLECTION_OUTPUTS", "run_collection"]
 
@@ -135,12 +137,13 @@ def run_collection(
             if result.stationary_dropped
             else ""
         )
-        + f", {result.timings_s['total']:.1f} s"
+        + f"; analysis {result.timings_s['total']:.1f} s, {elapsed_s():.1f} s in all "
+        "(start-up, reading and figures included)"
     )
     for k, m in enumerate(doc["movers"]):
-        x, y = m["position_m"]
-        ux, uy = m["velocity_mps"]
+        x, y = (fixed(v) for v in m["position_m"])
+        ux, uy = (fixed(v) for v in m["velocity_mps"])
         click.echo(
-            f"  mover {k + 1} (patch {m['patch']}): position ({x:.2f}, {y:.2f}) m, velocity "
-            f"({ux:.2f}, {uy:.2f}) m/s, range speed {m['range_speed_mps']:.2f} m/s"
+            f"  mover {k + 1} (patch {m['patch']}): position ({x}, {y}) m, velocity "
+            f"({ux}, {uy}) m/s, range speed {fixed(m['range_speed_mps'])} m/s"
         )

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from ..io import save_traces, staged_directory, staged_file, write_cphd, write_gotcha
+from ..io.gotcha import AZIMUTH_NAME_PATTERN
 from .autofocus import autofocus_options, read_focused
 from .common import (
     InputError,
@@ -102,7 +103,7 @@ def convert(
     )
     if to == "gotcha":
         with staged_directory(out) as stage:
-            files = write_gotcha(traces, stage)
+            files = write_gotcha(traces, stage, name_pattern=AZIMUTH_NAME_PATTERN)
         click.echo(f"wrote {len(files)} GOTCHA file(s) to {out}")
         return
     with staged_file(out) as path:

@@ -8,13 +8,14 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..core.text import fixed
 from ..documents.peaks import peaks_document
 from ..imaging import backproject
 from ..imaging.quality import point_quality
 from ..io import DataError, save_image, staged_directory, write_json
 from ..io.sicd import check_sicd_grid, write_sicd
 from ..report.autofocus import phase_error_figure
-from ..report.plotting import image_figure, save_figure
+from ..report.plotting import full_resolution_image_figure, save_figure
 from .autofocus import autofocus_options, read_focused
 from .common import (
     InputError,
@@ -28,6 +29,7 @@ from .common import (
     square_grid,
 )
 from .inputs import FRAME_HELP, INPUTS_HELP
+from .main import elapsed_s
 
 OUTPUTS = ("image.png", "image.h5", "peaks.json", "autofocus.png")
 
@@ -209,16 +211,15 @@ def image(
     peaks = img.peaks(5, min_separation_m=3.0)
     quality = [_quality(traces, (x, y), velocity) for x, y, v in peaks if abs(v) > 0]
     with staged_directory(out) as stage:
-        names = ", ".join(Path(i).name for i in inputs)
-        title = f"backprojection image of {names}"
-        if len(title) > 60:
-            title = f"backprojection image of {len(inputs)} inputs"
-        if velocity is not None:
-            title += f"\ncompensated for u = ({velocity[0]:g}, {velocity[1]:g}) m/s"
-        fig = image_figure(
-            [(title, img.values)], x_m=grid.x_m, y_m=grid.y_m, dynamic_range_db=dynamic_range_db
+        fig = full_resolution_image_figure(
+            img.values,
+            x_m=grid.x_m,
+            y_m=grid.y_m,
+            title=_title(inputs, grid, velocity, dynamic_range_db),
+            dynamic_range_db=dynamic_range_db,
+            dpi=IMAGE_DPI,
         )
-        save_figure(fig, stage / "image.png")
+        save_figure(fig, stage / "image.png", dpi=IMAGE_DPI, tight=False)
         if focus is not None:
             save_figure(
                 phase_error_figure(
@@ -259,12 +260,40 @@ def image(
             )
     if peaks and abs(peaks[0][2]) > 0:
         x, y, _ = peaks[0]
-        where = f"brightest point at ({x:.2f}, {y:.2f}) m"
+        where = f"brightest point at ({fixed(x)}, {fixed(y)}) m"
     else:
         where = "the image is zero: no echo falls on this grid"
     extra = ", autofocus.png" if focus is not None else ""
     extra += f" and {sicd_path}" if sicd_path is not None else ""
-    click.echo(f"wrote {out}/image.png, image.h5, peaks.json{extra}; {where}; {elapsed:.2f} s")
+    click.echo(
+        f"wrote {out}/image.png, image.h5, peaks.json{extra}; {where}; backprojection "
+        f"{elapsed:.2f} s, {elapsed_s():.1f} s in all (start-up, reading and figures included)"
+    )
+
+
+#: Resolution of image.png (PNG pixels per inch of its layout).
+IMAGE_DPI = 100
+
+
+def _title(inputs, grid, velocity, dynamic_range_db: float) -> str:
+    """image.png's title: what was imaged, the extent, the pixels, the scale."""
+    names = ", ".join(Path(i).name for i in inputs)
+    if len(names) > 50:
+        names = f"{len(inputs)} inputs"
+    ny, nx = grid.shape
+    x, y = grid.x_m, grid.y_m
+    spacing = float(x[1] - x[0]) if nx > 1 else float(y[1] - y[0]) if ny > 1 else 0.0
+    cx = 0.5 * (float(x[0]) + float(x[-1]))
+    cy = 0.5 * (float(y[0]) + float(y[-1]))
+    lines = [
+        f"backprojection image of {names}",
+        f"{nx * spacing:g} x {ny * spacing:g} m around ({fixed(cx, 1)}, {fixed(cy, 1)}) m: "
+        f"{nx} x {ny} pixels of {spacing:g} m",
+        f"|I| in dB re its peak, {dynamic_range_db:g} dB shown",
+    ]
+    if velocity is not None:
+        lines.append(f"compensated for a ground velocity of ({velocity[0]:g}, {velocity[1]:g}) m/s")
+    return "\n".join(lines)
 
 
 def _quality(traces, point, velocity) -> dict:

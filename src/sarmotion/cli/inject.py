@@ -9,6 +9,7 @@ import click
 import numpy as np
 
 from ..io import save_traces, staged_directory, staged_file, write_gotcha
+from ..io.gotcha import AZIMUTH_NAME_PATTERN
 from ..simulation import PointTarget
 from ..simulation import inject as run
 from .common import (
@@ -114,5 +115,5 @@ def inject(
         click.echo(f"wrote {out} with {len(parsed)} injected target(s)")
     else:
         with staged_directory(out) as stage:
-            files = write_gotcha(result, stage)
+            files = write_gotcha(result, stage, name_pattern=AZIMUTH_NAME_PATTERN)
         click.echo(f"wrote {len(files)} GOTCHA file(s) to {out} with {len(parsed)} target(s)")

@@ -14,17 +14,19 @@ from __future__ import annotations
 import contextlib
 import importlib
 import logging
+import os
 import signal
 import sys
 import textwrap
 import threading
+import time
 from collections.abc import Iterator, Sequence
 
 import click
 
 from .._version import __version__
 
-__all__ = ["main", "run", "entry_point"]
+__all__ = ["main", "run", "entry_point", "elapsed_s"]
 
 
 log = logging.getLogger("sarmotion")
@@ -219,8 +221,40 @@ def _bad_input() -> tuple[type[BaseException], ...]:
     return (InputError, OutputError, FileNotFoundError, OSError)
 
 
-def run(args: Sequence[str] | None = None) -> int:
-    """Run the CLI with ``args``; return the exit status (never raises for bad input)."""
+#: When the running command started, on the :func:`time.monotonic` clock: the process's
+#: start for the console script, the call of :func:`run` otherwise.
+_STARTED = [time.monotonic()]
+
+
+def elapsed_s() -> float:
+    """Seconds since the running command started: start-up, reading, work and writing."""
+    return time.monotonic() - _STARTED[0]
+
+
+def _process_age_s() -> float:
+    """Seconds since this process started (Linux ``/proc``; 0 where it cannot be read).
+
+    ``/proc/self/stat`` field 22 is the start time in clock ticks after boot and
+    ``/proc/uptime`` the time since boot: their difference is the process's age, to a
+    clock tick (10 ms).
+    """
+    try:
+        with open("/proc/self/stat", encoding="ascii") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+        with open("/proc/uptime", encoding="ascii") as fh:
+            uptime = float(fh.read().split()[0])
+        return max(0.0, uptime - int(fields[19]) / os.sysconf("SC_CLK_TCK"))
+    except (OSError, ValueError, IndexError, AttributeError):
+        return 0.0
+
+
+def run(args: Sequence[str] | None = None, *, started: float | None = None) -> int:
+    """Run the CLI with ``args``; return the exit status (never raises for bad input).
+
+    ``started``: when the command started (:func:`time.monotonic`), for the time it
+    reports (:func:`elapsed_s`); default now.
+    """
+    _STARTED[0] = time.monotonic() if started is None else started
     try:
         with _sigterm_raises():
             main.main(
@@ -253,4 +287,4 @@ def run(args: Sequence[str] | None = None) -> int:
 
 def entry_point() -> None:
     """Console-script entry point."""
-    sys.exit(run())
+    sys.exit(run(started=time.monotonic() - _process_age_s()))

@@ -12,6 +12,20 @@ from .common import Progress, as_flags, check_out, force_option, out_option
 
 __all__ = ["paper"]
 
+#: Where the GOTCHA files are looked for without --gotcha or $SARMOTION_GOTCHA_DIR,
+#: relative to the current directory: the data beside a clone (as the tests look).
+GOTCHA_LOCATIONS = (Path("shared/data/gotcha"), Path("../shared/data/gotcha"))
+
+
+def default_gotcha() -> list[Path]:
+    """The GOTCHA .mat files of the first of :data:`GOTCHA_LOCATIONS` that holds some."""
+    for d in GOTCHA_LOCATIONS:
+        if d.is_dir():
+            files = sorted(d.glob("*.mat"))
+            if files:
+                return files
+    return []
+
 
 @click.command()
 @out_option(
@@ -65,6 +79,8 @@ def paper(
     gotcha_paths: list[Path] = []
     for g in gotcha:
         gotcha_paths += sorted(g.glob("*.mat")) if g.is_dir() else [g]
+    if not gotcha:
+        gotcha_paths = default_gotcha()
     selected = list(only) if only else None
     check_out(out, force=force, names=("index.html",), patterns=("fig_*",))
     total = len(selected) if selected else len(FIGURE_LABELS)

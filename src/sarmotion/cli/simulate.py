@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from ..io import save_traces, staged_directory, staged_file, write_gotcha
+from ..io.gotcha import AZIMUTH_NAME_PATTERN
 from ..simulation import load_scene
 from ..simulation import simulate as run
 from .common import as_flags, check_out, force_option, noise_options, out_option
@@ -48,5 +49,5 @@ def simulate(
         click.echo(f"wrote {out} ({sim.traces.n_pulses} pulses x {sim.traces.n_samples} samples)")
     else:
         with staged_directory(out) as stage:
-            files = write_gotcha(sim.traces, stage)
+            files = write_gotcha(sim.traces, stage, name_pattern=AZIMUTH_NAME_PATTERN)
         click.echo(f"wrote {len(files)} GOTCHA file(s) to {out}")

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from ..core.text import fixed
 from ..documents.roads import read_roads
 from ..documents.tracks import tracks_document
 from ..io import staged_directory, write_json
@@ -32,6 +33,7 @@ from .common import (
     speed_option,
 )
 from .inputs import FRAME_HELP, INPUTS_HELP, read_inputs
+from .main import elapsed_s
 
 __all__ = ["track"]
 
@@ -221,7 +223,9 @@ def track(
         )
     click.echo(
         f"wrote {out}/tracks.json, tracks.png and report.html: {len(result.tracks)} track(s) "
-        f"over {len(result.sub_apertures)} sub-aperture(s), {result.timings_s['total']:.1f} s"
+        f"over {len(result.sub_apertures)} sub-aperture(s); tracking "
+        f"{result.timings_s['total']:.1f} s, {elapsed_s():.1f} s in all (start-up, reading "
+        "and figures included)"
     )
     n_detections = sum(s["n_detections"] for s in doc["sub_apertures"])
     least = options.min_detections
@@ -242,9 +246,9 @@ def track(
         on_road = sum(1 for s in t["states"] if s.get("road", {}).get("fixed"))
         parallel = sum(1 for s in t["states"] if s.get("road", {}).get("fixed") is False)
         click.echo(
-            f"  track {t['id']}: {t['n_detections']} detection(s), s = {first['time_s']:.2f} "
-            f"to {last['time_s']:.2f} s, range speed {first['range_speed_mps']:.2f} to "
-            f"{last['range_speed_mps']:.2f} m/s, {on_road} state(s) on a road"
+            f"  track {t['id']}: {t['n_detections']} detection(s), s = {fixed(first['time_s'])} "
+            f"to {fixed(last['time_s'])} s, range speed {fixed(first['range_speed_mps'])} to "
+            f"{fixed(last['range_speed_mps'])} m/s, {on_road} state(s) on a road"
             + (
                 f", {parallel} with the road parallel to the cross-range family (no point fixed)"
                 if parallel

@@ -130,7 +130,13 @@ from .plausibility import (
 )
 from .staging import staged_paths
 
-__all__ = ["read_gotcha", "write_gotcha", "is_gotcha_file", "DEFAULT_NAME_PATTERN"]
+__all__ = [
+    "read_gotcha",
+    "write_gotcha",
+    "is_gotcha_file",
+    "AZIMUTH_NAME_PATTERN",
+    "DEFAULT_NAME_PATTERN",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -138,6 +144,10 @@ PathLike = str | os.PathLike[str]
 
 #: File names of the AFRL release (pass 1, HH); ``index`` counts files from 1.
 DEFAULT_NAME_PATTERN = "data_3dsar_pass1_az{index:03d}_HH.mat"
+
+#: The AFRL release's names: file ``azNNN`` holds the azimuths ``[NNN - 1, NNN)`` degrees;
+#: ``azimuth`` is that ``NNN`` for a file's first pulse (1 to 360).
+AZIMUTH_NAME_PATTERN = "data_3dsar_pass1_az{azimuth:03d}_HH.mat"
 
 #: Largest deviation of ``freq`` from its least-squares uniform grid, as a fraction of the
 #: step: float32 rounds ~9.6 GHz to 512 Hz, 3.5e-4 of GOTCHA's 1.47 MHz step; 1e-2 is 30x that.
@@ -739,7 +749,10 @@ def write_gotcha(
         Pulses per file (the last file takes the remainder); default: all in one file.
         The AFRL release has one file per degree (117 or 118 pulses).
     name_pattern : str
-        File-name pattern, formatted with ``index`` = 1, 2, ... in flight order.
+        File-name pattern, formatted with ``index`` = 1, 2, ... in flight order and
+        ``azimuth``, the AFRL release's file number of the file's first pulse:
+        ``1 + floor(th)`` for its azimuth ``th`` in [0, 360) degrees seen from the
+        reference point (:data:`AZIMUTH_NAME_PATTERN`).
     overwrite : bool
         Replace existing files (default); if False, raise FileExistsError first.
 
@@ -767,8 +780,12 @@ def write_gotcha(
     if isinstance(per, bool) or not isinstance(per, (int, np.integer)) or per < 1:
         raise ValueError(f"pulses_per_file must be a positive integer, got {pulses_per_file!r}")
     bounds = [(a, min(a + int(per), n)) for a in range(0, n, int(per))]
+    pos = traces.positions_m - traces.reference_point_m[None, :]
+    th = np.unwrap(np.arctan2(pos[:, 1], pos[:, 0]))
+    th = np.rad2deg(th - 2 * np.pi * np.floor(th[0] / (2 * np.pi)))
+    azimuths = [1 + int(np.floor(th[a] % 360.0)) for a, _ in bounds]
     try:
-        names = [name_pattern.format(index=i + 1) for i in range(len(bounds))]
+        names = [name_pattern.format(index=i + 1, azimuth=azimuths[i]) for i in range(len(bounds))]
     except (KeyError, IndexError, ValueError) as exc:
         raise ValueError(
             f"name_pattern must be a format string with the field {{index}}, got "
@@ -781,10 +798,7 @@ def write_gotcha(
     if any(Path(nm).name != nm or nm in ("", ".", "..") for nm in names):
         raise ValueError(f"name_pattern must give plain file names, got {names[0]!r}")
 
-    pos = traces.positions_m - traces.reference_point_m[None, :]
     r0 = np.linalg.norm(pos, axis=1)
-    th = np.unwrap(np.arctan2(pos[:, 1], pos[:, 0]))
-    th = np.rad2deg(th - 2 * np.pi * np.floor(th[0] / (2 * np.pi)))
     phi = np.rad2deg(np.arctan2(pos[:, 2], np.hypot(pos[:, 0], pos[:, 1])))
     fp = traces.phase_history().T.astype(np.complex64)
     freq = traces.frequencies_hz.astype(np.float32)[:, None]

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.text import fixed
 from ..core.traces import Traces
 from ..imaging import Image
 from ..motion import (
@@ -22,17 +23,7 @@ from ..motion import (
 from ..separation import Separation
 from .options import AnalysisOptions
 
-__all__ = ["MoverEvidence", "Mover", "StationaryTarget", "AnalysisResult", "fixed"]
-
-
-def fixed(value: float, digits: int = 2) -> str:
-    """``value`` with ``digits`` decimals, never ``-0.00``: a value that rounds to zero is 0.
-
-    For text a person reads (console lines, summaries): a coordinate of ``-4e-25`` m is
-    printed ``0.00``, not ``-0.00``.
-    """
-    text = f"{float(value):.{digits}f}"
-    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+__all__ = ["MoverEvidence", "Mover", "StationaryTarget", "AnalysisResult"]
 
 
 def _pair(v: NDArray[np.float64] | tuple[float, ...], digits: int = 2) -> str:

@@ -23,6 +23,7 @@ __all__ = [
     "plot_image",
     "traces_figure",
     "image_figure",
+    "full_resolution_image_figure",
     "save_figure",
     "to_db",
 ]
@@ -232,6 +233,74 @@ def image_figure(
     return fig
 
 
+def full_resolution_image_figure(
+    values: ArrayLike,
+    *,
+    x_m: ArrayLike,
+    y_m: ArrayLike,
+    title: str,
+    dynamic_range_db: float = 40.0,
+    dpi: int = 100,
+    min_side_px: int = 400,
+) -> Figure:
+    """One image ``|I|`` (ny, nx) in dB re its peak, drawn with whole screen pixels per pixel.
+
+    Saved at ``dpi`` (:func:`save_figure` with the same ``dpi``, or
+    ``fig.savefig(..., dpi=dpi)``), the image area is ``k nx`` by ``k ny`` PNG pixels:
+    every image pixel is a ``k x k`` block, ``k`` the smallest integer that makes the
+    longer side at least ``min_side_px`` (1 for an image already that large): nothing is
+    resampled away. The figure keeps fixed margins (inches) around it for the axes, the
+    colour bar and the title, and is at least wide enough for a three-line title.
+
+    Parameters
+    ----------
+    values : (ny, nx) array_like
+        The image (any complex or real values; drawn as ``20 log10(|I| / max |I|)``).
+    x_m, y_m : (nx,), (ny,) array_like
+        Pixel centres (m).
+    title : str
+        Title; one line per line of text.
+    dynamic_range_db : float
+        Displayed range below the peak (dB).
+    dpi : int
+        The resolution the figure is laid out for (PNG pixels per inch).
+    min_side_px : int
+        Least length of the image's longer side on the PNG (pixels).
+    """
+    v = np.asarray(values)
+    ny, nx = v.shape
+    k = max(1, int(np.ceil(min_side_px / max(nx, ny))))
+    w_in, h_in = k * nx / dpi, k * ny / dpi
+    left, right, bottom = 0.9, 1.1, 0.7
+    top = 0.25 + 0.22 * (title.count("\n") + 1)
+    width = max(left + w_in + right, 6.0)
+    height = bottom + h_in + top
+    fig = Figure(figsize=(width, height), dpi=dpi)
+    x0 = left + 0.5 * (width - left - w_in - right)
+    ax = fig.add_axes((x0 / width, bottom / height, w_in / width, h_in / height))
+    cax = fig.add_axes(((x0 + w_in + 0.15) / width, bottom / height, 0.18 / width, h_in / height))
+    x = np.asarray(x_m)
+    y = np.asarray(y_m)
+    dx = (x[-1] - x[0]) / max(nx - 1, 1)
+    dy = (y[-1] - y[0]) / max(ny - 1, 1)
+    im = ax.imshow(
+        to_db(v, floor_db=-dynamic_range_db),
+        origin="lower",
+        extent=(x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2),
+        cmap="gray",
+        vmin=-dynamic_range_db,
+        vmax=0.0,
+        interpolation="nearest",
+        aspect="auto",
+    )
+    ax.set_xlabel("x (m)", fontsize=10)
+    ax.set_ylabel("y (m)", fontsize=10)
+    ax.tick_params(labelsize=9)
+    fig.suptitle(title, fontsize=10, y=1.0 - 0.08 / height, va="top")
+    fig.colorbar(im, cax=cax, label="dB re peak")
+    return fig
+
+
 def subplots(
     nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], squeeze: bool = True
 ) -> tuple[Figure, Any]:
@@ -244,8 +313,15 @@ def subplots(
     return fig, fig.subplots(nrows, ncols, squeeze=squeeze)
 
 
-def save_figure(fig: Figure, path: str | Path, *, dpi: int = 120) -> Path:
-    """Save ``fig`` as PNG at ``path``."""
+def save_figure(fig: Figure, path: str | Path, *, dpi: int = 120, tight: bool = True) -> Path:
+    """Save ``fig`` as PNG at ``path``.
+
+    ``tight``: crop to the drawn content (no clipped axis labels); ``False`` keeps the
+    figure's own layout (:func:`full_resolution_image_figure`).
+    """
     p = Path(path)
-    fig.savefig(p, dpi=dpi, bbox_inches="tight", pad_inches=0.1)  # no clipped axis labels
+    if tight:
+        fig.savefig(p, dpi=dpi, bbox_inches="tight", pad_inches=0.1)
+    else:
+        fig.savefig(p, dpi=dpi)
     return p
