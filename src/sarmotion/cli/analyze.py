@@ -11,12 +11,13 @@ import click
 from ..core.text import fixed
 from ..io import DataError
 from ..io.sicd import write_sicd
+from ..io.staging import claimed
 from ..pipeline import AnalysisOptions
 from ..pipeline import analyze as run_analysis
 from ..report.analysis import ANALYSIS_OUTPUTS, save
 from ..separation import SeparationOptions
 from .autofocus import ReadOptions, autofocus_options
-from .collection import run_collection
+from .collection import COLLECTION_OUTPUTS, run_collection
 from .common import (
     InputError,
     Progress,
@@ -85,7 +86,8 @@ def run_analyze(
     compensated image as ``mover-K.nitf`` (SICD, :func:`~sarmotion.io.sicd.write_sicd`).
     """
     reading = ReadOptions() if reading is None else reading
-    check_out(out, force=force, names=OUTPUTS, patterns=("mover-*.nitf",) if sicd else ())
+    if claimed(out) is None:  # the analyze command claimed it before reading
+        check_out(out, force=force, names=OUTPUTS, patterns=("mover-*.nitf",) if sicd else ())
     traces, sim, focus = read if read is not None else reading.read(inputs)
     with Progress(enabled=progress) as bar:
         result = run_analysis(traces, options, progress=bar)
@@ -241,6 +243,14 @@ def analyze(
     OUT/results.json (schema sarmotion.collection/1), report.html and mosaic.png.
     """
     options = _options(method, max_movers, size_m, trajectory, sub_aperture_deg, false_alarm_rate)
+    # --out is claimed before the inputs are read, whether one analysis or patches will
+    # write it: a concurrent run into the same directory is refused at once.
+    check_out(
+        out,
+        force=force,
+        names=tuple(dict.fromkeys(OUTPUTS + COLLECTION_OUTPUTS)),
+        patterns=("mover-*.nitf",) if sicd else (),
+    )
 
     def single(read: tuple[Any, Any, Any]) -> None:
         run_analyze(

@@ -20,6 +20,7 @@ from ..core.blocks import TracesBlocks
 from ..core.text import fixed
 from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
+from ..io.staging import claimed
 from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
 from .autofocus import ReadOptions
@@ -105,7 +106,8 @@ def run_collection(
         single(read_first if read_first is not None else read())
         return
     focus = read_first[2] if read_first is not None else None
-    check_out(out, force=force, names=COLLECTION_OUTPUTS)
+    if claimed(out) is None:  # the analyze command claims it before reading
+        check_out(out, force=force, names=COLLECTION_OUTPUTS)
     _quiet_dask()
     with Progress(enabled=progress) as bar:
         result = analyze_collection(

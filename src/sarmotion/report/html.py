@@ -26,7 +26,7 @@ from .._version import __version__
 from ..documents.results import results_document
 from ..motion import trajectory_error
 from ..pipeline import AnalysisResult
-from .plotting import image_figure, plot_image, subplots, traces_figure
+from .plotting import LEGEND_PT, image_figure, plot_image, subplots, traces_figure
 
 __all__ = [
     "traces_panels_figure",
@@ -108,7 +108,7 @@ def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = 
     ax.set_xlabel("range speed u (m/s)")
     ax.set_ylabel("g(u) / max")
     ax.set_title("g(u) on S (eq:OBJg) and the detector")
-    ax.legend(fontsize=6, loc="upper left")
+    ax.legend(fontsize=LEGEND_PT, loc="upper left")
     for k, m in enumerate(result.movers):
         _cross_panel(axes[0, 1 + k], k, m, truth)
     fig.tight_layout()
@@ -138,7 +138,7 @@ def _cross_panel(ax: Any, k: int, m: Any, truth: dict[str, Any] | None) -> None:
     ax.set_xlabel("cross-range speed u_perp (m/s)")
     ax.set_ylabel("/ max")
     ax.set_title(f"mover {k + 1}: g_perp (eq:OBJ2) and matched filter")
-    ax.legend(fontsize=6)
+    ax.legend(fontsize=LEGEND_PT)
 
 
 def images_figure(result: AnalysisResult) -> Figure:
@@ -182,7 +182,7 @@ def movers_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None
             t = next((t for t in truth["truth"] if t["label"] == name), None)
             if t is not None:
                 ax.plot(*t["position_m"], "x", color="w", ms=9, mew=2, label="truth")
-                ax.legend(fontsize=7, loc="lower right")
+                ax.legend(fontsize=LEGEND_PT, loc="lower right")
     if not result.movers:
         axes[0, 0].text(0.5, 0.5, "no mover found", ha="center", va="center")
         axes[0, 0].set_axis_off()
@@ -221,7 +221,7 @@ def trajectories_figure(result: AnalysisResult, *, truth: dict[str, Any] | None 
         ax.set_title("estimated trajectories over the aperture")
         ax.set_aspect("equal", adjustable="datalim")
     if drawn:
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=LEGEND_PT)
     else:
         ax.text(0.5, 0.5, "no trajectory estimated", ha="center", va="center")
     ax.grid(alpha=0.3)

@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "LEGEND_PT",
     "plot_traces",
     "subplots",
     "plot_image",
@@ -27,6 +28,11 @@ __all__ = [
     "save_figure",
     "to_db",
 ]
+
+
+#: Font size of every legend (pt): the least that reads as 8 pt in the reports, whose
+#: figures are drawn at 100 to 110 dpi and shown at about their size.
+LEGEND_PT = 8.0
 
 
 def to_db(
@@ -142,7 +148,7 @@ def plot_image(
         mx, my = np.asarray(markers, dtype=float).T
         ax.plot(mx, my, "o", mfc="none", mec="tab:red", ms=8, mew=1.0, label=marker_label or None)
         if marker_label:
-            ax.legend(loc="upper right", fontsize=7)
+            ax.legend(loc="upper right", fontsize=LEGEND_PT)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_aspect("equal")

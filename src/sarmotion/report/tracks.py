@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 
 from .._version import __version__
 from ..tracking import TrackingResult
+from .plotting import LEGEND_PT
 
 __all__ = ["tracks_figure", "write_tracks_report"]
 
@@ -52,8 +53,8 @@ def tracks_figure(result: TrackingResult) -> Figure:
     x0, x1, y0, y1 = result.grid.extent
     ax_map.set(xlim=(x0, x1), ylim=(y0, y1), xlabel="x (m)", ylabel="y (m)", title="tracks")
     if result.tracks:
-        ax_map.legend(loc="upper right", fontsize=8)
-        ax_speed.legend(fontsize=8)
+        ax_map.legend(loc="upper right", fontsize=LEGEND_PT)
+        ax_speed.legend(fontsize=LEGEND_PT)
     ax_speed.set(xlabel="slow time s (s)", ylabel="m/s", title="speed and range speed")
     ax_speed.grid(alpha=0.3)
     return fig

@@ -26,7 +26,7 @@ def _zoom_panel(ax, data, s, t, ref, title, *, half: int = 4, label: str = "max|
         reference_label=label,
     )
     ax.plot(_peak_delays_s(data, t) * 1e9, s, color="tab:red", lw=1.2, label="peak (sub-sample)")
-    ax.legend(loc="lower right", fontsize=7)
+    ax.legend(loc="lower right", fontsize=8)
 
 
 __all__ = []

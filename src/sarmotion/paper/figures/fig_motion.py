@@ -49,7 +49,7 @@ def _fig_objfxns(ctx: _Context) -> _Result:
         ax.set_xlabel("cross-range speed u_perp (m/s)")
         ax.set_ylabel("g_perp / max")
         ax.set_title(f"g_perp at u^e = {est.range_speed_mps:.2f} m/s (mover {k})", fontsize=9)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=8)
         parts.append(f"{_fmt(argmin, 1)} vs {_fmt(true_up, 1)}")
     fig.tight_layout()
     summary = "g_perp minima vs true u_perp (m/s): " + "; ".join(parts)

@@ -60,7 +60,7 @@ def _fig_rank1(ctx: _Context) -> _Result:
     axes[1].set_title(f"moving target at ρ_o, n+1 = {traj_m.n_pulses}", fontsize=9)
     for ax, n1 in zip(axes, (traj_s.n_pulses, traj_m.n_pulses), strict=True):
         ax.set_ylabel(f"rank of Y (of n+1 = {n1})")
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=8)
     fig.tight_layout()
     so, r2o = _linfit(offsets, r_off)
     su, r2u = _linfit(speeds, r_u)
@@ -119,7 +119,7 @@ def _fig_converge_rank(ctx: _Context) -> _Result:
     ax.set_xlabel("n + 1 (pulses)")
     ax.set_ylabel("rank(Y) / (n+1)")
     ax.set_title("stationary target 50 m off in cross range", fontsize=9)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     ratio = frac / est
     h = {
@@ -191,7 +191,7 @@ def _fig_eigenvals2(ctx: _Context) -> _Result:
             f"{b_geo:.2f} (3-D)",
             fontsize=8,
         )
-        axes[k].legend(fontsize=7)
+        axes[k].legend(fontsize=8)
     fig.tight_layout()
     summary = (
         f"B|β| = {h['B_beta_flat_left']:.2f} (flat convention; {h['B_beta_3d_left']:.2f} in 3-D "
