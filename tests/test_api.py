@@ -127,3 +127,54 @@ def test_save_report_writes_the_report_alone(scene1, tmp_path):
     text = path.read_text()
     assert "<title>scene 1 by hand</title>" in text and "data:image/png;base64," in text
     assert not (tmp_path / "r" / "results.json").exists()
+
+
+def test_report_legends_are_legible(scene1):
+    """Every legend of the report's figures is set at 8 pt or more (LEGEND_PT)."""
+    from sarmotion.report.html import (
+        images_figure,
+        movers_figure,
+        objectives_figure,
+        trajectories_figure,
+    )
+
+    _, result = scene1
+    sizes = []
+    for fig in (
+        objectives_figure(result),
+        images_figure(result),
+        movers_figure(result),
+        trajectories_figure(result),
+    ):
+        for ax in fig.axes:
+            legend = ax.get_legend()
+            if legend is not None:
+                sizes += [t.get_fontsize() for t in legend.get_texts()]
+    assert len(sizes) >= 5 and min(sizes) >= 8.0, sizes
+
+
+#: Width (CSS px) of the report's column: main's 1400 px less its padding (2 x 32) and a
+#: section's padding and border (2 x 20 + 2); a wider PNG is shown scaled down to it.
+REPORT_COLUMN_PX = 1400 - 64 - 42
+
+
+def test_report_legends_read_at_8_pt_as_the_page_shows_them(scene1, tmp_path):
+    """A legend's displayed size: LEGEND_PT x (PNG dpi / 96 CSS px per inch) x the scale
+    the page applies to the PNG (its width against the column), in CSS points."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    from sarmotion.report.plotting import LEGEND_PT
+
+    sim, result = scene1
+    text = sarmotion.save_report(result, tmp_path / "r", scene=sim.scene).read_text()
+    shown = {}
+    for alt, data in re.findall(r'<img alt="([^"]*)" src="data:image/png;base64,([^"]+)"', text):
+        png = Image.open(io.BytesIO(base64.b64decode(data)))
+        scale = min(1.0, REPORT_COLUMN_PX / png.width)
+        shown[alt[:20]] = LEGEND_PT * png.info["dpi"][0] / 96.0 * scale
+    with_legends = [k for k in shown if k.startswith(("g(u) with", "Each mover imaged"))]
+    assert len(with_legends) == 2, shown
+    assert min(shown[k] for k in with_legends) >= 8.0 - 0.05, shown

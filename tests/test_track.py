@@ -449,3 +449,19 @@ def test_dask_is_quiet_unless_asked_and_leaves_no_scratch(tmp_path):
     proc, left = _track_subprocess(tmp_path, "-v")
     assert "INFO distributed.scheduler:" in proc.stderr  # -v shows them, in our format
     assert left == []
+
+
+def test_a_road_that_fits_no_detection_says_why(gotcha_movers):
+    """A road across the scene far from both movers: each detection says why it is off it."""
+    data, subs = gotcha_movers
+    far = Road(points_m=[[-60.0, 80.0], [60.0, 80.0]], name="far")
+    result = _follow(data, subs, roads=[far])
+    states = [s for t in result.tracks for s in t.states if s.detection is not None]
+    assert states and not any(s.on_road for s in states)
+    reasons = ("does not cross", "beyond the", "does not move along")
+    for s in states:
+        assert s.road_missed.startswith("road far: ")
+        assert any(r in s.road_missed for r in reasons), s.road_missed
+    doc = tracks_document(result)
+    detected = [s for t in doc["tracks"] for s in t["states"] if s["detected"]]
+    assert all(s["road_missed"].startswith("road far: ") for s in detected)

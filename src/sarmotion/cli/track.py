@@ -255,3 +255,6 @@ def track(
                 else ""
             )
         )
+        missed = [s["road_missed"] for s in t["states"] if s.get("road_missed")]
+        if missed:
+            click.echo(f"    {len(missed)} detection(s) on no road; the first: {missed[0]}")

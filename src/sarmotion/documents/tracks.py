@@ -12,6 +12,7 @@
                              "range_speed_mps", "detected",
                              "measurement": {"position_m", "velocity_mps"},
                              "road": {"name", "angle_deg", "fixed", "std_m"},
+                             "road_missed": "...",
                              "cross_range_family": {"position_per_m",
                                                     "velocity_per_m"}}]}],
      "roads": [{"name", "points_m"}], "options": {...}, "timings_s": {...}}
@@ -20,7 +21,9 @@
 in the scene's ground coordinates (m), velocities in m/s, ``range_speed_mps = u . m_o``
 of the sub-aperture. ``road`` is present when the detection's cross-range family
 crossed a road (``fixed`` false: the road runs nearly parallel to the family and fixes
-no point); ``cross_range_family`` when no road fixed the state: the data are then as
+no point); ``road_missed`` when roads were given and none gave the detection a member:
+why, road by road (:func:`sarmotion.tracking.roads.road_misses`; a key added without
+changing any other); ``cross_range_family`` when no road fixed the state: the data are then as
 consistent with ``position + t position_per_m``, ``velocity + t velocity_per_m`` for
 any ``t`` (m), and ``position_std_m`` is large accordingly.
 """
@@ -98,6 +101,8 @@ def _state(s: TrackState, result: TrackingResult) -> dict[str, Any]:
             "fixed": s.road.fixed,
             "std_m": s.road.std_m,
         }
+    if s.road_missed is not None:
+        out["road_missed"] = s.road_missed
     if s.detection is not None and not s.on_road:
         out["cross_range_family"] = {
             "position_per_m": s.detection.family_position_per_m.tolist(),

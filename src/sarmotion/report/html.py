@@ -83,8 +83,15 @@ def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = 
     rs = result.range_speeds
     det = result.detection
     n = len(result.movers)
-    fig, axes = subplots(1, 1 + n, figsize=(4.6 * (1 + n), 3.6), squeeze=False)
-    ax = axes[0, 0]
+    # At most three panels a row: 12 in at the report's 110 dpi fit its 1294-px column
+    # unscaled, so the legends read at their LEGEND_PT.
+    ncols = min(3, 1 + n)
+    nrows = -(-(1 + n) // ncols)
+    fig, axes = subplots(nrows, ncols, figsize=(4.0 * ncols, 3.6 * nrows), squeeze=False)
+    axes = axes.ravel()
+    for extra in axes[1 + n :]:
+        extra.set_visible(False)
+    ax = axes[0]
     top = float(rs.objective.max())
     ax.plot(rs.grid_mps, rs.objective / top, color="k", lw=1.0, label="g(u)")
     if det is not None:
@@ -110,7 +117,7 @@ def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = 
     ax.set_title("g(u) on S (eq:OBJg) and the detector")
     ax.legend(fontsize=LEGEND_PT, loc="upper left")
     for k, m in enumerate(result.movers):
-        _cross_panel(axes[0, 1 + k], k, m, truth)
+        _cross_panel(axes[1 + k], k, m, truth)
     fig.tight_layout()
     return fig
 

@@ -10,7 +10,7 @@
 - :mod:`~sarmotion.tracking.track` — :func:`track`, the whole chain.
 """
 
-from .roads import Road, RoadFix, road_fix
+from .roads import Road, RoadFix, road_fix, road_misses
 from .scale import map_sub_apertures
 from .sub_apertures import (
     Detection,
@@ -34,6 +34,7 @@ __all__ = [
     "analyze_sub_aperture",
     "map_sub_apertures",
     "road_fix",
+    "road_misses",
     "sub_aperture_slices",
     "track",
 ]

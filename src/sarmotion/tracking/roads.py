@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Road", "RoadFix", "road_fix"]
+__all__ = ["Road", "RoadFix", "road_fix", "road_misses"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -193,3 +193,75 @@ def road_fix(
             if best is None or distance < best[0]:
                 best = (distance, fix)
     return None if best is None else best[1]
+
+
+def road_misses(
+    position_m: ArrayLike,
+    family_position_per_m: ArrayLike,
+    roads: Sequence[Road],
+    *,
+    velocity_mps: ArrayLike | None = None,
+    family_velocity_per_m: ArrayLike | None = None,
+    max_cross_speed_mps: float = np.inf,
+    max_offset_m: float = np.inf,
+) -> tuple[str, ...]:
+    """Why each road gives no candidate to :func:`road_fix`: one sentence per road.
+
+    The tests of :func:`road_fix`, road by road, and the first one every segment of the
+    road fails, in this order: the family line ``position + t a`` does not cross the
+    road (or runs parallel to it); it crosses it only beyond ``|t| <= max_offset_m``;
+    the family member there would cross the road faster than ``max_cross_speed_mps``
+    (it does not move along it). A road that gives a candidate gets the empty string.
+
+    Parameters are those of :func:`road_fix`.
+
+    Returns
+    -------
+    tuple of str
+        One reason per road, in the order of ``roads``; ``""`` for a road with a candidate.
+    """
+    p = np.asarray(position_m, dtype=np.float64).reshape(2)
+    a = np.asarray(family_position_per_m, dtype=np.float64).reshape(2)
+    if not np.all(np.isfinite(a)) or np.hypot(*a) == 0:
+        raise ValueError(f"family_position_per_m must be a finite non-zero vector, got {a}")
+    e_f = a / float(np.hypot(*a))
+    reasons = []
+    for road in roads:
+        offsets: list[float] = []  # |t| of the crossings (m)
+        across: list[float] = []  # speed across the road of the crossings within reach
+        for s0, s1 in zip(road.points_m[:-1], road.points_m[1:], strict=True):
+            d = s1 - s0
+            length = float(np.hypot(*d))
+            if length == 0.0:
+                continue
+            e_w = d / length
+            if abs(float(e_f[0] * e_w[1] - e_f[1] * e_w[0])) < 1e-9:
+                continue
+            t, r = np.linalg.solve(np.column_stack([a, -d]), s0 - p)
+            if not -1e-12 <= r <= 1.0 + 1e-12:
+                continue
+            offsets.append(abs(float(t)))
+            if abs(t) > max_offset_m:
+                continue
+            if velocity_mps is None:
+                across.append(0.0)
+                continue
+            v = np.asarray(velocity_mps, dtype=np.float64).reshape(2)
+            if family_velocity_per_m is not None:
+                v = v + t * np.asarray(family_velocity_per_m, dtype=np.float64).reshape(2)
+            across.append(abs(float(v @ np.array([-e_w[1], e_w[0]]))))
+        if not offsets:
+            reasons.append("the mover's cross-range family line does not cross it")
+        elif not across:
+            reasons.append(
+                f"it crosses the family line {min(offsets):.1f} m from the detection, beyond "
+                f"the {max_offset_m:.1f} m the data allow"
+            )
+        elif min(across) > max_cross_speed_mps:
+            reasons.append(
+                f"a mover on it would cross it at {min(across):.1f} m/s, more than "
+                f"{max_cross_speed_mps:.1f} m/s: it does not move along this road"
+            )
+        else:
+            reasons.append("")
+    return tuple(reasons)

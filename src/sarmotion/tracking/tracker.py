@@ -75,7 +75,7 @@ from ..core import Traces
 from ..errors import EstimationError
 from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
-from .roads import Road, RoadFix, road_fix
+from .roads import Road, RoadFix, road_fix, road_misses
 from .sub_apertures import Detection, SubApertureDetections, check_overlap
 
 if TYPE_CHECKING:
@@ -246,6 +246,9 @@ class TrackState:
         velocity sought there).
     road : RoadFix or None
         The road member of the detection's family, if a road was crossed.
+    road_missed : str or None
+        With roads, for a detection no road gave a member: why, road by road
+        (:func:`~sarmotion.tracking.roads.road_misses`); None otherwise.
     """
 
     time_s: float
@@ -259,6 +262,7 @@ class TrackState:
     measured_position_m: NDArray[np.float64] | None = None
     measured_velocity_mps: NDArray[np.float64] | None = None
     road: RoadFix | None = None
+    road_missed: str | None = None
 
     @property
     def position_std_m(self) -> float:
@@ -305,6 +309,7 @@ class _Meta:
     detection: Detection | None
     measured: tuple[NDArray[np.float64], NDArray[np.float64]] | None
     road: RoadFix | None
+    road_missed: str | None = None
 
 
 class Tracker:
@@ -436,6 +441,21 @@ class Tracker:
                 road_std_m=self.options.road_std_m,
                 max_std_m=self.options.max_road_std_m,
             )
+        missed = None
+        if self.roads and fix is None:
+            reasons = road_misses(
+                det.position_m,
+                a,
+                self.roads,
+                velocity_mps=det.velocity_mps,
+                family_velocity_per_m=b,
+                max_cross_speed_mps=3.0 * sub.cross_range_speed_resolution_mps,
+                max_offset_m=3.0 * self._family_std(sub),
+            )
+            missed = "; ".join(
+                f"road {r.name or k + 1}: {why}"
+                for k, (r, why) in enumerate(zip(self.roads, reasons, strict=True))
+            )
         if fix is not None and fix.fixed:
             t = fix.offset_m
         elif predicted_m is not None:
@@ -450,7 +470,7 @@ class Tracker:
         meas = self._measurement(
             sub, det, position, velocity, road, when, k, update=predicted_m is not None
         )
-        return meas, _Meta(sub.light(), det.light(), (position, velocity), fix)
+        return meas, _Meta(sub.light(), det.light(), (position, velocity), fix, missed)
 
     def _velocity_at(
         self,
@@ -561,6 +581,7 @@ class Tracker:
             measured_position_m=None if meta.measured is None else meta.measured[0],
             measured_velocity_mps=None if meta.measured is None else meta.measured[1],
             road=meta.road,
+            road_missed=meta.road_missed if detection is not None else None,
         )
 
 
