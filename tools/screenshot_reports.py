@@ -9,7 +9,8 @@ It writes, under ``--out``:
 * the reports: ``analyze-movers`` (Scene 1, two movers), ``analyze-no-movers`` (the
   one-target ``hyperbola`` scene), ``track-no-roads`` and ``track-roads`` (Scene 1's
   movers over 3 degrees, five 1-degree sub-apertures; the roads run through the movers'
-  true paths), ``paper`` (``sarmotion paper --quick``: its index);
+  true paths), ``paper`` (``sarmotion paper --quick``: its index; the GOTCHA data from
+  ``$SARMOTION_GOTCHA_DIR`` or ``shared/data/gotcha`` beside the repository);
 * ``screenshots/NAME.png``: each ``report.html`` (``index.html`` for the paper) as a
   1400-px-wide browser window shows it, the whole page down to ``--height`` pixels;
 * ``screenshots/checks.txt``: for every figure embedded in a page, its size in pixels,
@@ -35,6 +36,7 @@ import base64
 import html
 import io
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -79,9 +81,11 @@ def _scene_over(out: Path, degrees: float) -> Path:
         f"aperture_deg = {degrees!r}",
     ]
     for t in scene.targets:
-        lines += ["", "[[targets]]", f"position_m = [{t.position_m[0]!r}, {t.position_m[1]!r}]"]
+        x, y = (float(v) for v in t.position_m[:2])
+        lines += ["", "[[targets]]", f"position_m = [{x!r}, {y!r}]"]
         if np.any(t.velocity_mps):
-            lines.append(f"velocity_mps = [{t.velocity_mps[0]!r}, {t.velocity_mps[1]!r}]")
+            ux, uy = (float(v) for v in t.velocity_mps)
+            lines.append(f"velocity_mps = [{ux!r}, {uy!r}]")
     path = out / "scene1-wide.toml"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
@@ -95,8 +99,8 @@ def _roads(out: Path) -> Path:
     for t in load_scene("scene1").targets:
         if not np.any(t.velocity_mps):
             continue
-        p, v = np.asarray(t.position_m[:2]), np.asarray(t.velocity_mps)
-        line = [list(p - 3.0 * v), list(p + 3.0 * v)]
+        p, v = np.asarray(t.position_m[:2], dtype=float), np.asarray(t.velocity_mps, dtype=float)
+        line = [(p - 3.0 * v).tolist(), (p + 3.0 * v).tolist()]
         features.append(
             {
                 "type": "Feature",
@@ -123,6 +127,9 @@ def make_reports(out: Path, *, paper: bool) -> dict[str, Path]:
     }
     if paper:
         commands["paper"] = ["paper", "--quick"]
+        data = Path(__file__).resolve().parents[2] / "shared" / "data" / "gotcha"
+        if data.is_dir() and "SARMOTION_GOTCHA_DIR" not in os.environ:
+            commands["paper"] += ["--gotcha", str(data)]
     pages = {}
     for name, args in commands.items():
         target = out / name
@@ -140,10 +147,18 @@ def figure_checks(pages: dict[str, Path]) -> list[str]:
     lines = []
     for name, page in pages.items():
         text = page.read_text(encoding="utf-8")
-        images = re.findall(r'<img alt="([^"]*)" src="data:image/png;base64,([^"]+)"', text)
-        files = re.findall(r'<img[^>]* src="([^":]+\.png)"', text)
-        found = [(alt, Image.open(io.BytesIO(base64.b64decode(data)))) for alt, data in images]
-        found += [(src, Image.open(page.parent / src)) for src in files]
+        found = []
+        for tag in re.findall(r"<img [^>]*>", text):
+            src = re.search(r'src="([^"]+)"', tag)
+            alt = re.search(r'alt="([^"]*)"', tag)
+            where = src[1] if src else ""
+            if where.startswith("data:image/png;base64,"):
+                png = Image.open(io.BytesIO(base64.b64decode(where.split(",", 1)[1])))
+            elif where.endswith(".png"):
+                png = Image.open(page.parent / where)
+            else:  # no figure (the paper's zoom placeholder)
+                continue
+            found.append((alt[1] if alt and alt[1] else where[:40], png))
         for alt, png in found:
             dpi = float(png.info.get("dpi", (72.0, 72.0))[0])
             column = PAPER_COLUMN_PX if name == "paper" else COLUMN_PX

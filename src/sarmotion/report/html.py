@@ -62,7 +62,7 @@ def traces_panels_figure(result: AnalysisResult) -> Figure:
         slow_times_s=tr.slow_times_s,
         fast_times_s=tr.fast_times_s,
         normalise_by=float(np.abs(tr.data).max()),
-        ncols=min(4, len(panels)),
+        ncols=min(3, len(panels)),  # 12.6 in: shown unscaled in the 1294-px column
     )
     for ax in fig.axes:  # legible at the report's 110 dpi (default 8 px)
         ax.tick_params(labelsize=10)
@@ -114,7 +114,7 @@ def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = 
             ax.plot(t["range_speed_mps"], 1.02, "v", color="k", ms=6)
     ax.set_xlabel("range speed u (m/s)")
     ax.set_ylabel("g(u) / max")
-    ax.set_title("g(u) on S (eq:OBJg) and the detector")
+    ax.set_title("g(u) on S (eq:OBJg) and the detector", fontsize=10)
     ax.legend(fontsize=LEGEND_PT, loc="upper left")
     for k, m in enumerate(result.movers):
         _cross_panel(axes[1 + k], k, m, truth)
@@ -144,7 +144,7 @@ def _cross_panel(ax: Any, k: int, m: Any, truth: dict[str, Any] | None) -> None:
         ax.axvline(up - err, color="0.4", ls="-.", lw=1, label="truth")
     ax.set_xlabel("cross-range speed u_perp (m/s)")
     ax.set_ylabel("/ max")
-    ax.set_title(f"mover {k + 1}: g_perp (eq:OBJ2) and matched filter")
+    ax.set_title(f"mover {k + 1}: g_perp (eq:OBJ2) and matched filter", fontsize=10)
     ax.legend(fontsize=LEGEND_PT)
 
 
