@@ -28,7 +28,7 @@ from .common import (
     speed_option,
     square_grid,
 )
-from .inputs import FRAME_HELP, INPUTS_HELP
+from .inputs import FRAME_HELP, INPUTS_HELP, LABELS_HELP
 from .main import elapsed_s
 
 OUTPUTS = ("image.png", "image.h5", "peaks.json", "autofocus.png")
@@ -40,7 +40,7 @@ MAX_GROUND_SPEED_MPS = 1000.0
 __all__ = ["image"]
 
 
-@click.command(epilog=f"{INPUTS_HELP}\n\n{FRAME_HELP}")
+@click.command(epilog=f"{INPUTS_HELP}\n\n{FRAME_HELP} {LABELS_HELP}")
 @click.argument("inputs", nargs=-1, required=True)
 @out_option("Output directory: image.png, image.h5, peaks.json.")
 @force_option
@@ -51,7 +51,7 @@ __all__ = ["image"]
     default=None,
     metavar="UX UY",
     help="Motion-compensate for this ground velocity (m/s): each pixel is imaged at the "
-    "position it has moved to at every pulse (the paper's eq:imagecompu).",
+    "position it has moved to at every pulse [eq:imagecompu].",
 )
 @click.option(
     "--size",
@@ -140,8 +140,8 @@ def image(
 ) -> None:
     """Backprojection image of INPUTS: a scene, native traces, GOTCHA .mat or CPHD files.
 
-    Each pixel sums the traces at its round-trip travel time over the aperture (the
-    paper's eq:image).
+    Each pixel sums the traces at its round-trip travel time over the aperture
+    [eq:image].
     Writes OUT/image.png (dB, peak-normalised), OUT/image.h5 (complex image with its axes)
     and OUT/peaks.json (the brightest points).
     """

@@ -15,7 +15,7 @@ from ..core.traces import Traces
 from ..io import DataError, load_traces, read_cphd, read_gotcha
 from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
 
-__all__ = ["FRAME_HELP", "INPUTS_HELP", "is_scene_reference", "read_inputs"]
+__all__ = ["FRAME_HELP", "INPUTS_HELP", "LABELS_HELP", "is_scene_reference", "read_inputs"]
 
 #: What a command's INPUTS may be, for its help (the epilog of image, analyze, track, ...).
 INPUTS_HELP = (
@@ -33,9 +33,13 @@ FRAME_HELP = (
     "measured along the line of sight projected on the ground, cross range across it, "
     "along the flight path; for the built-in scenes and GOTCHA's first degrees the radar lies "
     "towards +x (x is range) and flies along +y (y is cross range). A range speed is "
-    "positive towards the radar (the range closes) and negative away from it. Labels such "
-    "as eq:image or sect:RPCA name equations and sections of the paper (Borcea, Callaghan "
-    "& Papanicolaou) by their LaTeX labels."
+    "positive towards the radar (the range closes) and negative away from it."
+)
+
+#: What the bracketed labels of the help are.
+LABELS_HELP = (
+    "Labels in brackets, such as [eq:image] or [sect:RPCA], name equations and sections of "
+    "the paper (Borcea, Callaghan & Papanicolaou) by their LaTeX labels."
 )
 
 

@@ -26,14 +26,14 @@ from .common import (
     out_option,
     speed_option,
 )
-from .inputs import INPUTS_HELP, read_inputs
+from .inputs import INPUTS_HELP, LABELS_HELP, read_inputs
 
 OUTPUTS = ("separated.h5", "separation.png", "image.png", "separation.json")
 
 __all__ = ["separate"]
 
 
-@click.command(epilog=INPUTS_HELP)
+@click.command(epilog=f"{INPUTS_HELP}\n\n{LABELS_HELP}")
 @click.argument("inputs", nargs=-1, required=True)
 @click.option(
     "--method",
@@ -41,10 +41,10 @@ __all__ = ["separate"]
     default="auto",
     show_default=True,
     help="combined: each stationary point of the preliminary image is aligned in its own "
-    "frame and its slow-time-constant part removed (the paper's sect:sepdisc); rpca: "
-    "windowed robust PCA, traces split into a low-rank and a sparse part (the paper's "
-    "sect:RPCA); annihilation: composed travel-time filters that cancel the echoes of the "
-    "stationary points of the image (the paper's eq:OP2). auto: combined for simulated "
+    "frame and its slow-time-constant part removed [sect:sepdisc]; rpca: "
+    "windowed robust PCA, traces split into a low-rank and a sparse part "
+    "[sect:RPCA]; annihilation: composed travel-time filters that cancel the echoes of the "
+    "stationary points of the image [eq:OP2]. auto: combined for simulated "
     "scenes, rpca for measured data.",
 )
 @out_option("Output directory: separated.h5, separation.png, image.png, separation.json.")
