@@ -120,14 +120,14 @@ def quarter_turns(t: float) -> tuple[float, float]:
     return cs, sn
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def unit_phasor(c: float) -> complex:
     """``exp(2i pi c)`` with ``c`` reduced exactly (compiled code; error < 1e-14)."""
     cs, sn = quarter_turns(4.0 * c)
     return complex(cs, sn)
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _delay_phase(delays, freqs, out):  # pragma: no cover - compiled
     """``out[j, k] = exp(2i pi delays[j] freqs[k])``; ``out`` is the float64 (re, im) view."""
     for j in range(delays.size):
@@ -139,7 +139,7 @@ def _delay_phase(delays, freqs, out):  # pragma: no cover - compiled
             out[j, 2 * k + 1] = sn
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def phased_row_sums(values, delays, f_first, f_step):  # pragma: no cover - compiled
     """``sum_k values[j, k] exp(2i pi delays[j] (f_first + k f_step))`` for every row ``j``.
 
@@ -259,7 +259,7 @@ def _unit_phasors(delays, frequency, out_re, out_im):  # pragma: no cover - comp
         out_im[j] = w.imag
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _plane_sums_derivatives(re, im, delays, f_first, f_step, out):  # pragma: no cover
     """:func:`_plane_sums` with the ``f``- and ``f^2``-weighted sums (derivatives in delay).
 
@@ -305,7 +305,7 @@ def _plane_sums_derivatives(re, im, delays, f_first, f_step, out):  # pragma: no
         out[2, j] = -(two_pi**2) * (f_c * f_c * s0 + 2.0 * f_c * s1 + s2)
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _plane_sums(re, im, delays, f_first, f_step):  # pragma: no cover - compiled
     """:func:`phased_row_sums` of frequency-major planes, the rows in the inner loop.
 

@@ -90,7 +90,7 @@ def antennas(positions: NDArray[np.float64], ref_ranges: NDArray[np.float64]) ->
 _FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
 
 
-@numba.njit(fastmath=_FASTMATH, cache=True)
+@numba.njit(nogil=True, fastmath=_FASTMATH, cache=True)
 def _row_geometry(xs, n, ax, c2, ref, consts, idx_max, base, obuf, wbuf, cbuf, sbuf):
     # pragma: no cover - compiled
     """Loop A: table offsets, weights and exp(i phi) along one tile row."""
@@ -105,7 +105,7 @@ def _row_geometry(xs, n, ax, c2, ref, consts, idx_max, base, obuf, wbuf, cbuf, s
         cbuf[k], sbuf[k] = quarter_turns(d * consts.quarter_scale)
 
 
-@numba.njit(fastmath=_FASTMATH, cache=True)
+@numba.njit(nogil=True, fastmath=_FASTMATH, cache=True)
 def _row_gather(table, n, obuf, wbuf, vre, vim):  # pragma: no cover - compiled
     """Loop B: the cubic piece at the offsets and weights of loop A."""
     for k in range(n):
@@ -115,7 +115,7 @@ def _row_gather(table, n, obuf, wbuf, vre, vim):  # pragma: no cover - compiled
         vim[k] = table[o + 1] + w * (table[o + 3] + w * (table[o + 5] + w * table[o + 7]))
 
 
-@numba.njit(fastmath=_FASTMATH, cache=True)
+@numba.njit(nogil=True, fastmath=_FASTMATH, cache=True)
 def _row_accumulate(n, vre, vim, cbuf, sbuf, are, aim):  # pragma: no cover - compiled
     """Loop C: ``acc += sample * exp(i phi)``."""
     for k in range(n):
@@ -125,7 +125,7 @@ def _row_accumulate(n, vre, vim, cbuf, sbuf, are, aim):  # pragma: no cover - co
         aim[k] += vre[k] * s + vim[k] * c
 
 
-@numba.njit(parallel=True, fastmath=_FASTMATH, cache=True)
+@numba.njit(nogil=True, parallel=True, fastmath=_FASTMATH, cache=True)
 def _accumulate_f64(table, pulse_stride, ant, x, y, consts, idx_max, out, ty0, ty1, tile):
     # pragma: no cover - compiled
     """Add the pulses of one block to tile rows ``ty0:ty1`` of ``out[0] + 1j out[1]``.
@@ -208,7 +208,7 @@ def run_numba_f64(
 
 
 # ===================================================================== float32 kernel
-@numba.njit(parallel=True, cache=True)
+@numba.njit(nogil=True, parallel=True, cache=True)
 def _tile_kernel(tab, starts, stops, ant, lat, consts, n_up, tile, ty0, ty1, out_re, out_im):
     # pragma: no cover - compiled
     """Add pulses to the tiles of tile rows ``ty0:ty1`` of ``out_re + 1j out_im``.

@@ -89,7 +89,7 @@ def _leaf_tile(
             oim[r0 + r, c0 + k] = b * cs - a * sn
 
 
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+@numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
 def level(
     re, im, tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale,
     idx_offset, n_up, quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim,
@@ -141,7 +141,7 @@ def level(
                 _add_child(dre, dim, m, cre[c], cim[c], k0, ratio, g[c])
 
 
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+@numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
 def root_rows(
     out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, us, ys, cu, cv, cz2,
     rref, quarter_scale, remodulate=True,
@@ -223,7 +223,7 @@ def _resample_pixel(
     return sr, si, True
 
 
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+@numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
 def resample(
     out, src, u0, du, v0, dv, xs, ys, ox, oy, cos_t, sin_t, wu_table, wv_table, cx, cy, cz2,
     rref, quarter_scale, block=16,
@@ -269,7 +269,7 @@ def resample(
                     out[r, k] = complex(a64 * cs - b64 * sn, a64 * sn + b64 * cs)
 
 
-@numba.njit(fastmath=_FASTMATH, parallel=True, cache=True)
+@numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
 def window_edges(xs, ys, px, py, pz2, ref, d_lo, d_hi, margin):  # pragma: no cover - compiled
     """``(ny, nx)`` mask of the pixels near an end of the fast-time window.
 

@@ -51,7 +51,7 @@ def fast_time_window(
 _BLOCK = 64
 
 
-@numba.njit(parallel=True, cache=True, fastmath={"contract"})
+@numba.njit(nogil=True, parallel=True, cache=True, fastmath={"contract"})
 def _exact_kernel(pr, pi, f0, df, ant, ref, px, py, t_lo, t_hi):  # pragma: no cover - compiled
     n_pix = px.size
     n_pulses, n = pr.shape

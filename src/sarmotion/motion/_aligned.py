@@ -272,7 +272,7 @@ def _columns(x: NDArray[np.complex64], basis: NDArray[np.complex64]) -> NDArray[
     return y.reshape(x.shape[:-1] + (basis.shape[1],))
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _modulate(delays, freq, spectrum, slots, out):  # pragma: no cover - compiled
     """``out[v, j, slots[k]] = spectrum[j, k] exp(2i pi freq[k] delays[v, j])``, complex64.
 
@@ -345,7 +345,7 @@ def _g_reduce(x: NDArray[np.complex64]) -> NDArray[np.float64]:
     return _sum_abs_max(x)
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _sum_abs_max(x):  # pragma: no cover - compiled
     """``max_t sum_j |x[v, j, t]|``, shape (n_vel,), accumulated in float64."""
     n_vel, n, m = x.shape
@@ -384,7 +384,7 @@ def _shifted_sum_abs_max(table, shifts, out):
         _shifted_trials(table, shifts, out)
 
 
-@numba.njit(cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
+@numba.njit(nogil=True, cache=True, fastmath={"nsz", "arcp", "contract", "afn"})
 def _shifted_trial(table, shifts):  # pragma: no cover - compiled
     """``max_m sum_j |x_j(m + shifts[j])|`` for one trial (see :func:`_shifted_sum_abs_max`)."""
     n, n_phase, m = table.shape
@@ -411,13 +411,13 @@ def _shifted_trial(table, shifts):  # pragma: no cover - compiled
     return np.float64(acc.max())
 
 
-@numba.njit(cache=True)
+@numba.njit(nogil=True, cache=True)
 def _shifted_trials(table, shifts, out):  # pragma: no cover - compiled
     for v in range(shifts.shape[0]):
         out[v] = _shifted_trial(table, shifts[v])
 
 
-@numba.njit(parallel=True, cache=True)
+@numba.njit(nogil=True, parallel=True, cache=True)
 def _shifted_trials_parallel(table, shifts, out):  # pragma: no cover - compiled
     for v in numba.prange(shifts.shape[0]):
         out[v] = _shifted_trial(table, shifts[v])

@@ -243,7 +243,7 @@ def stacked_ialm(
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(nogil=True, cache=True)
 def _sparse_step(ma, y, la, inv_mu, thr, sa, xa):  # pragma: no cover - compiled
     """``S = shrink(M + Y / mu - L, eta / mu)`` and ``X = M + Y / mu - S``, in one pass.
 
@@ -270,7 +270,7 @@ def _sparse_step(ma, y, la, inv_mu, thr, sa, xa):  # pragma: no cover - compiled
                     xa[i, j, c] = my
 
 
-@numba.njit(cache=True)
+@numba.njit(nogil=True, cache=True)
 def _dual_step(ma, la, sa, y, mu):  # pragma: no cover - compiled
     """``Z = M - L - S``, ``Y += mu Z`` in place; returns ``||Z_i||_F^2`` per matrix ``(k,)``."""
     k, n, m = ma.shape

@@ -62,7 +62,7 @@ def _hard_threshold(x: NDArray, zeta: float) -> NDArray:
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(nogil=True, cache=True)
 def _split(m, low, zeta2, sparse):  # pragma: no cover - compiled
     """``sparse = HT_zeta(m - low)``; returns ``||m - low - sparse||_F^2``. One pass."""
     n, k = m.shape
