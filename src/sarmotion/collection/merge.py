@@ -16,6 +16,18 @@ each patch reported, ``rho_r = c / 2B`` the range resolution and ``rho_u = rho_r
 point movers closer than half a cell in both are one peak of ``g`` in every patch. Of a
 group the fit with the smallest range-position error (then the highest SNR) is kept.
 
+**Which patch estimates a mover.** After re-referencing to a patch's centre
+``rho_p``, a mover's echoes sit at range ``R(0) - R_p(0)`` and Doppler ``(2 f_o / c)
+(R'(0) - R_p'(0))``, aliased by the data's pulse rate ``PRF``: ``R'`` is known modulo
+``lambda_o PRF / 2`` (:func:`echo_offsets`). A patch passes a Doppler band of ``+-
+f_pass`` (its core's band plus the movers' Doppler margin,
+:mod:`~sarmotion.collection.plan`), and its core spans ``+- R_core`` in range about
+``R_p(0)``. It estimates fully only the movers with ``|R(0) - R_p(0)| <= R_core +
+ECHO_CELLS c / 2B`` and Doppler within ``+- f_pass``: those whose echoes it passes.
+The others, leaking into its traces from beyond (through the filter's transition band,
+or where there is no filter), are fitted once and subtracted there, not estimated
+further: the patches whose band holds them do that.
+
 **Stationary targets** are one when within one resolution cell in ground range and in
 cross range (their positions, unlike a mover's, are fixed by the data); the brighter is
 kept. Their levels are compared across patches on one scale: ``|I| / n_pulses`` of each
@@ -37,6 +49,8 @@ from ..core.constants import C
 from ..core.geometry import Trajectory, travel_time
 
 __all__ = [
+    "ECHO_CELLS",
+    "echo_offsets",
     "MoverRecord",
     "StationaryRecord",
     "PatchImage",
@@ -45,6 +59,53 @@ __all__ = [
     "merge_stationary",
     "mosaic",
 ]
+
+
+#: Range cells ``c / 2B`` beyond a patch's core within which it estimates movers.
+ECHO_CELLS = 2.0
+
+
+def echo_offsets(
+    trajectory: Trajectory,
+    position_m: NDArray,
+    velocity_mps: NDArray,
+    centre_m: NDArray,
+    rate_period_mps: float,
+) -> tuple[float, float]:
+    """A mover's ``R(0) - R_p(0)`` (m) and ``R'(0) - R_p'(0)`` (m/s) (module notes).
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+        The pulses (``s = 0`` where the mover's position is given; the pulse nearest
+        it is used).
+    position_m : (2,) or (3,) ndarray
+        Mover's position at ``s = 0`` (m; height 0 when 2-D).
+    velocity_mps : (2,) ndarray
+        Its ground velocity (m/s).
+    centre_m : (3,) ndarray
+        The patch centre ``rho_p`` (m).
+    rate_period_mps : float
+        ``lambda_o PRF / 2`` (m/s): the rate offset is taken in ``[-1/2, 1/2)`` of it.
+    """
+    s = trajectory.slow_times_s
+    j0 = int(np.argmin(np.abs(s)))
+    r0 = trajectory.positions_m[j0]
+    rdot = np.gradient(trajectory.positions_m, s, axis=0)[j0]
+    p = np.zeros(3)
+    p[: np.size(position_m)] = np.asarray(position_m, float)
+    v = np.r_[np.asarray(velocity_mps, float)[:2], 0.0]
+
+    def history(x: NDArray, u: NDArray) -> tuple[float, float]:
+        d = r0 - x
+        n = float(np.linalg.norm(d))
+        return n, float(d @ (rdot - u)) / n
+
+    rm, dm = history(p, v)
+    rc, dc = history(np.asarray(centre_m, float), np.zeros(3))
+    rate = dm - dc
+    rate -= rate_period_mps * np.floor(rate / rate_period_mps + 0.5)
+    return rm - rc, float(rate)
 
 
 @dataclass(frozen=True, kw_only=True)

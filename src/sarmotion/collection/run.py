@@ -43,13 +43,17 @@ from ..core.blocks import PulseBlocks, TracesBlocks
 from ..core.geometry import Trajectory, look_geometry
 from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
+from ..core.constants import C
+from ..motion import PointFit
 from ..pipeline import AnalysisOptions, AnalysisResult, analyze
 from .extract import extract_patches
 from .merge import (
+    ECHO_CELLS,
     MoverRecord,
     PatchImage,
     StationaryRecord,
     merge_movers,
+    echo_offsets,
     merge_stationary,
     mosaic,
 )
@@ -150,6 +154,30 @@ def _patch_options(patch: Patch, options: AnalysisOptions, single: bool) -> Anal
     return dataclasses.replace(options, image_size_m=patch.size_m)
 
 
+def in_band(traces: Traces, patch: Patch) -> Callable[[PointFit], bool]:
+    """Whether a mover fitted on ``patch``'s traces has its echoes in the patch's band.
+
+    Range within the core's span plus ``ECHO_CELLS`` range cells, Doppler within the
+    pass band (:mod:`~sarmotion.collection.merge` notes); the data's pulse rate is
+    ``decimation`` times the traces'.
+    """
+    traj = traces.trajectory
+    prf = patch.decimation / traj.pulse_interval_s
+    period = 0.5 * traces.radar.wavelength_m * prf
+    to_hz = 2.0 * traces.radar.carrier_hz / C
+    x0, y0, x1, y1 = patch.core_m
+    z = float(patch.centre_m[2])
+    corners = [np.array([x, y, z]) for x in (x0, x1) for y in (y0, y1)]
+    span = max(abs(echo_offsets(traj, c, np.zeros(2), patch.centre_m, period)[0]) for c in corners)
+    span += ECHO_CELLS * traces.radar.range_resolution_m
+
+    def keep(fit: PointFit) -> bool:
+        dr, rate = echo_offsets(traj, fit.position_m, fit.velocity_mps, patch.centre_m, period)
+        return bool(abs(dr) <= span and abs(rate) * to_hz <= patch.passband_hz)
+
+    return keep
+
+
 def analyze_patch(
     traces: Traces,
     patch: Patch,
@@ -159,6 +187,9 @@ def analyze_patch(
     describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None = None,
 ) -> tuple[PatchResult, AnalysisResult]:
     """Analyse one patch's traces with :func:`~sarmotion.pipeline.analyze` and slim it.
+
+    Of a patch of several, only the movers whose echoes lie in its band
+    (:func:`in_band`) are estimated beyond their first fit.
 
     Parameters
     ----------
@@ -178,7 +209,8 @@ def analyze_patch(
     -------
     (PatchResult, AnalysisResult)
     """
-    result = analyze(traces, _patch_options(patch, options, single))
+    keep = None if single else in_band(traces, patch)
+    result = analyze(traces, _patch_options(patch, options, single), keep=keep)
     entries = describe(result) if describe is not None else [{} for _ in result.movers]
     movers = []
     for m, entry in zip(result.movers, entries, strict=True):

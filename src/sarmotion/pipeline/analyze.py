@@ -49,8 +49,11 @@ in s.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from ..core.progress import ProgressCallback
 from ..core.traces import Traces
+from ..motion import PointFit
 from ._timing import timed
 from .detection import detect
 from .movers import estimate_movers
@@ -65,6 +68,7 @@ def analyze(
     traces: Traces,
     options: AnalysisOptions | None = None,
     *,
+    keep: Callable[[PointFit], bool] | None = None,
     progress: ProgressCallback | None = None,
 ) -> AnalysisResult:
     """Separate, estimate and image the stationary and moving targets of ``traces``.
@@ -77,6 +81,9 @@ def analyze(
         Data ``M``.
     options : AnalysisOptions, optional
         Every choice of the analysis; defaults as documented there.
+    keep : callable, optional
+        ``keep(fit)``: whether a mover's fit is estimated further
+        (:func:`~sarmotion.pipeline.estimate_movers`); default every one.
     progress : callable, optional
         ``progress(stage, done, total)`` during the long stages.
 
@@ -91,7 +98,7 @@ def analyze(
     opts, acq = detection.options, traces.acquisition
     timings = dict(detection.timings_s)
     with timed(timings, "movers"):
-        stage = estimate_movers(detection, progress=progress)
+        stage = estimate_movers(detection, keep=keep, progress=progress)
     movers = stage.movers
     with timed(timings, "trajectories"):
         if opts.trajectory:

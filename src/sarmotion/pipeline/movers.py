@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,6 +103,7 @@ def estimate_movers(
     detection: DetectionResult,
     *,
     refit: bool = True,
+    keep: Callable[[PointFit], bool] | None = None,
     progress: ProgressCallback | None = None,
 ) -> MoverStage:
     """Maximum-likelihood movers with their bounds, then extracted (module docstring).
@@ -114,6 +115,11 @@ def estimate_movers(
     refit : bool
         Whether step 3 runs (default, as in :func:`~sarmotion.pipeline.analyze`);
         ``False`` stops at the fits on the separated traces.
+    keep : callable, optional
+        ``keep(fit)``: whether an accepted candidate's fit is estimated further (steps
+        2-6). A fit it declines is still subtracted while the candidates are fitted (it
+        hides no other mover), and its model is taken out of ``S`` before step 2, but it
+        is not a mover of the result. Default: every fit is kept.
     progress : callable, optional
         ``progress("movers", done, total)`` as candidates are tried.
 
@@ -134,6 +140,15 @@ def estimate_movers(
             timings=timings,
             progress=progress,
         )
+    if keep is not None:
+        declined = [f for f, _ in found if not keep(f)]
+        if declined:
+            log.info("%d fit(s) declined: not estimated further", len(declined))
+            found = [(f, e) for f, e in found if all(f is not d for d in declined)]
+            moving_sub = moving_sub - sum(
+                point_model(sub.acquisition, d.position_m, d.velocity_mps, d.amplitude)
+                for d in declined
+            )
     with timed(timings, "movers.joint_refinement"):
         separated = refine_jointly(
             moving_sub,
