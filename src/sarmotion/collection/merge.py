@@ -33,7 +33,10 @@ cross range (their positions, unlike a mover's, are fixed by the data); the brig
 kept. Their levels are compared across patches on one scale: ``|I| / n_pulses`` of each
 patch's stationary image (the slow-time filter has unit gain).
 
-**Mosaic.** Each patch's stationary image on its core, ``|I| / n_pulses``, on one grid.
+**Mosaic.** Each patch's stationary image on its core, ``|I| / n_pulses``, on one grid
+of a stated spacing: each patch's image is reduced to the mosaic's pixels by block
+maxima where it is analysed (:func:`coarsen`) and pasted in as it arrives
+(:func:`paste`), so the collection holds the mosaic, not every patch's image.
 """
 
 from __future__ import annotations
@@ -54,6 +57,9 @@ __all__ = [
     "MoverRecord",
     "StationaryRecord",
     "PatchImage",
+    "coarsen",
+    "mosaic_grid",
+    "paste",
     "same_mover",
     "merge_movers",
     "merge_stationary",
@@ -288,31 +294,70 @@ def merge_stationary(
     return kept
 
 
+def coarsen(image: PatchImage, origin_m: tuple[float, float], spacing_m: float) -> PatchImage:
+    """``image`` on the mosaic's pixels: the largest of its pixels in each.
+
+    The mosaic's pixel ``(i, j)`` covers ``origin + [j, j + 1) spacing`` in ``x`` and
+    ``origin + [i, i + 1) spacing`` in ``y``; the result's coordinates are the centres
+    of the mosaic pixels it touches. An image already finer than ``spacing_m`` or
+    as fine is reduced by block maxima; otherwise each of its pixels is one mosaic pixel.
+    """
+    x0, y0 = origin_m
+    ix = np.floor((image.x_m - x0) / spacing_m).astype(np.int64)
+    iy = np.floor((image.y_m - y0) / spacing_m).astype(np.int64)
+    mag = image.magnitude
+    if ix.size == 0 or iy.size == 0:
+        return image
+    ux, sx = np.unique(ix, return_index=True)
+    uy, sy = np.unique(iy, return_index=True)
+    mag = np.maximum.reduceat(np.maximum.reduceat(mag, sy, axis=0), sx, axis=1)
+    return PatchImage(
+        x_m=x0 + (ux + 0.5) * spacing_m,
+        y_m=y0 + (uy + 0.5) * spacing_m,
+        magnitude=mag.astype(np.float32),
+    )
+
+
+def paste(
+    out: NDArray[np.float32], image: PatchImage, origin_m: tuple[float, float], spacing_m: float
+) -> None:
+    """Put ``image`` into the mosaic ``out`` in place: each pixel the largest that falls in it."""
+    x0, y0 = origin_m
+    ny, nx = out.shape
+    ix = np.floor((image.x_m - x0) / spacing_m).astype(int)
+    iy = np.floor((image.y_m - y0) / spacing_m).astype(int)
+    okx = (ix >= 0) & (ix < nx)
+    oky = (iy >= 0) & (iy < ny)
+    if not (okx.any() and oky.any()):
+        return
+    sub = image.magnitude[np.ix_(oky, okx)]
+    yy, xx = np.meshgrid(iy[oky], ix[okx], indexing="ij")
+    np.maximum.at(out, (yy.ravel(), xx.ravel()), sub.ravel().astype(np.float32))
+
+
+def mosaic_grid(
+    region_m: tuple[float, float, float, float], spacing_m: float
+) -> tuple[NDArray[np.float32], tuple[float, float, float, float]]:
+    """An empty mosaic over ``region_m`` at ``spacing_m`` and its pixel-edge extent (m)."""
+    x0, y0, x1, y1 = region_m
+    nx = max(1, int(np.ceil((x1 - x0) / spacing_m)))
+    ny = max(1, int(np.ceil((y1 - y0) / spacing_m)))
+    return np.zeros((ny, nx), np.float32), (x0, x0 + nx * spacing_m, y0, y0 + ny * spacing_m)
+
+
 def mosaic(
     images: Sequence[PatchImage], region_m: tuple[float, float, float, float], spacing_m: float
 ) -> tuple[NDArray[np.float32], tuple[float, float, float, float]]:
     """The patches' core images on one grid of ``spacing_m`` over ``region_m``.
 
-    Each mosaic pixel takes the largest patch pixel that falls in it (the patch images
-    are coarsened by block maxima when ``spacing_m`` exceeds their own).
+    Each mosaic pixel takes the largest patch pixel that falls in it (:func:`paste`).
 
     Returns
     -------
     (ny, nx) ndarray, (left, right, bottom, top)
         The mosaic (float32, zero where no patch) and its pixel-edge extent (m).
     """
-    x0, y0, x1, y1 = region_m
-    nx = max(1, int(np.ceil((x1 - x0) / spacing_m)))
-    ny = max(1, int(np.ceil((y1 - y0) / spacing_m)))
-    out = np.zeros((ny, nx), np.float32)
+    out, extent = mosaic_grid(region_m, spacing_m)
     for im in images:
-        ix = np.floor((im.x_m - x0) / spacing_m).astype(int)
-        iy = np.floor((im.y_m - y0) / spacing_m).astype(int)
-        okx = (ix >= 0) & (ix < nx)
-        oky = (iy >= 0) & (iy < ny)
-        if not (okx.any() and oky.any()):
-            continue
-        sub = im.magnitude[np.ix_(oky, okx)]
-        yy, xx = np.meshgrid(iy[oky], ix[okx], indexing="ij")
-        np.maximum.at(out, (yy.ravel(), xx.ravel()), sub.ravel().astype(np.float32))
-    return out, (x0, x0 + nx * spacing_m, y0, y0 + ny * spacing_m)
+        paste(out, im, (region_m[0], region_m[1]), spacing_m)
+    return out, extent

@@ -40,10 +40,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core.blocks import PulseBlocks, TracesBlocks
+from ..core.constants import C
 from ..core.geometry import Trajectory, look_geometry
 from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
-from ..core.constants import C
 from ..motion import PointFit
 from ..pipeline import AnalysisOptions, AnalysisResult, analyze
 from .extract import extract_patches
@@ -52,10 +52,13 @@ from .merge import (
     MoverRecord,
     PatchImage,
     StationaryRecord,
-    merge_movers,
+    coarsen,
     echo_offsets,
+    merge_movers,
     merge_stationary,
     mosaic,
+    mosaic_grid,
+    paste,
 )
 from .plan import CollectionOptions, Patch, PatchPlan, _analysed_pulses, plan_patches
 
@@ -83,8 +86,9 @@ class PatchResult:
         Stationary targets the analysis listed (inside and outside the core).
     capped : bool
         The analysis listed ``max_stationary`` targets: more may have been dropped.
-    image : PatchImage
-        Its stationary image on the core.
+    image : PatchImage or None
+        Its stationary image on the core, on the mosaic's pixels; ``None`` in a
+        :class:`CollectionResult` of several patches, once pasted into the mosaic.
     method : str
         Separation method.
     n_pulses, n_samples : int
@@ -98,7 +102,7 @@ class PatchResult:
     stationary: tuple[StationaryRecord, ...]
     listed: int
     capped: bool
-    image: PatchImage
+    image: PatchImage | None
     method: str
     n_pulses: int
     n_samples: int
@@ -185,6 +189,7 @@ def analyze_patch(
     *,
     single: bool = False,
     describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None = None,
+    mosaic_m: tuple[float, float, float] | None = None,
 ) -> tuple[PatchResult, AnalysisResult]:
     """Analyse one patch's traces with :func:`~sarmotion.pipeline.analyze` and slim it.
 
@@ -204,6 +209,9 @@ def analyze_patch(
     describe : callable, optional
         ``describe(result)``: one JSON-ready entry per mover (the document layer's
         ``sarmotion.results/1`` mover entries), kept as each record's ``document``.
+    mosaic_m : (x0, y0, spacing), optional
+        The mosaic's origin and pixel (m): the core image is reduced to its pixels
+        (:func:`~sarmotion.collection.merge.coarsen`); default the analysis's pixels.
 
     Returns
     -------
@@ -244,6 +252,8 @@ def analyze_patch(
     okx = np.ones(gx.size, bool) if single else (gx >= x0) & (gx < x1)
     oky = np.ones(gy.size, bool) if single else (gy >= y0) & (gy < y1)
     image = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=mag[np.ix_(oky, okx)].astype(np.float32))
+    if mosaic_m is not None:
+        image = coarsen(image, (mosaic_m[0], mosaic_m[1]), mosaic_m[2])
     opts = result.options
     slim = PatchResult(
         index=patch.index,
@@ -267,10 +277,12 @@ def _task(
     single: bool,
     threads: int | None,
     describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None,
+    mosaic_m: tuple[float, float, float] | None = None,
 ) -> PatchResult:
     """One patch's analysis, numba's and BLAS's pools limited to ``threads``."""
+    kw: dict[str, Any] = {"single": single, "describe": describe, "mosaic_m": mosaic_m}
     if threads is None:
-        return analyze_patch(traces, patch, options, single=single, describe=describe)[0]
+        return analyze_patch(traces, patch, options, **kw)[0]
     import numba
     from threadpoolctl import threadpool_limits
 
@@ -278,7 +290,7 @@ def _task(
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
     try:
         with threadpool_limits(limits=threads):
-            return analyze_patch(traces, patch, options, single=single, describe=describe)[0]
+            return analyze_patch(traces, patch, options, **kw)[0]
     finally:
         numba.set_num_threads(previous)
 
@@ -354,14 +366,20 @@ def analyze_collection(
         )
         results[0] = slim
         report(progress, "patches", 1, 1)
+        canvas = None
     else:
+        spacing = _mosaic_spacing(plan, opts)
+        canvas = mosaic_grid(plan.region_m, spacing)
+        origin = (plan.region_m[0], plan.region_m[1], spacing)
         for r in _run(
-            src, plan, opts, scheduler, n_workers, processes, memory_mb, describe, progress
+            src, plan, opts, scheduler, n_workers, processes, memory_mb, describe, progress, origin
         ):
-            results[r.index] = r
+            if r.image is not None:
+                paste(canvas[0], r.image, origin[:2], spacing)
+            results[r.index] = dataclasses.replace(r, image=None)
     timings["patches"] = time.perf_counter() - t1
     t2 = time.perf_counter()
-    merged = _merge(src, plan, opts, [results[k] for k in sorted(results)])
+    merged = _merge(src, plan, opts, [results[k] for k in sorted(results)], canvas)
     timings["merge"] = time.perf_counter() - t2
     timings["total"] = time.perf_counter() - t0
     return dataclasses.replace(merged, timings_s=timings, single_result=single_result)
@@ -390,16 +408,25 @@ def _run(
     memory_mb: float,
     describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None,
     progress: ProgressCallback | None,
+    mosaic_m: tuple[float, float, float],
 ) -> Iterator[PatchResult]:
     """Extract the patches group by group and analyse them; yield as they complete."""
     total = len(plan.patches)
     done = 0
     if scheduler is None and n_workers == 0:
         for group in _groups(plan, memory_mb):
-            for patch, traces in zip(
-                group, extract_patches(src, group, block_pulses=opts.block_pulses), strict=True
-            ):
-                yield analyze_patch(traces, patch, opts.analysis, describe=describe)[0]
+            pending = extract_patches(src, group, block_pulses=opts.block_pulses)
+            pending.reverse()
+            for patch in group:
+                # each patch's traces are let go once analysed, and with them the
+                # backprojection tables cached for them (imaging's table cache holds
+                # a table while its traces live)
+                traces = pending.pop()
+                slim = analyze_patch(
+                    traces, patch, opts.analysis, describe=describe, mosaic_m=mosaic_m
+                )[0]
+                del traces
+                yield slim
                 done += 1
                 report(progress, "patches", done, total)
         return
@@ -424,7 +451,7 @@ def _run(
             threads = None
         log.info("patches on %s", client)
         pending = as_completed()
-        futures = []
+        futures: set[Any] = set()
         try:
             for group in _groups(plan, memory_mb):
                 traces = extract_patches(src, group, block_pulses=opts.block_pulses)
@@ -437,22 +464,31 @@ def _run(
                         False,
                         threads,
                         describe,
+                        mosaic_m,
                         pure=False,
                         key=f"sarmotion-patch-{patch.index}-{id(plan)}",
                     )
-                    futures.append(f)
+                    futures.add(f)
                     pending.add(f)
                 del traces
                 for f in _ready(pending):
                     done += 1
                     report(progress, "patches", done, total)
-                    yield f.result()
+                    yield _collect(f, futures)
             for f in pending:
                 done += 1
                 report(progress, "patches", done, total)
-                yield f.result()
+                yield _collect(f, futures)
         finally:
             client.cancel([f for f in futures if not f.done()])
+
+
+def _collect(future: Any, futures: set[Any]) -> PatchResult:
+    """A finished patch's result, its future released (the cluster forgets the result)."""
+    result: PatchResult = future.result()
+    futures.discard(future)
+    future.release()
+    return result
 
 
 def _ready(pending: Any) -> list[Any]:
@@ -460,8 +496,18 @@ def _ready(pending: Any) -> list[Any]:
     return list(pending.next_batch(block=False)) if pending.has_ready() else []
 
 
+def _mosaic_spacing(plan: PatchPlan, opts: CollectionOptions) -> float:
+    """The mosaic's pixel (m): the analysis's, or coarser to keep ``MOSAIC_MAX_PIXELS``."""
+    x0, y0, x1, y1 = plan.region_m
+    return max(opts.analysis.spacing_m, max(x1 - x0, y1 - y0) / MOSAIC_MAX_PIXELS)
+
+
 def _merge(
-    src: PulseBlocks, plan: PatchPlan, opts: CollectionOptions, results: list[PatchResult]
+    src: PulseBlocks,
+    plan: PatchPlan,
+    opts: CollectionOptions,
+    results: list[PatchResult],
+    canvas: tuple[NDArray[np.float32], tuple[float, float, float, float]] | None,
 ) -> CollectionResult:
     traj = src.trajectory
     geom = look_geometry(traj, src.reference_point_m)
@@ -486,13 +532,15 @@ def _merge(
     stationary = [t for t in stationary if t.level >= floor]
     cap = opts.analysis.max_stationary * len(plan.patches)
     dropped = max(0, len(stationary) - cap)
-    spacing = opts.analysis.spacing_m
-    x0, y0, x1, y1 = plan.region_m
-    if plan.single:
+    if canvas is None:  # one patch: its image, as today's analysis made it
         im = results[0].image
+        assert im is not None
+        spacing = opts.analysis.spacing_m
         x0, x1, y0, y1 = im.x_m[0], im.x_m[-1] + spacing, im.y_m[0], im.y_m[-1] + spacing
-    spacing = max(spacing, max(x1 - x0, y1 - y0) / MOSAIC_MAX_PIXELS)
-    image, extent = mosaic([r.image for r in results], (x0, y0, x1, y1), spacing)
+        spacing = max(spacing, max(x1 - x0, y1 - y0) / MOSAIC_MAX_PIXELS)
+        image, extent = mosaic([im], (x0, y0, x1, y1), spacing)
+    else:
+        image, extent = canvas
     return CollectionResult(
         plan=plan,
         patches=tuple(results),
