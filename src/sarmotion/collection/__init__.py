@@ -12,7 +12,14 @@
 
 from .document import COLLECTION_SCHEMA, collection_document
 from .extract import PatchBuilder, extract_patches, patch_radar
-from .merge import MoverRecord, StationaryRecord, merge_movers, merge_stationary, same_mover
+from .merge import (
+    MoverRecord,
+    StationaryRecord,
+    drop_sidelobes,
+    merge_movers,
+    merge_stationary,
+    same_mover,
+)
 from .plan import CollectionOptions, Patch, PatchPlan, RegionError, plan_patches, unambiguous_scene
 from .run import CollectionResult, PatchResult, analyze_collection, analyze_patch
 
@@ -25,6 +32,7 @@ __all__ = [
     "analyze_collection",
     "analyze_patch",
     "collection_document",
+    "drop_sidelobes",
     "merge_movers",
     "merge_stationary",
     "same_mover",

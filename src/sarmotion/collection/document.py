@@ -6,7 +6,9 @@ patch table: each patch's core, centre, pulses, samples, decimation, pass band),
 ``movers`` (each patch's ``sarmotion.results/1`` mover entry, plus ``patch``, the patch
 whose fit was kept, and ``patches``, every patch that found it), ``stationary``
 (position, level in dB re the brightest of the mosaic, patch), ``stationary_dropped``
-(targets beyond the cap, not listed), ``patch_summaries`` (per patch: movers,
+(targets beyond the cap, not listed), ``stationary_sidelobes_dropped`` (listings taken
+for a brighter target's sidelobes, :func:`~sarmotion.collection.merge.drop_sidelobes`),
+``patch_summaries`` (per patch: movers,
 stationary targets listed, whether its own cap was reached, method, timings),
 ``timings_s``, ``options``, ``source``.
 """
@@ -52,6 +54,7 @@ def collection_document(result: CollectionResult, source: PulseBlocks) -> dict[s
             for t in result.stationary
         ],
         "stationary_dropped": int(result.stationary_dropped),
+        "stationary_sidelobes_dropped": int(result.stationary_sidelobes),
         "patch_summaries": [
             {
                 "index": r.index,

@@ -33,6 +33,24 @@ cross range (their positions, unlike a mover's, are fixed by the data); the brig
 kept. Their levels are compared across patches on one scale: ``|I| / n_pulses`` of each
 patch's stationary image (the slow-time filter has unit gain).
 
+**Sidelobes.** A patch lists the local maxima of its stationary image; beside a bright
+target some are its sidelobes (a neighbour's target seen across the core's edge, where
+the separation's Doppler test has no say). The point-spread function is separable in
+ground range and cross range about the target: along each axis ``|sinc(a)|`` (``a``
+the offset in resolution cells; flat spectra: the rect pulse in range, evenly spaced
+pulses in cross range), or ``exp(-a^2 / 2)`` in range for a Gaussian pulse. Outside
+the main lobe ``|sinc(a)| <= 1 / (pi |a|)``, so a target ``b`` produces nowhere more
+than ``E(a_r) E(a_c)`` of its level, ``E(a) = 1`` for ``|a| < 1`` and ``1 / (pi |a|)``
+beyond (``a_r``, ``a_c`` along ``b``'s own look direction). The image is the sum of
+the targets' responses, so a listing whose level is at most the sum of that bound over
+the brighter listed targets, divided by ``w``, can be their sidelobes alone: it is
+dropped (:func:`drop_sidelobes`; the count is reported). ``w`` is the least fraction
+of a peak its nearest pixel reads (levels are read there): ``sinc(h / rho_r) sinc(h /
+rho_c)``, ``h`` half the pixel spacing. A true target that weak on a brighter one's
+sidelobe ridge cannot be told from the sidelobe by its level and is dropped with it;
+one off the ridges (``|a_r| >= 1`` and ``|a_c| >= 1``) is kept down to ``E E / w``, at
+least ``-20 dB - 20 log10 w`` below its neighbour.
+
 **Mosaic.** Each patch's stationary image on its core, ``|I| / n_pulses``, on one grid
 of a stated spacing: each patch's image is reduced to the mosaic's pixels by block
 maxima where it is analysed (:func:`coarsen`) and pasted in as it arrives
@@ -58,6 +76,7 @@ __all__ = [
     "StationaryRecord",
     "PatchImage",
     "coarsen",
+    "drop_sidelobes",
     "mosaic_grid",
     "paste",
     "same_mover",
@@ -292,6 +311,66 @@ def merge_stationary(
         kept.append(t)
         pts = np.vstack([pts, p[None, :]])
     return kept
+
+
+def _envelope(a: NDArray, gaussian: bool = False) -> NDArray:
+    """``E(a)``: 1 in the main lobe, ``1 / (pi |a|)`` beyond; ``exp(-a^2/2)`` if Gaussian."""
+    a = np.abs(a)
+    if gaussian:
+        return np.exp(-0.5 * a * a)
+    return np.where(a < 1.0, 1.0, 1.0 / (np.pi * np.maximum(a, 1.0)))
+
+
+def drop_sidelobes(
+    targets: Sequence[StationaryRecord],
+    *,
+    antenna_m: NDArray,
+    range_cell_m: float,
+    cross_cell_m: float,
+    pixel_m: float,
+    gaussian_range: bool = False,
+) -> tuple[list[StationaryRecord], int]:
+    """The listed targets that are not a brighter listed target's sidelobe (module notes).
+
+    Parameters
+    ----------
+    targets : sequence of StationaryRecord
+        De-duplicated targets.
+    antenna_m : (3,) ndarray
+        Antenna position at the aperture centre (m): each target's look direction.
+    range_cell_m, cross_cell_m : float
+        Ground-range and cross-range resolution (m).
+    pixel_m : float
+        Pixel spacing the levels were read at (m).
+    gaussian_range : bool
+        The compressed pulse is Gaussian (no range sidelobes).
+
+    Returns
+    -------
+    (list of StationaryRecord, int)
+        The kept targets, brightest first, and how many were dropped.
+    """
+    order = sorted(targets, key=lambda t: -t.level)
+    if not order:
+        return [], 0
+    h = 0.5 * pixel_m
+    w = float(np.sinc(h / range_cell_m) * np.sinc(h / cross_cell_m))
+    pos = np.array([t.position_m for t in order], float)
+    level = np.array([t.level for t in order], float)
+    look = np.asarray(antenna_m, float)[:2][None, :] - pos
+    e_r = look / np.linalg.norm(look, axis=1, keepdims=True)
+    kept: list[int] = []
+    for i in range(len(order)):
+        if kept:
+            k = np.array(kept)
+            d = pos[i][None, :] - pos[k]
+            a_r = np.einsum("ij,ij->i", d, e_r[k]) / range_cell_m
+            a_c = (d[:, 0] * -e_r[k, 1] + d[:, 1] * e_r[k, 0]) / cross_cell_m
+            bound = level[k] * _envelope(a_r, gaussian_range) * _envelope(a_c) / w
+            if level[i] <= float(bound.sum()):
+                continue
+        kept.append(i)
+    return [order[i] for i in kept], len(order) - len(kept)
 
 
 def coarsen(image: PatchImage, origin_m: tuple[float, float], spacing_m: float) -> PatchImage:

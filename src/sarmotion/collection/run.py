@@ -53,6 +53,7 @@ from .merge import (
     PatchImage,
     StationaryRecord,
     coarsen,
+    drop_sidelobes,
     echo_offsets,
     merge_movers,
     merge_stationary,
@@ -126,6 +127,9 @@ class CollectionResult:
         brightest, brightest first, at most ``max_stationary`` per patch in all.
     stationary_dropped : int
         Stationary targets beyond that cap, not listed.
+    stationary_sidelobes : int
+        Listings taken for a brighter target's sidelobes and dropped
+        (:func:`~sarmotion.collection.merge.drop_sidelobes`).
     mosaic : (ny, nx) ndarray
         Stationary image ``|I| / n_pulses`` over the region (float32).
     mosaic_extent_m : (float, float, float, float)
@@ -148,6 +152,7 @@ class CollectionResult:
     options: CollectionOptions
     timings_s: dict[str, float] = field(default_factory=dict)
     single_result: AnalysisResult | None = None
+    stationary_sidelobes: int = 0
 
 
 # ------------------------------------------------------------------ one patch
@@ -530,6 +535,16 @@ def _merge(
         opts.analysis.stationary_threshold_db / 20.0
     )
     stationary = [t for t in stationary if t.level >= floor]
+    sidelobes = 0
+    if not plan.single:  # one patch: today's listing, unchanged
+        stationary, sidelobes = drop_sidelobes(
+            stationary,
+            antenna_m=traj.positions_m[int(np.argmin(np.abs(traj.slow_times_s)))],
+            range_cell_m=range_cell,
+            cross_cell_m=cross_cell,
+            pixel_m=opts.analysis.spacing_m,
+            gaussian_range=src.radar.pulse == "gaussian",
+        )
     cap = opts.analysis.max_stationary * len(plan.patches)
     dropped = max(0, len(stationary) - cap)
     if canvas is None:  # one patch: its image, as today's analysis made it
@@ -547,6 +562,7 @@ def _merge(
         movers=tuple((m, tuple(p)) for m, p in movers),
         stationary=tuple(stationary[:cap]),
         stationary_dropped=dropped,
+        stationary_sidelobes=sidelobes,
         mosaic=image,
         mosaic_extent_m=extent,
         options=opts,
