@@ -5,6 +5,14 @@ RSS is that size's)::
 
     python benchmarks/bench_collection.py --sizes 100 200 400 --out benchmarks/results
 
+Rows are added to (or replace, by size) ``bench_collection.json`` in ``--out``, and the
+table ``bench_collection.md`` is written from it. ``--pieces k`` runs a size's patches
+in ``k`` processes one after the other, each a ``k``-th of the plan's patches (every
+``k``-th), and merges their answers as one run would (movers by range history,
+stationary targets by cell, then the listing floor and the sidelobe rule): wall is
+the sum, RSS the largest. ``--ab-workers 0 2 --rounds 2`` times the patches alone on
+one size with each worker count in turn, alternated, with the load average.
+
 Scene of side ``L`` (m), seeded: 0.5 stationary unit points per 1000 m^2 drawn uniformly
 in the ``L x L`` square, 3 movers of ground speed 5-15 m/s (random direction, unit
 amplitude, random phase) inside it, one degree of GOTCHA-like circular spotlight
@@ -20,8 +28,9 @@ separate process), throughput (km^2 per hour), movers accurate on their cross-ra
 (``sarmotion.pipeline.family_errors``' rule: the truth slid along its own family,
 ``motion.family_member``, to the fit's cross range; accurate when the range position is
 within 3 ground-range cells and the range speed within 0.5 m/s), false movers (a fit
-matching no true mover), stationary targets found (a listed target within one resolution
-cell of a true one) and listed.
+matching no true mover), mover reports (a mover fitted in several patches is reported by
+each before the merge), stationary targets found (a listed target within one resolution
+cell of a true one), listed, and dropped as sidelobes.
 
 The patches' margins are sized for the scene's movers (``max_speed_mps`` 15 m/s, the
 default). Threads against processes for the local cluster were compared on the
@@ -159,26 +168,145 @@ def run_whole(side_m: float, seed: int) -> dict:
     }
 
 
-def run_patches(side_m: float, seed: int, workers: int | None) -> dict:
-    from sarmotion.collection import analyze_collection
+def _cells(traces):
+    from sarmotion.imaging import resolution
+    from sarmotion.motion import central_sub_aperture
+
+    central = central_sub_aperture(traces, 1.0)
+    return resolution(traces.select_pulses(central.start, central.stop))
+
+
+def run_patches(side_m: float, seed: int, workers: int | None, piece=(0, 1)) -> dict:
+    """The collection on the scene; ``piece = (i, k)``: only every ``k``-th patch from ``i``."""
+    import dataclasses
+
+    from sarmotion.collection import analyze_collection, plan_patches
+    from sarmotion.core.blocks import TracesBlocks
 
     traces, stat, movers = make_scene(side_m, seed)
     t0 = time.perf_counter()
-    result = analyze_collection(traces, n_workers=workers)
+    plan = plan_patches(TracesBlocks(traces))
+    i, k = piece
+    part = dataclasses.replace(plan, patches=plan.patches[i::k]) if k > 1 else plan
+    result = analyze_collection(traces, plan=part, n_workers=workers)
     wall = time.perf_counter() - t0
-    fits = [(m.position_m, m.velocity_mps) for m, _ in result.movers]
-    acc, false, found = score(traces, fits, movers, [s.position_m for s in result.stationary], stat)
+    stage: dict[str, float] = {}
+    for r in result.patches:
+        for key, v in r.timings_s.items():
+            stage[key] = stage.get(key, 0.0) + v
     return {
         "wall_s": wall,
         "rss_gb": _rss_gb(),
-        "patches": len(result.plan.patches),
-        "patch_size_m": result.plan.patch_size_m,
-        "accurate": acc,
-        "false": false,
-        "stationary_found": found,
-        "stationary_listed": len(result.stationary),
+        "patches": len(part.patches),
+        "patch_size_m": plan.patch_size_m,
+        "pulses_per_patch": [
+            int(min(p.pulses.size for p in plan.patches)),
+            int(max(p.pulses.size for p in plan.patches)),
+        ],
+        "samples_per_patch": [
+            int(min(p.n_samples for p in plan.patches)),
+            int(max(p.n_samples for p in plan.patches)),
+        ],
+        "movers": [
+            (
+                m.position_m.tolist(),
+                m.velocity_mps.tolist(),
+                m.sigma_range_m,
+                m.sigma_range_speed_mps,
+                m.snr_db,
+                m.patch,
+            )
+            for m, _ in result.movers
+        ],
+        "mover_reports": sum(len(r.movers) for r in result.patches),
+        "stationary": [(t.position_m, t.level, t.patch) for t in result.stationary],
+        "stationary_sidelobes": result.stationary_sidelobes,
         "stationary_dropped": result.stationary_dropped,
         "timings_s": result.timings_s,
+        "patch_stage_s": stage,
+        "load_average": os.getloadavg()[0],
+    }
+
+
+def _score_patches(side_m: float, seed: int, parts: list[dict]) -> dict:
+    """One run's answer from its pieces (module notes), scored."""
+    from sarmotion.collection import MoverRecord, StationaryRecord
+    from sarmotion.collection.merge import drop_sidelobes, merge_movers, merge_stationary
+    from sarmotion.collection.plan import _analysed_pulses
+    from sarmotion.core import Trajectory
+    from sarmotion.core.blocks import TracesBlocks
+    from sarmotion.pipeline import AnalysisOptions
+
+    traces, stat, movers = make_scene(side_m, seed)
+    cells = _cells(traces)
+    recs = [
+        MoverRecord(
+            patch=pa,
+            position_m=np.asarray(p),
+            velocity_mps=np.asarray(v),
+            sigma_range_m=sx,
+            sigma_range_speed_mps=su,
+            snr_db=snr,
+            document={},
+        )
+        for part in parts
+        for p, v, sx, su, snr, pa in part["movers"]
+    ]
+    sl = _analysed_pulses(TracesBlocks(traces), AnalysisOptions().sub_aperture_deg)
+    traj = traces.trajectory
+    analysed = Trajectory(positions_m=traj.positions_m[sl], slow_times_s=traj.slow_times_s[sl])
+    merged = (
+        merge_movers(recs, analysed, traces.radar.range_resolution_m)
+        if len(parts) > 1
+        else [(r, [r.patch]) for r in recs]
+    )
+    fits = [(m.position_m, m.velocity_mps) for m, _ in merged]
+    targets = [
+        StationaryRecord(patch=pa, position_m=tuple(p), level=lv)
+        for part in parts
+        for p, lv, pa in part["stationary"]
+    ]
+    sidelobes = sum(part["stationary_sidelobes"] for part in parts)
+    if len(parts) > 1:
+        targets = merge_stationary(
+            targets,
+            range_direction=cells.range_direction,
+            range_cell_m=cells.ground_range_m,
+            cross_cell_m=cells.cross_range_m,
+        )
+        floor = max((t.level for t in targets), default=0.0) * 10 ** (
+            AnalysisOptions().stationary_threshold_db / 20
+        )
+        targets = [t for t in targets if t.level >= floor]
+        targets, more = drop_sidelobes(
+            targets,
+            antenna_m=traj.positions_m[int(np.argmin(np.abs(traj.slow_times_s)))],
+            range_cell_m=cells.ground_range_m,
+            cross_cell_m=cells.cross_range_m,
+            pixel_m=AnalysisOptions().spacing_m,
+        )
+        sidelobes += more
+    acc, false, found = score(traces, fits, movers, [t.position_m for t in targets], stat)
+    first = parts[0]
+    return {
+        "wall_s": sum(p["wall_s"] for p in parts),
+        "rss_gb": max(p["rss_gb"] for p in parts),
+        "pieces": len(parts),
+        "patches": sum(p["patches"] for p in parts),
+        "patch_size_m": first["patch_size_m"],
+        "pulses_per_patch": first["pulses_per_patch"],
+        "samples_per_patch": first["samples_per_patch"],
+        "accurate": acc,
+        "false": false,
+        "mover_reports": sum(p["mover_reports"] for p in parts),
+        "stationary_found": found,
+        "stationary_listed": len(targets),
+        "stationary_sidelobes": sidelobes,
+        "stationary_dropped": sum(p["stationary_dropped"] for p in parts),
+        "patch_stage_s": {
+            k: sum(p["patch_stage_s"].get(k, 0.0) for p in parts) for k in first["patch_stage_s"]
+        },
+        "load_average": [p["load_average"] for p in parts],
     }
 
 
@@ -228,6 +356,61 @@ def _in_process(fn, *args):
         return pool.apply(fn, args)
 
 
+def _table(rows: list[dict]) -> str:
+    """Markdown table of the rows (module notes)."""
+    head = (
+        "| side | pulses x samples | method | patches (pulses x samples each) | wall | "
+        "peak RSS | km^2/h | movers accurate | false | stationary found / true | listed "
+        "(sidelobes dropped) | load |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    )
+    out = []
+    for r in sorted(rows, key=lambda r: r["side_m"]):
+        for method in ("whole", "patches"):
+            m = r.get(method)
+            if m is None:
+                continue
+            load = m.get("load_average", r.get("load_average"))
+            load = max(load) if isinstance(load, list) else load
+            if method == "patches":
+                pp = m.get("pulses_per_patch", ["?", "?"])
+                ss = m.get("samples_per_patch", ["?", "?"])
+                pieces = f", {m['pieces']} pieces" if m.get("pieces", 1) > 1 else ""
+                how = f"{m['patches']} ({pp[0]}-{pp[1]} x {ss[0]}-{ss[1]}{pieces})"
+                listed = f"{m['stationary_listed']} ({m.get('stationary_sidelobes', 0)})"
+            else:
+                how, listed = "1 (whole scene)", str(m["stationary_listed"])
+            km2h = (r["side_m"] / 1000) ** 2 / m["wall_s"] * 3600
+            out.append(
+                f"| {r['side_m']:g} m | {r['pulses']} x {r['samples']} | {method} | {how} | "
+                f"{m['wall_s']:.1f} s | {m['rss_gb']:.2f} GB | {km2h:.2f} | {m['accurate']}/3 | "
+                f"{m['false']} | {m['stationary_found']}/{r['n_stationary']} | {listed} | "
+                f"{load:.1f} |"
+            )
+    return head + "\n".join(out) + "\n"
+
+
+def ab_workers(side_m: float, seed: int, workers: list[int], rounds: int) -> list[dict]:
+    """Patches' wall time with each worker count in turn, alternated, each in its own process."""
+    rows = []
+    for _ in range(rounds):
+        for w in workers:
+            before = os.getloadavg()[0]
+            r = _in_process(run_patches, side_m, seed, w)
+            rows.append(
+                {
+                    "side_m": side_m,
+                    "workers": w,
+                    "wall_s": r["wall_s"],
+                    "patches_s": r["timings_s"]["patches"],
+                    "rss_gb": r["rss_gb"],
+                    "load_before": before,
+                    "load_after": os.getloadavg()[0],
+                }
+            )
+            print(json.dumps(rows[-1]), flush=True)
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=float, nargs="+", default=[100, 200, 400, 800])
@@ -237,11 +420,22 @@ def main() -> None:
     parser.add_argument(
         "--methods", nargs="+", choices=["whole", "patches"], default=["whole", "patches"]
     )
+    parser.add_argument("--pieces", type=int, default=1)
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--threads-vs-processes", action="store_true")
+    parser.add_argument("--ab-workers", type=int, nargs="+", default=None)
+    parser.add_argument("--rounds", type=int, default=2)
     args = parser.parse_args()
     if args.threads_vs_processes:
         threads_vs_processes()
+        return
+    if args.ab_workers:
+        rows = ab_workers(args.sizes[0], args.seed, args.ab_workers, args.rounds)
+        if args.out is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            path = args.out / "bench_collection_workers.json"
+            old = json.loads(path.read_text()) if path.exists() else []
+            path.write_text(json.dumps(old + rows, indent=2) + "\n")
         return
     rows = []
     for side in args.sizes:
@@ -251,19 +445,38 @@ def main() -> None:
             "pulses": traces.n_pulses,
             "samples": traces.n_samples,
             "n_stationary": len(stat),
+            "seed": args.seed,
         }
         del traces
         if "whole" in args.methods and side <= args.whole_max:
             row["whole"] = _in_process(run_whole, side, args.seed)
+            row["whole"]["load_average"] = os.getloadavg()[0]
         if "patches" in args.methods:
-            row["patches"] = _in_process(run_patches, side, args.seed, args.workers)
+            parts = [
+                _in_process(run_patches, side, args.seed, args.workers, (i, args.pieces))
+                for i in range(args.pieces)
+            ]
+            row["patches"] = _score_patches(side, args.seed, parts)
+            row["patches"]["workers"] = args.workers
             row["patches"]["km2_per_hour"] = (side / 1000.0) ** 2 / row["patches"]["wall_s"] * 3600
         rows.append(row)
         row["load_average"] = list(os.getloadavg())
         print(json.dumps(row), flush=True)
-    if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / "bench_collection.json").write_text(json.dumps(rows, indent=2) + "\n")
+        if args.out is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            path = args.out / "bench_collection.json"
+            old = json.loads(path.read_text()) if path.exists() else {}
+            kept = [
+                r
+                for r in (old.get("sizes", []) if isinstance(old, dict) else old)
+                if r["side_m"] != side
+            ]
+            doc = {
+                "note": __doc__.split("\n")[0],
+                "sizes": sorted(kept + [row], key=lambda r: r["side_m"]),
+            }
+            path.write_text(json.dumps(doc, indent=2) + "\n")
+            (args.out / "bench_collection.md").write_text(_table(doc["sizes"]))
 
 
 if __name__ == "__main__":
