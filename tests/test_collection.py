@@ -244,3 +244,60 @@ def test_stationary_duplicates_across_a_border_merge():
         t, range_direction=np.array([1.0, 0.0]), range_cell_m=0.33, cross_cell_m=1.3
     )
     assert [k.position_m for k in kept] == [(49.9, 3.0), (50.1, 9.0)]
+
+
+@pytest.mark.parametrize("velocity", [(0.0, 0.0), (5.0, -3.0), (-13.0, 8.0)])
+def test_echo_offsets_give_the_aliased_doppler_of_the_traces(velocity):
+    """A mover's echo, re-referenced to ``c``, advances in phase by the aliased Doppler.
+
+    At the compressed pulse's peak the phase of a point is ``-omega_o (tau - tau_c)``;
+    from one pulse to the next it turns by ``-2 pi (2 f_o / c) dR dt`` modulo ``2 pi``,
+    which is what :func:`echo_offsets` predicts from ``R'(0) - R_c'(0)`` taken modulo
+    ``lambda_o PRF / 2``. Its range offset is where the peak sits in fast time.
+    """
+    from sarmotion.collection.merge import echo_offsets
+    from sarmotion.core.constants import C
+
+    radar, traj = _acquisition(range_window_m=100.0, pulses_per_deg=117.0)
+    centre = np.array([10.0, -20.0, 0.0])
+    mover = PointTarget(position_m=(18.0, 3.0), velocity_mps=velocity)
+    tr = _traces([mover], radar, traj, ref=centre)
+    j0 = int(np.argmin(np.abs(traj.slow_times_s)))
+    dt = traj.slow_times_s[j0 + 1] - traj.slow_times_s[j0]
+    period = 0.5 * radar.wavelength_m / traj.pulse_interval_s
+    dr, rate = echo_offsets(
+        traj, np.asarray(mover.position_m, float), np.asarray(velocity, float), centre, period
+    )
+    assert -0.5 * period <= rate < 0.5 * period
+    # range: the peak of pulse j0 sits at 2 dR / c (within a sample)
+    k = int(np.argmax(np.abs(tr.data[j0])))
+    t_peak = radar.fast_times_s[k]
+    assert abs(t_peak - 2.0 * dr / C) <= radar.sample_interval_s
+    # Doppler: the phase step at the peak between pulses j0 and j0 + 1
+    k1 = int(np.argmax(np.abs(tr.data[j0 + 1])))
+    step = np.angle(tr.data[j0 + 1, k1] * np.conj(tr.data[j0, k]))
+    predicted = -2.0 * np.pi * (2.0 * radar.carrier_hz / C) * rate * dt
+    # the rate changes over one pulse (the mover's acceleration in range), by far
+    # less than a tenth of a turn here
+    assert abs(np.angle(np.exp(1j * (step - predicted)))) < 0.2 * np.pi
+
+
+def test_a_coarsened_patch_image_pastes_as_the_fine_one():
+    """Block maxima at the task, pasted into the mosaic, equal the fine image pasted."""
+    from sarmotion.collection.merge import PatchImage, coarsen, mosaic_grid, paste
+
+    rng = np.random.default_rng(3)
+    fine = PatchImage(
+        x_m=-3.1 + 0.25 * np.arange(37),
+        y_m=7.3 + 0.25 * np.arange(29),
+        magnitude=rng.random((29, 37)).astype(np.float32),
+    )
+    region = (-10.0, 0.0, 10.0, 20.0)
+    for spacing in (0.25, 0.6, 1.7):
+        a, _ = mosaic_grid(region, spacing)
+        b, _ = mosaic_grid(region, spacing)
+        paste(a, fine, region[:2], spacing)
+        coarse = coarsen(fine, region[:2], spacing)
+        paste(b, coarse, region[:2], spacing)
+        np.testing.assert_array_equal(a, b)
+        assert coarse.magnitude.size <= fine.magnitude.size
