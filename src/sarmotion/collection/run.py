@@ -2,11 +2,18 @@
 
 :func:`analyze_collection` reads the data block by block into the traces of a group of
 patches (:func:`~sarmotion.collection.extract.extract_patches`; a group is as many
-patches as fit in ``memory_mb``, so peak memory is a block plus one group's traces plus
-the tasks in flight), submits each patch as a task running
-:func:`~sarmotion.pipeline.analyze` unchanged on its traces (its image: the core), and
-gathers the results as they complete. Then one mover per range history, stationary
-targets de-duplicated, and the stationary mosaic (:mod:`~sarmotion.collection.merge`).
+patches as fit in ``memory_mb``), submits each patch as a task running
+:func:`~sarmotion.pipeline.analyze` on its traces (its image: the core; only the movers
+whose echoes its band passes estimated beyond a first fit,
+:func:`in_band`), and gathers the results as they complete. Then one mover per range
+history, stationary targets de-duplicated and their sidelobes dropped, and the
+stationary mosaic (:mod:`~sarmotion.collection.merge`).
+
+Memory: a block's phase history, one group's traces (at most ``memory_mb``; each
+patch's are let go once analysed), one patch's analysis per task in flight, the mosaic
+(at most ``MOSAIC_MAX_PIXELS`` squared float32, each patch's image pasted in as it
+arrives, at the mosaic's pixels) and every patch's slim result (movers and stationary
+records): not the file, nor every patch's image.
 
 Where the tasks run (as for ``track``, :mod:`sarmotion.tracking.scale`):
 
