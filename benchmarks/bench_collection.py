@@ -12,6 +12,9 @@ in ``k`` processes one after the other, each a ``k``-th of the plan's patches (e
 stationary targets by cell, then the listing floor and the sidelobe rule): wall is
 the sum, RSS the largest. ``--ab-workers 0 2 --rounds 2`` times the patches alone on
 one size with each worker count in turn, alternated, with the load average.
+``--pieces k --piece-ids i ...`` runs only those pieces: their time and memory, and the
+wall the whole run would take (``k`` over the pieces run times their wall), written to
+``bench_collection_sampled.json``; a size too long to run whole is estimated so.
 
 Scene of side ``L`` (m), seeded: 0.5 stationary unit points per 1000 m^2 drawn uniformly
 in the ``L x L`` square, 3 movers of ground speed 5-15 m/s (random direction, unit
@@ -356,6 +359,24 @@ def _in_process(fn, *args):
         return pool.apply(fn, args)
 
 
+def _sampled(parts: list[dict], pieces: int) -> dict:
+    """Time and memory of some of a size's pieces, and the whole run's wall they imply."""
+    wall = sum(p["wall_s"] for p in parts)
+    return {
+        "pieces_run": len(parts),
+        "pieces": pieces,
+        "patches_run": sum(p["patches"] for p in parts),
+        "wall_s_run": wall,
+        "wall_s_estimated": wall * pieces / len(parts),
+        "rss_gb": max(p["rss_gb"] for p in parts),
+        "pulses_per_patch": parts[0]["pulses_per_patch"],
+        "samples_per_patch": parts[0]["samples_per_patch"],
+        "patch_stage_s": parts[0]["patch_stage_s"],
+        "timings_s": [p["timings_s"] for p in parts],
+        "load_average": [p["load_average"] for p in parts],
+    }
+
+
 def _table(rows: list[dict]) -> str:
     """Markdown table of the rows (module notes)."""
     head = (
@@ -421,6 +442,7 @@ def main() -> None:
         "--methods", nargs="+", choices=["whole", "patches"], default=["whole", "patches"]
     )
     parser.add_argument("--pieces", type=int, default=1)
+    parser.add_argument("--piece-ids", type=int, nargs="+", default=None)
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--threads-vs-processes", action="store_true")
     parser.add_argument("--ab-workers", type=int, nargs="+", default=None)
@@ -452,10 +474,20 @@ def main() -> None:
             row["whole"] = _in_process(run_whole, side, args.seed)
             row["whole"]["load_average"] = os.getloadavg()[0]
         if "patches" in args.methods:
+            ids = args.piece_ids if args.piece_ids is not None else range(args.pieces)
             parts = [
                 _in_process(run_patches, side, args.seed, args.workers, (i, args.pieces))
-                for i in range(args.pieces)
+                for i in ids
             ]
+            if len(parts) < args.pieces:  # a sample of the pieces: time and memory only
+                row["patches"] = _sampled(parts, args.pieces)
+                row["load_average"] = list(os.getloadavg())
+                print(json.dumps(row), flush=True)
+                if args.out is not None:
+                    path = args.out / "bench_collection_sampled.json"
+                    old = json.loads(path.read_text()) if path.exists() else []
+                    path.write_text(json.dumps(old + [row], indent=2) + "\n")
+                continue
             row["patches"] = _score_patches(side, args.seed, parts)
             row["patches"]["workers"] = args.workers
             row["patches"]["km2_per_hour"] = (side / 1000.0) ** 2 / row["patches"]["wall_s"] * 3600
