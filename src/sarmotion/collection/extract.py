@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from ..core.blocks import PulseBlocks
 from ..core.geometry import Trajectory, travel_time
 from ..core.radar import Radar
-from ..core.spectral import delay_phase, to_fast_time, to_frequency
+from ..core.spectral import delay_phase, to_frequency
 from ..core.traces import Traces
 from .plan import Patch
 
@@ -52,6 +52,24 @@ def patch_radar(radar: Radar, n_samples: int) -> Radar:
         frequency_step_hz=radar.span_hz / n_samples,
         pulse=radar.pulse,
     )
+
+
+def _window(spectrum: NDArray[np.complex64], lo: int, hi: int) -> NDArray[np.complex64]:
+    """Samples ``lo:hi`` of :func:`~sarmotion.core.spectral.to_fast_time` of ``spectrum``.
+
+    One single-precision inverse FFT (the traces are single precision) without the two
+    shifts: with ``h = n // 2``, ``to_fast_time(Z)[m] = exp(-2i pi h (m - h) / n)
+    ifft(Z)[(m - h) mod n]`` (the input shift ``ifftshift`` is that phase, the output
+    shift ``fftshift`` that index).
+    """
+    from scipy.fft import ifft
+
+    n = spectrum.shape[-1]
+    h = n // 2
+    raw = ifft(spectrum, axis=-1, overwrite_x=True)
+    idx = (np.arange(lo, hi) - h) % n
+    phase = np.exp(-2j * np.pi * h * idx.astype(np.float64) / n).astype(np.complex64)
+    return raw[:, idx] * phase[None, :]
 
 
 class PatchBuilder:
@@ -86,16 +104,24 @@ class PatchBuilder:
             raise ValueError(f"blocks must be consecutive: expected pulse {self._end}, got {start}")
         stop = start + spectrum.shape[0]
         self._end = stop
-        shifted = to_fast_time(spectrum * delay_phase(self._delays[start:stop], self._freqs))
-        rows = shifted[:, self._lo : self._hi].astype(np.complex64)
+        product = np.empty(spectrum.shape, np.complex64)
+        np.multiply(
+            spectrum,
+            delay_phase(self._delays[start:stop], self._freqs),
+            out=product,
+            casting="same_kind",
+        )
+        rows = _window(product, self._lo, self._hi)
         self._rows = np.concatenate([self._rows, rows]) if self._rows.shape[0] else rows
         if self._rows.shape[0] == rows.shape[0]:
             self._first = start
         pulses, h = self.patch.pulses, self._half
-        taps = self.patch.taps.astype(np.complex64)
+        # the taps are real; an explicit weighted sum, not a BLAS product: a vector-matrix
+        # product per output pulse is too small for BLAS's threads to pay
+        taps = self.patch.taps.astype(np.float32)[:, None]
         while self._next < pulses.size and pulses[self._next] + h < stop:
             a = int(pulses[self._next]) - h - self._first
-            self._out[self._next] = taps @ self._rows[a : a + taps.size]
+            self._out[self._next] = (taps * self._rows[a : a + taps.shape[0]]).sum(axis=0)
             self._next += 1
         keep = (int(pulses[self._next]) - h) if self._next < pulses.size else stop
         drop = min(max(0, keep - self._first), self._rows.shape[0])
