@@ -25,7 +25,8 @@ Where the tasks run (as for ``track``, :mod:`sarmotion.tracking.scale`):
 - ``scheduler="tcp://host:8786"`` or a ``distributed.Client``: that cluster's workers,
   which need sarmotion importable but not the input file (each task carries its
   patch's traces);
-- ``n_workers=0``: no Dask, the patches one after the other in this process.
+- ``n_workers=0``: no Dask, the patches one after the other in this process (BLAS on
+  one thread, as in a task: a patch's matrices are too small for its threads to gain).
 
 Nothing here reads files or prints; progress goes through ``progress(stage, done,
 total)`` ("patch traces" over pulses read, "patches" over patches analysed).
@@ -426,21 +427,16 @@ def _run(
     total = len(plan.patches)
     done = 0
     if scheduler is None and n_workers == 0:
-        for group in _groups(plan, memory_mb):
-            pending = extract_patches(src, group, block_pulses=opts.block_pulses)
-            pending.reverse()
-            for patch in group:
-                # each patch's traces are let go once analysed, and with them the
-                # backprojection tables cached for them (imaging's table cache holds
-                # a table while its traces live)
-                traces = pending.pop()
-                slim = analyze_patch(
-                    traces, patch, opts.analysis, describe=describe, mosaic_m=mosaic_m
-                )[0]
-                del traces
-                yield slim
-                done += 1
-                report(progress, "patches", done, total)
+        from threadpoolctl import threadpool_limits
+
+        # BLAS on one thread, as in a task: a patch's matrices are a few hundred on a
+        # side, too small for BLAS's threads to gain, and an OpenBLAS pool spinning
+        # beside numba's threads (or other work on the machine) slows every product
+        limit = threadpool_limits(limits=1, user_api="blas")
+        try:
+            yield from _serial(src, plan, opts, memory_mb, describe, progress, mosaic_m)
+        finally:
+            limit.restore_original_limits()
         return
     from distributed import Client, as_completed
 
@@ -493,6 +489,34 @@ def _run(
                 yield _collect(f, futures)
         finally:
             client.cancel([f for f in futures if not f.done()])
+
+
+def _serial(
+    src: PulseBlocks,
+    plan: PatchPlan,
+    opts: CollectionOptions,
+    memory_mb: float,
+    describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None,
+    progress: ProgressCallback | None,
+    mosaic_m: tuple[float, float, float],
+) -> Iterator[PatchResult]:
+    """The patches one after the other in this process."""
+    done, total = 0, len(plan.patches)
+    for group in _groups(plan, memory_mb):
+        pending = extract_patches(src, group, block_pulses=opts.block_pulses)
+        pending.reverse()
+        for patch in group:
+            # each patch's traces are let go once analysed, and with them the
+            # backprojection tables cached for them (imaging's table cache holds a
+            # table while its traces live)
+            traces = pending.pop()
+            slim = analyze_patch(
+                traces, patch, opts.analysis, describe=describe, mosaic_m=mosaic_m
+            )[0]
+            del traces
+            yield slim
+            done += 1
+            report(progress, "patches", done, total)
 
 
 def _collect(future: Any, futures: set[Any]) -> PatchResult:
