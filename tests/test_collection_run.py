@@ -114,6 +114,25 @@ def test_distributed_process_workers_give_the_same_answers(scene, default_result
     )
 
 
+def test_patches_in_process_give_the_same_answers_and_mosaic(scene, default_result):
+    """``n_workers=0`` (no Dask, BLAS on one thread) against the local cluster."""
+    res = analyze_collection(scene, OPTIONS, region_m=REGION, n_workers=0)
+    assert len(res.movers) == len(default_result.movers)
+    for (a, pa), (b, pb) in zip(res.movers, default_result.movers, strict=True):
+        assert pa == pb
+        assert np.allclose(a.position_m, b.position_m, atol=1e-6)
+        assert np.allclose(a.velocity_mps, b.velocity_mps, atol=1e-6)
+    assert np.allclose(
+        [t.position_m for t in res.stationary],
+        [t.position_m for t in default_result.stationary],
+        atol=1e-6,
+    )
+    assert res.stationary_sidelobes == default_result.stationary_sidelobes
+    np.testing.assert_allclose(res.mosaic, default_result.mosaic, rtol=1e-4, atol=0)
+    # the patches' images were pasted into the mosaic, not kept
+    assert all(r.image is None for r in res.patches)
+
+
 @pytest.mark.parametrize("suffix", [".h5", ".cphd"])
 def test_command_line_collection_outputs(scene, tmp_path, capsys, suffix):
     """Native and CPHD files go through their block readers: the same two patches."""
