@@ -293,6 +293,9 @@ def _task(
     mosaic_m: tuple[float, float, float] | None = None,
 ) -> PatchResult:
     """One patch's analysis, numba's and BLAS's pools limited to ``threads``."""
+    # traces of the task's own (the same array): imaging caches tables per traces object
+    # while it lives, and the cluster may keep a task's arguments after it ran
+    traces = traces.with_data(traces.data)
     kw: dict[str, Any] = {"single": single, "describe": describe, "mosaic_m": mosaic_m}
     if threads is None:
         return analyze_patch(traces, patch, options, **kw)[0]
