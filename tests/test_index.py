@@ -64,7 +64,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     # collection
     "collection.document": ("test_collection_run.py",),
     "collection.extract": ("test_collection.py",),
-    "collection.merge": ("test_collection.py",),
+    "collection.merge": ("test_collection.py", "test_collection_sidelobes.py"),
     "collection.plan": ("test_collection.py", "test_collection_run.py"),
     "collection.run": ("test_collection_run.py",),
     # core
