@@ -89,6 +89,67 @@ def candidates(job: tuple[str, int, int]) -> dict:
     }
 
 
+def coherent_candidates(job: tuple[str, int, int]) -> dict:
+    """The coherent statistic of every screened candidate of one null scene.
+
+    The analysis's own stages with ``detector="coherent"``: separation, the ``g(u)``
+    screen, and for each screened candidate the maximum-likelihood fit on ``S``
+    (searched over range position, range speed and cross-range speed) and its
+    ``Lambda`` (:func:`sarmotion.motion.coherent_statistic_db`), with the focus test's
+    verdict: a candidate the focus test explains as a stationary point is not declared
+    whatever its ``Lambda``, so the null of the decision is that of the others (the
+    explained ones are listed apart).
+    """
+    from sarmotion.motion import (
+        coherent_statistic_db,
+        coherent_threshold_db,
+        fit_point_mover,
+        stationary_explanation,
+    )
+    from sarmotion.pipeline import AnalysisOptions, detect
+    from sarmotion.separation import SeparationOptions
+
+    kind, index, seed = job
+    start = time.perf_counter()
+    traces, method = _scene(kind, index, seed)
+    opts = AnalysisOptions(
+        separation=SeparationOptions(method=method), trajectory=False, detector="coherent"
+    )
+    found = detect(traces, opts)
+    det, sub, moving = found.candidates, found.sub.acquisition, np.asarray(found.moving_sub)
+    stats, stationary = [], []
+    for u in det.range_speeds.speeds_mps:
+        fit = fit_point_mover(
+            moving, float(u), acquisition=sub, cross_speed_range_mps=opts.speed_range_mps
+        )
+        value = fit.amplitude * sub.n_pulses
+        stats.append(
+            coherent_statistic_db(
+                moving, fit.position_m, fit.velocity_mps, acquisition=sub, value=value
+            )
+        )
+        why = stationary_explanation(
+            moving, fit.position_m, fit.velocity_mps, value, acquisition=sub
+        )
+        stationary.append(bool(why.within_extent and why.focus_gain_db < opts.min_focus_gain_db))
+    n = det.range_speeds.n_movers
+    thr = coherent_threshold_db(opts.false_alarm_rate, n)
+    return {
+        "population": {"real": "real, RPCA", "sim_rpca": "simulated, RPCA"}.get(
+            kind, "simulated, combined"
+        ),
+        "scene": index,
+        # the decision's null: candidates the focus test does not explain as stationary
+        "statistic_db": [t for t, st in zip(stats, stationary, strict=True) if not st],
+        "stationary_db": [t for t, st in zip(stats, stationary, strict=True) if st],
+        "screen_db": det.threshold_db,
+        "n_candidates": n,
+        "threshold_db": thr,
+        "declared": int(sum(t >= thr and not st for t, st in zip(stats, stationary, strict=True))),
+        "seconds": time.perf_counter() - start,
+    }
+
+
 def tail(values: np.ndarray) -> dict:
     """Quantiles and the exponential tail above the 90 % quantile (dB)."""
     t0 = float(np.quantile(values, 0.9))
@@ -102,11 +163,16 @@ def tail(values: np.ndarray) -> dict:
     }
 
 
-def model_exceedance(values: np.ndarray) -> dict:
-    """Fractions beyond the NULL_TAIL model's 99 % and 99.9 % points."""
-    from sarmotion.motion import NULL_TAIL
+def model_tail(detector: str) -> dict:
+    """The tail in use: ``NULL_TAIL`` or ``COHERENT_NULL_TAIL``."""
+    from sarmotion.motion import COHERENT_NULL_TAIL, NULL_TAIL
 
-    t = NULL_TAIL
+    return dict(COHERENT_NULL_TAIL if detector == "coherent" else NULL_TAIL)
+
+
+def model_exceedance(values: np.ndarray, detector: str = "g") -> dict:
+    """Fractions beyond the model tail's 99 % and 99.9 % points."""
+    t = model_tail(detector)
     out = {}
     for p in (0.01, 0.001):
         point = t["t0_db"] + t["scale_db"] * np.log(t["p0"] / p)
@@ -114,19 +180,19 @@ def model_exceedance(values: np.ndarray) -> dict:
     return out
 
 
-def summarise(records: list[dict]) -> dict:
-    from sarmotion.motion import NULL_TAIL
-
+def summarise(records: list[dict], detector: str = "g") -> dict:
     pops = sorted({r["population"] for r in records})
-    out = {"null_tail": dict(NULL_TAIL), "populations": {}}
+    out = {"detector": detector, "null_tail": model_tail(detector), "populations": {}}
     for name in pops + ["all"]:
         rs = [r for r in records if name in ("all", r["population"])]
-        values = np.concatenate([np.asarray(r["statistic_db"]) for r in rs])
+        values = np.concatenate([np.asarray(r["statistic_db"], dtype=float) for r in rs])
+        if not values.size:
+            continue
         over = [max(r["statistic_db"], default=-np.inf) >= r["threshold_db"] for r in rs]
         out["populations"][name] = {
             "scenes": len(rs),
             **tail(values),
-            "model": model_exceedance(values),
+            "model": model_exceedance(values, detector),
             "scenes_reaching_threshold": int(np.sum(over)),
             "declared_movers": int(sum(r["declared"] for r in rs)),
         }
@@ -134,8 +200,10 @@ def summarise(records: list[dict]) -> dict:
 
 
 def write(summary: dict, records: list[dict], out: Path, seconds: float) -> None:
+    coherent = summary["detector"] == "coherent"
+    stem = "detector_null_coherent" if coherent else "detector_null"
     out.mkdir(parents=True, exist_ok=True)
-    (out / "detector_null.json").write_text(
+    (out / f"{stem}.json").write_text(
         json.dumps({"summary": summary, "records": records}, indent=1)
     )
     t = summary["null_tail"]
@@ -153,25 +221,46 @@ def write(summary: dict, records: list[dict], out: Path, seconds: float) -> None
             f"{100 * m['0.01']['fraction']:.2f} % | {100 * m['0.001']['fraction']:.2f} % | "
             f"{p['scenes_reaching_threshold']} | {p['declared_movers']} |"
         )
+    name = "COHERENT_NULL_TAIL" if coherent else "NULL_TAIL"
+    title = (
+        "# Null distribution of the coherent statistic (dB: fitted |I|^2 over sigma_I^2)"
+        if coherent
+        else "# Null distribution of the detector statistic (dB over the local floor)"
+    )
+    if coherent:
+        explained = [t for r in records for t in r["stationary_db"]]
+        note = (
+            "Candidates: the g(u) peaks that pass the screen (the g(u) null's per-candidate "
+            f"10 % point, {records[0]['screen_db']:.2f} dB, beyond the stationary band, shape "
+            "test), each fitted on S, less those the focus test explains as stationary "
+            f"points ({len(explained)} more, largest "
+            f"{max(explained, default=float('nan')):.2f} dB); 'scenes >= threshold': the "
+            "largest candidate reaches the 1 %-per-scene threshold over the scene's "
+            "screened candidates; 'declared': candidates over it."
+        )
+    else:
+        note = (
+            f"Candidates with |u| >= {MIN_SPEED_MPS} m/s; 'scenes >= threshold': the largest "
+            "candidate reaches the 1 %-per-scene threshold before the shape and focus tests; "
+            "'declared': candidates the detection stage passed on (threshold and shape "
+            "tests, any speed; its focus test, which follows, rejects the slow stationary "
+            "ones)."
+        )
     text = "\n".join(
         [
-            "# Null distribution of the detector statistic (dB over the local floor)",
+            title,
             "",
-            f"Model in use (NULL_TAIL): t0 = {t['t0_db']} dB, s = {t['scale_db']} dB, "
+            f"Model in use ({name}): t0 = {t['t0_db']} dB, s = {t['scale_db']} dB, "
             f"p0 = {t['p0']}; its 1 % point is "
             f"{summary['populations']['all']['model']['0.01']['point_db']:.2f} dB and its "
             f"0.1 % point {summary['populations']['all']['model']['0.001']['point_db']:.2f} dB.",
             "",
             *lines,
             "",
-            f"Candidates with |u| >= {MIN_SPEED_MPS} m/s; 'scenes >= threshold': the largest "
-            "candidate reaches the 1 %-per-scene threshold before the shape and focus tests; "
-            "'declared': candidates the detection stage passed on (threshold and shape tests, "
-            "any speed; its focus test, which follows, rejects the slow stationary ones). "
-            f"{seconds:.0f} s.",
+            f"{note} {seconds:.0f} s.",
         ]
     )
-    (out / "detector_null.md").write_text(text + "\n")
+    (out / f"{stem}.md").write_text(text + "\n")
     print(text)
 
 
@@ -181,13 +270,20 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=31)
     ap.add_argument("--scenes", type=int, default=25, help="simulated scenes per method")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument(
+        "--detector",
+        choices=("g", "coherent"),
+        default="g",
+        help="the g(u) statistic (default) or the coherent one (detector_null_coherent.*)",
+    )
     args = ap.parse_args()
     jobs = [("real", d, 0) for d in range(5)]
     jobs += [(k, i, args.seed) for k in ("sim_rpca", "sim_combined") for i in range(args.scenes)]
+    run = coherent_candidates if args.detector == "coherent" else candidates
     start = time.perf_counter()
     records = []
     with Pool(args.workers) as pool:
-        for k, rec in enumerate(pool.imap_unordered(candidates, jobs)):
+        for k, rec in enumerate(pool.imap_unordered(run, jobs)):
             records.append(rec)
             top = max(rec["statistic_db"], default=float("nan"))
             print(
@@ -197,7 +293,7 @@ def main() -> None:
                 flush=True,
             )
     records.sort(key=lambda r: (r["population"], r["scene"]))
-    write(summarise(records), records, args.out, time.perf_counter() - start)
+    write(summarise(records, args.detector), records, args.out, time.perf_counter() - start)
 
 
 if __name__ == "__main__":

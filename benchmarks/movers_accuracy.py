@@ -92,7 +92,11 @@ def _gotcha(degree: int):
 
 
 def _clutter(rng: np.random.Generator, movers: list, snr_db: float | None = None):
-    """Random point clutter of 10-80 unit targets with noise, and the given movers."""
+    """Random point clutter of 10-80 unit targets with noise, and the given movers.
+
+    Returns the traces, the scene's info and the noise-free traces of the clutter alone
+    (the true ``L``, for a detector that knows it: ``benchmarks/coherent_detection.py``).
+    """
     from sarmotion.simulation import random_scene, simulate
 
     n = int(rng.integers(10, 81))
@@ -102,7 +106,7 @@ def _clutter(rng: np.random.Generator, movers: list, snr_db: float | None = None
     from sarmotion.simulation import inject
 
     tr = inject(sim.traces, movers) if movers else sim.traces
-    return tr, {"n_stationary": n, "snr_db": snr}
+    return tr, {"n_stationary": n, "snr_db": snr}, sim.stationary
 
 
 def _mover(rng, geom, u_range, amp, *, u=None, up_range=(-10.0, 10.0), min_up=0.0):
@@ -120,8 +124,18 @@ def _mover(rng, geom, u_range, amp, *, u=None, up_range=(-10.0, 10.0), min_up=0.
     )
 
 
-def make_scene(spec: Spec):
-    """(traces, movers, method, info) of a spec."""
+def make_scene(spec: Spec, *, with_clutter: bool = False):
+    """(traces, movers, method, info) of a spec.
+
+    ``with_clutter``: a fifth element, the noise-free traces of the simulated clutter
+    (``None`` for a real degree).
+    """
+    out = _make_scene(spec)
+    return out if with_clutter else out[:4]
+
+
+def _make_scene(spec: Spec):
+    """(traces, movers, method, info, clutter or None) of a spec."""
     from sarmotion.simulation import inject
 
     rng = np.random.default_rng(spec.seed)
@@ -131,13 +145,13 @@ def make_scene(spec: Spec):
     if spec.kind == "clutter":
         amps = 10 ** (rng.uniform(-20, 0, 2) / 20)
         movers = [_mover(rng, geom, (1.0, 10.0), a) for a in amps[: int(rng.integers(1, 3))]]
-        tr, info = _clutter(rng, movers)
-        return tr, movers, "combined" if spec.seed % 2 == 0 else "rpca", info
+        tr, info, clutter = _clutter(rng, movers)
+        return tr, movers, "combined" if spec.seed % 2 == 0 else "rpca", info, clutter
     if spec.kind in ("null_real", "null_sim"):
         if spec.kind == "null_real":
-            return _gotcha(p["degree"]), [], "rpca", {"degree": p["degree"]}
-        tr, info = _clutter(rng, [])
-        return tr, [], "combined" if spec.seed % 2 == 0 else "rpca", info
+            return _gotcha(p["degree"]), [], "rpca", {"degree": p["degree"]}, None
+        tr, info, clutter = _clutter(rng, [])
+        return tr, [], "combined" if spec.seed % 2 == 0 else "rpca", info, clutter
     real = spec.kind == "real" or p.get("real", False)
     base = _gotcha(p["degree"]) if real else None
     ref = float(np.median(np.abs(base.data).max(axis=1))) if real else 1.0
@@ -155,9 +169,9 @@ def make_scene(spec: Spec):
         u2 = range_speed(first.velocity_mps, geom) + rng.uniform(-0.5, 0.5)
         movers = [first, _mover(rng, geom, (0, 0), amp[1], u=u2)]
     if real:
-        return inject(base, movers), movers, "rpca", {"degree": p["degree"]}
-    tr, info = _clutter(rng, movers, snr_db=20.0)
-    return tr, movers, "combined" if spec.seed % 2 == 0 else "rpca", info
+        return inject(base, movers), movers, "rpca", {"degree": p["degree"]}, None
+    tr, info, clutter = _clutter(rng, movers, snr_db=20.0)
+    return tr, movers, "combined" if spec.seed % 2 == 0 else "rpca", info, clutter
 
 
 # =================================================================== methods

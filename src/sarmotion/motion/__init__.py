@@ -22,7 +22,9 @@ position and seeks only the velocity):
 
 **Detection** -- :mod:`~sarmotion.motion.detector`: detection as a statistical test, the
 local-floor statistic of the ``g(u)`` peaks, its measured null distribution and
-threshold, the shape test and the focus gain against a stationary explanation.
+threshold, the shape test and the focus gain against a stationary explanation;
+:mod:`~sarmotion.motion.coherent`: the two-stage coherent detector (``g(u)`` screen,
+then the generalized likelihood ratio of the fit) and its clairvoyant bound.
 
 **Maximum likelihood** -- the estimator of :func:`sarmotion.pipeline.analyze`:
 
@@ -43,6 +45,17 @@ from .aperture import (
     refine_on_aperture,
 )
 from .bounds import PointBound, fisher_information, point_mover_bound, range_gradients
+from .coherent import (
+    COHERENT_NULL_TAIL,
+    SCREEN_PROBABILITY,
+    clairvoyant_threshold_db,
+    coherent_false_alarm_probability,
+    coherent_statistic_db,
+    coherent_threshold_db,
+    matched_filter_variance,
+    neighbourhood_noise,
+    screen_threshold_db,
+)
 from .cross_range import CrossRangeSpeed, cross_range_objective, estimate_cross_range_speed
 from .detector import (
     NULL_TAIL,
@@ -114,6 +127,15 @@ __all__ = [
     "point_peak_width",
     "stationary_explanation",
     "threshold_db",
+    "COHERENT_NULL_TAIL",
+    "SCREEN_PROBABILITY",
+    "clairvoyant_threshold_db",
+    "coherent_false_alarm_probability",
+    "coherent_statistic_db",
+    "coherent_threshold_db",
+    "matched_filter_variance",
+    "neighbourhood_noise",
+    "screen_threshold_db",
     # maximum likelihood
     "MatchedFilter",
     "PointFit",

@@ -24,6 +24,7 @@ from ..motion import (
     central_sub_aperture,
     detect_range_speeds,
     range_speed_resolution,
+    screen_threshold_db,
 )
 from ..separation import Separation, separate
 from ._timing import staged, timed
@@ -164,15 +165,23 @@ def find_range_speeds(
     ``u >> V R / L`` (``eq:AnnihCond``) are admitted because the focus test of the mover
     stage rejects those a stationary point explains. ``acquisition`` is that of
     ``moving`` (the central sub-aperture).
+
+    With ``options.detector == "coherent"`` this is the first stage of the coherent
+    detector (:mod:`sarmotion.motion.coherent`): the threshold is the ``g(u)`` null's
+    per-candidate point :func:`~sarmotion.motion.screen_threshold_db` (unless
+    ``options.threshold_db`` is given), and the mover stage tests each candidate's fit.
     """
     data = Traces(data=moving, acquisition=acquisition)
+    threshold = options.threshold_db
+    if options.detector == "coherent" and threshold is None:
+        threshold = screen_threshold_db()
     geom = acquisition.geometry
     apparent = geom.speed_mps * (options.image_size_m / np.sqrt(2.0)) / geom.range_m
     detection = detect_range_speeds(
         data,
         speed_range_mps=options.speed_range_mps,
         false_alarm_rate=options.false_alarm_rate,
-        threshold=options.threshold_db,
+        threshold=threshold,
         min_speed_mps=max(2.0 * range_speed_resolution(data), apparent),
         max_width=options.max_peak_width,
     )

@@ -47,6 +47,9 @@ from ..motion import (
     PointFit,
     RangeSpeedDetection,
     StationaryExplanation,
+    coherent_false_alarm_probability,
+    coherent_statistic_db,
+    coherent_threshold_db,
     detect_range_speeds,
     duplicate_fits,
     estimate_cross_range_speed,
@@ -325,6 +328,12 @@ def fit_candidates(
             log.info("g(u) candidate at %.2f m/s: what a subtracted mover left", u)
             continue
         value = fit.amplitude * sub.n_pulses
+        coherent = _coherent_test(residual, fit, detection, options, acquisition=sub)
+        if coherent is not None and coherent[0] < coherent[1]:
+            log.info(
+                "g(u) candidate at %.2f m/s: likelihood ratio %.2f dB under %.2f dB", u, *coherent
+            )
+            continue
         why = stationary_explanation(
             residual, fit.position_m, fit.velocity_mps, value, acquisition=sub
         )
@@ -338,7 +347,8 @@ def fit_candidates(
             )
             continue
         residual = residual - point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
-        out.append((fit, _evidence(detection, statistic, float(current.widths[k]), why)))
+        evidence = _evidence(detection, statistic, float(current.widths[k]), why, coherent)
+        out.append((fit, evidence))
         with timed(timings, "movers.redetection"):
             current = _redetect(Traces(data=residual, acquisition=sub), detection, options)
     return out
@@ -365,11 +375,53 @@ def _redetect(
     )
 
 
+def _coherent_test(
+    residual: NDArray[np.complexfloating],
+    fit: PointFit,
+    detection: RangeSpeedDetection,
+    options: AnalysisOptions,
+    *,
+    acquisition: Acquisition,
+) -> tuple[float, float, float] | None:
+    """Stage 2 of the coherent detector: ``(Lambda, threshold, p-value)`` of a fit (dB).
+
+    ``None`` for the ``g(u)`` detector. ``N`` of the union bound is the number of
+    candidates the first screen passed (:func:`~sarmotion.motion.coherent_threshold_db`).
+    """
+    if options.detector != "coherent":
+        return None
+    n = max(1, detection.range_speeds.n_movers)
+    stat = coherent_statistic_db(
+        residual,
+        fit.position_m,
+        fit.velocity_mps,
+        acquisition=acquisition,
+        value=fit.amplitude * acquisition.n_pulses,
+    )
+    return (
+        stat,
+        coherent_threshold_db(options.false_alarm_rate, n),
+        coherent_false_alarm_probability(stat, n),
+    )
+
+
 def _evidence(
-    detection: RangeSpeedDetection, statistic: float, width: float, why: StationaryExplanation
+    detection: RangeSpeedDetection,
+    statistic: float,
+    width: float,
+    why: StationaryExplanation,
+    coherent: tuple[float, float, float] | None = None,
 ) -> MoverEvidence:
     """The detection record of an accepted candidate."""
+    extra = {}
+    if coherent is not None:
+        extra = dict(
+            coherent_statistic_db=coherent[0],
+            coherent_threshold_db=coherent[1],
+            coherent_p_value=coherent[2],
+        )
     return MoverEvidence(
+        **extra,
         statistic_db=statistic,
         threshold_db=detection.threshold_db,
         false_alarm_rate=detection.false_alarm_rate,

@@ -17,7 +17,10 @@ from ..core.traces import Traces
 from ..imaging import default_scene_size_m
 from ..separation import SeparationOptions
 
-__all__ = ["AnalysisOptions"]
+__all__ = ["AnalysisOptions", "DETECTORS"]
+
+#: The mover detectors (:attr:`AnalysisOptions.detector`).
+DETECTORS = ("g", "coherent")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -49,6 +52,13 @@ class AnalysisOptions:
     threshold_db : float or None
         Threshold on that statistic (dB), overriding ``false_alarm_rate``; ``None``
         (default) derives it from the rate.
+    detector : {"g", "coherent"}
+        The mover detector. ``"g"`` (default): the ``g(u)`` peak over its local floor
+        against the threshold of ``false_alarm_rate``. ``"coherent"``: two stages
+        (:mod:`sarmotion.motion.coherent`), the ``g(u)`` peaks that reach its null's
+        per-candidate 10 % point (or ``threshold_db``) are fitted and each fit's
+        generalized likelihood ratio ``|I|^2 / sigma_I^2`` is tested against the
+        threshold of ``false_alarm_rate`` from that statistic's measured null.
     max_peak_width : float
         Widest ``g(u)`` peak accepted as a mover, at half height above the local floor,
         in widths of a noise-free point mover's peak
@@ -95,6 +105,7 @@ class AnalysisOptions:
     speed_range_mps: tuple[float, float] = (-30.0, 30.0)
     false_alarm_rate: float = 0.01
     threshold_db: float | None = None
+    detector: str = "g"
     max_peak_width: float = 2.5
     min_focus_gain_db: float = 1.0
     joint_rounds: int = 2
@@ -122,6 +133,8 @@ class AnalysisOptions:
             raise ValueError(f"false_alarm_rate must be in (0, 1), got {self.false_alarm_rate!r}")
         if self.threshold_db is not None:
             finite(self.threshold_db, "threshold_db", unit="dB")
+        if self.detector not in DETECTORS:
+            raise ValueError(f"detector must be one of {DETECTORS}, got {self.detector!r}")
         positive(self.max_peak_width, "max_peak_width")
         finite(self.min_focus_gain_db, "min_focus_gain_db", unit="dB")
         integer(self.joint_rounds, "joint_rounds", minimum=0)

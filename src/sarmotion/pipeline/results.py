@@ -56,6 +56,11 @@ class MoverEvidence:
     stationary_within_extent : bool
         Whether it lies within the alias-free cross-range extent (only then is the gain
         tested).
+    coherent_statistic_db, coherent_threshold_db, coherent_p_value : float or None
+        With the coherent detector (:mod:`sarmotion.motion.coherent`): the fit's
+        generalized likelihood ratio ``10 log10(|I|^2 / sigma_I^2)`` (dB), the threshold
+        it passed (dB) and its per-scene significance; ``None`` with the ``g(u)``
+        detector.
     """
 
     statistic_db: float
@@ -66,6 +71,9 @@ class MoverEvidence:
     focus_gain_db: float
     stationary_point_m: tuple[float, float]
     stationary_within_extent: bool
+    coherent_statistic_db: float | None = None
+    coherent_threshold_db: float | None = None
+    coherent_p_value: float | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -1,0 +1,114 @@
+"""The coherent detector: its statistic's null distribution and its decisions.
+
+The statistic is ``10 log10(|I|^2 / sigma_I^2)`` (:mod:`sarmotion.motion.coherent`): at
+one fixed parameter in circular white noise it is exponential with mean 1 (chi-square
+with two degrees of freedom over two). The thresholds are set once, from the stated
+false-alarm rate and the null tail measured on other scenes
+(``benchmarks/detector_null.py --detector coherent``); seeds 7600+ are used nowhere else.
+"""
+
+import numpy as np
+import pytest
+
+from sarmotion.motion import (
+    COHERENT_NULL_TAIL,
+    MatchedFilter,
+    clairvoyant_threshold_db,
+    coherent_false_alarm_probability,
+    coherent_statistic_db,
+    coherent_threshold_db,
+    matched_filter_variance,
+    neighbourhood_noise,
+    screen_threshold_db,
+)
+from sarmotion.pipeline import AnalysisOptions, detect, estimate_movers
+from sarmotion.separation import SeparationOptions
+from sarmotion.simulation import random_scene, simulate
+
+
+def _acquisition(seed: int = 7600):
+    """The default one-degree acquisition of a simulated scene (117 pulses)."""
+    rng = np.random.default_rng(seed)
+    return simulate(random_scene(n_stationary=1, rng=rng)).traces
+
+
+def _noise(shape, rng, sigma2=1.0):
+    return np.sqrt(sigma2 / 2) * (rng.standard_normal(shape) + 1j * rng.standard_normal(shape))
+
+
+def test_likelihood_ratio_of_white_noise_is_exponential():
+    """``|I|^2 / sigma_I^2`` at a fixed parameter: mean 1 and ``P(> ln 10) = 0.1``.
+
+    250 seeded draws of white noise of unit variance per fast-time sample; the mean of an
+    exponential of mean 1 has standard deviation ``1 / sqrt(250)`` (four allowed), the
+    fraction beyond its 90 % point ``ln 10`` a binomial one (three allowed).
+    """
+    tr = _acquisition()
+    rng = np.random.default_rng(7601)
+    pos = tr.reference_point_m + np.array([3.0, -2.0, 0.0])
+    vel = np.array([[4.0, -1.5]])
+    var = matched_filter_variance(tr.acquisition, 1.0)
+    ratio = np.array(
+        [
+            abs(MatchedFilter(tr.with_data(_noise(tr.shape, rng))).responses(pos[None], vel)[0])
+            ** 2
+            / var
+            for _ in range(250)
+        ]
+    )
+    assert abs(ratio.mean() - 1.0) <= 4.0 / np.sqrt(ratio.size), ratio.mean()
+    beyond = float(np.mean(ratio > np.log(10.0)))
+    assert abs(beyond - 0.1) <= 3.0 * np.sqrt(0.09 / ratio.size), beyond
+
+
+def test_neighbourhood_level_of_white_noise_is_its_variance():
+    """The level the statistic divides by is the noise's variance (unbiased over draws).
+
+    Noise of variance 2.5 per sample; the mean of the level over 16 draws is within four
+    of its own standard errors of 2.5, and the statistic at a fixed parameter with that
+    level has the mean of the exponential within the same allowance plus the level's.
+    """
+    tr = _acquisition()
+    rng = np.random.default_rng(7602)
+    pos = tr.reference_point_m + np.array([-4.0, 5.0, 0.0])
+    vel = np.array([-6.0, 2.0])
+    levels, stats = [], []
+    for _ in range(16):
+        d = tr.with_data(_noise(tr.shape, rng, 2.5))
+        levels.append(neighbourhood_noise(d, pos, vel))
+        stats.append(coherent_statistic_db(d, pos, vel, noise_variance=2.5))
+    levels = np.asarray(levels)
+    se = levels.std(ddof=1) / np.sqrt(levels.size)
+    assert abs(levels.mean() - 2.5) <= 4.0 * se, (levels.mean(), se)
+    lin = 10 ** (np.asarray(stats) / 10)
+    assert abs(lin.mean() - 1.0) <= 4.0 / np.sqrt(lin.size)
+
+
+def test_thresholds_follow_the_stated_rules():
+    """Screen, coherent and clairvoyant thresholds from their formulas, and their p-values."""
+    t = COHERENT_NULL_TAIL
+    assert screen_threshold_db(0.1) == pytest.approx(1.34)  # the g(u) null's t_0
+    thr = coherent_threshold_db(0.01, 5)
+    assert thr == pytest.approx(t["t0_db"] + t["scale_db"] * np.log(t["p0"] * 5 / 0.01))
+    assert coherent_false_alarm_probability(thr, 5) == pytest.approx(0.01)
+    assert coherent_threshold_db(0.01, 10) > thr > coherent_threshold_db(0.1, 5)
+    # an exponential of mean 1 exceeds ln(1 / alpha) with probability alpha
+    assert 10 ** (clairvoyant_threshold_db(0.01) / 10) == pytest.approx(np.log(100.0))
+    with pytest.raises(ValueError):
+        coherent_threshold_db(1.5, 3)
+    with pytest.raises(ValueError):
+        AnalysisOptions(detector="incoherent")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("seed", "method"), [(7610, "rpca"), (7611, "combined"), (7612, "rpca")])
+def test_no_mover_in_point_clutter_without_movers(seed, method):
+    """Fresh clutter scenes (10-80 targets, 0-30 dB SNR): the coherent detector declares none."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(10, 81))
+    snr = float(rng.choice([0.0, 10.0, 20.0, 30.0]))
+    traces = simulate(random_scene(n_stationary=n, rng=rng), snr_db=snr, rng=rng).traces
+    options = AnalysisOptions(
+        separation=SeparationOptions(method=method), trajectory=False, detector="coherent"
+    )
+    assert estimate_movers(detect(traces, options)).movers == ()
