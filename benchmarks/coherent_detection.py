@@ -262,7 +262,8 @@ def main() -> None:
             ms = rec["movers"]
             print(
                 f"[{k + 1}/{len(specs)}] {rec['kind']} seed {rec['seed']}: "
-                f"g {sum(m['g'] for m in ms)}/{len(ms)} ({rec['false_g']} false), coherent {sum(m['coherent'] for m in ms)} "
+                f"g {sum(m['g'] for m in ms)}/{len(ms)} ({rec['false_g']} false), "
+                f"coherent {sum(m['coherent'] for m in ms)} "
                 f"({rec['false_coherent']} false), clairvoyant "
                 f"{sum(bool(m['clairvoyant']) for m in ms)}; {sum(rec['seconds'].values()):.0f} s",
                 flush=True,
