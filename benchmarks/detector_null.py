@@ -257,7 +257,7 @@ def write(summary: dict, records: list[dict], out: Path, seconds: float) -> None
             "",
             *lines,
             "",
-            f"{note} {seconds:.0f} s.",
+            note + ("" if np.isnan(seconds) else f" {seconds:.0f} s."),
         ]
     )
     (out / f"{stem}.md").write_text(text + "\n")
@@ -276,7 +276,22 @@ def main() -> None:
         default="g",
         help="the g(u) statistic (default) or the coherent one (detector_null_coherent.*)",
     )
+    ap.add_argument(
+        "--from-records",
+        type=Path,
+        help="rewrite the table from a saved JSON, against the model tail now in use",
+    )
     args = ap.parse_args()
+    if args.from_records:
+        records = json.loads(args.from_records.read_text())["records"]
+        if args.detector == "coherent":
+            from sarmotion.motion import coherent_threshold_db
+
+            for r in records:
+                r["threshold_db"] = coherent_threshold_db(0.01, r["n_candidates"])
+                r["declared"] = int(sum(t >= r["threshold_db"] for t in r["statistic_db"]))
+        write(summarise(records, args.detector), records, args.out, float("nan"))
+        return
     jobs = [("real", d, 0) for d in range(5)]
     jobs += [(k, i, args.seed) for k in ("sim_rpca", "sim_combined") for i in range(args.scenes)]
     run = coherent_candidates if args.detector == "coherent" else candidates

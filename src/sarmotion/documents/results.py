@@ -108,6 +108,12 @@ def _mover(m: Mover) -> dict[str, Any]:
         "stationary_point_m": [float(v) for v in ev.stationary_point_m],
         "stationary_within_extent": bool(ev.stationary_within_extent),
     }
+    if ev.coherent_statistic_db is not None:  # the coherent detector's stage 2
+        entry["detection"]["coherent"] = {
+            "statistic_db": float(ev.coherent_statistic_db),
+            "threshold_db": float(ev.coherent_threshold_db),
+            "p_value": float(ev.coherent_p_value),
+        }
     entry["standard_errors"] = {
         "range_position_m": b.range_position_m,
         "range_speed_mps": b.range_speed_mps,
