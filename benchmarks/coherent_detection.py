@@ -145,6 +145,8 @@ def _half_point(movers: list[dict], who: str) -> float:
         if sel:
             cen.append(0.5 * (lo + hi))
             pd.append(np.mean([m[who] for m in sel]))
+    if pd and pd[0] >= 0.5:
+        return -np.inf  # already at the weakest bin
     for k in range(len(pd) - 1):
         if pd[k] < 0.5 <= pd[k + 1]:
             return float(cen[k] + (0.5 - pd[k]) * (cen[k + 1] - cen[k]) / (pd[k + 1] - pd[k]))
@@ -197,10 +199,21 @@ def write(records: list[dict], out: Path, seconds: float) -> None:
                 f"{f(_pd(s, 'clairvoyant'))} | {len(r)} | {f(_pd(r, 'g'))} | "
                 f"{f(_pd(r, 'coherent'))} |"
             )
-    hp = lambda ms, w: "-" if np.isnan(_half_point(ms, w)) else f"{_half_point(ms, w):.1f}"  # noqa: E731
+
+    def hp(ms: list[dict], who: str) -> str:
+        v = _half_point(ms, who)
+        if np.isnan(v):
+            return "-"
+        if np.isinf(v):  # P_d >= 0.5 already in the weakest bin with movers
+            lo = max(e for e in EDGES if e <= min(m["strength_db"] for m in ms))
+            hi = EDGES[EDGES.index(lo) + 1]
+            return f"<= {0.5 * (lo + hi):.0f}"
+        return f"{v:.1f}"
+
     lines += [
         "",
-        "Strength at P_d = 0.5 (dB, interpolated between bin centres; '-': not crossed):",
+        "Strength at P_d = 0.5 (dB, interpolated between bin centres; '-': not reached; "
+        "'<= x': reached at the centre x of the weakest bin):",
         "",
         "| population | g(u) | coherent | clairvoyant |",
         "|---|---|---|---|",

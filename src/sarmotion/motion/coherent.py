@@ -22,7 +22,10 @@ cross-range speeds within 3 cross-range-speed resolutions. A mover's main lobe i
 resolution wide in each, so most draws fall off it and the median ignores the rest; the
 leakage of stationary clutter that a separation leaves in ``S`` (the response of many
 stationary targets to a moving signature) is broad in the parameters and raises the
-level there as much as at the candidate: a constant-false-alarm-rate normalisation. At
+level there as much as at the candidate: a constant-false-alarm-rate normalisation. The
+level is taken on the data minus the candidate's fitted model: its own side lobes in the
+neighbourhood, a fixed fraction of its peak, would otherwise cap ``Lambda`` of a strong
+mover at the peak-to-side-lobe ratio. At
 one fixed ``theta`` in white noise ``|I|^2 / sigma_I^2`` is exponential with mean 1
 (chi-square with two degrees of freedom over two): ``P(Lambda > t) = exp(-10^(t /
 10))``. Maximised over the search it is the largest of many such cells, whose tail in
@@ -46,11 +49,12 @@ in dB, ``P(Lambda > t) = p_0 exp(-(t - t_0) / s)`` (``p_0 = 0.1``, ``s`` the mea
 over ``t_0``, the maximum-likelihood scale of an exponential), fitted on the heaviest
 population: :data:`COHERENT_NULL_TAIL`. The heaviest is simulated point clutter
 separated by robust PCA, whose tail holds the leakage of stationary clutter into ``S``
-at range speeds just beyond the stationary band (the response of several stationary targets to a moving
-signature, which a single stationary point does not explain): it is this leakage, not
-the noise, that sets the threshold. With ``N`` screened candidates in a scene the per-scene
-false-alarm rate ``alpha`` is met by :func:`coherent_threshold_db` ``= t_0 + s ln(p_0 N /
-alpha)`` (the union bound). The table is ``benchmarks/results/detector_null_coherent.md``.
+at range speeds just beyond the stationary band (the response of several stationary
+targets to a moving signature, which a single stationary point does not explain): it
+is this leakage, not the noise, that sets the threshold. With ``N`` screened candidates
+in a scene the per-scene false-alarm rate ``alpha`` is met by
+:func:`coherent_threshold_db` ``= t_0 + s ln(p_0 N / alpha)`` (the union bound). The
+table is ``benchmarks/results/detector_null_coherent.md``.
 
 **Clairvoyant bound.** The matched filter at a mover's *true* parameters on data whose
 clutter is removed exactly is a single test of a known ``theta``: its null is the
@@ -69,7 +73,7 @@ from numpy.typing import ArrayLike
 from ..core import Acquisition, C, Traces, as_traces
 from ..imaging import resolution
 from .detector import NULL_TAIL
-from .likelihood import MatchedFilter, matched_filter_noise_variance
+from .likelihood import MatchedFilter, matched_filter_noise_variance, point_model
 from .speed_resolution import cross_range_speed_resolution
 
 __all__ = [
@@ -97,7 +101,7 @@ NOISE_NEIGHBOURHOOD = {"cells": 4.0, "doppler": 5.0, "cross_range_speed": 3.0}
 #: Exponential tail of ``Lambda`` (dB) of screened null candidates above its 90 %
 #: quantile (module notes; ``benchmarks/detector_null.py --detector coherent``): the
 #: heaviest measured population.
-COHERENT_NULL_TAIL = {"t0_db": 14.33, "scale_db": 4.47, "p0": 0.10}
+COHERENT_NULL_TAIL = {"t0_db": 14.89, "scale_db": 4.09, "p0": 0.10}
 
 
 def screen_threshold_db(probability: float = SCREEN_PROBABILITY) -> float:
@@ -179,7 +183,10 @@ def coherent_statistic_db(
         ``I`` at the fit (data units times ``n_pulses``); computed when not given.
     noise_variance : float, optional
         Per-fast-time-sample interference level (data units squared); default the
-        matched filter's level in the fit's neighbourhood (:func:`neighbourhood_noise`).
+        matched filter's level in the fit's neighbourhood (:func:`neighbourhood_noise`)
+        on ``data`` minus the candidate's fitted model (:func:`point_model` at amplitude
+        ``I / n_pulses``), so that a strong mover's own side lobes do not count as
+        interference.
 
     Returns
     -------
@@ -190,8 +197,9 @@ def coherent_statistic_db(
     vel = np.asarray(velocity_mps, dtype=np.float64).reshape(2)
     if value is None:
         value = complex(MatchedFilter(tr).responses(pos[None], vel[None])[0])
-    if noise_variance is None:
-        noise_variance = neighbourhood_noise(tr, pos, vel)
+    if noise_variance is None:  # the interference there, the candidate's own model removed
+        model = point_model(tr.acquisition, pos, vel, value / tr.n_pulses)
+        noise_variance = neighbourhood_noise(tr.with_data(tr.data - model), pos, vel)
     var = matched_filter_variance(tr.acquisition, float(noise_variance))
     return float(10.0 * np.log10(max(abs(value) ** 2, 1e-300) / max(var, 1e-300)))
 
