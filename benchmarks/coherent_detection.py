@@ -24,7 +24,7 @@ Scoring is that of ``movers_accuracy.py`` (a detection is an estimate matched to
 mover in range speed and range position; an unmatched estimate is a false mover).
 ``strength`` is the mover's reflectivity over the median per-pulse peak of ``|M|`` (dB).
 The table gives P_d by strength bin for the three, per population (simulated point
-clutter, real GOTCHA clutter), the strength where each reaches P_d = 0.5 (linear
+clutter, real GOTCHA clutter), the strength beyond which each keeps P_d >= 0.5 (linear
 interpolation between bins), and the false movers over all scenes.
 """
 
@@ -138,16 +138,20 @@ def _pd(sel: list[dict], who: str) -> float:
 
 
 def _half_point(movers: list[dict], who: str) -> float:
-    """Strength (dB) where P_d crosses 0.5, interpolated between bin centres."""
+    """Strength (dB) beyond which P_d stays >= 0.5: its last upward crossing of 0.5.
+
+    Interpolated between bin centres; the last crossing, not the first, so that a bin of
+    a few movers that happen to be found below it does not count.
+    """
     cen, pd = [], []
     for lo, hi in zip(EDGES[:-1], EDGES[1:], strict=True):
         sel = [m for m in movers if lo <= m["strength_db"] < hi and m[who] is not None]
         if sel:
             cen.append(0.5 * (lo + hi))
             pd.append(np.mean([m[who] for m in sel]))
-    if pd and pd[0] >= 0.5:
+    if pd and min(pd) >= 0.5:
         return -np.inf  # already at the weakest bin
-    for k in range(len(pd) - 1):
+    for k in reversed(range(len(pd) - 1)):
         if pd[k] < 0.5 <= pd[k + 1]:
             return float(cen[k] + (0.5 - pd[k]) * (cen[k + 1] - cen[k]) / (pd[k + 1] - pd[k]))
     return float("nan")
@@ -212,7 +216,8 @@ def write(records: list[dict], out: Path, seconds: float) -> None:
 
     lines += [
         "",
-        "Strength at P_d = 0.5 (dB, interpolated between bin centres; '-': not reached; "
+        "Strength beyond which P_d stays >= 0.5 (dB, interpolated between bin centres; "
+        "'-': not reached; "
         "'<= x': reached at the centre x of the weakest bin):",
         "",
         "| population | g(u) | coherent | clairvoyant |",
