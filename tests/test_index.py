@@ -121,6 +121,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "motion._aligned": ("test_aligned_fast.py",),
     "motion.aperture": ("test_tracking.py", "test_fast_movers.py"),
     "motion.bounds": ("test_movers_detection.py",),
+    "motion.coherent": ("test_coherent_detection.py",),
     "motion.cross_range": ("test_velocity.py",),
     "motion.detector": ("test_movers_detection.py", "test_detector_null.py"),
     "motion.likelihood": ("test_likelihood_fit.py", "test_movers_detection.py"),
