@@ -128,3 +128,30 @@ def test_no_mover_on_a_real_degree(gotcha_files):
     found = detect(read_gotcha([gotcha_files[3]]), options)
     assert found.candidates.range_speeds.n_movers >= 2  # stage 2 is exercised
     assert estimate_movers(found).movers == ()
+
+
+@pytest.mark.slow
+def test_scene1_keeps_its_movers_with_the_coherent_detector():
+    """Scene 1's two movers are declared by the coherent detector, with its evidence.
+
+    Their range speeds are those of the truth within a range-speed resolution; each
+    passed its likelihood-ratio threshold, and ``results.json`` carries the record.
+    """
+    from sarmotion.core import range_speed
+    from sarmotion.documents.results import results_document
+    from sarmotion.motion import range_speed_resolution
+    from sarmotion.pipeline import analyze
+    from sarmotion.simulation import load_scene
+
+    sim = simulate(load_scene("scene1"))
+    result = analyze(sim.traces, AnalysisOptions(detector="coherent", trajectory=False))
+    geom = sim.traces.geometry
+    truth = sorted(range_speed(t.velocity_mps, geom) for t in sim.scene.moving)
+    found = sorted(m.range_speed_mps for m in result.movers)
+    assert len(found) == len(truth)
+    assert np.allclose(found, truth, atol=range_speed_resolution(sim.traces))
+    for m, entry in zip(result.movers, results_document(result)["movers"], strict=True):
+        ev = m.evidence
+        assert ev.coherent_statistic_db >= ev.coherent_threshold_db
+        assert ev.coherent_p_value <= 0.01
+        assert entry["detection"]["coherent"]["statistic_db"] == ev.coherent_statistic_db
