@@ -3,6 +3,13 @@
 Regenerate the table (about 5 min on 2 cores)::
 
     python benchmarks/detector_null.py --out benchmarks/results
+    python benchmarks/detector_null.py --detector coherent --scenes 50 --out benchmarks/results
+
+The second measures the coherent detector's statistic (:mod:`sarmotion.motion.coherent`,
+``COHERENT_NULL_TAIL``) on the same populations (about 4 min on 2 loaded cores; table
+``detector_null_coherent.md``): every candidate the ``g(u)`` screen passes, fitted on
+``S``, less those the focus test explains as stationary points; ``--from-records`` writes
+a table again from a saved JSON against the tail now in use.
 
 The threshold of :mod:`sarmotion.motion.detector` rests on an exponential tail fitted to
 the local-floor statistic of candidates measured on data without movers
