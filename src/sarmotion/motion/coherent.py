@@ -25,11 +25,10 @@ stationary targets to a moving signature) is broad in the parameters and raises 
 level there as much as at the candidate: a constant-false-alarm-rate normalisation. The
 level is taken on the data minus the candidate's fitted model: its own side lobes in the
 neighbourhood, a fixed fraction of its peak, would otherwise cap ``Lambda`` of a strong
-mover at the peak-to-side-lobe ratio. At
-one fixed ``theta`` in white noise ``|I|^2 / sigma_I^2`` is exponential with mean 1
-(chi-square with two degrees of freedom over two): ``P(Lambda > t) = exp(-10^(t /
-10))``. Maximised over the search it is the largest of many such cells, whose tail in
-dB is lighter than exponential.
+mover at the peak-to-side-lobe ratio. At one fixed ``theta`` in white noise ``|I|^2 /
+sigma_I^2`` is exponential with mean 1 (chi-square with two degrees of freedom over
+two): ``P(Lambda > t) = exp(-10^(t / 10))``. Maximised over the search it is the largest
+of many such cells, whose tail in dB is lighter than exponential.
 
 **Two stages.** (1) the ``g(u)`` screen: every candidate of ``g(u)`` beyond the
 stationary band and narrower than the shape test allows (as the ``g(u)`` detector) whose
