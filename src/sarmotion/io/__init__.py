@@ -10,11 +10,20 @@ file and the problem; implausible geometry or samples break the rules of
 computes from the headers of its input what it will allocate and refuses an input beyond
 :func:`memory_limit` (:func:`set_memory_limit`; ``--max-memory`` on the command line)
 before allocating it. Large files are read block by block with :func:`open_cphd_blocks`
-and :func:`open_native_blocks`.
+and :func:`open_native_blocks`, and a CPHD file is written block by block with
+:func:`write_cphd_blocks` (:class:`CphdWriter`).
 """
 
 from .._limits import memory_limit, set_memory_limit
-from .cphd import CphdBlocks, is_cphd_file, open_cphd_blocks, read_cphd, write_cphd
+from .cphd import (
+    CphdBlocks,
+    CphdWriter,
+    is_cphd_file,
+    open_cphd_blocks,
+    read_cphd,
+    write_cphd,
+    write_cphd_blocks,
+)
 from .errors import DataError
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
 from .jsonfile import write_json
@@ -45,6 +54,8 @@ __all__ = [
     "is_gotcha_file",
     "read_cphd",
     "write_cphd",
+    "write_cphd_blocks",
+    "CphdWriter",
     "is_cphd_file",
     "save_traces",
     "load_traces",

@@ -72,7 +72,9 @@ import datetime as _dt
 import json
 import logging
 import os
+import sys
 from collections.abc import Iterator
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -86,8 +88,9 @@ from numpy.typing import ArrayLike, NDArray
 from .._limits import over_budget, phase_history_bytes
 from .._validation import integer
 from .._version import __version__
-from ..core import C, Radar, Traces, Trajectory, as_point, delay_phase
-from ..core.spectral import to_fast_time
+from ..core import Acquisition, C, Radar, Traces, Trajectory, as_point, delay_phase
+from ..core.blocks import PulseBlocks
+from ..core.spectral import to_fast_time, to_frequency
 from .errors import DataError
 from .native import _to_json
 from .plausibility import (
@@ -102,7 +105,15 @@ from .plausibility import (
 )
 from .staging import staged_paths
 
-__all__ = ["CphdBlocks", "is_cphd_file", "open_cphd_blocks", "read_cphd", "write_cphd"]
+__all__ = [
+    "CphdBlocks",
+    "CphdWriter",
+    "is_cphd_file",
+    "open_cphd_blocks",
+    "read_cphd",
+    "write_cphd",
+    "write_cphd_blocks",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -770,6 +781,9 @@ _PVP_LAYOUT = (
 
 _CHANNEL_ID = "1"
 
+#: Signal samples as written: CF8, big-endian (NGA.STND.0068-1 binary data).
+_SIGNAL_DTYPE = np.dtype(">c8")
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _Layout:
@@ -970,14 +984,51 @@ def _utc(value: _dt.datetime | str | None) -> _dt.datetime:
     return value.astimezone(_dt.UTC)
 
 
-def _core_name(traces: Traces, path: Path) -> str:
-    meta = traces.metadata
+def _core_name(meta: dict[str, Any], path: Path) -> str:
     if isinstance(meta.get("scene"), str):
         return meta["scene"]
     files = meta.get("files")
     if isinstance(files, list) and files:
         return str(files[0]) if len(files) == 1 else f"{files[0]} .. {files[-1]}"
     return path.stem
+
+
+def _origin(origin_llh: ArrayLike) -> NDArray[np.float64]:
+    """``origin_llh`` checked, its longitude wrapped to [-180, 180) degrees."""
+    llh = np.array(origin_llh, dtype=np.float64)
+    if llh.shape != (3,) or not np.all(np.isfinite(llh)) or abs(llh[0]) > 90:
+        raise ValueError(f"origin_llh must be (lat_deg, lon_deg, hae_m), got {origin_llh!r}")
+    llh[1] = (llh[1] + 180.0) % 360.0 - 180.0
+    return llh
+
+
+def _header(
+    radar: Radar,
+    metadata: dict[str, Any],
+    target: Path,
+    collection_start: _dt.datetime | str | None,
+    classification: str,
+    release_info: str,
+) -> dict[str, Any]:
+    """What the XML needs besides the geometry: names, times, the stored parameters."""
+    radar_json = {
+        "carrier_hz": radar.carrier_hz,
+        "bandwidth_hz": radar.bandwidth_hz,
+        "n_samples": radar.n_samples,
+        "frequency_step_hz": radar.frequency_step_hz,
+        "pulse": radar.pulse,
+    }
+    return {
+        "core_name": _core_name(metadata, target),
+        "classification": classification,
+        "release_info": release_info,
+        "collection_start": _utc(collection_start),
+        "now": _dt.datetime.now(_dt.UTC).replace(microsecond=0),
+        "parameters": {
+            "radar": json.dumps(radar_json),
+            "metadata": _to_json(metadata, "traces"),
+        },
+    }
 
 
 def write_cphd(
@@ -1030,30 +1081,11 @@ def write_cphd(
     """
     if not isinstance(traces, Traces):
         raise TypeError(f"traces must be a Traces object, got {type(traces).__name__}")
-    llh = np.asarray(origin_llh, dtype=np.float64)
-    if llh.shape != (3,) or not np.all(np.isfinite(llh)) or abs(llh[0]) > 90:
-        raise ValueError(f"origin_llh must be (lat_deg, lon_deg, hae_m), got {origin_llh!r}")
-    llh[1] = (llh[1] + 180.0) % 360.0 - 180.0
+    llh = _origin(origin_llh)
     target = Path(path)
-    radar = traces.radar
-    radar_json = {
-        "carrier_hz": radar.carrier_hz,
-        "bandwidth_hz": radar.bandwidth_hz,
-        "n_samples": radar.n_samples,
-        "frequency_step_hz": radar.frequency_step_hz,
-        "pulse": radar.pulse,
-    }
-    header = {
-        "core_name": _core_name(traces, target),
-        "classification": classification,
-        "release_info": release_info,
-        "collection_start": _utc(collection_start),
-        "now": _dt.datetime.now(_dt.UTC).replace(microsecond=0),
-        "parameters": {
-            "radar": json.dumps(radar_json),
-            "metadata": _to_json(traces.metadata, "traces"),
-        },
-    }
+    header = _header(
+        traces.radar, traces.metadata, target, collection_start, classification, release_info
+    )
     lay = _layout(traces, llh)
     meta = skcphd.Metadata(xmltree=_xml(traces, lay, header))
     signal = np.ascontiguousarray(traces.phase_history().astype(np.complex64))
@@ -1063,6 +1095,189 @@ def write_cphd(
             writer.write_pvp(_CHANNEL_ID, lay.pvps)
     logger.debug("wrote CPHD %s: %d vectors of %d samples", target, *traces.shape)
     return target
+
+
+# ------------------------------------------------------------------------ block writing
+class CphdWriter:
+    """A CPHD file written a block of vectors at a time (the file of :func:`write_cphd`).
+
+    The XML and the PVPs (which need only the acquisition's axes) are written through
+    ``sarkit.cphd.Writer`` on entering; :meth:`write` then puts each block of vectors in
+    its place in the signal block, converting it from the traces' fast time to the phase
+    history (complex64, big-endian CF8, as ``sarkit`` writes). Only one block is held at
+    a time. The file is written under a temporary name beside ``path`` and renamed onto
+    it when the ``with`` block ends with every vector written; if the block raises, or
+    ends before the last vector, the temporary file is removed and ``path`` is left as
+    it was (absent, or its previous content).
+
+    Parameters
+    ----------
+    path : path
+        Output file; its directory must exist.
+    acquisition : Acquisition or PulseBlocks
+        Anything with ``trajectory``, ``radar`` and ``reference_point_m``: the axes of
+        every vector to be written.
+    metadata : dict, optional
+        Provenance stored with the file (JSON-serialisable), as ``Traces.metadata``.
+    origin_llh, collection_start, classification, release_info, overwrite
+        As for :func:`write_cphd`.
+
+    Examples
+    --------
+    >>> with CphdWriter("big.cphd", source) as out:  # doctest: +SKIP
+    ...     for start, stop, data in source.blocks(256):
+    ...         out.write(start, data)
+    """
+
+    def __init__(
+        self,
+        path: PathLike,
+        acquisition: Any,
+        *,
+        metadata: dict[str, Any] | None = None,
+        origin_llh: ArrayLike = (0.0, 0.0, 0.0),
+        collection_start: _dt.datetime | str | None = None,
+        classification: str = "UNCLASSIFIED",
+        release_info: str = "UNRESTRICTED",
+        overwrite: bool = True,
+    ) -> None:
+        self.path = Path(path)
+        self.acquisition = Acquisition(
+            trajectory=acquisition.trajectory,
+            radar=acquisition.radar,
+            reference_point_m=acquisition.reference_point_m,
+        )
+        if metadata is None:
+            metadata = dict(getattr(acquisition, "metadata", {}) or {})
+        header = _header(
+            self.acquisition.radar,
+            metadata,
+            self.path,
+            collection_start,
+            classification,
+            release_info,
+        )
+        self._lay = _layout(self.acquisition, _origin(origin_llh))
+        self._meta = skcphd.Metadata(xmltree=_xml(self.acquisition, self._lay, header))
+        self._overwrite = bool(overwrite)
+        self._stack: ExitStack | None = None
+        self._fh: Any = None
+        self._signal_offset = 0
+        self.n_written = 0
+
+    @property
+    def n_pulses(self) -> int:
+        """Vectors the file holds when complete."""
+        return self.acquisition.n_pulses
+
+    def __enter__(self) -> CphdWriter:
+        if self._stack is not None:
+            raise RuntimeError(f"{self.path}: the writer is already open")
+        stack = ExitStack()
+        try:
+            (tmp,) = stack.enter_context(staged_paths([self.path], overwrite=self._overwrite))
+            fh = stack.enter_context(tmp.open("x+b"))
+            writer = skcphd.Writer(fh, self._meta)  # the file header and the XML
+            writer.write_pvp(_CHANNEL_ID, self._lay.pvps)
+            fh.flush()
+            fh.seek(0)
+            _, kvp = skcphd.read_file_header(fh)
+            self._signal_offset = int(kvp["SIGNAL_BLOCK_BYTE_OFFSET"])
+        except BaseException:
+            stack.close()
+            raise
+        self._stack, self._fh = stack, fh
+        return self
+
+    def write(self, start: int, data: ArrayLike) -> None:
+        """Write the vectors ``start:start + len(data)``; blocks come in order from 0.
+
+        Parameters
+        ----------
+        start : int
+            First vector of the block: the number of vectors written so far.
+        data : (n, n_samples) array_like
+            The block in the :class:`~sarmotion.core.traces.Traces` convention (complex
+            baseband in fast time, ``t = 0`` at sample ``n_samples // 2``).
+        """
+        if self._fh is None:
+            raise RuntimeError(f"{self.path}: write() outside the writer's with block")
+        if start != self.n_written:
+            raise ValueError(
+                f"blocks must come in order: vector {self.n_written} is next, got {start}"
+            )
+        block = np.asarray(data)
+        n_samples = self.acquisition.n_samples
+        if block.ndim != 2 or block.shape[1] != n_samples or block.shape[0] < 1:
+            raise ValueError(f"a block must be (n >= 1, {n_samples}), got {block.shape}")
+        if start + block.shape[0] > self.n_pulses:
+            raise ValueError(
+                f"vectors {start}:{start + block.shape[0]} are beyond the {self.n_pulses} "
+                "of the acquisition"
+            )
+        if not np.all(np.isfinite(block)):
+            raise ValueError(f"the block at vector {start} has NaN or infinite samples")
+        signal = to_frequency(block).astype(_SIGNAL_DTYPE)
+        self._fh.seek(self._signal_offset + start * n_samples * _SIGNAL_DTYPE.itemsize)
+        self._fh.write(signal.tobytes())
+        self.n_written += block.shape[0]
+
+    def __exit__(self, kind: Any, value: Any, traceback: Any) -> None:
+        stack, self._stack, self._fh = self._stack, None, None
+        if stack is None:
+            return
+        # unwinding the stack closes the file, then renames it onto path, or removes it
+        # when it unwinds with an exception
+        if kind is None and self.n_written != self.n_pulses:
+            try:
+                raise ValueError(
+                    f"{self.path}: {self.n_written} of {self.n_pulses} vectors written; "
+                    "nothing written"
+                )
+            except ValueError:
+                stack.__exit__(*sys.exc_info())
+                raise
+        stack.__exit__(kind, value, traceback)
+        if kind is None:
+            logger.debug("wrote CPHD %s: %d x %d vectors", self.path, *self.acquisition.shape)
+
+
+def write_cphd_blocks(
+    path: PathLike,
+    source: PulseBlocks,
+    *,
+    block_pulses: int = 256,
+    **options: Any,
+) -> Path:
+    """Write a :class:`~sarmotion.core.blocks.PulseBlocks` source as CPHD, block by block.
+
+    The file is that of :func:`write_cphd` for the traces the source's blocks make up,
+    written with :class:`CphdWriter`: peak memory is one block (``block_pulses`` x
+    ``n_samples``) and its phase history, not the file.
+
+    Parameters
+    ----------
+    path : path
+        Output file; its directory must exist.
+    source : PulseBlocks
+        The acquisition (``trajectory``, ``radar``, ``reference_point_m``,
+        ``metadata``) and its data by blocks.
+    block_pulses : int
+        Vectors per block (>= 1).
+    **options
+        ``origin_llh``, ``collection_start``, ``classification``, ``release_info``,
+        ``overwrite``: as for :func:`write_cphd`.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    rows = integer(block_pulses, "block_pulses", minimum=1)
+    with CphdWriter(path, source, **options) as out:
+        for start, _stop, data in source.blocks(rows):
+            out.write(start, data)
+    return Path(path)
 
 
 # ------------------------------------------------------------------------ block reading

@@ -6,14 +6,20 @@
   injection of targets into measured data;
 - :mod:`~sarmotion.simulation.paths` — movers on piecewise-straight paths (turns,
   stops) and radars with a longer range window, for long acquisitions;
-- :mod:`~sarmotion.simulation.signals` — chirps, Gaussian pulses, range compression.
+- :mod:`~sarmotion.simulation.signals` — chirps, Gaussian pulses, range compression;
+- :mod:`~sarmotion.simulation.collection` — large constant-density scenes computed a
+  block of pulses at a time (:class:`CollectionScene`), never held whole.
 """
 
+from .collection import CollectionScene, collection_acquisition, random_collection
 from .forward import Simulation, add_noise, inject, simulate, simulate_phase_history
 from .paths import PathTarget, radar_with_range_window
 from .scene import PointTarget, Scene, SceneError, builtin_scene_names, load_scene, random_scene
 
 __all__ = [
+    "CollectionScene",
+    "collection_acquisition",
+    "random_collection",
     "PathTarget",
     "PointTarget",
     "Scene",
