@@ -158,6 +158,38 @@ def analyse(path: Path, out: Path, region, workers: int, timeout_s: float) -> di
     }
 
 
+def image_cross_range(acq, mover) -> float:
+    """Cross-range coordinate (m) where the mover's image lands, aliased by the pulse rate.
+
+    A stationary point's Doppler at ``s = 0`` (relative to the reference point) grows
+    linearly with its cross-range offset ``y``; the mover's Doppler differs from that of
+    a stationary point at its position by ``f_c (dtau_m/ds - dtau_p/ds)``, which displaces
+    its image by that difference over the Doppler rate per metre, wrapped into the
+    unambiguous window (width: pulse rate over that rate) centred on the reference point.
+    """
+    from sarmotion.core.geometry import travel_time
+    from sarmotion.imaging import resolution
+
+    traj = acq.trajectory
+    s = traj.slow_times_s
+    j = int(np.argmin(np.abs(s)))
+    sl = slice(j - 1, j + 2)
+    pos, ss = traj.positions_m[sl], s[sl]
+    e_c = np.r_[resolution(acq).cross_range_direction[:2], 0.0]
+
+    def rate(points) -> float:
+        tau = np.array([travel_time(pos[k : k + 1], points[k])[0] for k in range(3)])
+        return float((tau[2] - tau[0]) / (ss[2] - ss[0]))
+
+    p0 = mover.position_m
+    still = rate([p0] * 3)
+    moving = rate(mover.positions_at(ss))
+    per_m = rate([p0 + e_c] * 3) - still
+    y = float((p0 - acq.reference_point_m) @ e_c) + (moving - still) / per_m
+    width = 1.0 / (traj.pulse_interval_s * acq.radar.carrier_hz * abs(per_m))
+    return float((y + width / 2) % width - width / 2)
+
+
 def score(scene, doc: dict) -> dict:
     """The criteria on the movers and stationary points (module notes)."""
     from sarmotion.imaging import resolution
@@ -191,6 +223,7 @@ def score(scene, doc: dict) -> dict:
             "position_m": [float(v) for v in truth.position_m[:2]],
             "velocity_mps": [float(v) for v in truth.velocity_mps],
             "found": i in matched,
+            "image_cross_range_m": image_cross_range(acq, truth),
         }
         if i in matched:
             j, e = matched[i]
@@ -204,7 +237,10 @@ def score(scene, doc: dict) -> dict:
             )
         movers.append(row)
     false = [
-        {"position_m": doc["movers"][j]["position_m"], "velocity_mps": doc["movers"][j]["velocity_mps"]}
+        {
+            "position_m": doc["movers"][j]["position_m"],
+            "velocity_mps": doc["movers"][j]["velocity_mps"],
+        }
         for j in range(len(fits))
         if j not in used
     ]
@@ -288,9 +324,9 @@ def markdown(result: dict) -> str:
     if s is not None:
         lines += [
             "",
-            "| mover | truth (x, y) m | velocity m/s | found | patch | range err m | "
-            "range speed err m/s |",
-            "|---|---|---|---|---|---|---|",
+            "| mover | truth (x, y) m | velocity m/s | image cross range m | found | patches | "
+            "range err m | range speed err m/s |",
+            "|---|---|---|---|---|---|---|---|",
         ]
         for m in s["movers"]:
             err = (
@@ -301,11 +337,13 @@ def markdown(result: dict) -> str:
             lines.append(
                 f"| {m['label']} | ({m['position_m'][0]:.1f}, {m['position_m'][1]:.1f}) | "
                 f"({m['velocity_mps'][0]:.1f}, {m['velocity_mps'][1]:.1f}) | "
-                f"{'yes' if m['found'] else 'NO'} | {m.get('patches', '-')} | {err} |"
+                f"{m['image_cross_range_m']:.0f} | {'yes' if m['found'] else 'NO'} | {m.get('patches', '-')} | {err} |"
             )
         for f in s["false_movers"]:
-            lines.append(f"| false | ({f['position_m'][0]:.1f}, {f['position_m'][1]:.1f}) | "
-                         f"({f['velocity_mps'][0]:.1f}, {f['velocity_mps'][1]:.1f}) | - | - | - | - |")
+            lines.append(
+                f"| false | ({f['position_m'][0]:.1f}, {f['position_m'][1]:.1f}) | "
+                f"({f['velocity_mps'][0]:.1f}, {f['velocity_mps'][1]:.1f}) | - | - | - | - | - |"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -332,19 +370,26 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=None, help="folder for the results")
     parser.add_argument("--name", default="acceptance_collection")
     parser.add_argument("--reuse", action="store_true", help="keep an existing CPHD file")
+    parser.add_argument(
+        "--score-only", action="store_true", help="score the previous run's output again"
+    )
     args = parser.parse_args()
 
     scene, plan, region = build_scene(args)
     args.work.mkdir(parents=True, exist_ok=True)
     path = args.work / "collection.cphd"
     print(f"scene: {scene.acquisition.shape}, {len(plan.patches)} patches", flush=True)
-    if args.reuse and path.exists():
+    if (args.reuse or args.score_only) and path.exists():
         generation = json.loads((args.work / "generation.json").read_text())
     else:
         generation = generate(scene, path, args.block_pulses)
         (args.work / "generation.json").write_text(json.dumps(generation))
     print(json.dumps(generation), flush=True)
-    analysis = analyse(path, args.work / "out", region, args.workers, args.timeout)
+    if args.score_only:
+        analysis = json.loads((args.work / "analysis.json").read_text())
+    else:
+        analysis = analyse(path, args.work / "out", region, args.workers, args.timeout)
+        (args.work / "analysis.json").write_text(json.dumps(analysis))
     print(json.dumps({k: v for k, v in analysis.items() if "tail" not in k}), flush=True)
     result = {
         "cores": os.cpu_count(),

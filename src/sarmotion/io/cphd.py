@@ -64,6 +64,15 @@ the two-way travel time to the reference point, velocities by finite differences
 ``ProductInfo/Parameter`` elements named ``sarmotion.radar`` and ``sarmotion.metadata``
 (JSON), which :func:`read_cphd` restores. The file passes sarkit's consistency checker
 (``cphdcheck FILE --thorough``) without errors or warnings.
+
+Writing in blocks (:func:`write_cphd_blocks`, :class:`CphdWriter`)
+-----------------------------------------------------------------
+The same file, from the acquisition's axes (trajectory, radar, reference point) and its
+data handed over a block of vectors at a time: the XML and PVPs are written through
+sarkit first, then each block's phase history in its place in the signal block
+(sarkit's ``Writer`` writes a channel's signal whole only). Peak memory is one block.
+Both writers stage the file under a temporary name and rename it onto ``path`` only once
+complete.
 """
 
 from __future__ import annotations
