@@ -337,7 +337,8 @@ def markdown(result: dict) -> str:
             lines.append(
                 f"| {m['label']} | ({m['position_m'][0]:.1f}, {m['position_m'][1]:.1f}) | "
                 f"({m['velocity_mps'][0]:.1f}, {m['velocity_mps'][1]:.1f}) | "
-                f"{m['image_cross_range_m']:.0f} | {'yes' if m['found'] else 'NO'} | {m.get('patches', '-')} | {err} |"
+                f"{m['image_cross_range_m']:.0f} | {'yes' if m['found'] else 'NO'} | "
+                f"{m.get('patches', '-')} | {err} |"
             )
         for f in s["false_movers"]:
             lines.append(
