@@ -277,3 +277,28 @@ def test_ctrl_c_stops_every_worker(cphd, tmp_path):
     assert not out.exists()
     assert not list(tmp_path.glob(".out*"))
     assert _alive(children) == []
+
+
+def test_block_writer_writes_the_file_of_write_cphd(scene, tmp_path):
+    """The same XML (but its creation time), PVPs and signal bytes as the whole-traces writer."""
+    import lxml.etree
+    import sarkit.cphd as skcphd
+
+    from sarmotion.core.blocks import TracesBlocks
+    from sarmotion.io import write_cphd
+
+    traces = scene.traces()
+    whole = write_cphd(tmp_path / "whole.cphd", traces)
+    blocks = write_cphd_blocks(tmp_path / "blocks.cphd", TracesBlocks(traces), block_pulses=33)
+    parts = []
+    for path in (whole, blocks):
+        with path.open("rb") as fh:
+            reader = skcphd.Reader(fh)
+            xml = reader.metadata.xmltree
+            for node in xml.findall(".//{*}CreationInfo/{*}DateTime"):
+                node.text = ""
+            signal = reader.read_signal("1")
+            parts.append((lxml.etree.tostring(xml), reader.read_pvps("1").tobytes(), signal))
+    assert parts[0][0] == parts[1][0]
+    assert parts[0][1] == parts[1][1]
+    assert parts[0][2].tobytes() == parts[1][2].tobytes()
