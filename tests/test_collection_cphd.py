@@ -297,8 +297,8 @@ def test_block_writer_writes_the_file_of_write_cphd(scene, tmp_path):
             xml = reader.metadata.xmltree
             for node in xml.findall(".//{*}CreationInfo/{*}DateTime"):
                 node.text = ""
-            signal = reader.read_signal("1")
-            parts.append((lxml.etree.tostring(xml), reader.read_pvps("1").tobytes(), signal))
+            samples = reader.read_signal("1")
+            parts.append((lxml.etree.tostring(xml), reader.read_pvps("1").tobytes(), samples))
     assert parts[0][0] == parts[1][0]
     assert parts[0][1] == parts[1][1]
     assert parts[0][2].tobytes() == parts[1][2].tobytes()
