@@ -50,7 +50,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     # cli
     "cli.analyze": ("test_cli.py", "test_cli_demo.py", "test_analysis.py", "test_io_sicd.py"),
     "cli.autofocus": ("test_cli_autofocus.py",),
-    "cli.collection": ("test_collection_run.py",),
+    "cli.collection": ("test_collection_run.py", "test_collection_cphd.py"),
     "cli.common": ("test_cli_hardening.py", "test_outputs.py"),
     "cli.convert": ("test_cli_cphd.py", "test_cli_autofocus.py", "test_outputs.py"),
     "cli.image": ("test_cli.py", "test_cli_autofocus.py", "test_cuda_sim.py", "test_io_sicd.py"),
@@ -108,7 +108,12 @@ INDEX: dict[str, tuple[str, ...]] = {
     "imaging.quality": ("test_quality.py",),
     "imaging.resolution": ("test_imaging.py", "test_acquisition.py"),
     # io
-    "io.cphd": ("test_io_cphd.py", "test_fuzz_cphd.py", "test_io_blocks.py"),
+    "io.cphd": (
+        "test_io_cphd.py",
+        "test_fuzz_cphd.py",
+        "test_io_blocks.py",
+        "test_collection_cphd.py",
+    ),
     "io.errors": ("test_errors.py", "test_input_limits.py"),
     "io.gotcha": ("test_io_gotcha.py", "test_fuzz_gotcha.py", "test_inject_gotcha.py"),
     "io.jsonfile": ("test_analysis.py", "test_track.py"),
@@ -177,6 +182,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "separation.rpca_separation": ("test_separation.py", "test_separation_gotcha.py"),
     "separation.transforms": ("test_transforms.py",),
     # simulation
+    "simulation.collection": ("test_collection_cphd.py",),
     "simulation.forward": ("test_simulate.py", "test_signals.py"),
     "simulation.paths": ("test_paths.py",),
     "simulation.scene": ("test_scene.py",),
