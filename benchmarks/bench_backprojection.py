@@ -29,6 +29,12 @@ sample of pixels (the whole image at 256^2).
   ``ser_db_vs_exact_sum`` of both;
 - ``test_ffbp_oblique``: the same at an oblique look, the GOTCHA degrees turned by 30 and
   45 degrees about the scene centre (the rotated path of FFBP);
+- ``test_ffbp_simulated``: the same on simulated points (six at random, one mover, 20 dB
+  SNR) seen over 4 degrees at 0, 30 and 45 degree looks, 1024^2 at 0.25 m;
+
+Every FFBP row also records ``budget_db`` (the error budget of
+:mod:`sarmotion.imaging.ffbp` for that image) and the pixels computed exactly near the
+ends of the fast-time window (``exact_pixels``);
 - ``test_against_fastsar``: sarmotion exact and FFBP against FastSAR (the ``bench`` extra,
   ``fastsar==0.1.8``) exact (``ExactFormer``, cubic, its default upsampling 8) and
   factorised (``ImageFormer``) at 256^2, 1024^2, 2048^2 over one 51.2 m square
@@ -196,35 +202,7 @@ def _timed(f) -> tuple[float, float]:
 @pytest.mark.parametrize("n", (1024, 2048))
 def test_ffbp(benchmark, traces, n):
     grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
-    exact = backproject(traces, grid)
-    fast = backproject(traces, grid, method="ffbp")
-    # Exact and FFBP alternate, so both see the same load; medians of 7 pairs.
-    pairs = [
-        (_timed(lambda: backproject(traces, grid)),
-         _timed(lambda: backproject(traces, grid, method="ffbp")))
-        for _ in range(7)
-    ]  # fmt: skip
-    wall_e, cpu_e = (float(np.median([p[0][k] for p in pairs])) for k in (0, 1))
-    wall_f, cpu_f = (float(np.median([p[1][k] for p in pairs])) for k in (0, 1))
-    benchmark.pedantic(backproject, args=(traces, grid), kwargs={"method": "ffbp"}, rounds=5,
-                       iterations=1)  # fmt: skip
-    benchmark.extra_info.update(
-        {
-            "grid": f"{n}x{n}",
-            "exact_seconds_median": wall_e,
-            "ffbp_seconds_median": wall_f,
-            "speed_up": wall_e / wall_f,
-            "exact_cpu_seconds_median": cpu_e,
-            "ffbp_cpu_seconds_median": cpu_f,
-            "speed_up_cpu": cpu_e / cpu_f,
-            "ser_db_vs_exact": _ser_db(exact.values, fast.values),
-            "ser_db_vs_exact_sum": _ser_vs_exact(traces, grid, fast.values),
-            "exact_ser_db_vs_exact_sum": _ser_vs_exact(traces, grid, exact.values),
-            "ffbp": fast.metadata["ffbp"],
-            "threads": numba.get_num_threads(),
-            "load_average_1min": os.getloadavg()[0],
-        }
-    )
+    benchmark.extra_info.update(_ffbp_row(benchmark, traces, grid, rounds=5))
 
 
 def _turned(traces, deg: float):
@@ -240,11 +218,8 @@ def _turned(traces, deg: float):
     return dataclasses.replace(traces, trajectory=trajectory)
 
 
-@pytest.mark.parametrize("deg", (30.0, 45.0))
-@pytest.mark.parametrize("n", (1024, 2048))
-def test_ffbp_oblique(benchmark, traces, n, deg):
-    tr = _turned(traces, deg)
-    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+def _ffbp_row(benchmark, tr, grid: ImageGrid, rounds: int = 3) -> dict:
+    """FFBP against exact on ``grid``, alternating (7 pairs): speed-up, SER, load."""
     exact = backproject(tr, grid)
     fast = backproject(tr, grid, method="ffbp")
     load = [os.getloadavg()[0]]
@@ -256,29 +231,59 @@ def test_ffbp_oblique(benchmark, traces, n, deg):
     load.append(os.getloadavg()[0])
     wall_e, cpu_e = (float(np.median([p[0][k] for p in pairs])) for k in (0, 1))
     wall_f, cpu_f = (float(np.median([p[1][k] for p in pairs])) for k in (0, 1))
-    benchmark.pedantic(backproject, args=(tr, grid), kwargs={"method": "ffbp"}, rounds=3,
+    benchmark.pedantic(backproject, args=(tr, grid), kwargs={"method": "ffbp"}, rounds=rounds,
                        iterations=1)  # fmt: skip
     info = fast.metadata.get("ffbp", {})
-    benchmark.extra_info.update(
-        {
-            "grid": f"{n}x{n}",
-            "turned_deg": deg,
-            "exact_seconds_median": wall_e,
-            "ffbp_seconds_median": wall_f,
-            "speed_up": wall_e / wall_f,
-            "exact_cpu_seconds_median": cpu_e,
-            "ffbp_cpu_seconds_median": cpu_f,
-            "speed_up_cpu": cpu_e / cpu_f,
-            "ser_db_vs_exact": _ser_db(exact.values, fast.values),
-            "ser_db_vs_exact_sum": _ser_vs_exact(tr, grid, fast.values),
-            "exact_ser_db_vs_exact_sum": _ser_vs_exact(tr, grid, exact.values),
-            "ffbp_path": info.get("path"),
-            "exact_pixels": info.get("exact_pixels"),
-            "ffbp": info,
-            "threads": numba.get_num_threads(),
-            "load_average_1min": load,
-        }
-    )
+    return {
+        "grid": f"{grid.shape[1]}x{grid.shape[0]}",
+        "exact_seconds_median": wall_e,
+        "ffbp_seconds_median": wall_f,
+        "speed_up": wall_e / wall_f,
+        "exact_cpu_seconds_median": cpu_e,
+        "ffbp_cpu_seconds_median": cpu_f,
+        "speed_up_cpu": cpu_e / cpu_f,
+        "ser_db_vs_exact": _ser_db(exact.values, fast.values),
+        "ser_db_vs_exact_sum": _ser_vs_exact(tr, grid, fast.values),
+        "exact_ser_db_vs_exact_sum": _ser_vs_exact(tr, grid, exact.values),
+        "budget_db": info.get("budget_db"),
+        "ffbp_path": info.get("path"),
+        "exact_pixels": info.get("exact_pixels"),
+        "ffbp": info,
+        "threads": numba.get_num_threads(),
+        "load_average_1min": load,
+    }
+
+
+@pytest.mark.parametrize("deg", (30.0, 45.0))
+@pytest.mark.parametrize("n", (1024, 2048))
+def test_ffbp_oblique(benchmark, traces, n, deg):
+    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+    benchmark.extra_info.update(_ffbp_row(benchmark, _turned(traces, deg), grid))
+    benchmark.extra_info["turned_deg"] = deg
+
+
+def _simulated_points(look_deg: float, seed: int):
+    """Six points at random (seeded) and a mover, 20 dB SNR, 4 degrees about ``look_deg``."""
+    from sarmotion.simulation import PointTarget, Scene, add_noise, simulate
+
+    rng = np.random.default_rng(seed)
+    targets = [
+        PointTarget(position_m=tuple(rng.uniform(-100.0, 100.0, 2)),
+                    reflectivity=complex(*rng.normal(size=2)))
+        for _ in range(6)
+    ] + [PointTarget(position_m=(0.0, 0.0), velocity_mps=(10.0, 5.0))]  # fmt: skip
+    trajectory = Trajectory.circular(aperture_deg=4.0, centre_azimuth_deg=look_deg)
+    tr = simulate(Scene(name="bench", targets=targets), trajectory=trajectory).traces
+    return tr.with_data(add_noise(tr.data, snr_db=20.0, rng=seed))
+
+
+@pytest.mark.parametrize("look_deg", (0.0, 30.0, 45.0))
+def test_ffbp_simulated(benchmark, look_deg):
+    n = 1024
+    grid = ImageGrid.square(size_m=n * SPACING_M, spacing_m=SPACING_M)
+    tr = _simulated_points(look_deg, seed=20261126 + int(look_deg))
+    benchmark.extra_info.update(_ffbp_row(benchmark, tr, grid))
+    benchmark.extra_info["look_deg"] = look_deg
 
 
 # ------------------------------------------------------------------- FastSAR comparison

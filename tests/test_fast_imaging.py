@@ -124,7 +124,7 @@ def test_half_sample_filter(band, max_error):
     # Worst response error over the band, reached at its edges (measured: 1.4e-4 at 0.2
     # cycles/sample; 1.3e-2 at 1/3, the band edge of the default oversampling 1.5, where
     # little of a sub-image's energy lies).
-    g = half_sample_filter(band)
+    g = half_sample_filter(band, 8)
     offsets = np.arange(8) - 3.5
     f = np.linspace(-band, band, 301)
     response = np.exp(2j * np.pi * np.outer(f, offsets)) @ g
@@ -154,34 +154,35 @@ def test_ffbp_matches_exact_backprojection(azimuth_deg):
     fast = backproject(tr, grid, method="ffbp")
     assert fast.metadata["kernel_variant"] == "ffbp"
     assert fast.metadata["ffbp"]["levels"] >= 3  # a real factorisation, not exact in disguise
-    # Spec >= 40 dB; 48.7 dB (0 deg) and 48.9 dB (90 deg) measured here, 44 dB on GOTCHA at
-    # 2048 x 2048.
-    assert _ser_db(exact, fast.values) >= 40.0
+    # The accuracy the defaults are chosen for (ffbp.TARGET_DB; the budget's derivation and
+    # the test against the exact sum: tests/test_ffbp_accuracy.py).
+    assert _ser_db(exact, fast.values) >= ffbp.TARGET_DB
     # The points are where exact backprojection puts them.
     assert fast.peak()[:2] == pytest.approx(backproject(tr, grid).peak()[:2], abs=1e-9)
 
 
 @pytest.mark.parametrize("u", [(10.0, 5.0), (-8.0, 3.0), (15.0, 0.0)])
 def test_ffbp_with_motion_compensation(four_degrees, u):
-    # Spec >= 40 dB; 52.4, 46.5, 48.1 dB measured. Splitting down to 2-pulse leaves (nine
-    # levels of interpolation) gave 42.6, 34.0, 36.8 dB: a node splits only when that saves
-    # work, which keeps the tree shallow.
+    # The motion-compensated image (antennas at r(s) - s u) to the same accuracy.
     grid = ImageGrid.square(size_m=64.0, spacing_m=0.25)
     exact = backproject(four_degrees, grid, velocity_mps=u).values
     fast = backproject(four_degrees, grid, velocity_mps=u, method="ffbp").values
-    assert _ser_db(exact, fast) >= 40.0
+    assert _ser_db(exact, fast) >= ffbp.TARGET_DB
 
 
 @pytest.mark.gotcha
 def test_ffbp_on_gotcha_in_strips(gotcha_files):
-    # 1024 x 1024 at 0.25 m: two strips of rows evaluated together, depth by depth.
+    # 513 x 1601 pixels at 0.25 m, 400 m along the rows' axis: two strips of rows
+    # evaluated together, depth by depth; the fast-time window ends inside the image (its
+    # pixels there are computed exactly).
     tr = read_gotcha(gotcha_files)
-    grid = ImageGrid.square(size_m=256.0, spacing_m=0.25)
+    grid = ImageGrid.from_extent(x_range_m=(-64.0, 64.0), y_range_m=(-200.0, 200.0),
+                                 spacing_m=0.25)  # fmt: skip
     fast = backproject(tr, grid, method="ffbp")
     assert fast.metadata["kernel_variant"] == "ffbp"
     assert fast.metadata["ffbp"]["strips"] >= 2
-    # Spec >= 40 dB; 44.7 dB measured.
-    assert _ser_db(backproject(tr, grid).values, fast.values) >= 40.0
+    assert fast.metadata["ffbp"]["exact_pixels"] > 0
+    assert _ser_db(backproject(tr, grid).values, fast.values) >= ffbp.TARGET_DB
 
 
 def test_ffbp_strip_whose_root_does_not_split(four_degrees, monkeypatch):
@@ -218,8 +219,8 @@ def test_ffbp_strip_whose_root_does_not_split(four_degrees, monkeypatch):
     # The leaf strip is exact backprojection (float32, demodulated and remodulated; 137 dB
     # measured) ...
     assert _ser_db(exact[:n], fast.values[:n]) >= 60.0
-    # ... and the factorised ones within the FFBP spec (49 dB measured).
-    assert _ser_db(exact[n:], fast.values[n:]) >= 40.0
+    # ... and the factorised ones to the accuracy of FFBP.
+    assert _ser_db(exact[n:], fast.values[n:]) >= ffbp.TARGET_DB
 
 
 def test_ffbp_runs_exact_where_it_cannot_save_work():

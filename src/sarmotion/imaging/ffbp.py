@@ -20,8 +20,9 @@ evaluated bottom-up:
 - leaves: exact backprojection (the float32 tile arithmetic of :mod:`._bp_kernels`) of
   a few to a hundred pulses on their coarse grid, demodulated as each tile is written;
 - a parent ``J_P = J_A + J_B`` on a grid twice as fine in ``v``: even rows are the
-  children's rows, odd rows the half-sample interpolation of each child by a ``TAPS``-tap
-  filter, least-squares optimal over the child's band and shifted to its centre ``f_A``
+  children's rows, odd rows the half-sample interpolation of each child by a filter
+  (taps by depth, from the error budget below), least-squares optimal over the child's
+  band and shifted to its centre ``f_A``
   (no phase correction is needed: all sub-images share the demodulation);
 - the root's grid is ``dy / n`` (``n`` the smallest integer that holds its band), but only
   its rows on the image rows are formed (its children's rows added, or interpolated when
@@ -40,13 +41,18 @@ direction (``u`` along it, ``v`` across), over the requested grid's footprint, s
 at 1.6 times the demodulated image's range band along ``u`` and 2.05 ``alpha`` times its
 cross-range band along ``v`` (the root's children then sit at the spacing their band
 allows). ``J`` is band-limited there, so every requested pixel is ``J`` interpolated by a
-separable 8 x 6-tap least-squares filter (tabulated at 256 fractional positions), then
-remodulated. One exception: at the ends of the fast-time window each pulse's contribution
-steps to 0 along ``u``, which no band-limited interpolation reproduces; pixels where some
-pulse's window ends within the filter's reach are computed by exact backprojection. The
-path runs when a time model (:data:`_TREE_COST`, :data:`_RESAMPLE_COST`,
-:data:`_EDGE_COST`, fitted to timings of ``benchmarks/bench_backprojection.py``) predicts
-at most 80 % of exact; otherwise ``method="ffbp"`` runs exact backprojection.
+separable least-squares filter (:data:`RESAMPLE_TAPS`, tabulated at 256 fractional
+positions), then remodulated. The path runs when a time model (:data:`_TREE_COST`,
+:data:`_RESAMPLE_COST`, :data:`_EDGE_COST`, fitted to timings of
+``benchmarks/bench_backprojection.py``) predicts at most 80 % of exact; otherwise
+``method="ffbp"`` runs exact backprojection.
+
+Ends of the fast-time window. Each pulse's contribution steps to 0 where its fast-time
+window ends (:func:`~sarmotion.imaging.exact_sum.fast_time_window`), which no band-limited
+interpolation reproduces; the pixels whose interpolation would read such a step are
+computed by exact backprojection: on the axis-aligned path, those where some pulse's
+window ends within the last interpolation's reach along ``v`` (:func:`_reach_v`); on the
+rotated path, also within the resampling's reach along ``u`` (:func:`_window_edge_blocks`).
 
 Evaluation: the nodes of all strips at one depth of the tree are one parallel region
 (:mod:`._ffbp_kernels`): leaf tiles and merged rows are tasks of the same loop, and the
@@ -54,19 +60,45 @@ image rows of every strip one last region. Every region ends in a barrier, which
 machine waits for a descheduled thread, so the number of regions (about the depth, 7 at
 2048 x 2048) is kept to one per level.
 
-Accuracy. The specification is 40 dB of signal-to-error ratio against the exact sum
-(:func:`~sarmotion.imaging.exact_sum.exact_sum`, no interpolation), on seeded pixels
-(``benchmarks/bench_backprojection.py``); exact backprojection is some 87 dB from it, so the
-figures are FFBP's own error. That error comes from the interpolations: it grows as
-``alpha`` falls and with the number of levels. The default ``alpha = 1.4`` is the smallest
-multiple of 0.1 for which every GOTCHA geometry benchmarked (4 degrees at 0.1, 0.25 and
-0.5 m, 512^2 to 2048^2; two and one degrees at 1024^2 and 2048^2) stays 3 dB above the
-specification. Columns whose pixels no pulse's fast-time window reaches are zero, as in
-exact backprojection. The rotated path adds the resampling's error to the factorisation's
-(independent, they add in power; the filter's response error is at most 6.5e-3 at the
-``u`` band's edges, 6e-4 along ``v``). ``tests/test_ffbp_oblique.py`` and
-``tests/test_fast_imaging.py`` hold the specification on simulated points and GOTCHA at
-several look directions; the figures per geometry are in ``docs/notes/ffbp.md``.
+Error budget. The defaults are chosen so that the image is at least :data:`TARGET_DB`
+(55 dB) from the exact sum (:func:`~sarmotion.imaging.exact_sum.exact_sum`, no
+interpolation), as a signal-to-error power ratio. The leaves are exact backprojection (some
+87 dB from the exact sum, its own budget in :mod:`.backprojection`), so the error is the
+interpolations':
+
+- a merge: a child's band of half-width ``b`` cycles per row (its planned band times its
+  row spacing, at most ``1 / (2 alpha)``) is interpolated by a ``T``-tap filter whose
+  response error ``r(f) = sum_t g[t] exp(2i pi f (t - (T-1)/2)) - 1`` multiplies the
+  spectrum, so, for a spectrum spread evenly over the band, an interpolated row carries
+  the error power ``e_T(b) = (1/2b) integral_{-b}^{b} |r(f)|^2 df`` (:func:`merge_error`)
+  relative to the row's power. Half of a parent's rows are interpolated;
+- the ``S`` depths of the tree apply different filters to different sums of pulses:
+  their errors are independent and add in power, and the children of one parent,
+  incoherent for a distributed scene, add in power too, so the factorisation's error is
+  ``E_f = sum_d 1/2 max_{nodes at depth d} e_{T_d}(b)``;
+- the rotated path adds the resampling's error on each axis, ``e'_T(b)``, the same
+  integral for the fractional filters averaged over the read position
+  (:func:`resample_error`), at the bands its grid leaves (``1 / 3.2`` along ``u``,
+  ``1 / (4.1 alpha)`` along ``v``).
+
+The allowed error is ``E = 10^(-(TARGET_DB + BUDGET_MARGIN_DB) / 10)``: the factorisation
+gets :data:`FACTORISATION_SHARE` of it, an equal share ``2 * 0.8 E / S`` per depth, and each
+depth the fewest even taps (4 to :data:`TAPS`) that keep all its nodes' ``e_T(b)`` within
+that share (:func:`_filters`; bands far below ``1 / (2 alpha)`` near the root take 4 to 8
+taps, the leaves' parents 12 to 14); the resampling gets the rest, with the fewest taps
+:data:`RESAMPLE_TAPS` = 10 x 6 that do so at the widest bands. :data:`TAPS` = 14 is the cap
+that meets the factorisation's share when every one of :data:`MAX_STAGES` depths sits at
+the widest band (:func:`default_taps`). ``alpha`` stays 1.4: raising it costs every leaf
+and merge in proportion, more taps cost the merges only. ``info["budget_db"]`` is the
+image's own ``-10 log10 (E_f + e'_u + e'_v)``, ``info["taps"]`` the taps by depth. Real
+sub-images do not fill their planned band evenly (it is the union over the sub-aperture's
+pulses and the whole region, the band edges reached only at its corners), so images lie
+above the budget; ``tests/test_ffbp_accuracy.py`` holds FFBP to :data:`TARGET_DB` and to
+its budget less the margin against the exact sum on simulated points at 0, 30 and 45
+degree looks and on GOTCHA, and holds the formulas to the measured error of flat-band
+signals. Float32 sums (``~1e-7`` relative) lie far below. Columns whose pixels no pulse's
+fast-time window reaches are zero, as in exact backprojection. The figures per geometry
+are in ``docs/notes/ffbp.md``.
 
 References: L. M. H. Ulander, H. Hellsten, G. Stenström, "Synthetic-aperture radar
 processing using fast factorized back-projection", IEEE Trans. AES 39(3), 2003 (polar
@@ -87,15 +119,110 @@ from . import _ffbp_kernels as _kernels
 
 __all__ = ["FfbpPulses", "ffbp_values"]
 
-#: Taps of the half-sample interpolation filter (even). More taps gain less accuracy than
-#: raising ``alpha`` by 0.1 at the same cost (``docs/notes/ffbp.md``).
-TAPS = 8
+#: Signal-to-error ratio (dB) against the exact sum that the defaults are chosen to meet
+#: (module docstring, "Error budget").
+TARGET_DB = 55.0
+#: Margin (dB) of the budget over :data:`TARGET_DB`: the budget assumes a flat spectrum
+#: over each band, real sub-images are not flat.
+BUDGET_MARGIN_DB = 3.0
+#: Share of the error budget given to the factorisation; the rotated path's resampling
+#: has the rest.
+FACTORISATION_SHARE = 0.8
+#: Interpolation stages of the deepest tree the defaults are chosen for: a 2-pulse leaf
+#: under 2^8 = 256-pulse halves is as deep as a few hundred pulses split.
+MAX_STAGES = 8
 #: Oversampling of every sub-image's band along ``v``.
 DEFAULT_ALPHA = 1.4
+#: Most taps of the half-sample interpolation filter (even), the planning margins: the
+#: fewest for which a tree of :data:`MAX_STAGES` stages, every one at the widest band
+#: ``1 / (2 alpha)`` of :data:`DEFAULT_ALPHA`, stays within its share of the budget
+#: (:func:`default_taps`). Each depth of a tree uses the fewest taps its own bands need
+#: (:func:`_filters`).
+TAPS = 14
 #: Smallest leaf (pulses).
 _MIN_LEAF = 2
 #: Cost of a merged sample in pixel-pulses (two children, half the rows interpolated).
 _MERGE_COST = 4.0
+
+# ===================================================================== error budget
+_MERGE_ERRORS: dict[tuple[float, int], float] = {}
+
+
+def merge_error(band: float, taps: int | None = None) -> float:
+    """Mean-square error of the half-sample filter over a flat band, relative to the signal.
+
+    ``(1 / 2b) integral_{-b}^{b} |sum_t g[t] exp(2i pi f (t - (T-1)/2)) - 1|^2 df`` for
+    ``g = half_sample_filter(b, T)`` (evaluated on 2001 frequencies): the error power of
+    one interpolated row of a sub-image whose spectrum fills ``[-b, b]`` evenly (Parseval:
+    the error's spectrum is the filter's response error times the signal's).
+
+    Parameters
+    ----------
+    band : float
+        Half-width ``b`` of the band (cycles per sample, < 1/2).
+    taps : int, optional
+        Even number of taps; default :data:`TAPS`.
+
+    Returns
+    -------
+    float
+    """
+    taps = TAPS if taps is None else int(taps)
+    key = (math.ceil(band * 200.0) / 200.0, taps)
+    e = _MERGE_ERRORS.get(key)
+    if e is None:
+        g = half_sample_filter(key[0], taps)
+        f = np.linspace(-key[0], key[0], 2001)
+        response = np.exp(2j * np.pi * np.outer(f, np.arange(taps) - (taps - 1) / 2.0)) @ g
+        e = _MERGE_ERRORS[key] = float(np.mean(np.abs(response - 1.0) ** 2))
+    return e
+
+
+def factorisation_error(stages: int, alpha: float, taps: int | None = None) -> float:
+    """Error power of the factorisation relative to the image's, flat bands, widest case.
+
+    ``stages / 2 * merge_error(1 / (2 alpha), taps)``, every depth at the widest band: every
+    sub-image is sampled at ``alpha`` times its band, so its band is at most
+    ``1 / (2 alpha)`` cycles per sample; at
+    each merge half of the parent's rows are interpolated; the errors of the ``stages``
+    merges a pixel passes are independent (different filters on different sums of
+    pulses) and add in power. Children of one parent are taken as incoherent (a
+    distributed scene), so the parent's power is the sum of theirs.
+
+    Parameters
+    ----------
+    stages : int
+        Interpolation stages (tree depth below the root, ``info["levels"] - 1``).
+    alpha : float
+        Oversampling of the bands, > 1.
+    taps : int, optional
+        Taps of the half-sample filter; default :data:`TAPS`.
+
+    Returns
+    -------
+    float
+    """
+    return 0.5 * stages * merge_error(0.5 / alpha, taps)
+
+
+def error_allowed() -> float:
+    """The error power the budget allows, ``10^(-(TARGET_DB + BUDGET_MARGIN_DB) / 10)``."""
+    return 10.0 ** (-(TARGET_DB + BUDGET_MARGIN_DB) / 10.0)
+
+
+def default_taps(alpha: float = DEFAULT_ALPHA, stages: int = MAX_STAGES) -> int:
+    """Fewest even taps with ``factorisation_error <= FACTORISATION_SHARE * error_allowed()``."""
+    want = FACTORISATION_SHARE * error_allowed()
+    taps = 4
+    while factorisation_error(stages, alpha, taps) > want:
+        taps += 2
+    return taps
+
+
+def budget_db(error_power: float) -> float:
+    """Signal-to-error ratio (dB) of a relative error power."""
+    return math.inf if error_power <= 0.0 else -10.0 * math.log10(error_power)
+
 
 # ============================================================================= plan
 _FILTERS: dict[tuple[float, int], NDArray[np.float64]] = {}
@@ -240,26 +367,45 @@ def _depths(plans, bounds, y) -> tuple[list[list[_Node]], list[_Node | None]]:
     return depths, substitutes
 
 
-def _filters(nodes: list[_Node]) -> NDArray[np.float32]:
-    """``(len(nodes), 2, TAPS)`` complex half-sample filters of the nodes, by slot."""
-    offsets = np.arange(TAPS) - (TAPS - 1) / 2.0
-    g = np.zeros((max(len(nodes), 1), 2, TAPS), np.float32)
+def _filters(nodes: list[_Node], allowed: float) -> tuple[NDArray[np.float32], float]:
+    """Complex half-sample filters of the nodes, by slot, and the depth's merge error.
+
+    The taps are the fewest even number (4 to :data:`TAPS`) for which every node's
+    :func:`merge_error` over its own band is at most ``allowed``. Returns the
+    ``(len(nodes), 2, taps)`` filters and the largest merge error among the nodes.
+    """
+    bands = [node.half * node.dv for node in nodes if node.ratio == 2]
+    taps = 4
+    while taps < TAPS and any(merge_error(b, taps) > allowed for b in bands):
+        taps += 2
+    worst = max((merge_error(b, taps) for b in bands), default=0.0)
+    offsets = np.arange(taps) - (taps - 1) / 2.0
+    g = np.zeros((max(len(nodes), 1), 2, taps), np.float32)
     for node in nodes:
         if node.ratio == 2:
-            gc = half_sample_filter(node.half * node.dv, TAPS)
+            gc = half_sample_filter(node.half * node.dv, taps)
             gc = gc * np.exp(-2j * np.pi * node.centre * node.dv * offsets)
             g[node.slot, 0], g[node.slot, 1] = gc.real, gc.imag
-    return g
+    return g, worst
 
 
 def _evaluate(depths, frame: dict, tile_for, info: dict, report):
-    """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes."""
+    """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes.
+
+    Each depth's filters take the fewest taps that keep its merge error within an equal
+    share of ``frame["allowed"]`` (half of the rows interpolated: ``2 allowed / S`` per
+    depth, ``S`` depths); ``info["taps"]`` (by depth, 1 first) and
+    ``info["factorisation_error"]`` record them.
+    """
     us = frame["us"]
     du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
     k0 = TAPS // 2 - 1
     cre = np.zeros((1, 1, us.size), np.float32)
     cim = cre
     g = np.zeros((1, 2, TAPS), np.float32)
+    per_depth = 2.0 * frame["allowed"] / max(len(depths), 1)
+    taps: list[int] = []
+    error = 0.0
     for d in range(len(depths) - 1, -1, -1):
         nodes = depths[d]
         leaves = [n for n in nodes if not n.children]
@@ -287,8 +433,11 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
         cre, cim = re, im
-        g = _filters(nodes)
+        g, worst = _filters(nodes, per_depth)
+        taps.insert(0, int(g.shape[2]))
+        error += 0.5 * worst
         report()
+    info.update(taps=taps, factorisation_error=error)
     return cre, cim, g
 
 
@@ -336,6 +485,30 @@ def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
         d -= ref_ranges[j]
         active |= (d.max(axis=0) >= d_lo) & (d.min(axis=0) <= d_hi)
     return np.flatnonzero(active)
+
+
+def _reach_v(plans) -> float:
+    """How far along ``v`` (m) the last interpolation reads, over all strips.
+
+    An image row is read from the root's children within ``TAPS / 2`` of their spacing: a
+    pulse whose contribution steps to 0 there (an end of its fast-time window) enters the
+    row through taps of up to 0.63, so the row is computed exactly (:func:`ffbp_values`).
+    Deeper stages are not counted: there a step sits in a sub-image of ``2^-d`` of the
+    pulses (depth ``d >= 2``), a fraction of the pixel's power, and its interpolation error
+    is left to the budget's margin (``tests/test_ffbp_accuracy.py`` and
+    ``tests/test_fast_imaging.py`` hold images whose window ends lie inside them to
+    :data:`TARGET_DB`); counting every stage's reach would compute several times as many
+    pixels exactly.
+    """
+    return max((TAPS / 2 * levels[1][0].dv if len(levels) > 1 else 0.0) for levels, _ in plans)
+
+
+def _max_v_slope(pos, us, y) -> float:
+    """Largest ``|d|r_j - rho| / dv|`` over the pulses and the corners of the grid."""
+    corners = np.array([[a, b] for a in (us[0], us[-1]) for b in (y[0], y[-1])])
+    du = corners[None, :, 0] - pos[:, 0:1]
+    dv = corners[None, :, 1] - pos[:, 1:2]
+    return float(np.max(np.abs(dv) / np.sqrt(du * du + dv * dv + pos[:, 2:3] ** 2)))
 
 
 def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
@@ -491,16 +664,33 @@ def ffbp_values(
     values : (ny, nx) complex ndarray or None
     info : dict
         ``path`` (``"axis-aligned"``, ``"rotated"`` or ``"exact"``), ``levels``,
-        ``leaves``, ``leaf_pixel_pulses``, ``columns`` used, ``strips``; the rotated path
-        adds ``rotation_deg``, ``rotated_grid`` (rows, columns factorised) and
+        ``leaves``, ``leaf_pixel_pulses``, ``columns`` used, ``strips``, ``stages``,
+        ``budget_db`` (the error budget, module docstring), ``exact_pixels`` (near the
+        ends of the fast-time window), ``edge_margin_m``; the rotated path adds
+        ``rotation_deg``, ``rotated_grid`` (rows, columns factorised) and
         ``resample_taps``; ``"exact"`` adds ``fallback``.
     """
     x = np.asarray(x_m, np.float64)
     y = np.asarray(y_m, np.float64)
+    pos, ref_ranges = pulses.positions, pulses.ref_ranges
     kw = dict(tile_for=tile_for, alpha=alpha, progress=progress)
-    budget = 0.7 * pulses.positions.shape[0]  # pixel-pulses per pixel of exact, same pixels
-    values, info = _aligned_values(pulses, x, y, budget=budget, **kw)
+    n_pulses = pos.shape[0]
+    budget = 0.7 * n_pulses  # pixel-pulses per pixel of exact on the same pixels
+    edges: list = []
+
+    def admit(cost: float, margin: float, n_used: int) -> bool:
+        """The factorisation and the exact pixels near the window ends within the budget."""
+        if exact_for is None:
+            return cost <= budget * n_used
+        edges[:] = _window_edge_blocks(pos, ref_ranges, x, y, pulses.constants, pulses.n_up,
+                                       margin, block=EDGE_BLOCK_ROWS)  # fmt: skip
+        return cost + _EDGE_COST * n_pulses * _n_pixels(edges) <= budget * n_used
+
+    values, info = _aligned_values(pulses, x, y, budget=budget, admit=admit, **kw)
     if values is not None:
+        for rows, cols in edges:  # exact where the window's ends make J a step along v
+            values[rows, cols] = exact_for(x[cols], y[rows])
+        info["exact_pixels"] = _n_pixels(edges)
         return values, info
     if exact_for is not None and x.size > 1 and y.size > 1:
         values, info = _rotated_values(pulses, x, y, budget=budget, exact_for=exact_for, **kw)
@@ -515,7 +705,10 @@ def _aligned_values(
     """The factorisation on the grid's own columns (the ``"axis-aligned"`` path).
 
     ``None`` as values when it would cost more than ``budget`` pixel-pulses per pixel of
-    the used columns (or when ``admit(cost)`` is false, when given). With ``demodulated``, the
+    the used columns (or when ``admit(cost, margin_m, n_used)`` is false, when given: the
+    factorisation's cost, how far in range (m) the last interpolation's reach along ``v``
+    spans, :func:`_reach_v` times the largest ``|d|r_j - rho| / dv|``, and the pixels of the
+    used columns). With ``demodulated``, the
     values are ``J`` (complex64, not remodulated) on the used columns only,
     ``info["first_column"]`` the first one's index.
     """
@@ -543,8 +736,10 @@ def _aligned_values(
     us = np.ascontiguousarray(x[k_lo:k_hi])
     f_lo, f_hi = pulses.band_hz
     c_best, bounds, plans = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz, alpha)
-    info["cost_pixel_pulses"] = float(c_best)
-    if not (c_best <= budget * y.size * us.size if admit is None else admit(c_best)):
+    margin = _reach_v(plans) * _max_v_slope(pos, us, y)
+    info.update(cost_pixel_pulses=float(c_best), edge_margin_m=margin)
+    n_used = y.size * us.size
+    if not (c_best <= budget * n_used if admit is None else admit(c_best, margin, n_used)):
         return None, info
     centre = pos.mean(axis=0)
     frame = {
@@ -560,9 +755,11 @@ def _aligned_values(
         # c, |c|_z^2, |c - rho_o|: the demodulation (see the module docstring)
         "centre": (float(centre[0]), float(centre[1]), float(centre[2] ** 2),
                    float(np.linalg.norm(centre - rho_o))),
+        "allowed": FACTORISATION_SHARE * error_allowed(),
     }  # fmt: skip
     depths, substitutes = _depths(plans, bounds, y)
-    info.update(levels=len(depths) + 1, columns=int(us.size), strips=len(plans))
+    info.update(levels=len(depths) + 1, stages=len(depths), columns=int(us.size),
+                strips=len(plans))  # fmt: skip
     done = 0
 
     def report() -> None:
@@ -572,6 +769,7 @@ def _aligned_values(
             progress("backprojection", done, len(depths) + 1)
 
     cre, cim, g = _evaluate(depths, frame, tile_for, info, report)
+    info["budget_db"] = budget_db(info["factorisation_error"])
     if demodulated:
         out = np.zeros((y.size, us.size), np.complex64)
         _image_rows(out, 0, plans, bounds, substitutes, cre, cim, g, frame, remodulate=False)
@@ -586,10 +784,16 @@ def _aligned_values(
 
 # ==================================================================== rotated path
 #: Taps per axis (``u``, ``v``) of the filter that resamples the rotated image onto the
-#: requested pixels (the ``v`` band is oversampled more, see below).
-RESAMPLE_TAPS = (8, 6)
+#: requested pixels (the ``v`` band is oversampled more, see below): the fewest for which
+#: :func:`resample_error` at the widest bands :data:`RESAMPLE_OVERSAMPLING` leaves stays
+#: within ``1 - FACTORISATION_SHARE`` of the allowed error (module docstring).
+RESAMPLE_TAPS = (10, 6)
 #: Pulses spread on the aperture that find the edge zone.
 N_EDGE_PULSES = 5
+#: Rows per exact block of the axis-aligned path's window-end zone: there the zone is a
+#: band of columns across the rows, so tall blocks cover it with few extra pixels, and
+#: each block is one call (one parallel region) of exact backprojection.
+EDGE_BLOCK_ROWS = 128
 #: Edge-zone margin, in ``u`` samples (see :func:`_window_edge_blocks`).
 EDGE_MARGIN = 2.0
 #: Oversampling of the demodulated image's band on the rotated grid along ``u`` (range),
@@ -606,12 +810,15 @@ _RESAMPLE_PHASES = 256
 #: over the time of an exact pixel-pulse. Ratios of timings, so independent of the
 #: machine's speed to first order; fitted on GOTCHA rotated to 45 degrees
 #: (``benchmarks/bench_backprojection.py``, ``docs/notes/ffbp.md``).
+#: The resampling's cost scales with its multiply-adds per pixel from the 8 x 6 taps it
+#: was fitted with, ``T_u T_v + T_u + T_v``.
 _TREE_COST = 1.75
-_RESAMPLE_COST = 73.0
+_RESAMPLE_COST = 73.0 * (RESAMPLE_TAPS[0] * RESAMPLE_TAPS[1] + sum(RESAMPLE_TAPS)) / 62.0
 _EDGE_COST = 1.7
 #: The rotated path runs when its predicted time is at most this fraction of exact.
 _ROTATED_BUDGET = 0.8
 _FRACTIONAL: dict[tuple[float, int], NDArray[np.float32]] = {}
+_RESAMPLE_ERRORS: dict[tuple[float, int], float] = {}
 
 
 def fractional_filters(band: float, taps: int | None = None) -> NDArray[np.float32]:
@@ -646,6 +853,41 @@ def fractional_filters(band: float, taps: int | None = None) -> NDArray[np.float
             table[p] = np.linalg.lstsq(np.vstack([a.real, a.imag]), rhs, rcond=None)[0]
         _FRACTIONAL[key] = table
     return table
+
+
+def resample_error(band: float, taps: int) -> float:
+    """Mean-square error of the fractional filters over a flat band, relative to the signal.
+
+    ``|sum_t g_p[t] exp(2i pi f (t - T/2 + 1 - p/P)) - 1|^2`` averaged over ``|f| <= band``
+    (801 frequencies) and over every fourth tabulated phase ``p``
+    (:func:`fractional_filters`, whose band is ``band`` rounded up to 1/200, as here):
+    the error power of one axis of the resampling at uniformly spread read positions. The
+    two axes' errors are independent and add. Cached.
+
+    Parameters
+    ----------
+    band : float
+        Half-width of the band (cycles per sample, < 1/2).
+    taps : int
+        Even number of taps.
+
+    Returns
+    -------
+    float
+    """
+    key = (math.ceil(band * 200.0) / 200.0, int(taps))
+    e = _RESAMPLE_ERRORS.get(key)
+    if e is None:
+        table = fractional_filters(key[0], key[1]).astype(np.float64)
+        phases = table.shape[0] - 1
+        f = np.linspace(-key[0], key[0], 801)
+        errors = []
+        for p in range(0, phases, 4):
+            offsets = np.arange(key[1]) - (key[1] // 2 - 1) - p / phases
+            response = np.exp(2j * np.pi * np.outer(f, offsets)) @ table[p]
+            errors.append(np.mean(np.abs(response - 1.0) ** 2))
+        e = _RESAMPLE_ERRORS[key] = float(np.mean(errors))
+    return e
 
 
 def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progress, exact_for):
@@ -701,14 +943,14 @@ def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progre
     n_pixels = x.size * y.size
     edges: list = []
 
-    def admit(cost: float) -> bool:
+    def admit(cost: float, margin: float, n_used: int) -> bool:
         """The time model; the edge zone is looked for only if the rest fits."""
         left = (_ROTATED_BUDGET * n_pulses - _RESAMPLE_COST) * n_pixels - _TREE_COST * cost
         if left < 0.0:
             return False
-        edges.extend(_window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, EDGE_MARGIN * du))
-        n_edge = sum((r.stop - r.start) * (c.stop - c.start) for r, c in edges)
-        return _EDGE_COST * n_pulses * n_edge <= left
+        edges[:] = _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up,
+                                       EDGE_MARGIN * du + margin)  # fmt: skip
+        return _EDGE_COST * n_pulses * _n_pixels(edges) <= left
 
     total = [1]
 
@@ -728,8 +970,12 @@ def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progre
         rotated_grid=(int(vs.size), int(j.shape[1])), spacing_m=(float(du), float(dv)),
     )  # fmt: skip
     k_lo = info.pop("first_column")
-    wu = fractional_filters(max(abs(lo_u), abs(hi_u)) * du, RESAMPLE_TAPS[0])
-    wv = fractional_filters(max(abs(lo_v), abs(hi_v)) * dv, RESAMPLE_TAPS[1])
+    band_u = max(abs(lo_u), abs(hi_u)) * du
+    band_v = max(abs(lo_v), abs(hi_v)) * dv
+    wu = fractional_filters(band_u, RESAMPLE_TAPS[0])
+    wv = fractional_filters(band_v, RESAMPLE_TAPS[1])
+    resampling = resample_error(band_u, RESAMPLE_TAPS[0]) + resample_error(band_v, RESAMPLE_TAPS[1])
+    info["budget_db"] = budget_db(info["factorisation_error"] + resampling)
     out = np.zeros((y.size, x.size), np.complex128)
     if j.shape[1] >= RESAMPLE_TAPS[0]:
         quarter_scale = float(constants[2])
@@ -743,8 +989,13 @@ def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progre
     if progress is not None:
         progress("backprojection", total[0], total[0])
     info["levels"] += 1
-    info["exact_pixels"] = sum((r.stop - r.start) * (c.stop - c.start) for r, c in edges)
+    info["exact_pixels"] = _n_pixels(edges)
     return out, info
+
+
+def _n_pixels(blocks) -> int:
+    """Pixels of the rectangles ``(row slice, column slice)``."""
+    return sum((r.stop - r.start) * (c.stop - c.start) for r, c in blocks)
 
 
 def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32):
