@@ -46,6 +46,7 @@ def _options(
     trajectory: bool,
     sub_aperture_deg: float,
     false_alarm_rate: float = 0.01,
+    device: str = "cpu",
 ) -> AnalysisOptions:
     """AnalysisOptions from the flags; a bad value is reported under its flag's name."""
     with as_flags(
@@ -61,6 +62,7 @@ def _options(
             trajectory=trajectory,
             sub_aperture_deg=sub_aperture_deg,
             false_alarm_rate=false_alarm_rate,
+            device=device,
         )
 
 
@@ -209,6 +211,13 @@ def _write_sicd_images(result, stage: Path) -> None:
     default=None,
     help="Patches: local Dask workers (default one per core; 0: no Dask).",
 )
+@click.option(
+    "--device",
+    type=click.Choice(["cpu", "cuda"]),
+    default="cpu",
+    show_default=True,
+    help="Where to backproject the images: 'cuda' on an NVIDIA GPU (the sarmotion[gpu] extra).",
+)
 @noise_options
 @click.pass_context
 def analyze(
@@ -234,6 +243,7 @@ def analyze(
     max_speed_mps: float,
     scheduler: str | None,
     n_workers: int | None,
+    device: str,
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
@@ -242,7 +252,14 @@ def analyze(
     than one patch (or any --region) is cut into patches, analysed on Dask and merged:
     OUT/results.json (schema sarmotion.collection/1), report.html and mosaic.png.
     """
-    options = _options(method, max_movers, size_m, trajectory, sub_aperture_deg, false_alarm_rate)
+    if device == "cuda":
+        from ..imaging.cuda import NEEDS, available
+
+        if not available():
+            raise InputError(f"--device cuda: {NEEDS}")
+    options = _options(
+        method, max_movers, size_m, trajectory, sub_aperture_deg, false_alarm_rate, device
+    )
     # --out is claimed before the inputs are read, whether one analysis or patches will
     # write it: a concurrent run into the same directory is refused at once.
     check_out(

@@ -105,7 +105,9 @@ def analyze(
             movers = estimate_trajectories(movers, acquisition=acq, progress=progress)
     with timed(timings, "images"):
         sep = detection.separation
-        stat_img = stationary_image(traces, sep, movers, detection.image.grid, progress=progress)
+        stat_img = stationary_image(
+            traces, sep, movers, detection.image.grid, progress=progress, device=opts.device
+        )
         movers = mover_images(movers, stat_img, opts, acquisition=acq)
     with timed(timings, "stationary_targets"):
         stationary = stationary_targets(stat_img, sep, opts, acquisition=acq)

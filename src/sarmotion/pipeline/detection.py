@@ -148,7 +148,9 @@ def preliminary_image(
 ) -> Image:
     """``eq:image`` of the data on the square scene grid of ``options`` (resolved)."""
     grid = scene_grid(traces, size_m=options.image_size_m, spacing_m=options.spacing_m)
-    return backproject(traces, grid, progress=staged(progress, "preliminary image"))
+    return backproject(
+        traces, grid, progress=staged(progress, "preliminary image"), device=options.device
+    )
 
 
 def find_range_speeds(

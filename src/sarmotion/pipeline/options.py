@@ -89,6 +89,10 @@ class AnalysisOptions:
         wider aperture is analysed on its central sub-aperture and each mover is then
         focused on all pulses. Default 1 degree, over which the motion estimates assume
         uniform motion and a straight look.
+    device : {"cpu", "cuda"}
+        Where the images (preliminary, stationary, each mover's) are backprojected:
+        ``"cuda"`` on an NVIDIA GPU (``backproject(device="cuda")``, the ``sarmotion[gpu]``
+        extra), the same sum to its own accuracy. Default ``"cpu"``.
 
     Notes
     -----
@@ -114,6 +118,7 @@ class AnalysisOptions:
     mover_half_window: int | None = None
     trajectory: bool = True
     sub_aperture_deg: float = 1.0
+    device: str = "cpu"
 
     def __post_init__(self) -> None:
         if not isinstance(self.separation, SeparationOptions):
@@ -148,6 +153,8 @@ class AnalysisOptions:
         if not isinstance(self.trajectory, bool):
             raise TypeError(f"trajectory must be a bool, got {self.trajectory!r}")
         positive(self.sub_aperture_deg, "sub_aperture_deg", unit="degrees")
+        if self.device not in ("cpu", "cuda"):
+            raise ValueError(f"device must be 'cpu' or 'cuda', got {self.device!r}")
 
     @property
     def method(self) -> str | None:

@@ -108,13 +108,19 @@ def stationary_image(
     grid: ImageGrid,
     *,
     progress: ProgressCallback | None = None,
+    device: str = "cpu",
 ) -> Image:
-    """``eq:image`` of the stationary traces: ``L``, or ``M`` minus the movers' traces."""
+    """``eq:image`` of the stationary traces: ``L``, or ``M`` minus the movers' traces.
+
+    ``device``: where to backproject (:func:`~sarmotion.imaging.backproject`).
+    """
     if separation.stationary is not None:
         data = separation.stationary
     else:
         data = traces.data - sum((m.traces for m in movers), np.zeros(traces.shape))
-    return backproject(traces.with_data(data), grid, progress=staged(progress, "stationary image"))
+    return backproject(
+        traces.with_data(data), grid, progress=staged(progress, "stationary image"), device=device
+    )
 
 
 def mover_images(
@@ -138,7 +144,7 @@ def mover_images(
             spacing_m=options.spacing_m,
         )
         own = Traces(data=mover.traces, acquisition=acquisition)
-        img = backproject(own, grid, velocity_mps=mover.velocity_mps)
+        img = backproject(own, grid, velocity_mps=mover.velocity_mps, device=options.device)
         x, y, v = img.peak(refine=True)
         out.append(
             dataclasses.replace(
