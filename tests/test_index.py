@@ -48,7 +48,13 @@ INDEX: dict[str, tuple[str, ...]] = {
     "_version": ("test_io_native.py", "test_io_cphd.py"),
     "errors": ("test_errors.py",),
     # cli
-    "cli.analyze": ("test_cli.py", "test_cli_demo.py", "test_analysis.py", "test_io_sicd.py"),
+    "cli.analyze": (
+        "test_cli.py",
+        "test_cli_demo.py",
+        "test_analysis.py",
+        "test_io_sicd.py",
+        "test_analyze_device.py",
+    ),  # fmt: skip
     "cli.autofocus": ("test_cli_autofocus.py",),
     "cli.collection": ("test_collection_run.py", "test_collection_cphd.py"),
     "cli.common": ("test_cli_hardening.py", "test_outputs.py"),
@@ -90,7 +96,11 @@ INDEX: dict[str, tuple[str, ...]] = {
     "imaging._bp_reference": ("test_imaging.py", "test_backprojection_accuracy.py"),
     "imaging._bp_table": ("test_fast_imaging.py", "test_imaging_threads.py"),
     "imaging._cuda_kernels": ("test_cuda_sim.py",),
-    "imaging._ffbp_kernels": ("test_fast_imaging.py", "test_ffbp_oblique.py"),
+    "imaging._ffbp_kernels": (
+        "test_fast_imaging.py",
+        "test_ffbp_oblique.py",
+        "test_ffbp_accuracy.py",
+    ),  # fmt: skip
     "imaging._simd": ("test_fast_imaging.py",),
     "imaging.autofocus": ("test_autofocus.py",),
     "imaging.backprojection": (
@@ -101,7 +111,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     ),
     "imaging.cuda": ("test_cuda_sim.py",),
     "imaging.exact_sum": ("test_backprojection_accuracy.py",),
-    "imaging.ffbp": ("test_fast_imaging.py", "test_ffbp_oblique.py"),
+    "imaging.ffbp": ("test_fast_imaging.py", "test_ffbp_oblique.py", "test_ffbp_accuracy.py"),
     "imaging.grid": ("test_imaging.py",),
     "imaging.peaks": ("test_imaging.py", "test_analysis.py"),
     "imaging.point_response": ("test_point_response.py",),
@@ -151,10 +161,10 @@ INDEX: dict[str, tuple[str, ...]] = {
     "paper.rank.symbols": ("test_rank.py",),
     # pipeline
     "pipeline._timing": ("test_analysis.py",),
-    "pipeline.analyze": ("test_analysis.py",),
+    "pipeline.analyze": ("test_analysis.py", "test_analyze_device.py"),
     "pipeline.detection": ("test_movers_detection.py", "test_detector_null.py"),
     "pipeline.movers": ("test_movers_detection.py", "test_fast_movers.py", "test_fit_lobes.py"),
-    "pipeline.options": ("test_analysis.py",),
+    "pipeline.options": ("test_analysis.py", "test_analyze_device.py"),
     "pipeline.refit": ("test_refit.py",),
     "pipeline.results": ("test_analysis.py", "test_errors.py", "test_api.py"),
     "pipeline.stages": ("test_analysis.py", "test_errors.py"),
