@@ -8,7 +8,6 @@ from typing import Any
 
 import click
 
-from ..core.text import fixed
 from ..io import DataError
 from ..io.sicd import write_sicd
 from ..io.staging import claimed
@@ -31,6 +30,7 @@ from .common import (
     out_option,
     speed_option,
 )
+from .describe import mover_lines, not_estimated_lines
 from .inputs import FRAME_HELP, INPUTS_HELP
 from .main import elapsed_s
 
@@ -108,12 +108,10 @@ def run_analyze(
         "and figures included)"
     )
     for k, m in enumerate(doc["movers"]):
-        x, y = (fixed(v) for v in m["position_m"])
-        ux, uy = (fixed(v) for v in m["velocity_mps"])
-        click.echo(
-            f"  mover {k + 1}: position ({x}, {y}) m, velocity ({ux}, {uy}) "
-            f"m/s, range speed {fixed(m['range_speed_mps'])} m/s"
-        )
+        for line in mover_lines(m, f"mover {k + 1}"):
+            click.echo(line)
+    for line in not_estimated_lines(doc):
+        click.echo(line)
 
 
 def _write_sicd_images(result, stage: Path) -> None:
@@ -247,7 +245,7 @@ def analyze(
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
-    Writes OUT/results.json (schema sarmotion.results/1),
+    Writes OUT/results.json (schema sarmotion.results/2),
     OUT/report.html (self-contained) and the report's figures as PNG. A scene larger
     than one patch (or any --region) is cut into patches, analysed on Dask and merged:
     OUT/results.json (schema sarmotion.collection/1), report.html and mosaic.png.

@@ -17,7 +17,6 @@ from ..collection import (
     plan_patches,
 )
 from ..core.blocks import TracesBlocks
-from ..core.text import fixed
 from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
 from ..io.staging import claimed
@@ -25,6 +24,7 @@ from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
 from .autofocus import ReadOptions
 from .common import InputError, Progress, as_flags, check_out
+from .describe import mover_lines
 from .main import elapsed_s
 
 __all__ = ["COLLECTION_OUTPUTS", "run_collection"]
@@ -43,7 +43,7 @@ def _quiet_dask() -> None:
 
 
 def mover_entries(result: Any) -> list[dict[str, Any]]:
-    """The ``sarmotion.results/1`` entries of an analysis's movers."""
+    """The ``sarmotion.results`` entries of an analysis's movers."""
     return results_document(result)["movers"]
 
 
@@ -143,9 +143,5 @@ def run_collection(
         "(start-up, reading and figures included)"
     )
     for k, m in enumerate(doc["movers"]):
-        x, y = (fixed(v) for v in m["position_m"])
-        ux, uy = (fixed(v) for v in m["velocity_mps"])
-        click.echo(
-            f"  mover {k + 1} (patch {m['patch']}): position ({x}, {y}) m, velocity "
-            f"({ux}, {uy}) m/s, range speed {fixed(m['range_speed_mps'])} m/s"
-        )
+        for line in mover_lines(m, f"mover {k + 1} (patch {m['patch']})"):
+            click.echo(line)

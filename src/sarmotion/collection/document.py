@@ -3,7 +3,7 @@
 Top-level keys: ``schema``, ``reference_point_m``, ``n_pulses``, ``n_samples``,
 ``region_m``, ``plan`` (core side, the movers' margins, the unambiguous scene and the
 patch table: each patch's core, centre, pulses, samples, decimation, pass band),
-``movers`` (each patch's ``sarmotion.results/1`` mover entry, plus ``patch``, the patch
+``movers`` (each patch's ``sarmotion.results/2`` mover entry, plus ``patch``, the patch
 whose fit was kept, and ``patches``, every patch that found it), ``stationary``
 (position, level in dB re the brightest of the mosaic, patch), ``stationary_dropped``
 (targets beyond the cap, not listed), ``stationary_sidelobes_dropped`` (listings taken

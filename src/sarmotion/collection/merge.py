@@ -151,7 +151,7 @@ class MoverRecord:
     snr_db : float
         Matched-filter SNR (dB); ``-inf`` when unknown.
     document : dict
-        Its entry of the ``sarmotion.results/1`` document.
+        Its entry of the ``sarmotion.results/2`` document.
     """
 
     patch: int

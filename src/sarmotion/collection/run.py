@@ -221,7 +221,7 @@ def analyze_patch(
         The patch is the whole region (today's analysis: options unchanged).
     describe : callable, optional
         ``describe(result)``: one JSON-ready entry per mover (the document layer's
-        ``sarmotion.results/1`` mover entries), kept as each record's ``document``.
+        ``sarmotion.results/2`` mover entries), kept as each record's ``document``.
     mosaic_m : (x0, y0, spacing), optional
         The mosaic's origin and pixel (m): the core image is reduced to its pixels
         (:func:`~sarmotion.collection.merge.coarsen`); default the analysis's pixels.

@@ -3,7 +3,7 @@
 One module per document, each a function from result objects to JSON-ready data (lists,
 floats, strings) and the schema name it carries:
 
-* :mod:`~sarmotion.documents.results` -- ``sarmotion.results/1``, an analysis
+* :mod:`~sarmotion.documents.results` -- ``sarmotion.results/2``, an analysis
   (:func:`sarmotion.pipeline.analyze`);
 * :mod:`~sarmotion.documents.tracks` -- ``sarmotion.tracks/1``, the movers followed across
   sub-apertures (:func:`sarmotion.tracking.track`);

@@ -1,48 +1,67 @@
-"""The ``sarmotion.results/1`` document: an analysis as JSON-ready data.
+"""The ``sarmotion.results/2`` document: an analysis as JSON-ready data.
 
-Top-level keys: ``schema``, ``method``, ``reference_point_m``, ``platform_speed_mps``,
-``n_pulses``, ``n_samples``, ``aperture_s``, ``aperture_deg``,
-``range_speed_resolution_mps``, ``detection`` (the test: statistic, threshold,
-false-alarm rate, the measured null tail, every candidate), ``movers`` (position_m,
-velocity_mps, range and cross-range speeds, peak levels, ``detection`` (statistic,
-threshold, false-alarm rate, p-value, width, focus gain), ``standard_errors`` (the
-Cramér–Rao bound at the measured SNR), ``snr_db``, ``amplitude``,
-``g_perp_cross_range_speed_mps``, ``likelihood_lobes``, ``cross_range_family``,
-``trajectory``),
+Every key, with its unit, frame and reference, is described in ``docs/results-schema.json``
+(JSON Schema) and the frame in ``docs/results.md``. Top-level keys: ``schema``,
+``method``, ``reference_point_m``, ``platform_speed_mps``, ``n_pulses``, ``n_samples``,
+``aperture_s``, ``aperture_deg``, ``range_speed_resolution_mps``, ``frame`` (the look
+direction and the unit vectors the range and cross-range coordinates and speeds are
+measured along), ``scene_extent_m``, ``detection`` (the test: statistic, threshold,
+false-alarm rate, the measured null tail, every candidate), ``movers``,
+``movers_not_estimated`` (candidates above the threshold beyond ``max_movers``),
 ``stationary``, ``timings_s``, ``options``, ``source``; for simulated inputs also
 ``truth``, per-mover ``errors``, ``false_movers`` and ``missed_movers``
 (:mod:`sarmotion.pipeline.truth`).
 
-The schema name stays ``sarmotion.results/1``: ``detection``, and per mover
-``detection``, ``standard_errors``, ``snr_db``, ``amplitude`` and
-``g_perp_cross_range_speed_mps``, were added; no key was removed or changed meaning
-except ``g_peak_db``, now the ``g(u)`` peak over its *local* floor (the detector's
-statistic) instead of over the global median. ``timings_s`` also holds
-``movers.<step>`` entries, the mover stage's steps (:mod:`sarmotion.pipeline.movers`),
-which ``total`` does not count. Per mover, ``likelihood_lobes`` was added: whether the
-matched filter's likelihood has a second maximum on another lobe within
-``motion.likelihood.NEAR_EQUAL_LOBES`` of the fit's ``|I|`` (``ambiguous``), the ratio of
-the best other lobe's ``|I|`` to the fit's (``lobe_ratio``) and that lobe's cross-range
-speed (m/s, null when there is none).
+Per mover: what the data fix and what they do not. ``range_m`` and ``range_std_m`` (the
+ground-range coordinate and its Cramér–Rao standard error) are measured;
+``cross_range_known`` is false (a few degrees of one antenna do not fix the cross-range
+position) and ``position_m`` is one member of ``cross_range_family``, the one at the
+reference point's cross range; ``cross_range_family.in_scene`` lists the family's members
+across the imaged scene (positions and velocities). Then the velocity, range and
+cross-range speeds, peak levels, ``detection``, ``standard_errors``, ``snr_db``,
+``amplitude`` (``[re, im]``) and ``amplitude_complex`` (``{"re", "im"}``),
+``g_perp_cross_range_speed_mps``, ``likelihood_lobes`` and ``trajectory`` (knot times,
+velocities and the positions at the knot times).
+
+Version 2 (from ``sarmotion.results/1``): ``g_peak_db`` is the ``g(u)`` peak over its
+*local* floor (the detector's statistic), no longer over the global median; added
+``frame``, ``scene_extent_m``, ``movers_not_estimated`` and per mover
+``cross_range_known``, ``range_m``, ``range_std_m``, ``cross_range_family.in_scene``,
+``amplitude_complex`` and ``trajectory.positions_m``. No key was removed and no number
+changed. Readers of the document (the HTML report) accept both versions.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from ..motion import NULL_TAIL, azimuth_span_deg
-from ..pipeline import AnalysisResult, Mover, TruthComparison
+import numpy as np
 
-__all__ = ["RESULTS_SCHEMA", "results_document"]
+from ..core.traces import Traces
+from ..imaging import resolution
+from ..motion import NULL_TAIL, TrajectoryEstimate, azimuth_span_deg
+from ..pipeline import (
+    AnalysisResult,
+    Mover,
+    NotEstimated,
+    TruthComparison,
+    family_segment,
+    range_coordinate,
+)
+
+__all__ = ["RESULTS_SCHEMA", "READABLE_RESULTS_SCHEMAS", "results_document"]
 
 #: Schema name of the results document.
-RESULTS_SCHEMA = "sarmotion.results/1"
+RESULTS_SCHEMA = "sarmotion.results/2"
+
+#: Versions a reader of results.json (the HTML report) accepts.
+READABLE_RESULTS_SCHEMAS = ("sarmotion.results/1", RESULTS_SCHEMA)
 
 
 def results_document(
     result: AnalysisResult, *, truth: TruthComparison | None = None
 ) -> dict[str, Any]:
-    """The ``sarmotion.results/1`` document of ``result`` (lists, floats, strings).
+    """The ``sarmotion.results/2`` document of ``result`` (lists, floats, strings).
 
     Parameters
     ----------
@@ -53,6 +72,8 @@ def results_document(
         ``false_movers`` and ``missed_movers``.
     """
     tr = result.traces
+    g = result.stationary_image.grid
+    extent = (float(g.x_m[0]), float(g.x_m[-1]), float(g.y_m[0]), float(g.y_m[-1]))
     doc: dict[str, Any] = {
         "schema": RESULTS_SCHEMA,
         "method": result.method,
@@ -63,8 +84,11 @@ def results_document(
         "aperture_s": float(tr.slow_times_s[-1] - tr.slow_times_s[0]),
         "aperture_deg": float(azimuth_span_deg(tr)),
         "range_speed_resolution_mps": float(result.range_speeds.resolution_mps),
+        "frame": _frame(tr),
+        "scene_extent_m": list(extent),
         "detection": _detection(result),
-        "movers": [_mover(m) for m in result.movers],
+        "movers": [_mover(m, tr, extent) for m in result.movers],
+        "movers_not_estimated": [_not_estimated(c) for c in result.movers_not_estimated],
         "stationary": [
             {"position_m": list(s.position_m), "peak_db": float(s.level_db)}
             for s in result.stationary
@@ -83,9 +107,38 @@ def results_document(
     return doc
 
 
-def _mover(m: Mover) -> dict[str, Any]:
+def _frame(tr: Traces) -> dict[str, Any]:
+    """The look direction and the ground unit vectors of range and cross range (module notes)."""
+    geom = tr.geometry
+    cells = resolution(tr)
+    m_o, t = np.asarray(geom.m_o, float), np.asarray(geom.tangent, float)
+    return {
+        "look_direction": m_o.tolist(),
+        "flight_tangent": t.tolist(),
+        "range_direction": [float(v) for v in cells.range_direction],
+        "cross_range_direction": [float(v) for v in cells.cross_range_direction],
+        "range_speed_vector": m_o[:2].tolist(),
+        "cross_range_speed_vector": (geom.projector @ t)[:2].tolist(),
+    }
+
+
+def _mover(m: Mover, tr: Traces, extent: tuple[float, float, float, float]) -> dict[str, Any]:
+    seg = family_segment(tr, m.position_m, m.velocity_mps, m.family_position_per_m, extent)
+    in_scene = (
+        None
+        if seg is None
+        else {
+            "cross_offsets_m": seg.cross_offsets_m.tolist(),
+            "positions_m": seg.positions_m.tolist(),
+            "velocities_mps": seg.velocities_mps.tolist(),
+            "range_history_rms_m": seg.rms_m.tolist(),
+        }
+    )
     entry: dict[str, Any] = {
         "position_m": [float(v) for v in m.position_m[:2]],
+        "cross_range_known": False,
+        "range_m": range_coordinate(tr, m.position_m),
+        "range_std_m": float(m.bound.range_position_m),
         "velocity_mps": [float(v) for v in m.velocity_mps],
         "range_speed_mps": float(m.range_speed_mps),
         "cross_range_speed_mps": float(m.cross_range_speed_mps),
@@ -95,6 +148,7 @@ def _mover(m: Mover) -> dict[str, Any]:
         "cross_range_family": {
             "position_per_m": [float(v) for v in m.family_position_per_m],
             "velocity_mps_per_m": [float(v) for v in m.family_velocity_per_m],
+            "in_scene": in_scene,
         },
     }
     ev, b = m.evidence, m.bound
@@ -123,6 +177,7 @@ def _mover(m: Mover) -> dict[str, Any]:
     }
     entry["snr_db"] = b.snr_db
     entry["amplitude"] = [float(m.fit.amplitude.real), float(m.fit.amplitude.imag)]
+    entry["amplitude_complex"] = {"re": entry["amplitude"][0], "im": entry["amplitude"][1]}
     entry["g_perp_cross_range_speed_mps"] = float(m.g_perp.speed_mps)
     lobes = m.separated_fit  # the global search over cross-range speed ran on S
     entry["likelihood_lobes"] = {
@@ -136,11 +191,37 @@ def _mover(m: Mover) -> dict[str, Any]:
     }
     if m.trajectory is not None:
         knots = m.trajectory.knot_times_s
+        times = np.r_[knots[:, 0], knots[-1, 1]]
         entry["trajectory"] = {
-            "slow_times_s": knots[:, 0].tolist() + [float(knots[-1, 1])],
+            "slow_times_s": times.tolist(),
             "velocities_mps": m.trajectory.velocities_mps.tolist(),
+            "positions_m": _knot_positions(m.trajectory, times).tolist(),
         }
     return entry
+
+
+def _knot_positions(tj: TrajectoryEstimate, times: np.ndarray) -> np.ndarray:
+    """Ground positions (m) of the piecewise-linear trajectory at ``times`` (s), shape (n, 2).
+
+    ``rho(t) = rho(0) + integral_0^t u(s) ds`` with ``u`` the velocity of each straight
+    segment ``[knot_k, knot_k+1]`` (the estimate's definition).
+    """
+    a, b = tj.knot_times_s[:, 0], tj.knot_times_s[:, 1]
+    t = np.asarray(times, dtype=np.float64)[:, None]
+    # signed length of each segment's overlap with [0, t] (negative for t < 0)
+    forward = np.clip(np.minimum(b, t) - np.maximum(a, 0.0), 0.0, None)
+    backward = np.clip(np.minimum(b, 0.0) - np.maximum(a, t), 0.0, None)
+    lengths = np.where(t >= 0.0, forward, -backward)
+    return tj.position_at_zero_m[:2][None, :] + lengths @ tj.velocities_mps
+
+
+def _not_estimated(c: NotEstimated) -> dict[str, Any]:
+    return {
+        "range_speed_mps": float(c.range_speed_mps),
+        "statistic_db": float(c.statistic_db),
+        "width_resolutions": float(c.width_resolutions),
+        "range_m": float(c.range_m),
+    }
 
 
 def _detection(result: AnalysisResult) -> dict[str, Any] | None:

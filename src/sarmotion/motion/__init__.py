@@ -85,7 +85,7 @@ from .likelihood import (
 )
 from .location import MoverLocation, locate_mover
 from .phase_space import TrajectoryEstimate, estimate_trajectory, trajectory_error
-from .range_speed import RangeSpeeds, estimate_range_speeds, range_speed_objective
+from .range_speed import RangeSpeeds, aligned_range, estimate_range_speeds, range_speed_objective
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
 from .velocity import EstimationStep, MoverEstimate, estimate_velocity
 from .wigner import WignerRidge, wigner_ridge, wigner_slow_time
@@ -93,6 +93,7 @@ from .wigner import WignerRidge, wigner_ridge, wigner_slow_time
 __all__ = [
     # the paper's objectives
     "RangeSpeeds",
+    "aligned_range",
     "range_speed_objective",
     "estimate_range_speeds",
     "cross_range_objective",

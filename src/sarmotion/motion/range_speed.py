@@ -11,7 +11,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import finite as _finite
 from .._validation import interval as _interval
 from .._validation import positive as _positive
-from ..core import Traces, as_point
+from ..core import C, Traces, as_point
+from ..core.geometry import range_direction_velocity
 from ._aligned import (
     _Aligner,
     _check_traces,
@@ -23,7 +24,7 @@ from .speed_resolution import range_speed_resolution
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RangeSpeeds", "range_speed_objective", "estimate_range_speeds"]
+__all__ = ["RangeSpeeds", "aligned_range", "range_speed_objective", "estimate_range_speeds"]
 
 
 # ==================================================================== g(u)
@@ -247,3 +248,44 @@ def _over_floor_db(values: NDArray[np.float64], floor: float) -> NDArray[np.floa
     """``20 log10(values / floor)`` (dB); infinite for a zero floor."""
     v = np.asarray(values, dtype=np.float64)
     return 20.0 * np.log10(v / floor) if floor > 0 else np.full(v.size, np.inf)
+
+
+def aligned_range(traces: Traces, range_speed_mps: float) -> float:
+    """Ground-range coordinate of a ``g(u)`` peak's range history at ``s = 0`` (m), not fitted.
+
+    The traces are aligned on the reference point ``rho_o`` at the ground velocity of
+    range speed ``u`` and zero cross-range speed
+    (:func:`~sarmotion.core.geometry.range_direction_velocity`); the fast-time sample
+    ``t`` where ``sum_s |T_+ d(s, t)|`` peaks (the one ``g(u)`` takes) puts the range
+    history at ``R = L + c t / 2`` at ``s = 0``. The coordinate is the ``x`` of the point
+    ``rho_o + x e_r`` at that distance from the antenna (``e_r``: ground range direction
+    at ``rho_o``, :func:`sarmotion.imaging.resolution`):
+    ``|L m_o - x e_r| = R``, the root nearer ``rho_o``. Good to about a range resolution
+    (the sample grid is oversampled, the cross-range speed is not searched).
+
+    Parameters
+    ----------
+    traces : Traces
+        Traces holding the mover (e.g. what the estimated movers leave of ``S``).
+    range_speed_mps : float
+        The ``g(u)`` peak (m/s).
+
+    Returns
+    -------
+    float
+        ``x`` (m).
+    """
+    from ..imaging import resolution  # imaging imports motion's neighbours: at call time
+
+    al = _Aligner(traces, traces.reference_point_m)
+    geom = traces.geometry
+    spectra = al.spectra(range_direction_velocity(float(range_speed_mps), geom)[None])
+    padded = np.zeros(spectra.shape[:2] + (al.n_fft,), dtype=np.complex64)
+    padded[..., al.slots] = spectra
+    centre = int(np.argmax(np.abs(np.fft.ifft(padded, axis=-1)).sum(axis=1)[0]))
+    slant = geom.range_m + 0.5 * C * float(al.times_s[centre])
+    e_r = resolution(traces).range_direction
+    cos = float(geom.m_o[:2] @ e_r)
+    length = geom.range_m
+    disc = max(0.0, (length * cos) ** 2 + slant**2 - length**2)
+    return float(length * cos - np.sign(cos) * np.sqrt(disc))

@@ -125,4 +125,5 @@ def analyze(
         stationary=stationary,
         timings_s=timings,
         options=opts,
+        movers_not_estimated=stage.not_estimated,
     )

@@ -47,6 +47,7 @@ from ..motion import (
     PointFit,
     RangeSpeedDetection,
     StationaryExplanation,
+    aligned_range,
     coherent_false_alarm_probability,
     coherent_statistic_db,
     coherent_threshold_db,
@@ -70,7 +71,7 @@ from ._timing import timed
 from .detection import DetectionResult
 from .options import AnalysisOptions
 from .refit import at_full_amplitude, data_without_stationary, refit_in_cell
-from .results import Mover, MoverEvidence
+from .results import Mover, MoverEvidence, NotEstimated
 
 __all__ = [
     "MoverStage",
@@ -95,11 +96,14 @@ class MoverStage:
         ``S`` minus every mover's traces (whole aperture).
     timings_s : dict of str to float
         Wall-clock time of each step (s), keys ``movers.<step>`` (module docstring).
+    not_estimated : tuple of NotEstimated
+        The candidates still above the threshold once ``max_movers`` were accepted.
     """
 
     movers: tuple[Mover, ...]
     residual: NDArray[np.complex128]
     timings_s: dict[str, float] = field(default_factory=dict)
+    not_estimated: tuple[NotEstimated, ...] = ()
 
 
 def estimate_movers(
@@ -133,6 +137,7 @@ def estimate_movers(
     opts = detection.options
     sub, moving_sub = detection.sub, np.asarray(detection.moving_sub)
     timings: dict[str, float] = {}
+    beyond: list[NotEstimated] = []
     with timed(timings, "movers.candidates"):
         found = fit_candidates(
             moving_sub,
@@ -142,6 +147,13 @@ def estimate_movers(
             peak_width_mps=point_peak_width(sub) * range_speed_resolution(sub),
             timings=timings,
             progress=progress,
+            not_estimated=beyond,
+        )
+    if beyond:
+        log.info(
+            "%d candidate(s) above the threshold not estimated (max_movers = %d)",
+            len(beyond),
+            opts.max_movers,
         )
     if keep is not None:
         declined = [f for f, _ in found if not keep(f)]
@@ -194,12 +206,15 @@ def estimate_movers(
         residual = residual - own
         out.append(_with(mover, traces=own))
         log.info(
-            "mover %d: position (%.2f, %.2f) m, velocity (%.2f, %.2f) m/s",
+            "mover %d: position (%.2f, %.2f) m, velocity (%.2f, %.2f) m/s, the member of its "
+            "cross-range family at the reference cross range (the data fix its range only)",
             k + 1,
             *mover.position_m[:2],
             *mover.velocity_mps,
         )
-    return MoverStage(movers=tuple(out), residual=residual, timings_s=timings)
+    return MoverStage(
+        movers=tuple(out), residual=residual, timings_s=timings, not_estimated=tuple(beyond)
+    )
 
 
 def _refit(
@@ -264,6 +279,7 @@ def fit_candidates(
     peak_width_mps: float,
     timings: dict[str, float] | None = None,
     progress: ProgressCallback | None = None,
+    not_estimated: list[NotEstimated] | None = None,
 ) -> list[tuple[PointFit, MoverEvidence]]:
     """Fit the candidates one at a time, strongest first, each on what the others leave.
 
@@ -297,6 +313,10 @@ def fit_candidates(
         Adds the redetections' wall-clock time under ``movers.redetection`` (s).
     progress : callable, optional
         ``progress("movers", done, total)``.
+    not_estimated : list, optional
+        Receives, strongest first, the candidates still above the threshold (on what the
+        accepted movers leave) once ``max_movers`` were accepted: detected, not fitted
+        (:class:`~sarmotion.pipeline.NotEstimated`). Nothing is dropped silently.
 
     Returns
     -------
@@ -351,7 +371,53 @@ def fit_candidates(
         out.append((fit, evidence))
         with timed(timings, "movers.redetection"):
             current = _redetect(Traces(data=residual, acquisition=sub), detection, options)
+    if not_estimated is not None and len(out) >= options.max_movers:
+        left = Traces(data=residual, acquisition=sub)
+        accepted = [f for f, _ in out]
+        not_estimated.extend(_beyond_cap(left, current, tried, accepted, peak_width_mps))
     return out
+
+
+def _beyond_cap(
+    residual: Traces,
+    current: RangeSpeedDetection,
+    tried: Sequence[float],
+    accepted: Sequence[PointFit],
+    width_mps: float,
+) -> list[NotEstimated]:
+    """The untried candidates of ``current``, strongest first.
+
+    Untried: half a resolution from every tried speed. A candidate within a ``g`` peak's
+    width and a range cell of an accepted mover is what the point model left of it (the
+    rule :func:`fit_candidates` applies to fits, here on the aligned range), not a mover.
+    """
+    rs = current.range_speeds
+    res = rs.resolution_mps
+    cells = resolution(residual)
+    ref = residual.reference_point_m[:2]
+    fitted = [
+        (f.range_speed_mps, float((f.position_m[:2] - ref) @ cells.range_direction))
+        for f in accepted
+    ]
+    out = []
+    for k, u in enumerate(rs.speeds_mps):
+        if any(abs(u - t) <= 0.5 * res for t in tried):
+            continue
+        rng = aligned_range(residual, float(u))
+        if any(
+            abs(u - fu) < width_mps and abs(rng - fx) < cells.ground_range_m for fu, fx in fitted
+        ):
+            log.info("g(u) candidate at %.2f m/s beyond the cap: what a subtracted mover left", u)
+            continue
+        out.append(
+            NotEstimated(
+                range_speed_mps=float(u),
+                statistic_db=float(current.statistic_db[k]),
+                width_resolutions=float(current.widths[k]),
+                range_m=rng,
+            )
+        )
+    return sorted(out, key=lambda c: -c.statistic_db)
 
 
 def _same_trace(sub: Acquisition, a: PointFit, b: PointFit, width_mps: float) -> bool:

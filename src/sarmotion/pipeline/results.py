@@ -23,7 +23,7 @@ from ..motion import (
 from ..separation import Separation
 from .options import AnalysisOptions
 
-__all__ = ["MoverEvidence", "Mover", "StationaryTarget", "AnalysisResult"]
+__all__ = ["MoverEvidence", "Mover", "NotEstimated", "StationaryTarget", "AnalysisResult"]
 
 
 def _pair(v: NDArray[np.float64] | tuple[float, ...], digits: int = 2) -> str:
@@ -167,6 +167,31 @@ class Mover:
 
 
 @dataclass(frozen=True, kw_only=True)
+class NotEstimated:
+    """A candidate that passed the detector but was not estimated: ``max_movers`` was reached.
+
+    Attributes
+    ----------
+    range_speed_mps : float
+        Its ``g(u)`` peak (m/s), on what the estimated movers leave of ``S``.
+    statistic_db : float
+        Its detector statistic there (dB, ``g`` peak over its local floor), above the
+        threshold.
+    width_resolutions : float
+        Half-height width of its ``g`` peak (range-speed resolutions).
+    range_m : float
+        Ground-range coordinate ``(rho - rho_o) . e_r`` of its range history at ``s = 0``
+        (m): the brightest fast-time sample of the traces aligned at that range speed and
+        zero cross-range speed, not fitted (good to about a range resolution).
+    """
+
+    range_speed_mps: float
+    statistic_db: float
+    width_resolutions: float
+    range_m: float
+
+
+@dataclass(frozen=True, kw_only=True)
 class StationaryTarget:
     """A bright point of the stationary image.
 
@@ -210,6 +235,10 @@ class AnalysisResult:
         are not in ``total``.
     options : AnalysisOptions
         The options the analysis ran with, every data-dependent default filled.
+    movers_not_estimated : tuple of NotEstimated
+        The candidates that passed the detector after ``options.max_movers`` movers were
+        accepted, strongest first: detected, neither estimated nor tested against a
+        stationary explanation.
     """
 
     traces: Traces
@@ -223,6 +252,7 @@ class AnalysisResult:
     stationary: tuple[StationaryTarget, ...]
     timings_s: dict[str, float]
     options: AnalysisOptions
+    movers_not_estimated: tuple[NotEstimated, ...] = ()
 
     def __repr__(self) -> str:
         """One line: pulses, samples, movers, stationary targets, method and total time."""

@@ -1,7 +1,10 @@
 """Figures and reports: the layer that imports matplotlib (with the paper's figures).
 
 - :mod:`~sarmotion.report.plotting` — trace and image panels in the paper's style;
-- :mod:`~sarmotion.report.html` — the self-contained HTML report of an analysis;
+- :mod:`~sarmotion.report.analysis_figures` — the figures of an analysis (movers drawn
+  as their cross-range family) and its ``write_report``;
+- :mod:`~sarmotion.report.html` — the self-contained HTML report, from the results
+  document alone;
 - :mod:`~sarmotion.report.tracks` — tracks over the stationary image and their speeds.
 
 The paper's figures are built in :mod:`sarmotion.paper.figures` with these panels.

@@ -1,6 +1,6 @@
 """An analysis written to a directory: what ``sarmotion analyze --out DIR`` writes.
 
-:func:`save` writes ``results.json`` (the ``sarmotion.results/1`` document with the
+:func:`save` writes ``results.json`` (the ``sarmotion.results/2`` document with the
 point-target quality of the brightest stationary targets), ``report.html`` and the
 report's figures as PNG; :func:`save_report` writes the report and its figures alone.
 The command line calls :func:`save` after claiming ``--out``; called from Python, they
@@ -27,7 +27,7 @@ from ..io import staged_directory, write_json
 from ..io.staging import claim_output, claimed
 from ..pipeline import AnalysisResult, compare_with_truth
 from ..simulation import Scene
-from .html import write_report
+from .analysis_figures import write_report
 
 __all__ = ["ANALYSIS_OUTPUTS", "REPORT_OUTPUTS", "analysis_document", "save", "save_report"]
 

@@ -1,12 +1,15 @@
-"""Figures and a self-contained HTML report of an analysis (:mod:`sarmotion.pipeline`).
+"""The self-contained HTML report of an analysis, from its results document alone.
 
-Plotting layer: with :mod:`sarmotion.report.plotting` the only module that imports matplotlib.
-The trace and image panels are drawn by :mod:`sarmotion.report.plotting`; the objective-function
-and trajectory plots (not in the paper's figure set of that module) are drawn here.
+:func:`write_html` reads the ``sarmotion.results`` document (the dict written as, or
+loaded from, results.json; versions 1 and 2) and the report's figures, saves each figure
+as a PNG in the output directory and writes ``report.html`` with the same PNGs embedded
+as base64 data URIs, so the HTML file can be mailed or archived alone. The figures are
+made from the analysis itself by :mod:`sarmotion.report.analysis_figures`, whose
+:func:`~sarmotion.report.analysis_figures.write_report` is the one call from an
+:class:`~sarmotion.pipeline.AnalysisResult` to a report (also importable from here).
 
-:func:`write_report` saves each figure as a PNG in ``directory`` and writes
-``report.html`` with the same PNGs embedded as base64 data URIs, so the HTML file can be
-mailed or archived alone.
+Each mover is reported as what its data fix: its range with the standard error, and its
+cross-range position as not determined, with the family of positions across the scene.
 """
 
 from __future__ import annotations
@@ -16,224 +19,45 @@ import datetime as _dt
 import html
 import io
 from collections.abc import Sequence
+from importlib import import_module
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from .._version import __version__
-from ..documents.results import results_document
-from ..motion import trajectory_error
-from ..pipeline import AnalysisResult
-from .plotting import LEGEND_PT, image_figure, plot_image, subplots, traces_figure
 
-__all__ = [
+__all__ = ["ReportFigure", "write_html"]
+
+# Made from the AnalysisResult in sarmotion.report.analysis_figures; importable from here.
+_FROM_ANALYSIS = (
+    "write_report",
     "traces_panels_figure",
     "objectives_figure",
     "images_figure",
     "movers_figure",
     "trajectories_figure",
-    "write_report",
-]
+)
+
+
+def __getattr__(name: str) -> object:
+    if name in _FROM_ANALYSIS:
+        return getattr(import_module(".analysis_figures", __package__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+class ReportFigure(NamedTuple):
+    """A figure of the report: its section, caption, the figure and its PNG file name."""
+
+    section: str
+    caption: str
+    figure: Figure
+    name: str
+
 
 #: Stationary detections closer than this (m) to a brighter one are merged in the report.
 _MERGE_M = 0.5
-
-_COLOURS = ("tab:red", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
-
-
-# ======================================================================== figures
-def traces_panels_figure(result: AnalysisResult) -> Figure:
-    """``|M|``, ``|L|``, ``|S|`` (dB), each mover's separated traces and the residual."""
-    tr = result.traces
-    panels: list[tuple[str, Any, bool]] = [("data |M|", tr.data, False)]
-    stat = result.separation.stationary
-    if stat is not None:
-        panels.append(("stationary |L|", stat, False))
-        panels.append(("moving |S| (dB)", result.separation.moving, True))
-    else:
-        panels.append(("filtered |Q M| (dB)", result.separation.moving, True))
-    for k, m in enumerate(result.movers):
-        panels.append((f"mover {k + 1} |D_{k + 1}| (dB)", m.traces, True))
-    panels.append(("residual (dB)", result.residual, True))
-    fig = traces_figure(
-        panels,
-        slow_times_s=tr.slow_times_s,
-        fast_times_s=tr.fast_times_s,
-        normalise_by=float(np.abs(tr.data).max()),
-        ncols=min(3, len(panels)),  # 12.6 in: shown unscaled in the 1294-px column
-    )
-    for ax in fig.axes:  # legible at the report's 110 dpi (default 8 px)
-        ax.tick_params(labelsize=10)
-        ax.xaxis.label.set_size(11)
-        ax.yaxis.label.set_size(11)
-    fig.tight_layout()
-    return fig
-
-
-def objectives_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
-    """``g(u)`` on ``S`` with its detection threshold, and each mover's ``g_perp`` and ML profile.
-
-    Left: ``g``, its local floor and the threshold (floor times the statistic's
-    threshold), the detected range speeds. Right, per mover: ``g_perp`` (``eq:OBJ2``,
-    minimum) and the matched filter's global profile over the cross-range speed
-    (maximum: the maximum-likelihood estimate).
-    """
-    rs = result.range_speeds
-    det = result.detection
-    n = len(result.movers)
-    # At most three panels a row: 12 in at the report's 110 dpi fit its 1294-px column
-    # unscaled, so the legends read at their LEGEND_PT.
-    ncols = min(3, 1 + n)
-    nrows = -(-(1 + n) // ncols)
-    fig, axes = subplots(nrows, ncols, figsize=(4.0 * ncols, 3.6 * nrows), squeeze=False)
-    axes = axes.ravel()
-    for extra in axes[1 + n :]:
-        extra.set_visible(False)
-    ax = axes[0]
-    top = float(rs.objective.max())
-    ax.plot(rs.grid_mps, rs.objective / top, color="k", lw=1.0, label="g(u)")
-    if det is not None:
-        ax.plot(rs.grid_mps, det.floor_curve / top, color="0.6", ls=":", lw=1, label="local floor")
-        ax.plot(
-            rs.grid_mps,
-            det.floor_curve * 10.0 ** (det.threshold_db / 20.0) / top,
-            color="tab:blue",
-            ls="--",
-            lw=1,
-            label=f"threshold {det.threshold_db:.1f} dB "
-            f"(false alarms {det.false_alarm_rate:g} per scene)",
-        )
-        ax.axvspan(-det.min_speed_mps, det.min_speed_mps, color="0.9", lw=0)
-    for k, m in enumerate(result.movers):
-        u = m.range_speed_mps
-        ax.axvline(u, color=_COLOURS[k % 6], ls="--", lw=1, label=f"mover {k + 1}: {u:.2f} m/s")
-    if truth:
-        for t in truth["truth"]:
-            ax.plot(t["range_speed_mps"], 1.02, "v", color="k", ms=6)
-    ax.set_xlabel("range speed u (m/s)")
-    ax.set_ylabel("g(u) / max")
-    ax.set_title("g(u) on S (eq:OBJg) and the detector", fontsize=10)
-    ax.legend(fontsize=LEGEND_PT, loc="upper left")
-    for k, m in enumerate(result.movers):
-        _cross_panel(axes[1 + k], k, m, truth)
-    fig.tight_layout()
-    return fig
-
-
-def _cross_panel(ax: Any, k: int, m: Any, truth: dict[str, Any] | None) -> None:
-    """One mover's ``g_perp`` and maximum-likelihood profile against the cross-range speed."""
-    cc = m.g_perp
-    ax.plot(cc.grid_mps, cc.objective / cc.objective.max(), color="k", lw=1.0, label="g_perp")
-    ax.axvline(cc.speed_mps, color="k", ls=":", lw=1, label=f"g_perp min {cc.speed_mps:.2f} m/s")
-    if m.fit is not None:
-        f = m.fit
-        ax.plot(
-            f.grid_mps,
-            f.profile / f.profile.max(),
-            color=_COLOURS[k % 6],
-            lw=1.0,
-            label="ML profile",
-        )
-    up = m.cross_range_speed_mps
-    sd = f" +- {m.bound.cross_range_speed_mps:.2g}" if m.bound is not None else ""
-    ax.axvline(up, color=_COLOURS[k % 6], ls="--", lw=1, label=f"ML {up:.2f}{sd} m/s")
-    if truth and truth["errors"][k] is not None:
-        err = truth["errors"][k]["cross_range_speed_mps"]
-        ax.axvline(up - err, color="0.4", ls="-.", lw=1, label="truth")
-    ax.set_xlabel("cross-range speed u_perp (m/s)")
-    ax.set_ylabel("/ max")
-    ax.set_title(f"mover {k + 1}: g_perp (eq:OBJ2) and matched filter", fontsize=10)
-    ax.legend(fontsize=LEGEND_PT)
-
-
-def images_figure(result: AnalysisResult) -> Figure:
-    """Preliminary image and stationary image, with movers and stationary targets marked.
-
-    Circles: the movers' estimated positions at ``s = 0`` (preliminary image) and the
-    listed stationary targets (stationary image).
-    """
-    g = result.preliminary_image.grid
-    found = [s.position_m for s in result.stationary]
-    movers = [tuple(m.position_m[:2]) for m in result.movers]
-    return image_figure(
-        [
-            ("preliminary image |I| (eq:image)", result.preliminary_image.values),
-            ("stationary image (from L)", result.stationary_image.values),
-        ],
-        x_m=g.x_m,
-        y_m=g.y_m,
-        markers=[movers, found],
-    )
-
-
-def movers_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
-    """Each mover's image from its own traces, compensated at its estimated velocity."""
-    n = max(1, len(result.movers))
-    fig, axes = subplots(1, n, figsize=(4.6 * n, 4.0), squeeze=False)
-    for k, m in enumerate(result.movers):
-        ax = axes[0, k]
-        g = m.image.grid
-        u = m.velocity_mps
-        plot_image(
-            ax,
-            m.image.values,
-            x_m=g.x_m,
-            y_m=g.y_m,
-            title=f"mover {k + 1}, u = ({u[0]:.2f}, {u[1]:.2f}) m/s",
-            markers=[tuple(m.position_m[:2])],
-        )
-        if truth and truth["errors"][k] is not None:
-            name = truth["errors"][k]["matched"]
-            t = next((t for t in truth["truth"] if t["label"] == name), None)
-            if t is not None:
-                ax.plot(*t["position_m"], "x", color="w", ms=9, mew=2, label="truth")
-                ax.legend(fontsize=LEGEND_PT, loc="lower right")
-    if not result.movers:
-        axes[0, 0].text(0.5, 0.5, "no mover found", ha="center", va="center")
-        axes[0, 0].set_axis_off()
-    fig.tight_layout()
-    return fig
-
-
-def trajectories_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
-    """Trajectory error ``|rho^e(s) - rho(s)|`` (simulations), else the trajectories."""
-    fig, ax = subplots(figsize=(6.0, 3.8))
-    drawn = False
-    for k, m in enumerate(result.movers):
-        tj = m.trajectory
-        if tj is None:
-            continue
-        colour = _COLOURS[k % 6]
-        t = None
-        if truth and truth["errors"][k] is not None:
-            name = truth["errors"][k]["matched"]
-            t = next((x for x in truth["truth"] if x["label"] == name), None)
-        if t is not None:
-            err = trajectory_error(tj, t["position_m"], t["velocity_mps"])
-            ax.plot(tj.slow_times_s, err, color=colour, label=f"estimate {k + 1} vs truth '{name}'")
-            ax.set_ylabel("|rho_e(s) - rho(s)| (m)")
-        else:
-            ax.plot(tj.positions_m[:, 0], tj.positions_m[:, 1], color=colour)
-            ax.plot(*tj.position_at_zero_m[:2], "o", color=colour, label=f"mover {k + 1}, s = 0")
-            ax.set_xlabel("x (m)")
-            ax.set_ylabel("y (m)")
-        drawn = True
-    if truth:
-        ax.set_xlabel("slow time s (s)")
-        ax.set_title("trajectory error (phase-space estimate)")
-        ax.set_ylim(bottom=0.0)
-    else:
-        ax.set_title("estimated trajectories over the aperture")
-        ax.set_aspect("equal", adjustable="datalim")
-    if drawn:
-        ax.legend(fontsize=LEGEND_PT)
-    else:
-        ax.text(0.5, 0.5, "no trajectory estimated", ha="center", va="center")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return fig
 
 
 # ========================================================================= report
@@ -295,31 +119,36 @@ def _errors_cell(m: dict[str, Any]) -> str:
     )
 
 
-def _html_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
-    h = "".join(f"<th>{html.escape(c)}</th>" for c in head)
+def _html_table(
+    head: Sequence[str], rows: Sequence[Sequence[str]], *, escape_head: bool = True
+) -> str:
+    h = "".join(f"<th>{html.escape(c) if escape_head else c}</th>" for c in head)
     body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
     return f"<table><tr>{h}</tr>{body}</table>"
 
 
-def write_report(
-    result: AnalysisResult,
+def write_html(
+    document: dict[str, Any],
     directory: str | Path,
     *,
-    document: dict[str, Any] | None = None,
+    figures: Sequence[ReportFigure] = (),
     title: str = "sarmotion analysis",
     inputs: Sequence[str] = (),
 ) -> Path:
-    """Save the figures as PNG in ``directory`` and write ``directory/report.html``.
+    """Save ``figures`` as PNG in ``directory`` and write ``directory/report.html``.
 
     Parameters
     ----------
-    result : AnalysisResult
-        The analysis.
+    document : dict
+        The results document (``sarmotion.results/2`` or ``/1``, e.g. loaded from
+        results.json), with ``truth`` for simulated inputs: every number and table of the
+        page comes from it.
     directory : path
         Existing output directory.
-    document : dict, optional
-        ``results_document(result, ...)`` (with ``truth`` for simulated inputs); computed
-        without truth if not given.
+    figures : sequence of ReportFigure
+        The figures, in order within their sections
+        (:func:`sarmotion.report.analysis_figures.analysis_figures`); the autofocus figure is
+        drawn here from the document's ``autofocus`` entry.
     title : str
         Report title.
     inputs : sequence of str
@@ -331,21 +160,19 @@ def write_report(
         The HTML file.
     """
     out = Path(directory)
-    doc = document if document is not None else results_document(result)
-    truth = None
-    if "truth" in doc:
-        truth = {"truth": doc["truth"], "errors": [m.get("errors") for m in doc["movers"]]}
+    doc = document
+    truth = "truth" in doc
     sections: dict[str, list[str]] = {}
-    figures = _figures(result, truth)
+    figures = [ReportFigure(*f) for f in figures]
     if doc.get("autofocus"):
-        figures.append(_autofocus_figure(doc["autofocus"]))
+        figures.append(ReportFigure(*_autofocus_figure(doc["autofocus"])))
     for section, caption, fig, name in figures:
         b64 = base64.b64encode(_png(fig, out / name)).decode("ascii")
         sections.setdefault(section, []).append(
             f'<img alt="{html.escape(caption)}" src="data:image/png;base64,{b64}">'
             f'<p class="note">{html.escape(caption)}</p>'
         )
-    movers = _movers_html(doc) + (_truth_html(doc) if truth is not None else "")
+    movers = _movers_html(doc) + _not_estimated_html(doc) + (_truth_html(doc) if truth else "")
     parts = [
         f"<section><h2>Acquisition</h2>{_acquisition_html(doc, inputs)}</section>",
         f"<section><h2>Moving targets</h2>{movers}</section>",
@@ -385,61 +212,29 @@ def _autofocus_figure(focus: dict[str, Any]) -> tuple[str, str, Figure, str]:
     return ("Autofocus", caption, fig, "autofocus.png")
 
 
-def _figures(
-    result: AnalysisResult, truth: dict[str, Any] | None
-) -> list[tuple[str, str, Figure, str]]:
-    """The report's figures: (section, caption, figure, file name)."""
-    marks = truth is not None
-    figures = [
-        (
-            "Traces",
-            "Range-compressed traces: slow time s (vertical) against fast time t. Data M, "
-            f"its separation ({result.method}) into L and S, each mover's own traces "
-            "(its s-independent part in its frame T_+^{u,rho}, mapped back) and what is left.",
-            traces_panels_figure(result),
-            "traces.png",
-        ),
-        (
-            "Motion estimation",
-            "g(u) with its local floor and the detection threshold (a stated false-alarm "
-            "rate; grey band: the stationary band, not tested); dashed: the movers' range "
-            "speeds" + (" (triangles: truth)" if marks else "") + ". Per mover: g_perp (its "
-            "minimum) and the matched filter's global profile over the cross-range speed (its "
-            "maximum is the maximum-likelihood estimate, with its Cramér–Rao standard error)"
-            + (" (dotted: truth)." if marks else "."),
-            objectives_figure(result, truth=truth),
-            "objectives.png",
-        ),
-        (
-            "Images",
-            "Preliminary image of M (circles: movers' estimated positions at s = 0) and the "
-            "stationary image (circles: listed stationary targets). dB re each image's peak.",
-            images_figure(result),
-            "images.png",
-        ),
-    ]
-    if result.movers:
-        figures.append(
-            (
-                "Images",
-                "Each mover imaged from its own traces, compensated at its estimated velocity. "
-                "Circle: estimated position at s = 0" + ("; cross: truth." if marks else "."),
-                movers_figure(result, truth=truth),
-                "movers.png",
-            )
+def _range_cell(m: dict[str, Any]) -> str:
+    """Range coordinate and its standard error (``/2``); ``/1`` documents lack them."""
+    if "range_m" not in m:
+        return "&ndash;"
+    return f"{_fmt(m['range_m'], 2)} &plusmn; {m['range_std_m']:.2g}"
+
+
+def _family_cell(m: dict[str, Any]) -> str:
+    """What the data say of the cross range: known, or the family across the scene."""
+    if m.get("cross_range_known"):
+        return "known: " + _fmt(m["position_m"])
+    fam = m["cross_range_family"]
+    seg = fam.get("in_scene")
+    text = '<span class="bad">not determined by the data</span>'
+    if seg:
+        p, v = seg["positions_m"], seg["velocities_mps"]
+        text += (
+            f"; family across the scene from {_fmt(p[0])} m at {_fmt(v[0])} m/s "
+            f"to {_fmt(p[-1])} m at {_fmt(v[-1])} m/s"
         )
-    if any(m.trajectory is not None for m in result.movers):
-        figures.append(
-            (
-                "Trajectories",
-                "Phase-space trajectory estimate (sub-apertures, Wigner ridge), anchored at "
-                "the estimated position at s = 0"
-                + (": distance to the true trajectory (m)." if marks else "."),
-                trajectories_figure(result, truth=truth),
-                "trajectories.png",
-            )
-        )
-    return figures
+    elif "in_scene" in fam:
+        text += "; the family does not cross the imaged scene"
+    return text
 
 
 def _movers_html(doc: dict[str, Any]) -> str:
@@ -450,9 +245,11 @@ def _movers_html(doc: dict[str, Any]) -> str:
         rows.append(
             [
                 str(k + 1),
+                _range_cell(m),
+                _fmt(m["range_speed_mps"], 3),
+                _family_cell(m),
                 _fmt(m["position_m"]),
                 _fmt(m["velocity_mps"]),
-                _fmt(m["range_speed_mps"], 3),
                 _fmt(m["cross_range_speed_mps"], 3),
                 _detection_cell(m),
                 _errors_cell(m),
@@ -461,23 +258,59 @@ def _movers_html(doc: dict[str, Any]) -> str:
             ]
         )
     if not rows:
+        if doc.get("movers_not_estimated"):
+            return "<p>No mover estimated: see the candidates not estimated below.</p>"
         return "<p>No mover found: no candidate passed the detector.</p>"
     head = [
         "estimate",
-        "position at s=0 (m)",
-        "velocity (m/s)",
+        "range (m) &plusmn; standard error",
         "range speed (m/s)",
-        "cross-range speed (m/s)",
+        "cross range",
+        "position at s=0, at the reference cross range (m)",
+        "velocity there (m/s)",
+        "cross-range speed there (m/s)",
         "detection: statistic / threshold (dB), p, focus gain (dB)",
         "standard errors: range position (m), range speed, cross-range speed (m/s); SNR (dB)",
-        "image peak (dB re stationary)",
+        "image peak (dB re the stationary image's peak)",
         "family, per m of cross-range offset: position (m/m) / velocity (m/s per m)",
     ]
-    return _html_table(head, rows) + (
-        '<p class="note">The data of a few degrees do not fix a mover\'s cross-range '
-        "position: position + t a and velocity + t b fit them as well for any t metres "
-        "of cross-range offset (a, b in the last column; sarmotion.motion.aperture). The "
-        "estimate is the member near the reference cross range.</p>"
+    return _html_table(head, rows, escape_head=False) + (
+        '<p class="note">Range: the ground-range coordinate from the reference point '
+        "(positive towards the radar), what the data fix. The data of a few degrees do not "
+        "fix a mover's cross-range position: position + t a and velocity + t b fit them as "
+        "well for any t metres of cross-range offset (a, b in the last column; "
+        "sarmotion.motion.aperture), and the figures draw each mover as that family across "
+        "the scene. Position, velocity and cross-range speed are those of the member at "
+        "the reference cross range.</p>"
+    )
+
+
+def _not_estimated_html(doc: dict[str, Any]) -> str:
+    """The candidates that passed the detector beyond ``max_movers``: listed, not dropped."""
+    extra = doc.get("movers_not_estimated") or []
+    if not extra:
+        return ""
+    rows = [
+        [
+            str(k + 1),
+            _fmt(c["statistic_db"], 1),
+            _fmt(c["range_m"], 1),
+            _fmt(c["range_speed_mps"], 3),
+            _fmt(c["width_resolutions"], 1),
+        ]
+        for k, c in enumerate(extra)
+    ]
+    cap = doc.get("options", {}).get("max_movers")
+    threshold = (doc.get("detection") or {}).get("threshold_db")
+    over = f" (threshold {threshold:.1f} dB)" if threshold is not None else ""
+    head = ["candidate", "statistic (dB)", "range (m)", "range speed (m/s)"]
+    head += ["width (resolutions)"]
+    return (
+        f"<h3>Detected, not estimated: {len(extra)} candidate(s) beyond max_movers = {cap}</h3>"
+        + f"<p>These passed the detector{over} after {cap} mover(s) were estimated; they "
+        "were neither fitted nor tested against a stationary explanation. Range: the "
+        "aligned trace's peak at the range speed (not fitted). Raise --max-movers to "
+        "estimate them.</p>" + _html_table(head, rows)
     )
 
 
@@ -649,13 +482,18 @@ def _acquisition_html(doc: dict[str, Any], inputs: Sequence[str]) -> str:
     )
 
 
+def _beyond(doc: dict[str, Any]) -> str:
+    n = len(doc.get("movers_not_estimated") or [])
+    return f" (and {n} detected, not estimated)" if n else ""
+
+
 def _page(title: str, doc: dict[str, Any], parts: list[str]) -> str:
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     head = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
         f"<header><h1>{html.escape(title)}</h1><p>sarmotion {__version__} &middot; {now} "
-        f"&middot; {len(doc['movers'])} mover(s), {len(doc['stationary'])} stationary "
-        "target(s)</p></header><main>",
+        f"&middot; {len(doc['movers'])} mover(s){_beyond(doc)}, {len(doc['stationary'])} "
+        "stationary target(s)</p></header><main>",
     ]
     return "\n".join([*head, *parts, "</main></body></html>"])
