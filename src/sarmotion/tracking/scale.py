@@ -28,11 +28,11 @@ from __future__ import annotations
 
 import logging
 import os
-import tempfile
 from collections.abc import Iterator, Sequence
-from contextlib import ExitStack, contextmanager, nullcontext
+from contextlib import ExitStack, nullcontext
 from typing import Any
 
+from .._cluster import MAX_WORKERS_PER_CORE, check_workers, local_cluster
 from ..core import Traces
 from ..pipeline import AnalysisOptions
 from .sub_apertures import SubApertureDetections, analyze_sub_aperture, sub_aperture_time_s
@@ -40,8 +40,6 @@ from .sub_apertures import SubApertureDetections, analyze_sub_aperture, sub_aper
 __all__ = ["MAX_WORKERS_PER_CORE", "check_workers", "local_cluster", "map_sub_apertures"]
 
 log = logging.getLogger(__name__)
-
-from .._cluster import MAX_WORKERS_PER_CORE, check_workers, local_cluster
 
 
 def _task(
