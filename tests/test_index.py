@@ -73,7 +73,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "collection.extract": ("test_collection.py",),
     "collection.merge": ("test_collection.py", "test_collection_sidelobes.py"),
     "collection.plan": ("test_collection.py", "test_collection_run.py"),
-    "collection.run": ("test_collection_run.py",),
+    "collection.run": ("test_collection_run.py", "test_collection_dead_zone.py"),
     # core
     "core.acquisition": ("test_acquisition.py",),
     "core.ascent": ("test_ascent.py",),

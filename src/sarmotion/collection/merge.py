@@ -28,6 +28,17 @@ The others, leaking into its traces from beyond (through the filter's transition
 or where there is no filter), are fitted once and subtracted there, not estimated
 further: the patches whose band holds them do that.
 
+A patch's ``g(u)`` tests only range speeds ``|R'(0) - R_p'(0)|`` above those of its
+core's stationary points, ``c`` (their largest, at a corner; slower peaks are taken for
+stationary residue, :func:`~sarmotion.collection.run.core_stationary_speed`). A mover
+slower than ``c`` relative to a patch mimics a stationary point of that core; the next
+patch across range has its reference about ``2 c'`` away in range rate (``c'`` the rate
+of the core's cross-range edge, ``c' <= c``), so the mover is at ``2 c' - |r|`` there:
+above that patch's ``c`` for ``|r| <= 2 c' - c``, and within its pass band when the pass
+band reaches ``2 c'``. The generic band of an image, two range-speed resolutions, is
+wider than a core's ``c`` and than the pass band's reach: taken per patch it left
+movers of slow range rate to no patch.
+
 **Stationary targets** are one when within one resolution cell in ground range and in
 cross range (their positions, unlike a mover's, are fixed by the data); the brighter is
 kept. Their levels are compared across patches on one scale: ``|I| / n_pulses`` of each
@@ -111,7 +122,8 @@ def echo_offsets(
     centre_m : (3,) ndarray
         The patch centre ``rho_p`` (m).
     rate_period_mps : float
-        ``lambda_o PRF / 2`` (m/s): the rate offset is taken in ``[-1/2, 1/2)`` of it.
+        ``lambda_o PRF / 2`` (m/s): the rate offset is taken in ``[-1/2, 1/2)`` of it
+        (``inf``: not aliased).
     """
     s = trajectory.slow_times_s
     j0 = int(np.argmin(np.abs(s)))
@@ -129,7 +141,8 @@ def echo_offsets(
     rm, dm = history(p, v)
     rc, dc = history(np.asarray(centre_m, float), np.zeros(3))
     rate = dm - dc
-    rate -= rate_period_mps * np.floor(rate / rate_period_mps + 0.5)
+    if np.isfinite(rate_period_mps):
+        rate -= rate_period_mps * np.floor(rate / rate_period_mps + 0.5)
     return rm - rc, float(rate)
 
 

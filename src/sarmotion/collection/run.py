@@ -164,11 +164,43 @@ class CollectionResult:
 
 
 # ------------------------------------------------------------------ one patch
-def _patch_options(patch: Patch, options: AnalysisOptions, single: bool) -> AnalysisOptions:
-    """The analysis options of ``patch``: its image is its core (unless one patch)."""
+def _patch_options(
+    patch: Patch, options: AnalysisOptions, single: bool, trajectory: Trajectory | None = None
+) -> AnalysisOptions:
+    """The analysis options of ``patch``: its image is its core (unless one patch).
+
+    With ``trajectory`` (the patch's pulses) and no ``stationary_speed_mps`` given, the
+    range speeds ``g(u)`` leaves untested are those of the core's own stationary points
+    (:func:`core_stationary_speed`), not an image's generic band (two range-speed
+    resolutions, or ``V (P / sqrt 2) / R``): a mover of slow range rate that mimics a
+    stationary point of one core is tested by the next patch, whose reference is two
+    core bands away and whose pass band reaches it (:mod:`~sarmotion.collection.merge`
+    notes).
+    """
     if single or options.image_size_m is not None:
         return options
-    return dataclasses.replace(options, image_size_m=patch.size_m)
+    out = dataclasses.replace(options, image_size_m=patch.size_m)
+    if trajectory is not None and options.stationary_speed_mps is None:
+        out = dataclasses.replace(
+            out, stationary_speed_mps=core_stationary_speed(trajectory, patch)
+        )
+    return out
+
+
+def core_stationary_speed(trajectory: Trajectory, patch: Patch) -> float:
+    """Largest ``|R_x'(0) - R_p'(0)|`` (m/s) of a stationary point ``x`` of the core.
+
+    The range rate relative to the centre ``rho_p`` at the aperture centre
+    (:func:`~sarmotion.collection.merge.echo_offsets`, not aliased); linear in ``x``
+    to first order, so its largest magnitude over the core is at a corner.
+    """
+    x0, y0, x1, y1 = patch.core_m
+    z = float(patch.centre_m[2])
+    return max(
+        abs(echo_offsets(trajectory, np.array([x, y, z]), np.zeros(2), patch.centre_m, np.inf)[1])
+        for x in (x0, x1)
+        for y in (y0, y1)
+    )
 
 
 def in_band(traces: Traces, patch: Patch) -> Callable[[PointFit], bool]:
@@ -231,7 +263,8 @@ def analyze_patch(
     (PatchResult, AnalysisResult)
     """
     keep = None if single else in_band(traces, patch)
-    result = analyze(traces, _patch_options(patch, options, single), keep=keep)
+    opts = _patch_options(patch, options, single, traces.trajectory)
+    result = analyze(traces, opts, keep=keep)
     entries = describe(result) if describe is not None else [{} for _ in result.movers]
     movers = []
     for m, entry in zip(result.movers, entries, strict=True):

@@ -163,7 +163,8 @@ def find_range_speeds(
     ``options.max_peak_width`` resolutions are stationary residue. Peaks slower than the
     stationary band are not tested: the apparent range speed ``V y / L`` (``eq:Dtau``)
     of a stationary target at the image's half-diagonal, and at least two range-speed
-    resolutions (the stationary peak's main lobe). Slower candidates than the paper's
+    resolutions (the stationary peak's main lobe); or ``options.stationary_speed_mps``
+    where given (the caller knows its image's stationary band). Slower candidates than the paper's
     ``u >> V R / L`` (``eq:AnnihCond``) are admitted because the focus test of the mover
     stage rejects those a stationary point explains. ``acquisition`` is that of
     ``moving`` (the central sub-aperture).
@@ -178,13 +179,16 @@ def find_range_speeds(
     if options.detector == "coherent" and threshold is None:
         threshold = screen_threshold_db()
     geom = acquisition.geometry
-    apparent = geom.speed_mps * (options.image_size_m / np.sqrt(2.0)) / geom.range_m
+    slowest = options.stationary_speed_mps
+    if slowest is None:
+        apparent = geom.speed_mps * (options.image_size_m / np.sqrt(2.0)) / geom.range_m
+        slowest = max(2.0 * range_speed_resolution(data), apparent)
     detection = detect_range_speeds(
         data,
         speed_range_mps=options.speed_range_mps,
         false_alarm_rate=options.false_alarm_rate,
         threshold=threshold,
-        min_speed_mps=max(2.0 * range_speed_resolution(data), apparent),
+        min_speed_mps=slowest,
         max_width=options.max_peak_width,
     )
     rs = detection.range_speeds

@@ -59,6 +59,14 @@ class AnalysisOptions:
         per-candidate 10 % point (or ``threshold_db``) are fitted and each fit's
         generalized likelihood ratio ``|I|^2 / sigma_I^2`` is tested against the
         threshold of ``false_alarm_rate`` from that statistic's measured null.
+    stationary_speed_mps : float or None
+        Slowest ``g(u)`` peak tested (m/s): slower ones are taken for stationary residue
+        (:func:`~sarmotion.pipeline.find_range_speeds`). ``None`` (default): the range
+        speed relative to the reference point of a stationary point at the image's
+        half-diagonal, ``V (image_size_m / sqrt 2) / R``, and at least two range-speed
+        resolutions. A caller that knows the range speeds of its image's stationary
+        points gives their largest (a collection's patch,
+        :func:`~sarmotion.collection.run.core_stationary_speed`).
     max_peak_width : float
         Widest ``g(u)`` peak accepted as a mover, at half height above the local floor,
         in widths of a noise-free point mover's peak
@@ -110,6 +118,7 @@ class AnalysisOptions:
     false_alarm_rate: float = 0.01
     threshold_db: float | None = None
     detector: str = "g"
+    stationary_speed_mps: float | None = None
     max_peak_width: float = 2.5
     min_focus_gain_db: float = 1.0
     joint_rounds: int = 2
@@ -140,6 +149,8 @@ class AnalysisOptions:
             finite(self.threshold_db, "threshold_db", unit="dB")
         if self.detector not in DETECTORS:
             raise ValueError(f"detector must be one of {DETECTORS}, got {self.detector!r}")
+        if self.stationary_speed_mps is not None:
+            positive(self.stationary_speed_mps, "stationary_speed_mps", unit="m/s")
         positive(self.max_peak_width, "max_peak_width")
         finite(self.min_focus_gain_db, "min_focus_gain_db", unit="dB")
         integer(self.joint_rounds, "joint_rounds", minimum=0)
@@ -178,4 +189,6 @@ class AnalysisOptions:
         d = dataclasses.asdict(self)
         sep = d.pop("separation")
         d["speed_range_mps"] = list(self.speed_range_mps)
+        if self.stationary_speed_mps is None:  # the image's rule: recorded as before
+            del d["stationary_speed_mps"]
         return {**sep, **d}
