@@ -167,7 +167,7 @@ class CollectionResult:
 def _patch_options(
     patch: Patch, options: AnalysisOptions, single: bool, trajectory: Trajectory | None = None
 ) -> AnalysisOptions:
-    """The analysis options of ``patch``: its image is its core (unless one patch).
+    """The analysis options of ``patch``: its image is its core (unless one patch or given).
 
     With ``trajectory`` (the patch's pulses) and no ``stationary_speed_mps`` given, the
     range speeds ``g(u)`` leaves untested are those of the core's own stationary points
@@ -177,9 +177,11 @@ def _patch_options(
     core bands away and whose pass band reaches it (:mod:`~sarmotion.collection.merge`
     notes).
     """
-    if single or options.image_size_m is not None:
+    if single:
         return options
-    out = dataclasses.replace(options, image_size_m=patch.size_m)
+    out = options
+    if options.image_size_m is None:
+        out = dataclasses.replace(out, image_size_m=patch.size_m)
     if trajectory is not None and options.stationary_speed_mps is None:
         out = dataclasses.replace(
             out, stationary_speed_mps=core_stationary_speed(trajectory, patch)
