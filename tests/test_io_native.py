@@ -118,6 +118,7 @@ def test_file_layout_is_the_documented_one(tmp_path, sim):
             "n_samples",
             "pulse",
             "reference_point_m",
+            "geometry_sha256",
             "metadata",
         ):
             assert name in g.attrs, name
@@ -307,3 +308,35 @@ def test_implausible_native_traces_are_refused(tmp_path, edit, message):
         load_traces(path)
     assert str(info.value).startswith(str(path)) and "rule" in str(info.value)
     assert load_traces(path, lenient=True).n_pulses == 117
+
+
+@pytest.mark.parametrize(
+    ("where", "axis", "shift"),
+    [("reference_point_m", 1, 10.0), ("positions_m", 0, 1e-3), ("slow_times_s", None, 1e-6)],
+)
+def test_geometry_altered_after_writing_is_refused(tmp_path, sim, where, axis, shift):
+    # A reference point moved by metres, an antenna 1 mm off or a time 1 us off passes
+    # every plausibility rule yet moves the travel times the phases rest on by more than
+    # a quarter cycle over the scene (or, for the small edits, by an unknown amount):
+    # only the digest written with the geometry tells. Without --lenient it is refused;
+    # with it, read with a warning; a file written without a digest is read as before.
+    path = save_traces(tmp_path / "t.h5", sim.traces)
+    with h5py.File(path, "a") as fh:
+        g = fh["traces"]
+        if where == "reference_point_m":
+            ref = np.array(g.attrs[where], dtype=np.float64)
+            ref[axis] += shift
+            g.attrs[where] = ref
+        else:
+            value = g[where][()]
+            if axis is None:
+                value[len(value) // 2] += shift
+            else:
+                value[len(value) // 2, axis] += shift
+            g[where][...] = value
+    with pytest.raises(DataError, match="do not match the digest written with them"):
+        load_traces(path)
+    assert load_traces(path, lenient=True).n_pulses == sim.traces.n_pulses
+    with h5py.File(path, "a") as fh:
+        del fh["traces"].attrs["geometry_sha256"]
+    assert load_traces(path).n_pulses == sim.traces.n_pulses

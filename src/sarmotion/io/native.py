@@ -13,6 +13,11 @@ Traces, ``schema = "sarmotion.traces/1"``::
     /traces                 attrs: carrier_hz, bandwidth_hz, frequency_step_hz (float, Hz),
                                    n_samples (int), pulse ("rect" | "gaussian"),
                                    reference_point_m (3,) float64 (m),
+                                   geometry_sha256 (hex string, optional:
+                                   :func:`geometry_digest` of the positions, slow
+                                   times, reference point and radar; a file whose
+                                   geometry no longer matches it is refused, a file
+                                   without it is read as before),
                                    metadata (JSON string)
     /extra/<name>           (n_pulses, n_samples) arrays, optional: further trace sets on
                             the same axes (e.g. separated "L" and "S", simulated truth)
@@ -51,6 +56,7 @@ aperture looks at, e.g. displaced by 100 km, is at a few degrees).
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import re
@@ -77,6 +83,7 @@ from .plausibility import (
     check_speed,
     check_times,
     check_track,
+    violation,
 )
 from .staging import staged_paths
 
@@ -458,6 +465,9 @@ def save_traces(
             g.attrs["n_samples"] = int(radar.n_samples)
             g.attrs["pulse"] = str(radar.pulse)
             g.attrs["reference_point_m"] = np.asarray(traces.reference_point_m, np.float64)
+            g.attrs["geometry_sha256"] = geometry_digest(
+                traces.positions_m, traces.slow_times_s, traces.reference_point_m, radar
+            )
             g.attrs["metadata"] = meta
             if extras:
                 e = fh.create_group("extra")
@@ -536,7 +546,55 @@ def _traces_header(
             f"{p}: inconsistent traces: /traces/data has {m} samples per pulse, the radar "
             f"{radar.n_samples}"
         )
+    _check_digest(g, p, pos, s, ref, radar, lenient=lenient)
     return {"radar": radar, "trajectory": trajectory, "reference_point_m": ref, "metadata": meta}
+
+
+def geometry_digest(
+    positions_m: ArrayLike, slow_times_s: ArrayLike, reference_point_m: ArrayLike, radar: Radar
+) -> str:
+    """SHA-256 (hex) of the geometry a traces file's phases rest on.
+
+    Over the antenna positions (m), slow times (s), reference point (m) as little-endian
+    float64 and the radar's carrier, bandwidth and frequency step (Hz). A reference point
+    moved by metres, or a position or time edited within the plausibility rules, changes
+    the travel times every phase is referred to while leaving the file plausible: only a
+    digest written with them tells that the file was altered after it was written.
+    """
+    h = hashlib.sha256()
+    for value in (
+        positions_m,
+        slow_times_s,
+        reference_point_m,
+        [radar.carrier_hz, radar.bandwidth_hz, radar.frequency_step_hz],
+    ):
+        h.update(np.ascontiguousarray(value, dtype="<f8").tobytes())
+    return h.hexdigest()
+
+
+def _check_digest(
+    g: h5py.Group,
+    p: Path,
+    pos: NDArray[np.float64],
+    s: NDArray[np.float64],
+    ref: NDArray[np.float64],
+    radar: Radar,
+    *,
+    lenient: bool,
+) -> None:
+    """The file's geometry against the digest written with it (files without one pass)."""
+    stored = g.attrs.get("geometry_sha256")
+    if stored is None:
+        return
+    if isinstance(stored, bytes):
+        stored = stored.decode("ascii", "replace")
+    if str(stored) != geometry_digest(pos, s, ref, radar):
+        violation(
+            f"{p}: the antenna positions, slow times, reference point or radar do not match "
+            "the digest written with them (/traces geometry_sha256): the file was altered "
+            "after it was written",
+            lenient=lenient,
+        )
 
 
 def load_traces(path: PathLike, *, lenient: bool = False) -> Traces:
