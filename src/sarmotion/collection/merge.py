@@ -77,8 +77,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.constants import C
-from ..core.geometry import Trajectory, travel_time
+from ..core.geometry import Trajectory
 
 __all__ = [
     "ECHO_CELLS",
@@ -212,12 +211,6 @@ class PatchImage:
     magnitude: NDArray[np.float32]
 
 
-def _history(trajectory: Trajectory, position: NDArray, velocity: NDArray) -> NDArray:
-    s = trajectory.slow_times_s
-    where = np.asarray(position, float)[None, :3] + s[:, None] * np.r_[velocity, 0.0][None, :]
-    return 0.5 * C * travel_time(trajectory.positions_m, where)
-
-
 def same_mover(
     a: MoverRecord, b: MoverRecord, trajectory: Trajectory, range_resolution_m: float
 ) -> bool:
@@ -234,17 +227,16 @@ def same_mover(
         Slant-range resolution ``c / 2B`` (m).
     """
     s = trajectory.slow_times_s
-    j0 = int(np.argmin(np.abs(s)))
-    ra = _history(trajectory, a.position_m, a.velocity_mps)
-    rb = _history(trajectory, b.position_m, b.velocity_mps)
-    da = np.gradient(ra, s)[j0]
-    db = np.gradient(rb, s)[j0]
+    # Range and range rate at s = 0, each against the same point (it cancels).
+    origin = np.zeros(3)
+    ra, da = echo_offsets(trajectory, a.position_m, a.velocity_mps, origin, np.inf)
+    rb, db = echo_offsets(trajectory, b.position_m, b.velocity_mps, origin, np.inf)
     duration = float(s[-1] - s[0])
     speed_cell = range_resolution_m / (0.5 * duration)
     sx = np.hypot(_finite(a.sigma_range_m), _finite(b.sigma_range_m))
     su = np.hypot(_finite(a.sigma_range_speed_mps), _finite(b.sigma_range_speed_mps))
     return bool(
-        abs(ra[j0] - rb[j0]) <= 3.0 * sx + 0.5 * range_resolution_m
+        abs(ra - rb) <= 3.0 * sx + 0.5 * range_resolution_m
         and abs(da - db) <= 3.0 * su + 0.5 * speed_cell
     )
 

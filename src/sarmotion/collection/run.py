@@ -196,13 +196,17 @@ def core_stationary_speed(trajectory: Trajectory, patch: Patch) -> float:
     (:func:`~sarmotion.collection.merge.echo_offsets`, not aliased); linear in ``x``
     to first order, so its largest magnitude over the core is at a corner.
     """
+    return max(
+        abs(echo_offsets(trajectory, c, np.zeros(2), patch.centre_m, np.inf)[1])
+        for c in _core_corners(patch)
+    )
+
+
+def _core_corners(patch: Patch) -> list[NDArray[np.float64]]:
+    """The four corners of the patch's core, at the centre's height (m)."""
     x0, y0, x1, y1 = patch.core_m
     z = float(patch.centre_m[2])
-    return max(
-        abs(echo_offsets(trajectory, np.array([x, y, z]), np.zeros(2), patch.centre_m, np.inf)[1])
-        for x in (x0, x1)
-        for y in (y0, y1)
-    )
+    return [np.array([x, y, z]) for x in (x0, x1) for y in (y0, y1)]
 
 
 def in_band(traces: Traces, patch: Patch) -> Callable[[PointFit], bool]:
@@ -216,10 +220,10 @@ def in_band(traces: Traces, patch: Patch) -> Callable[[PointFit], bool]:
     prf = patch.decimation / traj.pulse_interval_s
     period = 0.5 * traces.radar.wavelength_m * prf
     to_hz = 2.0 * traces.radar.carrier_hz / C
-    x0, y0, x1, y1 = patch.core_m
-    z = float(patch.centre_m[2])
-    corners = [np.array([x, y, z]) for x in (x0, x1) for y in (y0, y1)]
-    span = max(abs(echo_offsets(traj, c, np.zeros(2), patch.centre_m, period)[0]) for c in corners)
+    span = max(
+        abs(echo_offsets(traj, c, np.zeros(2), patch.centre_m, period)[0])
+        for c in _core_corners(patch)
+    )
     span += ECHO_CELLS * traces.radar.range_resolution_m
 
     def keep(fit: PointFit) -> bool:
