@@ -20,7 +20,6 @@ the fewest taps whose budget reaches ``TARGET_DB + BUDGET_MARGIN_DB``. Here:
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -31,6 +30,7 @@ from sarmotion.imaging import ImageGrid, backproject, ffbp
 from sarmotion.imaging.exact_sum import exact_sum
 from sarmotion.io import read_gotcha
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate
+from turned import turned
 
 #: Side of the test images (pixels at 0.25 m): small, so the exact sum on every pixel stays
 #: a few seconds.
@@ -172,19 +172,6 @@ def test_ffbp_of_simulated_points_reaches_its_accuracy(look_deg, path, monkeypat
     _check(_simulated(look_deg, seed=7700 + int(look_deg)), monkeypatch, path)
 
 
-def _turned(traces, deg: float):
-    """The acquisition turned by ``deg`` about the reference point (ranges unchanged)."""
-    t = math.radians(deg)
-    c, s = math.cos(t), math.sin(t)
-    o = traces.reference_point_m
-    p = traces.trajectory.positions_m.copy()
-    d = p[:, :2] - o[:2]
-    p[:, 0] = o[0] + c * d[:, 0] - s * d[:, 1]
-    p[:, 1] = o[1] + s * d[:, 0] + c * d[:, 1]
-    trajectory = Trajectory(positions_m=p, slow_times_s=traces.trajectory.slow_times_s)
-    return dataclasses.replace(traces, trajectory=trajectory)
-
-
 @pytest.fixture(scope="module")
 def gotcha(gotcha_files):
     return read_gotcha(gotcha_files)
@@ -193,4 +180,4 @@ def gotcha(gotcha_files):
 @pytest.mark.gotcha
 @pytest.mark.parametrize(("deg", "path"), [(0.0, "axis-aligned"), (45.0, "rotated")])
 def test_ffbp_of_gotcha_reaches_its_accuracy(gotcha, deg, path, monkeypatch):
-    _check(_turned(gotcha, deg) if deg else gotcha, monkeypatch, path)
+    _check(turned(gotcha, deg) if deg else gotcha, monkeypatch, path)

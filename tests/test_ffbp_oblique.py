@@ -4,7 +4,6 @@ benchmarks/bench_backprojection.py)."""
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -14,6 +13,7 @@ from sarmotion.core import Trajectory
 from sarmotion.imaging import ImageGrid, backproject, ffbp
 from sarmotion.io import read_gotcha
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate
+from turned import turned
 
 
 def _ser_db(ref: np.ndarray, x: np.ndarray) -> float:
@@ -32,19 +32,6 @@ def _points(centre_azimuth_deg: float):
     trajectory = Trajectory.circular(aperture_deg=4.0, centre_azimuth_deg=centre_azimuth_deg)
     tr = simulate(Scene(name="oblique", targets=targets), trajectory=trajectory).traces
     return tr.with_data(add_noise(tr.data, snr_db=20.0, rng=11))
-
-
-def _turned(traces, deg: float):
-    """The acquisition turned by ``deg`` about the reference point (ranges unchanged)."""
-    t = math.radians(deg)
-    c, s = math.cos(t), math.sin(t)
-    o = traces.reference_point_m
-    p = traces.trajectory.positions_m.copy()
-    d = p[:, :2] - o[:2]
-    p[:, 0] = o[0] + c * d[:, 0] - s * d[:, 1]
-    p[:, 1] = o[1] + s * d[:, 0] + c * d[:, 1]
-    trajectory = Trajectory(positions_m=p, slow_times_s=traces.trajectory.slow_times_s)
-    return dataclasses.replace(traces, trajectory=trajectory)
 
 
 @pytest.mark.parametrize(
@@ -103,7 +90,7 @@ def test_ffbp_on_gotcha_turned_to_an_oblique_look(gotcha, deg):
     # The four degrees turned so that the look is 28-32 (or 43-47) degrees from both grid
     # axes; 1024 x 1024 at 0.25 m, to the accuracy of FFBP (ffbp.TARGET_DB), some pixels
     # computed exactly near the ends of the fast-time window.
-    tr = _turned(gotcha, deg)
+    tr = turned(gotcha, deg)
     grid = ImageGrid.square(size_m=256.0, spacing_m=0.25)
     fast = backproject(tr, grid, method="ffbp")
     info = fast.metadata["ffbp"]
@@ -117,7 +104,7 @@ def test_window_ends_are_computed_exactly(gotcha, monkeypatch):
     # contribution steps to 0 along u, which no band-limited interpolation reproduces:
     # resampled there too, the image falls short of the accuracy of FFBP, which the pixels
     # near the ends computed exactly restore.
-    tr = _turned(gotcha, 45.0)
+    tr = turned(gotcha, 45.0)
     grid = ImageGrid.square(size_m=256.0, spacing_m=0.25)
     exact = backproject(tr, grid).values
     with_edges = _ser_db(exact, backproject(tr, grid, method="ffbp").values)
