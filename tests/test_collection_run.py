@@ -187,3 +187,17 @@ def test_bad_collection_input_is_one_line_and_exit_2(tmp_path, capsys, extra, pa
 def test_plan_of_the_test_scene_is_two_patches(scene):
     plan = plan_patches(TracesBlocks(scene), OPTIONS, region_m=REGION)
     assert [p.core_m for p in plan.patches] == [(-60.0, -25.0, 0.0, 25.0), (0.0, -25.0, 60.0, 25.0)]
+
+
+def test_the_false_alarm_rate_is_the_collections_shared_by_its_patches():
+    """Each of N patches tests at alpha / N: its g(u) threshold rises by s ln N."""
+    from sarmotion.collection.run import patch_false_alarm
+    from sarmotion.motion import NULL_TAIL, threshold_db
+
+    options = AnalysisOptions(false_alarm_rate=0.01)
+    assert patch_false_alarm(options, 1) is options
+    for n in (4, 700):
+        per_patch = patch_false_alarm(options, n)
+        assert per_patch.false_alarm_rate == pytest.approx(0.01 / n)
+        rise = threshold_db(per_patch.false_alarm_rate, 50) - threshold_db(0.01, 50)
+        assert rise == pytest.approx(NULL_TAIL["scale_db"] * np.log(n))

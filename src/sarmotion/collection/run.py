@@ -71,7 +71,13 @@ from .merge import (
 )
 from .plan import CollectionOptions, Patch, PatchPlan, _analysed_pulses, plan_patches
 
-__all__ = ["PatchResult", "CollectionResult", "analyze_patch", "analyze_collection"]
+__all__ = [
+    "PatchResult",
+    "CollectionResult",
+    "analyze_patch",
+    "analyze_collection",
+    "patch_false_alarm",
+]
 
 log = logging.getLogger(__name__)
 
@@ -187,6 +193,22 @@ def _patch_options(
             out, stationary_speed_mps=core_stationary_speed(trajectory, patch)
         )
     return out
+
+
+def patch_false_alarm(options: AnalysisOptions, n_patches: int) -> AnalysisOptions:
+    """The options each of ``n_patches`` patches is analysed with: the false-alarm rate shared.
+
+    ``options.false_alarm_rate`` is the collection's: the probability of a false mover
+    anywhere in it. Each patch tests its candidates at ``alpha / n_patches`` (the union
+    bound over the patches; a mover's echo tested by two overlapping patches only makes
+    it conservative), which raises the ``g(u)`` threshold by the null tail's scale times
+    ``ln n_patches`` (:func:`~sarmotion.motion.threshold_db`). One patch: unchanged.
+    """
+    if n_patches <= 1:
+        return options
+    return dataclasses.replace(
+        options, false_alarm_rate=options.false_alarm_rate / float(n_patches)
+    )
 
 
 def core_stationary_speed(trajectory: Trajectory, patch: Patch) -> float:
@@ -426,8 +448,11 @@ def analyze_collection(
         spacing = _mosaic_spacing(plan, opts)
         canvas = mosaic_grid(plan.region_m, spacing)
         origin = (plan.region_m[0], plan.region_m[1], spacing)
+        run_opts = dataclasses.replace(
+            opts, analysis=patch_false_alarm(opts.analysis, len(plan.patches))
+        )
         for r in _run(
-            src, plan, opts, scheduler, n_workers, processes, memory_mb, describe, progress, origin
+            src, plan, run_opts, scheduler, n_workers, processes, memory_mb, describe, progress, origin
         ):
             if r.image is not None:
                 paste(canvas[0], r.image, origin[:2], spacing)

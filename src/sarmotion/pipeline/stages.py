@@ -112,12 +112,15 @@ def stationary_image(
 ) -> Image:
     """``eq:image`` of the stationary traces: ``L``, or ``M`` minus the movers' traces.
 
-    ``device``: where to backproject (:func:`~sarmotion.imaging.backproject`).
+    ``device``: where to backproject (:func:`~sarmotion.imaging.backproject`). Traces
+    that are zero (a separation that found no stationary target) image to zero.
     """
     if separation.stationary is not None:
         data = separation.stationary
     else:
         data = traces.data - sum((m.traces for m in movers), np.zeros(traces.shape))
+    if not np.any(data):
+        return Image(values=np.zeros(grid.shape, np.complex128), grid=grid)
     return backproject(
         traces.with_data(data), grid, progress=staged(progress, "stationary image"), device=device
     )

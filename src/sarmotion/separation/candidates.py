@@ -1,4 +1,11 @@
-"""Stationary target candidates: bright points of a preliminary image, Doppler-tested."""
+"""Stationary target candidates: bright points of a preliminary image, Doppler-tested.
+
+An image whose brightest pixel is what noise alone reaches has no candidate
+(:func:`noise_only`): a patch of a large collection that holds no stationary target (the
+pulse rate's cross range beyond the illuminated scene, say) would otherwise offer its
+noise peaks within ``threshold_db`` of its own brightest, each then tested and removed
+as a stationary target.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +17,11 @@ from ..core.spectral import phased_row_sums
 from ..imaging import find_peaks, resolution
 from .transforms import travel_time_delays
 
-__all__ = ["stationary_candidates", "doppler_contrast_db"]
+__all__ = ["stationary_candidates", "doppler_contrast_db", "noise_only", "NOISE_FALSE_ALARM"]
+
+#: Probability that an image of noise alone is taken for one holding a target
+#: (:func:`noise_only`).
+NOISE_FALSE_ALARM = 1e-3
 
 
 # ----------------------------------------------------------------- candidates
@@ -23,14 +34,23 @@ def stationary_candidates(
     threshold_db: float = -25.0,
     max_targets: int = 100,
     separation_cells: float = 0.5,
+    noise_false_alarm: float | None = NOISE_FALSE_ALARM,
 ) -> NDArray[np.float64]:
     """Bright points of a preliminary image, resolution-aware (brightest first), m.
 
     The non-maximum-suppression radius is ``separation_cells`` times the larger of the
     ground-range and cross-range resolutions of ``traces`` (see
-    :func:`sarmotion.imaging.resolution`).
+    :func:`sarmotion.imaging.resolution`). None, shape ``(0, 3)``, when the image is
+    consistent with noise alone at ``noise_false_alarm`` (:func:`noise_only`; ``None``
+    skips that test).
     """
     res = resolution(traces)
+    if noise_false_alarm is not None and noise_only(
+        image_values,
+        n_cells=_n_cells(x_m, y_m, res.ground_range_m, res.cross_range_m),
+        false_alarm=noise_false_alarm,
+    ):
+        return np.zeros((0, 3))
     radius = separation_cells * max(res.ground_range_m, res.cross_range_m)
     return find_peaks(
         image_values,
@@ -41,6 +61,47 @@ def stationary_candidates(
         max_peaks=max_targets,
         suppression="window",
     )
+
+
+def noise_only(image_values: ArrayLike, *, n_cells: float, false_alarm: float) -> bool:
+    """Whether an image's brightest pixel is no brighter than noise alone would make it.
+
+    Noise backprojected over many samples is a circular complex Gaussian field: ``|I|^2``
+    is exponential with mean ``p``, estimated robustly as ``median(|I|^2) / ln 2`` (the
+    median of an exponential; a few targets barely move it). Over ``n_cells``
+    independent resolution cells the largest ``|I|^2`` exceeds ``p ln(n_cells / a)``
+    with probability about ``a`` (the union bound ``n e^{-T}``). The image is noise alone
+    when its largest ``|I|^2`` is at most that.
+
+    Parameters
+    ----------
+    image_values : (ny, nx) array_like
+        Complex image.
+    n_cells : float
+        Independent resolution cells in the image (> 0).
+    false_alarm : float
+        ``a`` in (0, 1).
+
+    Returns
+    -------
+    bool
+    """
+    if not 0.0 < false_alarm < 1.0:
+        raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm!r}")
+    power = np.abs(np.asarray(image_values)) ** 2
+    if power.size == 0:
+        return True
+    mean = float(np.median(power)) / np.log(2.0)
+    threshold = mean * np.log(max(float(n_cells), 1.0) / false_alarm)
+    return bool(float(power.max()) <= threshold)
+
+
+def _n_cells(x_m: ArrayLike, y_m: ArrayLike, range_cell_m: float, cross_cell_m: float) -> float:
+    """Resolution cells (ground range by cross range) in the image's extent."""
+    x, y = np.asarray(x_m, float), np.asarray(y_m, float)
+    dx = float(np.ptp(x)) + (float(x[1] - x[0]) if x.size > 1 else 0.0)
+    dy = float(np.ptp(y)) + (float(y[1] - y[0]) if y.size > 1 else 0.0)
+    return max(dx * dy / (range_cell_m * cross_cell_m), 1.0)
 
 
 def doppler_contrast_db(

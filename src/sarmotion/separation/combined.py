@@ -194,7 +194,8 @@ def separate_combined(
                 }
             )
             report(progress, "combined separation", len(records), total)
-    moving = to_fast_time(spectrum)
+    # nothing accepted: the data are all moving, exactly (not through a transform pair)
+    moving = to_fast_time(spectrum) if used else np.array(traces.data, copy=True)
     info = {
         "candidates": records,
         "half_window": int(half_window),
