@@ -452,7 +452,16 @@ def analyze_collection(
             opts, analysis=patch_false_alarm(opts.analysis, len(plan.patches))
         )
         for r in _run(
-            src, plan, run_opts, scheduler, n_workers, processes, memory_mb, describe, progress, origin
+            src,
+            plan,
+            run_opts,
+            scheduler,
+            n_workers,
+            processes,
+            memory_mb,
+            describe,
+            progress,
+            origin,
         ):
             if r.image is not None:
                 paste(canvas[0], r.image, origin[:2], spacing)
