@@ -180,7 +180,10 @@ def _write_sicd_images(result, stage: Path) -> None:
     default=None,
     metavar="X0 Y0 X1 Y1",
     help="Analyse this part of the scene (m); default the data's whole unambiguous scene. "
-    "A scene larger than one patch is cut into overlapping patches.",
+    "A scene larger than one patch is cut into overlapping patches. A mover is found "
+    "where its Doppler places its image: its range speed shifts it in cross range "
+    "(about R/V metres per m/s), so a mover inside the region whose image lands outside "
+    "it is not seen, and one outside may be.",
 )
 @click.option(
     "--patch-size",
