@@ -71,9 +71,17 @@ INDEX: dict[str, tuple[str, ...]] = {
     # collection
     "collection.document": ("test_collection_run.py",),
     "collection.extract": ("test_collection.py",),
-    "collection.merge": ("test_collection.py", "test_collection_sidelobes.py"),
+    "collection.merge": (
+        "test_collection.py",
+        "test_collection_sidelobes.py",
+        "test_collection_doppler.py",
+    ),
     "collection.plan": ("test_collection.py", "test_collection_run.py"),
-    "collection.run": ("test_collection_run.py", "test_collection_dead_zone.py"),
+    "collection.run": (
+        "test_collection_run.py",
+        "test_collection_dead_zone.py",
+        "test_collection_doppler.py",
+    ),
     # core
     "core.acquisition": ("test_acquisition.py",),
     "core.ascent": ("test_ascent.py",),

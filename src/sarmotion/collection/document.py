@@ -8,6 +8,8 @@ whose fit was kept, and ``patches``, every patch that found it), ``stationary``
 (position, level in dB re the brightest of the mosaic, patch), ``stationary_dropped``
 (targets beyond the cap, not listed), ``stationary_sidelobes_dropped`` (listings taken
 for a brighter target's sidelobes, :func:`~sarmotion.collection.merge.drop_sidelobes`),
+``stationary_mover_images_dropped`` (listings on a found mover's echo,
+:func:`~sarmotion.collection.merge.drop_mover_images`),
 ``patch_summaries`` (per patch: movers,
 stationary targets listed, whether its own cap was reached, method, timings),
 ``timings_s``, ``options``, ``source``.
@@ -55,6 +57,7 @@ def collection_document(result: CollectionResult, source: PulseBlocks) -> dict[s
         ],
         "stationary_dropped": int(result.stationary_dropped),
         "stationary_sidelobes_dropped": int(result.stationary_sidelobes),
+        "stationary_mover_images_dropped": int(result.stationary_mover_images),
         "patch_summaries": [
             {
                 "index": r.index,

@@ -62,6 +62,17 @@ sidelobe ridge cannot be told from the sidelobe by its level and is dropped with
 one off the ridges (``|a_r| >= 1`` and ``|a_c| >= 1``) is kept down to ``E E / w``, at
 least ``-20 dB - 20 log10 w`` below its neighbour.
 
+**Movers' images.** A stationary image holds each mover's smeared echo: the mover's
+range and range rate at slow time ``s`` are a stationary point's at some ``p``, and
+its energy lands on the locus of those points over the aperture. A slow mover's
+Doppler test passes as stationary (its Doppler spread is small), so a patch may list
+points of that locus. A listed stationary point ``p`` is a found mover's image when at
+some pulse of the analysed aperture ``|R_p(s) - R_m(s)| <= ECHO_CELLS c / 2B`` and
+``|R_p'(s) - R_m'(s)| <= ECHO_CELLS lambda_o / (2 T)`` (a Doppler resolution ``1 / T``
+in range rate, aliased by the pulse rate): it is dropped and counted
+(:func:`drop_mover_images`). A true stationary target that close to a mover's echo in
+both cannot be told from it by the data of that aperture.
+
 **Mosaic.** Each patch's stationary image on its core, ``|I| / n_pulses``, on one grid
 of a stated spacing: each patch's image is reduced to the mosaic's pixels by block
 maxima where it is analysed (:func:`coarsen`) and pasted in as it arrives
@@ -87,6 +98,7 @@ __all__ = [
     "PatchImage",
     "coarsen",
     "drop_sidelobes",
+    "drop_mover_images",
     "mosaic_grid",
     "paste",
     "same_mover",
@@ -376,6 +388,82 @@ def drop_sidelobes(
                 continue
         kept.append(i)
     return [order[i] for i in kept], len(order) - len(kept)
+
+
+def _histories(
+    trajectory: Trajectory, points_m: NDArray, velocities_mps: NDArray, step: int
+) -> tuple[NDArray, NDArray]:
+    """Ranges (m) and range rates (m/s) of points ``(k, 3)`` moving at ``(k, 2)``.
+
+    Over every ``step``-th pulse of ``trajectory`` (slow times as given; the points'
+    positions are at ``s = 0``); shapes ``(k, n)``.
+    """
+    s = trajectory.slow_times_s
+    pos = trajectory.positions_m
+    vel = np.gradient(pos, s, axis=0)
+    sel = np.unique(np.r_[np.arange(0, s.size, step), s.size - 1])
+    s, pos, vel = s[sel], pos[sel], vel[sel]
+    v3 = np.zeros((len(points_m), 3))
+    v3[:, :2] = velocities_mps
+    d = pos[None, :, :] - (points_m[:, None, :] + s[None, :, None] * v3[:, None, :])
+    r = np.linalg.norm(d, axis=-1)
+    rate = np.einsum("kns,kns->kn", d, vel[None, :, :] - v3[:, None, :]) / r
+    return r, rate
+
+
+def drop_mover_images(
+    targets: Sequence[StationaryRecord],
+    movers: Sequence[MoverRecord],
+    *,
+    trajectory: Trajectory,
+    range_resolution_m: float,
+    wavelength_m: float,
+    rate_period_mps: float,
+    height_m: float = 0.0,
+) -> tuple[list[StationaryRecord], int]:
+    """Stationary listings that are a found mover's image, dropped (module notes).
+
+    Parameters
+    ----------
+    targets : sequence of StationaryRecord
+        Listed stationary targets.
+    movers : sequence of MoverRecord
+        Movers found.
+    trajectory : Trajectory
+        The analysed pulses (``s = 0`` where the movers' positions are given).
+    range_resolution_m : float
+        Slant-range resolution ``c / 2B`` (m).
+    wavelength_m : float
+        Carrier wavelength ``lambda_o`` (m).
+    rate_period_mps : float
+        ``lambda_o PRF / 2`` (m/s): range rates are compared modulo it.
+    height_m : float
+        Height of the stationary targets (m).
+
+    Returns
+    -------
+    (list of StationaryRecord, int)
+        The listings kept, in order, and how many were dropped.
+    """
+    if not targets or not movers:
+        return list(targets), 0
+    s = trajectory.slow_times_s
+    step = max(1, s.size // 64)
+    duration = float(s[-1] - s[0])
+    rate_cell = wavelength_m / (2.0 * duration)
+    mpos = np.array([np.r_[np.asarray(m.position_m, float)[:2], height_m] for m in movers])
+    mvel = np.array([np.asarray(m.velocity_mps, float)[:2] for m in movers])
+    r_m, d_m = _histories(trajectory, mpos, mvel, step)
+    spos = np.array([[*t.position_m, height_m] for t in targets], dtype=float)
+    r_s, d_s = _histories(trajectory, spos, np.zeros((len(targets), 2)), step)
+    dr = np.abs(r_s[:, None, :] - r_m[None, :, :])
+    dd = d_s[:, None, :] - d_m[None, :, :]
+    if np.isfinite(rate_period_mps):
+        dd -= rate_period_mps * np.floor(dd / rate_period_mps + 0.5)
+    image = (dr <= ECHO_CELLS * range_resolution_m) & (np.abs(dd) <= ECHO_CELLS * rate_cell)
+    hit = np.any(image, axis=(1, 2))
+    kept = [t for t, h in zip(targets, hit, strict=True) if not h]
+    return kept, int(np.sum(hit))
 
 
 def coarsen(image: PatchImage, origin_m: tuple[float, float], spacing_m: float) -> PatchImage:

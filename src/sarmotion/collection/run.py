@@ -61,6 +61,7 @@ from .merge import (
     PatchImage,
     StationaryRecord,
     coarsen,
+    drop_mover_images,
     drop_sidelobes,
     echo_offsets,
     merge_movers,
@@ -144,6 +145,9 @@ class CollectionResult:
     stationary_sidelobes : int
         Listings taken for a brighter target's sidelobes and dropped
         (:func:`~sarmotion.collection.merge.drop_sidelobes`).
+    stationary_mover_images : int
+        Listings that lie on a found mover's echo and were dropped
+        (:func:`~sarmotion.collection.merge.drop_mover_images`).
     mosaic : (ny, nx) ndarray
         Stationary image ``|I| / n_pulses`` over the region (float32).
     mosaic_extent_m : (float, float, float, float)
@@ -167,6 +171,7 @@ class CollectionResult:
     timings_s: dict[str, float] = field(default_factory=dict)
     single_result: AnalysisResult | None = None
     stationary_sidelobes: int = 0
+    stationary_mover_images: int = 0
 
 
 # ------------------------------------------------------------------ one patch
@@ -652,6 +657,18 @@ def _merge(
             pixel_m=opts.analysis.spacing_m,
             gaussian_range=src.radar.pulse == "gaussian",
         )
+    images = 0
+    if not plan.single:
+        prf = 1.0 / traj.pulse_interval_s
+        stationary, images = drop_mover_images(
+            stationary,
+            [m for m, _ in movers],
+            trajectory=analysed,
+            range_resolution_m=slant,
+            wavelength_m=src.radar.wavelength_m,
+            rate_period_mps=0.5 * src.radar.wavelength_m * prf,
+            height_m=float(src.reference_point_m[2]),
+        )
     cap = opts.analysis.max_stationary * len(plan.patches)
     dropped = max(0, len(stationary) - cap)
     if canvas is None:  # one patch: its image, as today's analysis made it
@@ -670,6 +687,7 @@ def _merge(
         stationary=tuple(stationary[:cap]),
         stationary_dropped=dropped,
         stationary_sidelobes=sidelobes,
+        stationary_mover_images=images,
         mosaic=image,
         mosaic_extent_m=extent,
         options=opts,
