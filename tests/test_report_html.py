@@ -80,3 +80,54 @@ def test_trajectory_error_axis_is_linear_and_trace_ticks_legible(scene1_report):
     fig = traces_panels_figure(result)
     sizes = {t.get_fontsize() for a in fig.axes for t in a.get_xticklabels()}
     assert min(sizes) >= 10
+
+
+def _legend_figure(width_in: float, legend_pt: float = 8.0):
+    """Three panels side by side with a legend of ``legend_pt`` (tight layout)."""
+    from sarmotion.report.plotting import subplots
+
+    fig, axes = subplots(1, 3, figsize=(width_in, width_in / 3.5))
+    for ax in axes:
+        ax.plot([0, 1], [0, 1], label="a line")
+        ax.set_xlabel("x (m)")
+        ax.legend(fontsize=legend_pt)
+    fig.tight_layout()
+    return fig
+
+
+def test_smallest_text_counts_tick_labels_legends_and_titles():
+    from sarmotion.report.plotting import smallest_text_pt
+
+    fig = _legend_figure(9.0, legend_pt=8.0)
+    assert smallest_text_pt(fig) == 8.0
+    fig.axes[1].tick_params(labelsize=6.5)  # tick labels exist only once drawn
+    assert smallest_text_pt(fig) == 6.5
+    fig.axes[2].set_title("t", fontsize=5.0)
+    assert smallest_text_pt(fig) == 5.0
+    fig.axes[2].set_visible(False)  # an unused panel's text is not shown
+    assert smallest_text_pt(fig) == 6.5
+
+
+def test_a_wide_figure_is_shrunk_until_its_legends_read_at_8_pt_in_the_column():
+    """17 in at 150 dpi shown in a 1055-px column: an 8-pt legend shows at about 5 pt.
+    Shrunk, the PNG is at most 1055 x 150 / 96 px wide, so that the legend (still set at
+    8 pt, 8 x 150 / 96 CSS pt at natural size) shows at 8 pt or more."""
+    from sarmotion.report.plotting import displayed_pt, fit_to_column, saved_width_px
+
+    dpi, column = 150, 1055
+    fig = _legend_figure(17.0)
+    before = displayed_pt(8.0, dpi=dpi, width_px=saved_width_px(fig, dpi=dpi), column_px=column)
+    assert before < 6.0
+    shown = fit_to_column(fig, dpi=dpi, column_px=column)
+    width = saved_width_px(fig, dpi=dpi)
+    assert shown == displayed_pt(8.0, dpi=dpi, width_px=width, column_px=column)
+    # legible, and not shrunk further than needed (the last step is 1 % under the ratio,
+    # the text's share of the width makes the PNG shrink by less than the figure)
+    assert 8.0 <= shown < 8.0 * 1.05
+    assert width <= column * 150 / 96
+    assert {t.get_fontsize() for ax in fig.axes for t in ax.get_legend().get_texts()} == {8.0}
+    # a figure already legible is left as it is
+    narrow = _legend_figure(9.0)
+    size = tuple(narrow.get_size_inches())
+    assert fit_to_column(narrow, dpi=dpi, column_px=column) >= 8.0
+    assert tuple(narrow.get_size_inches()) == size

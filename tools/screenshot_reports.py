@@ -46,15 +46,15 @@ from pathlib import Path
 import numpy as np
 
 from sarmotion.cli.main import run
-from sarmotion.report.plotting import LEGEND_PT
+from sarmotion.paper.figures.build import INDEX_COLUMN_PX
+from sarmotion.report.plotting import LEGEND_PT, LEGIBLE_PT, displayed_pt
 
 #: The analyze and track reports' column (CSS px): main's 1400 px less its padding
 #: (2 x 32) and a section's padding and border (2 x 20 + 2).
 COLUMN_PX = 1400 - 64 - 42
 
-#: The paper index's column in a 1400-px window (CSS px): less the navigation (17em at
-#: 0.85 x 16 px, its padding 2 x 1.2em and border: 265 px) and main's padding (2 x 2.5em).
-PAPER_COLUMN_PX = 1400 - 265 - 80
+#: The paper index's column in a 1400-px window (CSS px).
+PAPER_COLUMN_PX = INDEX_COLUMN_PX
 
 #: Window of the screenshots (CSS px).
 WIDTH_PX = 1400
@@ -163,8 +163,8 @@ def figure_checks(pages: dict[str, Path]) -> list[str]:
             dpi = float(png.info.get("dpi", (72.0, 72.0))[0])
             column = PAPER_COLUMN_PX if name == "paper" else COLUMN_PX
             scale = min(1.0, column / png.width)
-            legend_pt = LEGEND_PT * dpi / 96.0 * scale
-            flag = "LOW " if legend_pt < 8.0 - 0.05 else "ok  "
+            legend_pt = displayed_pt(LEGEND_PT, dpi=dpi, width_px=png.width, column_px=column)
+            flag = "LOW " if legend_pt < LEGIBLE_PT - 0.05 else "ok  "
             lines.append(
                 f"{flag}{name}: {html.unescape(alt)[:60]!r}: {png.width} x {png.height} px "
                 f"at {dpi:.0f} dpi, shown x{scale:.2f}: legends {legend_pt:.1f} pt"
