@@ -132,7 +132,8 @@ td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
 <img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="mosaic">
 <h2>Movers</h2><table><tr><th>#</th><th>position (m)</th><th>velocity (m/s)</th>
 <th>range speed (m/s)</th><th>patch kept</th><th>found in patches</th></tr>{"".join(rows)}</table>
-{_not_estimated_html(document)}<h2>Patches</h2><table><tr><th>patch</th><th>core x0, y0, x1, y1 (m)</th><th>pulses x samples</th>
+{_not_estimated_html(document)}
+<h2>Patches</h2><table><tr><th>patch</th><th>core x0, y0, x1, y1 (m)</th><th>pulses x samples</th>
 <th>decimation</th></tr>{"".join(patches)}</table></body></html>
 """
     (directory / "report.html").write_text(page)

@@ -353,8 +353,16 @@ def _truth_html(doc: dict[str, Any]) -> str:
         + "<h3>Errors (estimate &minus; truth)</h3>"
         + errors
         + f"<p>False movers: {doc['false_movers']}; missed movers: "
-        f"{doc['missed_movers']}.</p>"
-        + '<p class="note">The cross-range position and the range speed of a mover are '
+        f"{doc['missed_movers']}.</p>" + _family_note(doc)
+    )
+
+
+def _family_note(doc: dict[str, Any]) -> str:
+    """How far an estimate may sit from the truth along its family (with estimates only)."""
+    if not doc["movers"]:
+        return ""
+    return (
+        '<p class="note">The cross-range position and the range speed of a mover are '
         "tied over a few degrees (sarmotion.motion.aperture, module notes): a mover away from "
         "the reference cross range is placed on the data-consistent family near it, "
         "shifted in cross range by about L &delta;u / (V &minus; u_t). &ldquo;Truth to "

@@ -83,9 +83,7 @@ def smallest_text_pt(fig: Figure) -> float:
     sizes = [
         t.get_fontsize()
         for t in fig.findobj(Text)
-        if t.get_visible()
-        and t.get_text().strip()
-        and (t.axes is None or t.axes.get_visible())
+        if t.get_visible() and t.get_text().strip() and (t.axes is None or t.axes.get_visible())
     ]
     return float(min(sizes, default=np.inf))
 

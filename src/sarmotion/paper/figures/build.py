@@ -15,7 +15,8 @@ Every figure is legible as the index shows it: a figure whose PNG is wider than 
 index's column (:data:`INDEX_COLUMN_PX`) is scaled down by the browser, its text with
 it, so a wide figure is shrunk before it is saved until its smallest text (legends,
 tick and axis labels) shows at 8 pt or more
-(:func:`sarmotion.report.plotting.fit_to_column`).
+(:func:`sarmotion.report.plotting.fit_to_column`); each figure's ``<img>`` records that
+smallest size in points as ``data-text-pt``.
 
 The headline numbers of each figure (:attr:`FigureRecord.headline`) are measured by the
 package's building blocks on the built-in scenes; nothing is typed in. Conventions are
@@ -273,7 +274,7 @@ def _write_index(out: Path, records: Sequence[FigureRecord], quick: bool) -> Pat
                 f'<figure id="{html.escape(r.label)}"'
                 f"{' class=small' if ncol_small else ''}>"
                 f'<a href="{r.png.name}"><img src="{r.png.name}" loading="lazy" '
-                f'alt="{html.escape(r.label)}"></a>\n<figcaption>'
+                f'alt="{html.escape(r.label)}" data-text-pt="{r.text_pt:g}"></a>\n<figcaption>'
                 f'<div class="caption"><b>Figure {number[r.label]}</b> '
                 f'<span class="label">{html.escape(r.label)}</span> &mdash; '
                 f"{html.escape(r.caption)}</div>\n"
