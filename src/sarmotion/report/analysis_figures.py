@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.patheffects import withStroke
 
 from ..documents.results import results_document
 from ..motion import trajectory_error
@@ -274,7 +275,16 @@ def movers_figure(
             name = truth["errors"][k]["matched"]
             t = next((t for t in truth["truth"] if t["label"] == name), None)
             if t is not None:
-                ax.plot(*t["position_m"], "x", color="w", ms=9, mew=2, label="truth")
+                # white on the dark image, outlined in black to show in the white legend
+                ax.plot(
+                    *t["position_m"],
+                    "x",
+                    color="w",
+                    ms=9,
+                    mew=2,
+                    label="truth",
+                    path_effects=[withStroke(linewidth=3.5, foreground="k")],
+                )
         ax.set(xlim=(g.x_m[0], g.x_m[-1]), ylim=(g.y_m[0], g.y_m[-1]))
         _legend_below(ax)
     if not result.movers:
