@@ -201,3 +201,44 @@ def test_the_false_alarm_rate_is_the_collections_shared_by_its_patches():
         assert per_patch.false_alarm_rate == pytest.approx(0.01 / n)
         rise = threshold_db(per_patch.false_alarm_rate, 50) - threshold_db(0.01, 50)
         assert rise == pytest.approx(NULL_TAIL["scale_db"] * np.log(n))
+
+
+def test_candidates_beyond_max_movers_are_kept_in_the_document_and_said(scene, tmp_path, capsys):
+    """``--max-movers 0``: the border mover passes a patch's detector and is listed, with
+    its patch, its range speed and its range from that patch's centre, in results.json,
+    on the console and in the report; so is the count of sidelobe listings dropped."""
+    from sarmotion.io import save_traces
+
+    src = tmp_path / "two.h5"
+    save_traces(src, scene)
+    out = tmp_path / "out"
+    args = ["analyze", str(src), "--out", str(out), "--region", *map(str, REGION)]
+    args += ["--patch-size", "60", "--workers", "0", "--no-trajectory", "--max-movers", "0"]
+    code = run(args)
+    console = capsys.readouterr().out
+    assert code == 0
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["movers"] == []
+    extra = doc["movers_not_estimated"]
+    assert extra and {c["patch"] for c in extra} <= {0, 1}
+    assert sum(p["movers_not_estimated"] for p in doc["patch_summaries"]) == len(extra)
+    patches = {p["index"]: p for p in doc["plan"]["patches"]}
+    geom = scene.geometry
+    u_true = range_speed(MOVER.velocity_mps, geom)
+    # one range-speed resolution: range resolution over half the aperture time
+    du = scene.radar.range_resolution_m / (0.5 * np.ptp(scene.slow_times_s))
+    for c in extra:
+        assert c["statistic_db"] > 0 and c["width_resolutions"] > 0
+        assert abs(c["range_speed_mps"] - u_true) <= du, (c, u_true, du)
+        # the range of the mover from its patch's centre, along that centre's range axis
+        centre = np.asarray(patches[c["patch"]]["centre_m"], float)
+        cells = resolution(scene, point_m=(*centre[:2], 0.0))
+        truth = float((np.asarray(MOVER.position_m[:2]) - centre[:2]) @ cells.range_direction)
+        assert abs(c["range_m"] - truth) <= 2 * cells.ground_range_m, (c, truth)
+    assert f"{len(extra)} more candidate(s) passed a patch's detector, not estimated" in console
+    assert console.count("from the patch centre (aligned trace, not fitted)") == len(extra)
+    report = (out / "report.html").read_text()
+    assert f"Detected, not estimated: {len(extra)} candidate(s)" in report
+    sidelobes = doc["stationary_sidelobes_dropped"]
+    assert f"{sidelobes} dropped as a brighter target's sidelobes" in report
+    assert (f"{sidelobes} dropped as a brighter target's sidelobes" in console) == (sidelobes > 0)

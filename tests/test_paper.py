@@ -259,3 +259,25 @@ def test_separated_images_focus_at_the_true_positions(built):
     # documented in sarmotion.motion; asserted as it is, so a fix shows up here.
     assert abs(h["mover2_peak_range_error_m"]) < h["range_cell_m"]
     assert abs(h["mover2_peak_cross_range_error_m"]) > h["cross_range_cell_m"]
+
+
+def test_every_figure_reads_at_8_pt_or_more_in_the_index(built):
+    """Each figure's smallest text (legends, tick and axis labels) as the index shows it:
+    ``text_pt x dpi / 96`` CSS pt at natural size, scaled by the index's column over the
+    PNG's width when wider (a 1400-px window)."""
+    from PIL import Image
+
+    from sarmotion.paper.figures.build import _STYLE, INDEX_COLUMN_PX
+
+    # the column the constant stands for: the navigation's and main's widths
+    assert "flex:0 0 17em" in _STYLE and "padding:1em 2.5em" in _STYLE
+    _, recs, _ = built
+    shown = {}
+    for lab, r in recs.items():
+        png = Image.open(r.png)
+        dpi = float(png.info["dpi"][0])
+        scale = min(1.0, INDEX_COLUMN_PX / png.width)
+        shown[lab] = r.text_pt * dpi / 96.0 * scale
+    assert min(shown.values()) >= 8.0, {k: round(v, 2) for k, v in shown.items() if v < 8.0}
+    # the legends are set at 8 pt: the least text of at least the figures with legends
+    assert sum(r.text_pt == 8.0 for r in recs.values()) >= 5

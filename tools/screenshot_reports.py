@@ -16,8 +16,9 @@ It writes, under ``--out``:
 * ``screenshots/checks.txt``: for every figure embedded in a page, its size in pixels,
   its resolution, the scale the page shows it at in a 1400-px window (the 1294-px
   column of the analyze and track reports, 1055 px for the paper's index) and the size
-  a legend of ``LEGEND_PT`` points then has on the screen in CSS points; a line ``LOW``
-  marks a figure whose legends would show below 8 pt.
+  its smallest text then has on the screen in CSS points (a legend of ``LEGEND_PT``
+  points; for the paper's figures, their smallest text as the index records it in
+  ``data-text-pt``); a line ``LOW`` marks a figure whose text would show below 8 pt.
 
 The browser is Chromium or Chrome in headless mode (``--browser``, default the first of
 ``chromium``, ``chromium-browser``, ``google-chrome`` on the PATH; Debian's package is
@@ -46,15 +47,15 @@ from pathlib import Path
 import numpy as np
 
 from sarmotion.cli.main import run
-from sarmotion.report.plotting import LEGEND_PT
+from sarmotion.paper.figures.build import INDEX_COLUMN_PX
+from sarmotion.report.plotting import LEGEND_PT, LEGIBLE_PT, displayed_pt
 
 #: The analyze and track reports' column (CSS px): main's 1400 px less its padding
 #: (2 x 32) and a section's padding and border (2 x 20 + 2).
 COLUMN_PX = 1400 - 64 - 42
 
-#: The paper index's column in a 1400-px window (CSS px): less the navigation (17em at
-#: 0.85 x 16 px, its padding 2 x 1.2em and border: 265 px) and main's padding (2 x 2.5em).
-PAPER_COLUMN_PX = 1400 - 265 - 80
+#: The paper index's column in a 1400-px window (CSS px).
+PAPER_COLUMN_PX = INDEX_COLUMN_PX
 
 #: Window of the screenshots (CSS px).
 WIDTH_PX = 1400
@@ -158,16 +159,19 @@ def figure_checks(pages: dict[str, Path]) -> list[str]:
                 png = Image.open(page.parent / where)
             else:  # no figure (the paper's zoom placeholder)
                 continue
-            found.append((alt[1] if alt and alt[1] else where[:40], png))
-        for alt, png in found:
+            text_pt = re.search(r'data-text-pt="([^"]+)"', tag)
+            size = float(text_pt[1]) if text_pt else LEGEND_PT
+            found.append((alt[1] if alt and alt[1] else where[:40], png, size))
+        for alt, png, size in found:
             dpi = float(png.info.get("dpi", (72.0, 72.0))[0])
             column = PAPER_COLUMN_PX if name == "paper" else COLUMN_PX
             scale = min(1.0, column / png.width)
-            legend_pt = LEGEND_PT * dpi / 96.0 * scale
-            flag = "LOW " if legend_pt < 8.0 - 0.05 else "ok  "
+            legend_pt = displayed_pt(size, dpi=dpi, width_px=png.width, column_px=column)
+            flag = "LOW " if legend_pt < LEGIBLE_PT - 0.05 else "ok  "
             lines.append(
                 f"{flag}{name}: {html.unescape(alt)[:60]!r}: {png.width} x {png.height} px "
-                f"at {dpi:.0f} dpi, shown x{scale:.2f}: legends {legend_pt:.1f} pt"
+                f"at {dpi:.0f} dpi, shown x{scale:.2f}: {size:g}-pt text shows at "
+                f"{legend_pt:.1f} pt"
             )
     return lines
 

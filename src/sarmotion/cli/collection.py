@@ -17,6 +17,7 @@ from ..collection import (
     plan_patches,
 )
 from ..core.blocks import TracesBlocks
+from ..core.text import fixed
 from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
 from ..io.staging import claimed
@@ -134,14 +135,47 @@ def run_collection(
     click.echo(
         f"wrote {out}/results.json, report.html and mosaic.png: {len(plan.patches)} patch(es), "
         f"{len(result.movers)} mover(s), {len(result.stationary)} stationary target(s)"
-        + (
-            f" ({result.stationary_dropped} beyond the cap not listed)"
-            if result.stationary_dropped
-            else ""
-        )
+        + _stationary_note(doc)
         + f"; analysis {result.timings_s['total']:.1f} s, {elapsed_s():.1f} s in all "
         "(start-up, reading and figures included)"
     )
     for k, m in enumerate(doc["movers"]):
         for line in mover_lines(m, f"mover {k + 1} (patch {m['patch']})"):
             click.echo(line)
+    for line in _not_estimated_lines(doc):
+        click.echo(line)
+
+
+def _stationary_note(doc: dict[str, Any]) -> str:
+    """The stationary listings left out: beyond the cap, sidelobes, on a mover's echo."""
+    notes = []
+    if doc["stationary_dropped"]:
+        notes.append(f"{doc['stationary_dropped']} beyond the cap not listed")
+    if doc["stationary_sidelobes_dropped"]:
+        notes.append(
+            f"{doc['stationary_sidelobes_dropped']} dropped as a brighter target's sidelobes"
+        )
+    if doc.get("stationary_mover_images_dropped"):
+        notes.append(
+            f"{doc['stationary_mover_images_dropped']} dropped as lying on a mover's echo"
+        )
+    return f" ({', '.join(notes)})" if notes else ""
+
+
+def _not_estimated_lines(doc: dict[str, Any]) -> list[str]:
+    """Lines for the candidates each patch left unestimated by ``--max-movers``."""
+    extra = doc.get("movers_not_estimated") or []
+    if not extra:
+        return []
+    cap = doc["options"]["analysis"].get("max_movers")
+    lines = [
+        f"  {len(extra)} more candidate(s) passed a patch's detector, not estimated "
+        f"(--max-movers {cap} per patch):"
+    ]
+    for k, c in enumerate(extra):
+        lines.append(
+            f"    candidate {k + 1} (patch {c['patch']}): statistic {fixed(c['statistic_db'], 1)} "
+            f"dB, range {fixed(c['range_m'], 1)} m from the patch centre (aligned trace, not "
+            f"fitted), range speed {fixed(c['range_speed_mps'], 2)} m/s"
+        )
+    return lines

@@ -10,13 +10,19 @@ whose fit was kept, and ``patches``, every patch that found it), ``stationary``
 for a brighter target's sidelobes, :func:`~sarmotion.collection.merge.drop_sidelobes`),
 ``stationary_mover_images_dropped`` (listings on a found mover's echo,
 :func:`~sarmotion.collection.merge.drop_mover_images`),
-``patch_summaries`` (per patch: movers,
-stationary targets listed, whether its own cap was reached, method, timings),
-``timings_s``, ``options``, ``source``.
+``movers_not_estimated`` (the candidates that passed a patch's detector after
+``max_movers`` movers of that patch were estimated, each patch's strongest first, as the
+single analysis's ``sarmotion.results/2`` entries -- ``range_speed_mps``,
+``statistic_db``, ``width_resolutions``, ``range_m`` -- plus ``patch``; ``range_m`` is
+the ground range from that patch's centre, its reference point; a mover seen by two
+neighbouring patches may be listed by both), ``patch_summaries`` (per patch: movers,
+candidates not estimated, stationary targets listed, whether its own cap was reached,
+method, timings), ``timings_s``, ``options``, ``source``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -55,6 +61,11 @@ def collection_document(result: CollectionResult, source: PulseBlocks) -> dict[s
             }
             for t in result.stationary
         ],
+        "movers_not_estimated": [
+            {**{k: float(v) for k, v in dataclasses.asdict(c).items()}, "patch": int(r.index)}
+            for r in result.patches
+            for c in r.not_estimated
+        ],
         "stationary_dropped": int(result.stationary_dropped),
         "stationary_sidelobes_dropped": int(result.stationary_sidelobes),
         "stationary_mover_images_dropped": int(result.stationary_mover_images),
@@ -62,6 +73,7 @@ def collection_document(result: CollectionResult, source: PulseBlocks) -> dict[s
             {
                 "index": r.index,
                 "movers": len(r.movers),
+                "movers_not_estimated": len(r.not_estimated),
                 "stationary_listed": r.listed,
                 "stationary_cap_reached": bool(r.capped),
                 "method": r.method,

@@ -53,7 +53,7 @@ from ..core.geometry import Trajectory, look_geometry
 from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
 from ..motion import PointFit
-from ..pipeline import AnalysisOptions, AnalysisResult, analyze
+from ..pipeline import AnalysisOptions, AnalysisResult, NotEstimated, analyze
 from .extract import extract_patches
 from .merge import (
     ECHO_CELLS,
@@ -111,6 +111,9 @@ class PatchResult:
         Size of its traces.
     timings_s : dict
         Stage times of its analysis (s).
+    not_estimated : tuple of NotEstimated
+        The candidates that passed its detector after ``max_movers`` movers were
+        estimated (:attr:`~sarmotion.pipeline.AnalysisResult.movers_not_estimated`).
     """
 
     index: int
@@ -123,6 +126,7 @@ class PatchResult:
     n_pulses: int
     n_samples: int
     timings_s: dict[str, float]
+    not_estimated: tuple[NotEstimated, ...] = ()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -345,6 +349,7 @@ def analyze_patch(
         n_pulses=traces.n_pulses,
         n_samples=traces.n_samples,
         timings_s=dict(result.timings_s),
+        not_estimated=tuple(result.movers_not_estimated),
     )
     return slim, result
 

@@ -18,12 +18,21 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.patheffects import withStroke
 
 from ..documents.results import results_document
 from ..motion import trajectory_error
 from ..pipeline import AnalysisResult
-from .html import ReportFigure, write_html
-from .plotting import LEGEND_PT, image_figure, plot_image, subplots, traces_figure
+from .html import COLUMN_PX, REPORT_DPI, ReportFigure, write_html
+from .plotting import (
+    CSS_PX_PER_IN,
+    LEGEND_PT,
+    LEGIBLE_PT,
+    image_figure,
+    plot_image,
+    subplots,
+    traces_figure,
+)
 
 __all__ = [
     "analysis_figures",
@@ -37,6 +46,21 @@ __all__ = [
 ]
 
 _COLOURS = ("tab:red", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
+
+#: Side of one mover's panel in :func:`movers_figure` (in).
+MOVER_PANEL_IN = 4.6
+
+
+def _movers_per_row() -> int:
+    """Most mover panels a row whose PNG shows its legends at :data:`LEGIBLE_PT` or more.
+
+    At :data:`~sarmotion.report.html.REPORT_DPI` a ``LEGEND_PT`` legend is ``LEGEND_PT *
+    dpi / 96`` CSS pt at natural size; the page scales a PNG wider than its column
+    (:data:`~sarmotion.report.html.COLUMN_PX`) down to it, so a row may be
+    ``COLUMN_PX * LEGEND_PT * dpi / (96 * LEGIBLE_PT)`` PNG pixels wide at most.
+    """
+    widest_px = COLUMN_PX * LEGEND_PT * REPORT_DPI / (CSS_PX_PER_IN * LEGIBLE_PT)
+    return max(1, int(widest_px // (MOVER_PANEL_IN * REPORT_DPI)))
 
 
 def traces_panels_figure(result: AnalysisResult) -> Figure:
@@ -220,13 +244,22 @@ def movers_figure(
 ) -> Figure:
     """Each mover's image from its own traces, compensated at its estimated velocity.
 
-    Over it, the mover's cross-range family (:func:`draw_family`).
+    Over it, the mover's cross-range family (:func:`draw_family`). The panels fill rows
+    of :func:`_movers_per_row` (rows are added for more movers), so that the legends
+    read at :data:`~sarmotion.report.plotting.LEGIBLE_PT` or more in the report's
+    column whatever the number of movers.
     """
     doc = document if document is not None else results_document(result)
     n = max(1, len(result.movers))
-    fig, axes = subplots(1, n, figsize=(4.6 * n, 4.6), squeeze=False)
+    ncols = min(n, _movers_per_row())
+    nrows = -(-n // ncols)
+    side = MOVER_PANEL_IN
+    fig, grid = subplots(nrows, ncols, figsize=(side * ncols, side * nrows), squeeze=False)
+    axes = grid.ravel()
+    for extra in axes[n:]:
+        extra.set_visible(False)
     for k, m in enumerate(result.movers):
-        ax = axes[0, k]
+        ax = axes[k]
         g = m.image.grid
         u = m.velocity_mps
         plot_image(
@@ -242,12 +275,21 @@ def movers_figure(
             name = truth["errors"][k]["matched"]
             t = next((t for t in truth["truth"] if t["label"] == name), None)
             if t is not None:
-                ax.plot(*t["position_m"], "x", color="w", ms=9, mew=2, label="truth")
+                # white on the dark image, outlined in black to show in the white legend
+                ax.plot(
+                    *t["position_m"],
+                    "x",
+                    color="w",
+                    ms=9,
+                    mew=2,
+                    label="truth",
+                    path_effects=[withStroke(linewidth=3.5, foreground="k")],
+                )
         ax.set(xlim=(g.x_m[0], g.x_m[-1]), ylim=(g.y_m[0], g.y_m[-1]))
         _legend_below(ax)
     if not result.movers:
-        axes[0, 0].text(0.5, 0.5, "no mover found", ha="center", va="center")
-        axes[0, 0].set_axis_off()
+        axes[0].text(0.5, 0.5, "no mover found", ha="center", va="center")
+        axes[0].set_axis_off()
     fig.tight_layout()
     return fig
 

@@ -77,6 +77,27 @@ def mosaic_figure(result: CollectionResult) -> Figure:
     return fig
 
 
+def _not_estimated_html(document: dict[str, Any]) -> str:
+    """The candidates each patch detected beyond ``max_movers``: listed, not dropped."""
+    extra = document.get("movers_not_estimated") or []
+    if not extra:
+        return ""
+    cap = document["options"]["analysis"].get("max_movers")
+    rows = "".join(
+        f"<tr><td>{c['patch']}</td><td>{c['statistic_db']:.1f}</td><td>{c['range_m']:.1f}</td>"
+        f"<td>{c['range_speed_mps']:.2f}</td></tr>"
+        for c in extra
+    )
+    return (
+        f"<h3>Detected, not estimated: {len(extra)} candidate(s) beyond max_movers = {cap} "
+        "per patch</h3><p>They passed their patch's detector after its movers were "
+        "estimated; neither fitted nor tested against a stationary explanation (range: the "
+        "aligned trace's peak, from the patch's centre). Raise --max-movers to estimate "
+        "them.</p><table><tr><th>patch</th><th>statistic (dB)</th><th>range (m)</th>"
+        f"<th>range speed (m/s)</th></tr>{rows}</table>"
+    )
+
+
 def write_collection_report(
     result: CollectionResult, directory: Path, *, document: dict[str, Any], title: str
 ) -> None:
@@ -106,10 +127,13 @@ td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
 </head><body><h1>{html.escape(title)}</h1>
 <p>{len(document["plan"]["patches"])} patch(es) of {document["plan"]["patch_size_m"]:.1f} m;
 {len(document["movers"])} mover(s); {len(document["stationary"])} stationary target(s) listed,
-{document["stationary_dropped"]} beyond the cap not listed.</p>
+{document["stationary_dropped"]} beyond the cap not listed,
+{document.get("stationary_sidelobes_dropped", 0)} dropped as a brighter target's sidelobes,
+{document.get("stationary_mover_images_dropped", 0)} dropped as lying on a mover's echo.</p>
 <img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="mosaic">
 <h2>Movers</h2><table><tr><th>#</th><th>position (m)</th><th>velocity (m/s)</th>
 <th>range speed (m/s)</th><th>patch kept</th><th>found in patches</th></tr>{"".join(rows)}</table>
+{_not_estimated_html(document)}
 <h2>Patches</h2><table><tr><th>patch</th><th>core x0, y0, x1, y1 (m)</th><th>pulses x samples</th>
 <th>decimation</th></tr>{"".join(patches)}</table></body></html>
 """

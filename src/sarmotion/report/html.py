@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 
 from .._version import __version__
 
-__all__ = ["ReportFigure", "write_html"]
+__all__ = ["COLUMN_PX", "REPORT_DPI", "ReportFigure", "write_html"]
 
 # Made from the AnalysisResult in sarmotion.report.analysis_figures; importable from here.
 _FROM_ANALYSIS = (
@@ -56,12 +56,20 @@ class ReportFigure(NamedTuple):
     name: str
 
 
+#: Resolution of the report's PNGs (pixels per inch): saved at their figure size.
+REPORT_DPI = 110
+
+#: Width (CSS px) of the report's column in a 1400-px-wide window: main's 1400 px less
+#: its padding (2 x 32 px) and a section's padding and border (2 x 20 + 2 px). A wider
+#: PNG is shown scaled down to it (``img{max-width:100%}``).
+COLUMN_PX = 1400 - 64 - 42
+
 #: Stationary detections closer than this (m) to a brighter one are merged in the report.
 _MERGE_M = 0.5
 
 
 # ========================================================================= report
-def _png(fig: Figure, path: Path, dpi: int = 110) -> bytes:
+def _png(fig: Figure, path: Path, dpi: int = REPORT_DPI) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     data = buf.getvalue()
@@ -333,14 +341,28 @@ def _truth_html(doc: dict[str, Any]) -> str:
     ]
     head = ["true target", "matched estimate", "position at s=0 (m)", "velocity (m/s)"]
     head += ["range speed (m/s)", "cross-range speed (m/s)"]
+    truth_table = _html_table(head, trows) if trows else "<p>The scene has no movers.</p>"
+    errors = (
+        _errors_table(doc)
+        if doc["movers"]
+        else "<p>No mover was estimated, so there are no errors to show.</p>"
+    )
     return (
         "<h3>Truth</h3>"
-        + _html_table(head, trows)
+        + truth_table
         + "<h3>Errors (estimate &minus; truth)</h3>"
-        + _errors_table(doc)
+        + errors
         + f"<p>False movers: {doc['false_movers']}; missed movers: "
-        f"{doc['missed_movers']}.</p>"
-        + '<p class="note">The cross-range position and the range speed of a mover are '
+        f"{doc['missed_movers']}.</p>" + _family_note(doc)
+    )
+
+
+def _family_note(doc: dict[str, Any]) -> str:
+    """How far an estimate may sit from the truth along its family (with estimates only)."""
+    if not doc["movers"]:
+        return ""
+    return (
+        '<p class="note">The cross-range position and the range speed of a mover are '
         "tied over a few degrees (sarmotion.motion.aperture, module notes): a mover away from "
         "the reference cross range is placed on the data-consistent family near it, "
         "shifted in cross range by about L &delta;u / (V &minus; u_t). &ldquo;Truth to "

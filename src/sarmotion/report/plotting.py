@@ -8,6 +8,7 @@ relative to their peak, with ground coordinates in metres.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -15,10 +16,17 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.text import Text
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "LEGEND_PT",
+    "LEGIBLE_PT",
+    "CSS_PX_PER_IN",
+    "displayed_pt",
+    "smallest_text_pt",
+    "saved_width_px",
+    "fit_to_column",
     "plot_traces",
     "subplots",
     "plot_image",
@@ -33,6 +41,94 @@ __all__ = [
 #: Font size of every legend (pt): the least that reads as 8 pt in the reports, whose
 #: figures are drawn at 100 to 110 dpi and shown at about their size.
 LEGEND_PT = 8.0
+
+#: Least size (CSS pt) of any text of a figure as a page shows it.
+LEGIBLE_PT = 8.0
+
+#: CSS pixels per inch (CSS 2.1: 1 in = 96 px = 72 pt): a browser shows a PNG at one
+#: CSS pixel per PNG pixel unless the page scales it.
+CSS_PX_PER_IN = 96.0
+
+
+def displayed_pt(size_pt: float, *, dpi: float, width_px: float, column_px: float) -> float:
+    """Size (CSS pt) of ``size_pt`` text of a PNG saved at ``dpi`` as a page's column shows it.
+
+    A point of the figure is ``dpi / 72`` PNG pixels; the page shows the PNG at one CSS
+    pixel per PNG pixel, scaled down to the column when wider (``min(1, column_px /
+    width_px)``, as ``max-width: 100%`` does); a CSS point is ``96 / 72`` CSS pixels. So
+    ``size_pt * dpi / 96 * min(1, column_px / width_px)``.
+
+    Parameters
+    ----------
+    size_pt : float
+        Font size in the figure (pt).
+    dpi : float
+        Resolution the PNG was saved at (PNG pixels per inch).
+    width_px : float
+        Width of the PNG (pixels).
+    column_px : float
+        Width of the page's column (CSS px).
+    """
+    return float(size_pt) * float(dpi) / CSS_PX_PER_IN * min(1.0, column_px / width_px)
+
+
+def smallest_text_pt(fig: Figure) -> float:
+    """Smallest font size (pt) of the text drawn in ``fig``.
+
+    Every visible, non-empty text (tick labels, axis labels, titles, legends, colour bar
+    labels, annotations) of the visible axes and of the figure, once the figure is laid
+    out (tick labels exist only then). ``inf`` for a figure without text.
+    """
+    fig.draw_without_rendering()
+    sizes = [
+        t.get_fontsize()
+        for t in fig.findobj(Text)
+        if t.get_visible() and t.get_text().strip() and (t.axes is None or t.axes.get_visible())
+    ]
+    return float(min(sizes, default=np.inf))
+
+
+def saved_width_px(fig: Figure, *, dpi: float, tight: bool = True) -> int:
+    """Width (pixels) of the PNG that :func:`save_figure` writes of ``fig`` at ``dpi``."""
+    buf = io.BytesIO()
+    if tight:
+        fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight", pad_inches=0.1)
+    else:
+        fig.savefig(buf, format="png", dpi=dpi)
+    # PNG: 8-byte signature, then the IHDR chunk (length, type, width, height)
+    return int.from_bytes(buf.getvalue()[16:20], "big")
+
+
+def fit_to_column(
+    fig: Figure, *, dpi: float, column_px: float, min_pt: float = LEGIBLE_PT
+) -> float:
+    """Shrink ``fig`` until its smallest text shows at ``min_pt`` or more in the column.
+
+    A figure wider than the column is shown scaled down (:func:`displayed_pt`), and its
+    text with it. Shrinking the figure (then laying it out again with ``tight_layout``)
+    keeps its text at its size in points while the panels get smaller, so the PNG
+    (saved tight at ``dpi``) needs less scaling. The text does not shrink with the
+    figure, so one step of the ratio ``shown / min_pt`` can leave it short: it repeats
+    until legible. A figure already legible is left as it is. For figures laid out with
+    ``tight_layout`` (the paper's).
+
+    Returns
+    -------
+    float
+        The smallest text's displayed size (CSS pt).
+    """
+    smallest = smallest_text_pt(fig)
+    shown = np.inf
+    for _ in range(12):
+        width = saved_width_px(fig, dpi=dpi)
+        shown = displayed_pt(smallest, dpi=dpi, width_px=width, column_px=column_px)
+        if shown >= min_pt:
+            break
+        w, h = fig.get_size_inches()
+        r = 0.99 * shown / min_pt  # 1 % under the ratio: fewer repeats, never above it
+        fig.set_size_inches(w * r, h * r)
+        fig.tight_layout()
+    return float(shown)
 
 
 def to_db(

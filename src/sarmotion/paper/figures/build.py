@@ -11,6 +11,13 @@ synthetic aperture radar":
   beside it, the line of what it shows numerically; the conventions, and the one
   definition of signal-to-clutter used by every figure, at the top.
 
+Every figure is legible as the index shows it: a figure whose PNG is wider than the
+index's column (:data:`INDEX_COLUMN_PX`) is scaled down by the browser, its text with
+it, so a wide figure is shrunk before it is saved until its smallest text (legends,
+tick and axis labels) shows at 8 pt or more
+(:func:`sarmotion.report.plotting.fit_to_column`); each figure's ``<img>`` records that
+smallest size in points as ``data-text-pt``.
+
 The headline numbers of each figure (:attr:`FigureRecord.headline`) are measured by the
 package's building blocks on the built-in scenes; nothing is typed in. Conventions are
 the paper's: traces ``|.|`` normalised by the maximum named on each colour bar
@@ -42,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...core.progress import ProgressCallback
-from ...report.plotting import save_figure
+from ...report.plotting import fit_to_column, save_figure, smallest_text_pt
 from ._context import _Context, _Result
 from .captions import CAPTIONS
 from .fig_imaging import _fig_hyperbola, _fig_image_comp, _fig_rot_scatt, _fig_straight_trace
@@ -68,7 +75,15 @@ from .fig_separation import (
 )
 from .fig_setup import _fig_setup
 
-__all__ = ["FigureRecord", "FIGURE_LABELS", "SECTIONS", "build_figures", "figure_filename"]
+__all__ = [
+    "FigureRecord",
+    "FIGURE_DPI",
+    "FIGURE_LABELS",
+    "INDEX_COLUMN_PX",
+    "SECTIONS",
+    "build_figures",
+    "figure_filename",
+]
 
 
 log = logging.getLogger(__name__)
@@ -81,6 +96,15 @@ FIGURE_LABELS: tuple[str, ...] = tuple(CAPTIONS)
 def figure_filename(label: str, suffix: str = ".png") -> str:
     """File name of a figure: ``fig:rpcaEx2b`` -> ``fig_rpcaEx2b.png``."""
     return label.replace(":", "_") + suffix
+
+
+#: Resolution of the figures' PNGs (pixels per inch).
+FIGURE_DPI = 150
+
+#: Width (CSS px) of the index's column in a 1400-px-wide window: less the navigation
+#: (17em at 0.85 x 16 px, its padding 2 x 1.2em and its border: 265 px) and main's
+#: padding (2 x 2.5em at 16 px: 80 px). A wider PNG is shown scaled down to it.
+INDEX_COLUMN_PX = 1400 - 265 - 80
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -101,6 +125,10 @@ class FigureRecord:
         The measured numbers behind :attr:`summary`.
     seconds : float
         Wall-clock time to build it (s).
+    text_pt : float
+        Font size (pt) of the figure's smallest text (legends, tick and axis labels,
+        titles), as drawn: the PNG at :data:`FIGURE_DPI` shows it at ``text_pt *
+        FIGURE_DPI / 96`` CSS pt, scaled by the index's column when wider.
     """
 
     label: str
@@ -110,6 +138,7 @@ class FigureRecord:
     summary: str
     headline: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
+    text_pt: float = float("nan")
 
 
 _BUILDERS: dict[str, Callable[[_Context], _Result]] = {
@@ -245,7 +274,7 @@ def _write_index(out: Path, records: Sequence[FigureRecord], quick: bool) -> Pat
                 f'<figure id="{html.escape(r.label)}"'
                 f"{' class=small' if ncol_small else ''}>"
                 f'<a href="{r.png.name}"><img src="{r.png.name}" loading="lazy" '
-                f'alt="{html.escape(r.label)}"></a>\n<figcaption>'
+                f'alt="{html.escape(r.label)}" data-text-pt="{r.text_pt:g}"></a>\n<figcaption>'
                 f'<div class="caption"><b>Figure {number[r.label]}</b> '
                 f'<span class="label">{html.escape(r.label)}</span> &mdash; '
                 f"{html.escape(r.caption)}</div>\n"
@@ -331,7 +360,8 @@ def build_figures(
     for i, lab in enumerate(labels, start=1):
         t0 = time.perf_counter()
         res = _BUILDERS[lab](ctx)
-        png = save_figure(res.fig, out / figure_filename(lab), dpi=150)
+        fit_to_column(res.fig, dpi=FIGURE_DPI, column_px=INDEX_COLUMN_PX)
+        png = save_figure(res.fig, out / figure_filename(lab), dpi=FIGURE_DPI)
         npz = out / figure_filename(lab, ".npz")
         np.savez_compressed(npz, **{k: _for_npz(v) for k, v in res.arrays.items()})
         dt = time.perf_counter() - t0
@@ -343,6 +373,7 @@ def build_figures(
             summary=res.summary,
             headline={k: float(v) for k, v in res.headline.items()},
             seconds=dt,
+            text_pt=smallest_text_pt(res.fig),
         )
         records.append(rec)
         log.info("%s (%.1f s): %s", lab, dt, res.summary)

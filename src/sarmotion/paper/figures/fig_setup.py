@@ -115,7 +115,7 @@ def _draw_path(
     ax.set_xlabel("x (km)")
     ax.set_ylabel("y (km)")
     ax.set_zlabel("z (km)")
-    ax.set_title(f"{source}: platform path and lines of sight", fontsize=10)
+    ax.set_title(f"{source}:\nplatform path and lines of sight", fontsize=10)
     ax.legend(fontsize=8, loc="upper left")
     ax.view_init(elev=22, azim=-120)
 
@@ -137,7 +137,7 @@ def _draw_aperture(
     ax.set_xlabel("along track (m)")
     ax.set_ylabel("towards ρ_o (m)  [axis stretched]")
     ax.set_title(
-        f"the aperture from above: a = {a_m:.0f} m, {len(pos)} pulses, bowed {sagitta:.1f} m",
+        f"the aperture from above:\na = {a_m:.0f} m, {len(pos)} pulses, bowed {sagitta:.1f} m",
         fontsize=10,
     )
     ax.annotate(
@@ -188,7 +188,7 @@ def _draw_scene(ax: Any, pos: NDArray, rho_o: NDArray, geo: Any, aperture_deg: f
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title(
-        f"the scene on the ground: aperture {aperture_deg:.2f}° seen from ρ_o", fontsize=10
+        f"the scene on the ground:\naperture {aperture_deg:.2f}° seen from ρ_o", fontsize=10
     )
     ax.legend(fontsize=8, loc="lower left")
 
