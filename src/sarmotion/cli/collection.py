@@ -156,9 +156,7 @@ def _stationary_note(doc: dict[str, Any]) -> str:
             f"{doc['stationary_sidelobes_dropped']} dropped as a brighter target's sidelobes"
         )
     if doc.get("stationary_mover_images_dropped"):
-        notes.append(
-            f"{doc['stationary_mover_images_dropped']} dropped as lying on a mover's echo"
-        )
+        notes.append(f"{doc['stationary_mover_images_dropped']} dropped as lying on a mover's echo")
     return f" ({', '.join(notes)})" if notes else ""
 
 
