@@ -173,7 +173,7 @@ def test_console_has_no_negative_zero_and_its_time_covers_the_run(tmp_path):
     wall = time.perf_counter() - start
     assert proc.returncode == 0, proc.stderr
     assert not NEGATIVE_ZERO.search(proc.stdout), proc.stdout
-    assert "reference cross range: (0.00, 0.00) m" in proc.stdout
+    assert "cross range of the reference point: (0.00, 0.00) m" in proc.stdout
     analysis = float(re.search(r"analysis (\d+\.\d) s", proc.stdout)[1])
     in_all = float(re.search(r"(\d+\.\d) s in all", proc.stdout)[1])
     assert analysis < in_all <= wall + 0.05

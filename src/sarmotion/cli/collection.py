@@ -140,7 +140,9 @@ def run_collection(
         "(start-up, reading and figures included)"
     )
     for k, m in enumerate(doc["movers"]):
-        for line in mover_lines(m, f"mover {k + 1} (patch {m['patch']})"):
+        centre = doc["plan"]["patches"][m["patch"]]["centre_m"]
+        where = f"patch {m['patch']}'s centre ({centre[0]:.1f}, {centre[1]:.1f}) m"
+        for line in mover_lines(m, f"mover {k + 1} (patch {m['patch']})", where):
             click.echo(line)
     for line in _not_estimated_lines(doc):
         click.echo(line)

@@ -26,7 +26,9 @@ def _std(v: float) -> str:
     return _num(v, 2) if v >= 0.01 else f"{float(v):.1g}"
 
 
-def mover_lines(entry: dict[str, Any], label: str) -> list[str]:
+def mover_lines(
+    entry: dict[str, Any], label: str, reference: str = "the reference point"
+) -> list[str]:
     """Two lines for one mover entry of a results document.
 
     Parameters
@@ -36,13 +38,16 @@ def mover_lines(entry: dict[str, Any], label: str) -> list[str]:
         family's members).
     label : str
         How the mover is named, e.g. ``"mover 1"``.
+    reference : str
+        The point its ``range_m`` is measured from, in words (a collection's mover: its
+        patch's centre).
     """
     speed = f"range speed {_num(entry['range_speed_mps'])} m/s"
     if "range_m" in entry:
         rng = f"range {_num(entry['range_m'])} +- {_std(entry['range_std_m'])} m"
     else:
         rng = "range (not in this document)"
-    first = f"  {label}: {rng} (ground range from the reference point), {speed}"
+    first = f"  {label}: {rng} (ground range from {reference}), {speed}"
     fam = entry.get("cross_range_family", {}).get("in_scene")
     if entry.get("cross_range_known"):
         x, y = entry["position_m"]
@@ -57,8 +62,8 @@ def mover_lines(entry: dict[str, Any], label: str) -> list[str]:
     else:
         where = "its family does not cross the imaged scene"
     second = (
-        f"    cross range not determined by the data: {where}; shown at the reference "
-        f"cross range: {_pair(entry['position_m'])} m, {_pair(entry['velocity_mps'])} m/s"
+        f"    cross range not determined by the data: {where}; shown at the cross range "
+        f"of {reference}: {_pair(entry['position_m'])} m, {_pair(entry['velocity_mps'])} m/s"
     )
     return [first, second]
 
