@@ -139,6 +139,11 @@ class AutofocusResult:
         The stopping tolerance (rad).
     image : Image or None
         :func:`focus_mover`: the mover's compensated image from the corrected traces.
+    order : int
+        Highest Legendre order of the final fit (0: no final fit, the iteration's
+        estimate stands).
+    n_fitted_lines : int
+        Range lines the final fit used.
     """
 
     traces: Traces
@@ -150,6 +155,8 @@ class AutofocusResult:
     lines_history: NDArray[np.int64]
     tol_rad: float
     image: Image | None = field(default=None)
+    order: int = 0
+    n_fitted_lines: int = 0
 
     def to_dict(self) -> dict:
         """JSON-ready summary (phase error per pulse in rad)."""
@@ -224,6 +231,203 @@ def _phase(
     return 2.0 * k_o * (r - r0[:, None])
 
 
+def _bright_lines(
+    img: Image, contrast: float, contrast_db: float, max_lines: int
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """Range lines whose brightest pixel is ``contrast`` times their median intensity.
+
+    Returns the chosen lines (brightest first, at most ``max_lines``), every line's peak
+    pixel and the lines' intensity ``(n_range_lines, n_cross)``.
+
+    Raises
+    ------
+    ValueError
+        No line qualifies.
+    """
+    power = np.abs(img.values.T) ** 2  # one row per range line
+    peak_idx = np.argmax(power, axis=1)
+    peak_pow = power[np.arange(power.shape[0]), peak_idx]
+    median = np.median(power, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(median > 0, peak_pow / np.where(median > 0, median, 1.0), np.inf)
+    ratio[peak_pow == 0] = 0.0
+    chosen = np.nonzero(ratio >= contrast)[0]
+    if chosen.size == 0:
+        raise ValueError(
+            f"no bright scatterer for PGA: no range line of the image has a peak "
+            f"{contrast_db:g} dB above its median"
+        )
+    return chosen[np.argsort(-peak_pow[chosen], kind="stable")][:max_lines], peak_idx, power
+
+
+def _windowed_lines(
+    traces: Traces,
+    img: Image,
+    chosen: NDArray[np.int64],
+    peaks: NDArray[np.int64],
+    window: int,
+    velocity: NDArray[np.float64],
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.float64]]:
+    """The chosen range lines' windows and their exact pulse-to-pixel models.
+
+    Each line ``n`` is centre-shifted on its sub-pixel peak ``rho_t`` (a parabola through
+    ``|I|``) and cut to the ``window`` pixels about it that lie in the image (a
+    backprojected image is not periodic, so a window is cut at the image's edge, not
+    wrapped).
+
+    Returns
+    -------
+    models : (n_lines, window, n_pulses) complex ndarray
+        ``exp(i omega_o (dtau_j(rho_y) - dtau_j(rho_t)))``: the window's pixels ``y`` of a
+        point at ``rho_t`` whose pulse ``j`` carries a unit phasor (rows of pixels cut at
+        the image's edge are zero).
+    pixels : (n_lines, window) complex ndarray
+        The window's pixel values (zero where cut).
+    slopes : (n_lines, n_pulses) ndarray
+        ``2 k_o (m_j . e_y)`` (rad/m): moving ``rho_t`` by ``d`` along ``e_y`` multiplies
+        pulse ``j`` of the model by ``exp(i slopes_j d)`` (first order in ``d``).
+    """
+    grid = img.grid
+    dx = grid.x_m[1] - grid.x_m[0]
+    dy = grid.y_m[1] - grid.y_m[0]
+    ny = grid.y_m.size
+    lines = img.values.T  # (n_range_lines, n_cross): one row per range line
+    mags = np.abs(img.values)
+    half = window // 2
+    offsets = np.arange(-half, half + 1)
+    models = np.zeros((chosen.size, offsets.size, traces.n_pulses), dtype=np.complex128)
+    pixels = np.zeros((chosen.size, offsets.size), dtype=np.complex128)
+    slopes = np.empty((chosen.size, traces.n_pulses))
+    k_o = 2.0 * np.pi * traces.radar.carrier_hz / C
+    for row, (n, k) in enumerate(zip(chosen, peaks, strict=True)):
+        fy, fx = parabolic_peak(mags, int(k), int(n))  # sub-pixel peak along y and x
+        point = np.array([grid.x_m[0] + fx * dx, grid.y_m[0] + fy * dy, 0.0])
+        keep = (k + offsets >= 0) & (k + offsets < ny)
+        idx = k + offsets[keep]
+        dist = grid.y_m[0] + idx * dy - point[1]
+        shift = np.array([grid.x_m[n] - point[0], 0.0])
+        models[row, keep] = np.exp(1j * _phase(traces, point, shift, dist, velocity)).T
+        pixels[row, keep] = lines[n, idx]
+        where = point[None, :] + traces.slow_times_s[:, None] * velocity[None, :]
+        rel = traces.positions_m - where
+        slopes[row] = 2.0 * k_o * rel[:, 1] / np.linalg.norm(rel, axis=1)
+    return models, pixels, slopes
+
+
+def _legendre_basis(s: NDArray[np.float64], orders: int) -> NDArray[np.float64]:
+    """Legendre polynomials ``P_2 .. P_orders`` of slow time mapped onto [-1, 1], (n, orders - 1)."""
+    x = (s - 0.5 * (s[0] + s[-1])) / (0.5 * (s[-1] - s[0]))
+    return np.stack(
+        [np.polynomial.legendre.Legendre.basis(order)(x) for order in range(2, orders + 1)], axis=1
+    )
+
+
+def _resolved_orders(
+    models: NDArray[np.complex128], slopes: NDArray[np.float64], dy: float, s: NDArray[np.float64]
+) -> int:
+    """Highest Legendre order with at least half its linearised image energy in the window.
+
+    A small error ``c P_l(s)`` adds ``i c P_l`` to a point's phase history; its image is
+    ``c`` times the transform of ``P_l``, and the window holds the fraction
+    ``|M P_l|^2 / (n_period |P_l|^2)`` of it (Parseval: a range line of one period in
+    ``y``, ``2 pi / (dkappa dy)`` pixels, holds ``n_period |v|^2`` for pulse weights
+    ``v``), ``M`` the window's model of the line with the most pixels. Orders whose image
+    lies mostly outside the window are not resolved by it.
+    """
+    n = int(np.argmax(np.count_nonzero(np.any(models != 0, axis=2), axis=1)))
+    dkappa = abs(slopes[n, -1] - slopes[n, 0]) / (s.size - 1)
+    n_period = 2.0 * np.pi / (dkappa * dy)
+    order = 1
+    while order + 1 < s.size:
+        p = _legendre_basis(s, order + 1)[:, -1]
+        if np.sum(np.abs(models[n] @ p) ** 2) < 0.5 * n_period * np.sum(p**2):
+            break
+        order += 1
+    return order
+
+
+def _fit_lines(
+    models: NDArray[np.complex128],
+    pixels: NDArray[np.complex128],
+    slopes: NDArray[np.float64],
+    applied: NDArray[np.float64],
+    basis: NDArray[np.float64],
+    coef: NDArray[np.float64],
+    tol_rad: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Least-squares fit of the lines' windows by points with the phase error ``basis @ coef``.
+
+    Model of line ``n`` (window pixels ``I_n``, see :func:`_windowed_lines`):
+    ``I_n = a_n M_n w_n``, ``w_nj = exp(i ((basis @ coef)_j - applied_j + slopes_nj d_n))``,
+    with a complex amplitude ``a_n`` and a cross-range offset ``d_n`` (m) of the sub-pixel
+    peak per line, and the common coefficients ``coef``. Levenberg-Marquardt on the
+    Gauss-Newton normal equations, the per-line unknowns ``(d_n, a_n)`` eliminated by
+    their Schur complement. It stops when a step changes the phase error by less than
+    ``tol_rad / 100`` RMS over the pulses (a hundredth of the stopping tolerance of the
+    iteration), or after 100 steps.
+
+    Returns
+    -------
+    coef : (n_basis,) ndarray
+        The fitted coefficients (rad).
+    misfit : (n_lines,) ndarray
+        Each line's unexplained window energy over its window energy.
+    """
+    n_lines = models.shape[0]
+    energy = np.sum(np.abs(pixels) ** 2, axis=1)
+
+    def model(c: NDArray[np.float64], d: NDArray[np.float64]) -> NDArray[np.complex128]:
+        w = np.exp(1j * ((basis @ c - applied)[None, :] + slopes * d[:, None]))
+        return w
+
+    def amplitudes(v: NDArray[np.complex128]) -> NDArray[np.complex128]:
+        return np.sum(np.conj(v) * pixels, axis=1) / np.sum(np.abs(v) ** 2, axis=1)
+
+    d = np.zeros(n_lines)
+    w = model(coef, d)
+    v = np.einsum("nwk,nk->nw", models, w)
+    a = amplitudes(v)
+    r = pixels - a[:, None] * v
+    cost = float(np.sum(np.abs(r) ** 2))
+    damping = 1e-3
+    for _ in range(100):
+        dv = models * (1j * w)[:, None, :]  # d v / d theta_j, (n_lines, window, n_pulses)
+        jc = a[:, None, None] * np.einsum("nwk,kb->nwb", dv, basis)  # d (a v) / d coef
+        jl = np.stack(
+            [a[:, None] * np.einsum("nwk,nk->nw", dv, slopes), v, 1j * v], axis=2
+        )  # d (a v) / d (d_n, Re a_n, Im a_n)
+        hcc = np.einsum("nwb,nwe->be", np.conj(jc), jc).real
+        hcl = np.einsum("nwb,nwe->nbe", np.conj(jc), jl).real
+        hll = np.einsum("nwb,nwe->nbe", np.conj(jl), jl).real
+        gc = np.einsum("nwb,nw->b", np.conj(jc), r).real
+        gl = np.einsum("nwb,nw->nb", np.conj(jl), r).real
+        while True:
+            dll = hll + damping * np.einsum("nbb->nb", hll)[:, :, None] * np.eye(3)
+            inv = np.linalg.inv(dll)
+            reduced = hcc + damping * np.diag(np.diag(hcc))
+            reduced = reduced - np.einsum("nbe,nef,ngf->bg", hcl, inv, hcl)
+            rhs = gc - np.einsum("nbe,nef,nf->b", hcl, inv, gl)
+            step_c = np.linalg.solve(reduced, rhs)
+            step_l = np.einsum("nbe,ne->nb", inv, gl - np.einsum("nbe,b->ne", hcl, step_c))
+            c_new = coef + step_c
+            d_new = d + step_l[:, 0]
+            a_new = a + step_l[:, 1] + 1j * step_l[:, 2]
+            w_new = model(c_new, d_new)
+            v_new = np.einsum("nwk,nk->nw", models, w_new)
+            r_new = pixels - a_new[:, None] * v_new
+            cost_new = float(np.sum(np.abs(r_new) ** 2))
+            if cost_new <= cost or damping > 1e8:
+                break
+            damping *= 10.0
+        if cost_new > cost:
+            break
+        coef, d, a, w, v, r, cost = c_new, d_new, a_new, w_new, v_new, r_new, cost_new
+        damping = max(damping / 10.0, 1e-9)
+        if np.sqrt(np.mean((basis @ step_c) ** 2)) < 0.01 * tol_rad:
+            break
+    return coef, np.sum(np.abs(r) ** 2, axis=1) / energy
+
+
 def _remove_linear(phi: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
     """``phi`` minus its least-squares line in ``s`` (mean and slope)."""
     a = np.stack([np.ones_like(s), s - s.mean()], axis=1)
@@ -244,6 +448,62 @@ def _window_width(power: NDArray[np.float64], peaks: NDArray[np.int64]) -> int:
     while hi < n - 1 and above[hi + 1]:
         hi += 1
     return int(math.ceil(1.5 * (hi - lo + 1)))
+
+
+def _final_estimate(
+    work: Traces,
+    grid: ImageGrid,
+    applied: NDArray[np.float64],
+    window: int,
+    velocity: NDArray[np.float64],
+    *,
+    contrast: float,
+    contrast_db: float,
+    max_lines: int,
+    tol_rad: float,
+) -> tuple[NDArray[np.float64], int, int] | None:
+    """The final estimate: the lines' windows fitted with the window's exact model.
+
+    ``work`` are the traces corrected by ``applied`` (rad per pulse). The phase error is
+    the Legendre series of the orders the final window resolves
+    (:func:`_resolved_orders`), fitted by :func:`_fit_lines` to the bright lines'
+    windows (:func:`_bright_lines`, :func:`_windowed_lines`) of the image of ``work``.
+    A line is kept while the fit explains its window to the contrast asked of a line,
+    misfit <= ``1 / contrast``: what else lies in its window (another point, clutter)
+    then stands at least as far below the point as a line's median below its peak.
+    Lines above it are dropped and the fit repeated until every kept line meets it.
+
+    Returns
+    -------
+    tuple or None
+        ``(phase_error_rad, order, n_lines)``: the fitted phase error per pulse (rad),
+        the highest order and the lines fitted; None where the window resolves no order
+        above the linear one or no line meets the misfit rule (the iteration's estimate
+        then stands).
+    """
+    img = backproject(work, grid, velocity_mps=None if not np.any(velocity) else velocity[:2])
+    try:
+        chosen, peak_idx, _ = _bright_lines(img, contrast, contrast_db, max_lines)
+    except ValueError:
+        return None
+    models, pixels, slopes = _windowed_lines(work, img, chosen, peak_idx[chosen], window, velocity)
+    s = work.slow_times_s
+    order = _resolved_orders(models, slopes, grid.y_m[1] - grid.y_m[0], s)
+    if order < 2:
+        return None
+    basis = _legendre_basis(s, order)
+    line = np.stack([np.ones_like(s), s - s.mean()], axis=1)  # not in the basis (mean, slope)
+    coef = np.linalg.lstsq(np.hstack([line, basis]), applied, rcond=None)[0][2:]
+    keep = np.ones(chosen.size, dtype=bool)
+    while keep.any():
+        coef, misfit = _fit_lines(
+            models[keep], pixels[keep], slopes[keep], applied, basis, coef, tol_rad
+        )
+        bad = misfit > 1.0 / contrast
+        if not bad.any():
+            return basis @ coef, order, int(keep.sum())
+        keep[np.nonzero(keep)[0][bad]] = False
+    return None
 
 
 def pga(
@@ -348,40 +608,11 @@ def pga(
     converged = False
     for _ in range(max_iter):
         img = backproject(work, grid, velocity_mps=None if velocity_mps is None else vel_rot[:2])
-        lines = img.values.T  # (n_range_lines, n_cross): one row per range line
-        power = np.abs(lines) ** 2
-        peak_idx = np.argmax(power, axis=1)
-        peak_pow = power[np.arange(power.shape[0]), peak_idx]
-        median = np.median(power, axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.where(median > 0, peak_pow / np.where(median > 0, median, 1.0), np.inf)
-        ratio[peak_pow == 0] = 0.0
-        chosen = np.nonzero(ratio >= contrast)[0]
-        if chosen.size == 0:
-            raise ValueError(
-                f"no bright scatterer for PGA: no range line of the image has a peak "
-                f"{min_contrast_db:g} dB above its median"
-            )
-        chosen = chosen[np.argsort(-peak_pow[chosen], kind="stable")][:max_lines]
+        chosen, peak_idx, power = _bright_lines(img, contrast, min_contrast_db, max_lines)
         window = max(min_window, min(_window_width(power[chosen], peak_idx[chosen]),
                                      int(shrink * window), ny))  # fmt: skip
-        mags = np.abs(img.values)
-        g = np.empty((chosen.size, traces.n_pulses), dtype=np.complex128)
-        half = window // 2
-        offsets = np.arange(-half, half + 1)
-        for row, n in enumerate(chosen):
-            k = int(peak_idx[n])
-            fy, fx = parabolic_peak(mags, k, int(n))  # sub-pixel peak along y and x
-            y_hat = grid.y_m[0] + fy * dy
-            x_hat = grid.x_m[0] + fx * dx
-            # Centre shift: the window's pixels that lie in the image (a backprojected
-            # image is not periodic, so a window is cut at the image's edge, not wrapped).
-            idx = k + offsets
-            idx = idx[(idx >= 0) & (idx < ny)]
-            dist = grid.y_m[0] + idx * dy - y_hat
-            point = np.array([x_hat, y_hat, 0.0])
-            shift = np.array([grid.x_m[n] - x_hat, 0.0])
-            g[row] = np.exp(-1j * _phase(work, point, shift, dist, vel_rot)) @ lines[n, idx]
+        models, pixels, _ = _windowed_lines(work, img, chosen, peak_idx[chosen], window, vel_rot)
+        g = np.einsum("nwk,nw->nk", np.conj(models), pixels)
         if kernel == "eigenvector":
             _, _, vh = np.linalg.svd(g, full_matrices=False)
             raw = np.unwrap(np.angle(vh[0]))
@@ -398,6 +629,13 @@ def pga(
         if rms < tol:
             converged = True
             break
+    final = _final_estimate(
+        work, grid, phi_total, window, vel_rot, contrast=contrast, contrast_db=min_contrast_db,
+        max_lines=max_lines, tol_rad=tol,
+    )  # fmt: skip
+    order, n_fitted = 0, 0
+    if final is not None:
+        phi_total, order, n_fitted = final
     phi_total = _remove_linear(phi_total, s)
     meta = {
         "autofocus": "pga",
@@ -416,6 +654,8 @@ def pga(
         window_history_m=np.array(win_hist),
         lines_history=np.array(line_hist, dtype=np.int64),
         tol_rad=tol,
+        order=order,
+        n_fitted_lines=n_fitted,
     )
 
 
@@ -473,4 +713,6 @@ def focus_mover(
         lines_history=result.lines_history,
         tol_rad=result.tol_rad,
         image=img,
+        order=result.order,
+        n_fitted_lines=result.n_fitted_lines,
     )
