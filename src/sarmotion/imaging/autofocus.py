@@ -64,6 +64,36 @@ smooths the estimate over pulses (its transform), so components of high order in
 time are only partly recovered per iteration; clutter in the window biases the estimate
 by a fixed amount, so many more iterations than needed drift (stop at the tolerance).
 
+Final estimate
+--------------
+The iteration's fixed point is not the error. Its estimate at pulse ``j`` is the phase
+of the window's smoothing of ``exp(i phi)`` over pulses (``G = M^H I``, ``M`` the
+window's model below), and a residual whose image lies outside the window is invisible
+to it. The first, wide-window iterations on a large error leave such a residual, mostly
+on the pulses at the aperture edges, which the narrower windows that follow cannot see;
+it projects onto the quadratic (a mover's cross-range speed, below). So the last step
+fits the windows instead of back-transforming them. The window of line ``n``
+(``I_n``, its pixels ``y``) is modelled exactly as one point at its sub-pixel peak
+``rho_t``,
+
+    I_n(y) = a_n sum_j exp(i omega_o (dtau_j(rho_y) - dtau_j(rho_t)))
+             exp(i (phi_j - phi_applied_j + s_nj d_n)),
+
+``phi_applied`` the iteration's correction, ``a_n`` a complex amplitude, ``d_n`` a
+cross-range offset of the peak (the parabola's error; ``s_nj = 2 k_o (m_j . e_c)``),
+and ``phi`` a Legendre series in slow time of orders 2 to ``L`` (order 0 is ``a_n``,
+order 1 the ``d_n``). ``L`` is the highest order the window resolves: the highest
+whose linearised image (``i c P_L``) has at least half its energy inside the window.
+The fit is least squares over all kept lines (Levenberg-Marquardt, the per-line
+unknowns eliminated), from the iteration's estimate projected on the series. A line is
+kept while the fit explains its window to the contrast asked of a line: unexplained
+energy at most ``10^(-min_contrast_db / 10)`` of the window's (another point or clutter
+in the window biases that line's phases by about the square root of that ratio, rad);
+lines above it are dropped and the fit repeated. Where the window resolves no order
+above the linear one, or no line meets the rule, the iteration's estimate stands
+(:attr:`AutofocusResult.order` is then 0). The estimate is then a series of at most the
+window's resolution: components of higher order in slow time are not returned.
+
 The maximum-likelihood phase-difference kernel is the default; ``kernel="eigenvector"``
 takes the phase of the principal right singular vector of ``G`` (lines x pulses), the
 maximum-likelihood estimate of ``phi`` under ``G_{n,j} = a_n exp(i phi_j) + noise``
@@ -315,7 +345,7 @@ def _windowed_lines(
 
 
 def _legendre_basis(s: NDArray[np.float64], orders: int) -> NDArray[np.float64]:
-    """Legendre polynomials ``P_2 .. P_orders`` of slow time mapped onto [-1, 1], (n, orders - 1)."""
+    """Legendre ``P_2 .. P_orders`` of slow time mapped onto [-1, 1], shape (n, orders - 1)."""
     x = (s - 0.5 * (s[0] + s[-1])) / (0.5 * (s[-1] - s[0]))
     return np.stack(
         [np.polynomial.legendre.Legendre.basis(order)(x) for order in range(2, orders + 1)], axis=1
@@ -376,15 +406,14 @@ def _fit_lines(
     n_lines = models.shape[0]
     energy = np.sum(np.abs(pixels) ** 2, axis=1)
 
-    def model(c: NDArray[np.float64], d: NDArray[np.float64]) -> NDArray[np.complex128]:
-        w = np.exp(1j * ((basis @ c - applied)[None, :] + slopes * d[:, None]))
-        return w
+    def phasors(c: NDArray[np.float64], d: NDArray[np.float64]) -> NDArray[np.complex128]:
+        return np.exp(1j * ((basis @ c - applied)[None, :] + slopes * d[:, None]))
 
     def amplitudes(v: NDArray[np.complex128]) -> NDArray[np.complex128]:
         return np.sum(np.conj(v) * pixels, axis=1) / np.sum(np.abs(v) ** 2, axis=1)
 
     d = np.zeros(n_lines)
-    w = model(coef, d)
+    w = phasors(coef, d)
     v = np.einsum("nwk,nk->nw", models, w)
     a = amplitudes(v)
     r = pixels - a[:, None] * v
@@ -403,7 +432,7 @@ def _fit_lines(
         gl = np.einsum("nwb,nw->nb", np.conj(jl), r).real
         while True:
             dll = hll + damping * np.einsum("nbb->nb", hll)[:, :, None] * np.eye(3)
-            inv = np.linalg.inv(dll)
+            inv = np.linalg.pinv(dll)
             reduced = hcc + damping * np.diag(np.diag(hcc))
             reduced = reduced - np.einsum("nbe,nef,ngf->bg", hcl, inv, hcl)
             rhs = gc - np.einsum("nbe,nef,nf->b", hcl, inv, gl)
@@ -412,7 +441,7 @@ def _fit_lines(
             c_new = coef + step_c
             d_new = d + step_l[:, 0]
             a_new = a + step_l[:, 1] + 1j * step_l[:, 2]
-            w_new = model(c_new, d_new)
+            w_new = phasors(c_new, d_new)
             v_new = np.einsum("nwk,nk->nw", models, w_new)
             r_new = pixels - a_new[:, None] * v_new
             cost_new = float(np.sum(np.abs(r_new) ** 2))
