@@ -89,10 +89,14 @@ unknowns eliminated), from the iteration's estimate projected on the series. A l
 kept while the fit explains its window to the contrast asked of a line: unexplained
 energy at most ``10^(-min_contrast_db / 10)`` of the window's (another point or clutter
 in the window biases that line's phases by about the square root of that ratio, rad);
-lines above it are dropped and the fit repeated. Where the window resolves no order
-above the linear one, or no line meets the rule, the iteration's estimate stands
-(:attr:`AutofocusResult.order` is then 0). The estimate is then a series of at most the
-window's resolution: components of higher order in slow time are not returned.
+lines above it are dropped and the fit repeated. Above order ``L`` the iteration's
+estimate is either its own residue (the error has nothing there: the estimate is the
+series alone) or part of the error (kept, and the series fitted beneath it); the second
+is taken only where it explains more of the kept windows by at least the share of a
+point's focused energy that a phase error of ``tol_rad`` RMS moves, ``1 - exp(-tol^2)``,
+since below that the windows cannot tell the two apart within the tolerance. Where the
+window resolves no order above the linear one, or no line meets the rule, the
+iteration's estimate stands (:attr:`AutofocusResult.order` is then 0).
 
 The maximum-likelihood phase-difference kernel is the default; ``kernel="eigenvector"``
 takes the phase of the principal right singular vector of ``G`` (lines x pulses), the
@@ -521,16 +525,31 @@ def _final_estimate(
     if order < 2:
         return None
     basis = _legendre_basis(s, order)
-    line = np.stack([np.ones_like(s), s - s.mean()], axis=1)  # not in the basis (mean, slope)
-    coef = np.linalg.lstsq(np.hstack([line, basis]), applied, rcond=None)[0][2:]
+    low = np.hstack([np.stack([np.ones_like(s), s - s.mean()], axis=1), basis])
+    start = np.linalg.lstsq(low, applied, rcond=None)[0]
+    resolved, coef = low @ start, start[2:]  # the iteration's estimate up to order L
+    energy = np.sum(np.abs(pixels) ** 2, axis=1)
     keep = np.ones(chosen.size, dtype=bool)
     while keep.any():
-        coef, misfit = _fit_lines(
+        fitted, misfit = _fit_lines(
             models[keep], pixels[keep], slopes[keep], applied, basis, coef, tol_rad
         )
         bad = misfit > 1.0 / contrast
         if not bad.any():
-            return basis @ coef, order, int(keep.sum())
+            # Above order L the iteration's estimate is either its own residue (the
+            # error has nothing there: the series alone) or the error's (kept, the
+            # series fitted below it). The second is taken only where it explains more
+            # of the windows by at least the share of a point's focused energy that a
+            # phase error of tol_rad RMS moves, 1 - exp(-tol_rad^2): else the windows
+            # cannot tell them apart within the tolerance, and the smaller stands.
+            above, misfit_above = _fit_lines(
+                models[keep], pixels[keep], slopes[keep], resolved, basis, coef, tol_rad
+            )
+            gain = np.sum((misfit - misfit_above) * energy[keep])
+            if gain > -np.expm1(-(tol_rad**2)) * np.sum(energy[keep]):
+                return applied - resolved + basis @ above, order, int(keep.sum())
+            return basis @ fitted, order, int(keep.sum())
+        coef = fitted
         keep[np.nonzero(keep)[0][bad]] = False
     return None
 
