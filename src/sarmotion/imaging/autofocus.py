@@ -500,7 +500,9 @@ def _final_estimate(
     ``work`` are the traces corrected by ``applied`` (rad per pulse). The phase error is
     the Legendre series of the orders the final window resolves
     (:func:`_resolved_orders`), fitted by :func:`_fit_lines` to the bright lines'
-    windows (:func:`_bright_lines`, :func:`_windowed_lines`) of the image of ``work``.
+    windows (:func:`_bright_lines`, :func:`_windowed_lines`) of the image of ``work``;
+    or, where that explains the windows better by the tolerance's share (module
+    docstring), ``applied`` above those orders plus the series fitted beneath it.
     A line is kept while the fit explains its window to the contrast asked of a line,
     misfit <= ``1 / contrast``: what else lies in its window (another point, clutter)
     then stands at least as far below the point as a line's median below its peak.
