@@ -188,6 +188,19 @@ def test_final_fit_keeps_a_high_order_error_the_window_sees(seed, monkeypatch):
     assert rms(result.phase_error_rad) < rms(iteration.phase_error_rad) + result.tol_rad
 
 
+def test_pga_is_the_same_whatever_the_block_of_line_models(monkeypatch):
+    # The windows' models are computed a block of lines at a time within the read's
+    # memory budget; one line per block and all lines at once give the same estimate.
+    rng = np.random.default_rng(3)
+    tr = simulate(point_scene(rng.uniform(-20, 20, size=(8, 2))), snr_db=10.0, rng=4).traces
+    bad = apply_phase_correction(tr, -injected_error(tr, 5))
+    estimates = []
+    for budget in (1, 10**12):
+        monkeypatch.setattr(autofocus, "phase_history_bytes", lambda *shape, b=budget: b)
+        estimates.append(pga(bad).phase_error_rad)
+    np.testing.assert_allclose(estimates[0], estimates[1], rtol=0, atol=1e-12)
+
+
 def test_focus_mover_refocuses_a_defocused_mover():
     scene = Scene(
         name="mover",

@@ -133,11 +133,13 @@ leaves unfocused, so it is meant for the mover's own traces.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._limits import phase_history_bytes
 from .._validation import positive as _positive
 from ..core import C, Traces, Trajectory, as_point
 from ..core.geometry import _as_velocity
@@ -242,29 +244,6 @@ def _rotated(traces: Traces, centre: NDArray[np.float64], rot: NDArray[np.float6
     )
 
 
-def _phase(
-    traces: Traces,
-    point: NDArray[np.float64],
-    shift: NDArray[np.float64],
-    dist: NDArray[np.float64],
-    velocity: NDArray[np.float64],
-) -> NDArray[np.float64]:
-    """Phases ``omega_o (dtau_j(rho) - dtau_j(point))`` (rad), shape ``(n_pulses, n_dist)``.
-
-    ``rho = point + shift + dist e_y`` in the rotated frame (``shift`` (2,) m, ``dist``
-    (n_dist,) m); ``velocity`` (3,) m/s moves ``point`` with slow time (a mover's image).
-    """
-    where = point[None, :] + traces.slow_times_s[:, None] * velocity[None, :]
-    rel = traces.positions_m - where  # (n_pulses, 3), target to antenna
-    r0 = np.linalg.norm(rel, axis=1)
-    shifted = np.repeat(rel[:, None, :], dist.size, axis=1)
-    shifted[:, :, 0] -= shift[0]
-    shifted[:, :, 1] -= shift[1] + dist[None, :]
-    r = np.linalg.norm(shifted, axis=2)
-    k_o = 2.0 * np.pi * traces.radar.carrier_hz / C
-    return 2.0 * k_o * (r - r0[:, None])
-
-
 def _bright_lines(
     img: Image, contrast: float, contrast_db: float, max_lines: int
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
@@ -294,58 +273,152 @@ def _bright_lines(
     return chosen[np.argsort(-peak_pow[chosen], kind="stable")][:max_lines], peak_idx, power
 
 
-def _windowed_lines(
-    traces: Traces,
-    img: Image,
-    chosen: NDArray[np.int64],
-    peaks: NDArray[np.int64],
-    window: int,
-    velocity: NDArray[np.float64],
-) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.float64]]:
+@dataclass(frozen=True, eq=False)
+class _Windows:
     """The chosen range lines' windows and their exact pulse-to-pixel models.
 
     Each line ``n`` is centre-shifted on its sub-pixel peak ``rho_t`` (a parabola through
-    ``|I|``) and cut to the ``window`` pixels about it that lie in the image (a
+    ``|I|``) and cut to the window's pixels about it that lie in the image (a
     backprojected image is not periodic, so a window is cut at the image's edge, not
-    wrapped).
+    wrapped). The models, ``(n_lines, window, n_pulses)``, are computed a block of lines
+    at a time (:meth:`blocks`), each block at most ``block_bytes``: the working bytes the
+    read of the phase history held (:func:`~sarmotion._limits.phase_history_bytes`, the
+    budget the input was admitted under), whatever the number of lines.
 
-    Returns
-    -------
-    models : (n_lines, window, n_pulses) complex ndarray
-        ``exp(i omega_o (dtau_j(rho_y) - dtau_j(rho_t)))``: the window's pixels ``y`` of a
-        point at ``rho_t`` whose pulse ``j`` carries a unit phasor (rows of pixels cut at
-        the image's edge are zero).
+    Attributes
+    ----------
+    traces : Traces
+        The traces the image was formed from (rotated frame).
+    velocity : (3,) ndarray
+        Compensated velocity of the image (m/s).
+    points : (n_lines, 3) ndarray
+        Sub-pixel peaks ``rho_t`` (m).
+    shifts : (n_lines,) ndarray
+        Range line's ``x`` minus the peak's (m).
+    dists : (n_lines, window) ndarray
+        Window pixels' ``y`` minus the peak's (m).
+    mask : (n_lines, window) bool ndarray
+        Pixels inside the image.
     pixels : (n_lines, window) complex ndarray
         The window's pixel values (zero where cut).
     slopes : (n_lines, n_pulses) ndarray
         ``2 k_o (m_j . e_y)`` (rad/m): moving ``rho_t`` by ``d`` along ``e_y`` multiplies
         pulse ``j`` of the model by ``exp(i slopes_j d)`` (first order in ``d``).
+    block_bytes : int
+        Largest block of models (with its temporaries) computed at once.
+    cache : list
+        The models of all lines, once computed, where they fit in one block.
     """
-    grid = img.grid
-    dx = grid.x_m[1] - grid.x_m[0]
-    dy = grid.y_m[1] - grid.y_m[0]
-    ny = grid.y_m.size
-    lines = img.values.T  # (n_range_lines, n_cross): one row per range line
-    mags = np.abs(img.values)
-    half = window // 2
-    offsets = np.arange(-half, half + 1)
-    models = np.zeros((chosen.size, offsets.size, traces.n_pulses), dtype=np.complex128)
-    pixels = np.zeros((chosen.size, offsets.size), dtype=np.complex128)
-    slopes = np.empty((chosen.size, traces.n_pulses))
-    k_o = 2.0 * np.pi * traces.radar.carrier_hz / C
-    for row, (n, k) in enumerate(zip(chosen, peaks, strict=True)):
-        fy, fx = parabolic_peak(mags, int(k), int(n))  # sub-pixel peak along y and x
-        point = np.array([grid.x_m[0] + fx * dx, grid.y_m[0] + fy * dy, 0.0])
-        keep = (k + offsets >= 0) & (k + offsets < ny)
-        idx = k + offsets[keep]
-        dist = grid.y_m[0] + idx * dy - point[1]
-        shift = np.array([grid.x_m[n] - point[0], 0.0])
-        models[row, keep] = np.exp(1j * _phase(traces, point, shift, dist, velocity)).T
-        pixels[row, keep] = lines[n, idx]
-        where = point[None, :] + traces.slow_times_s[:, None] * velocity[None, :]
-        rel = traces.positions_m - where
-        slopes[row] = 2.0 * k_o * rel[:, 1] / np.linalg.norm(rel, axis=1)
-    return models, pixels, slopes
+
+    traces: Traces
+    velocity: NDArray[np.float64]
+    points: NDArray[np.float64]
+    shifts: NDArray[np.float64]
+    dists: NDArray[np.float64]
+    mask: NDArray[np.bool_]
+    pixels: NDArray[np.complex128]
+    slopes: NDArray[np.float64]
+    block_bytes: int
+    cache: list = field(default_factory=list)
+
+    @classmethod
+    def cut(
+        cls,
+        traces: Traces,
+        img: Image,
+        chosen: NDArray[np.int64],
+        peaks: NDArray[np.int64],
+        window: int,
+        velocity: NDArray[np.float64],
+    ) -> _Windows:
+        """The windows of lines ``chosen`` (peaks at cross-range pixels ``peaks``)."""
+        grid = img.grid
+        dx = grid.x_m[1] - grid.x_m[0]
+        dy = grid.y_m[1] - grid.y_m[0]
+        ny = grid.y_m.size
+        lines = img.values.T  # (n_range_lines, n_cross): one row per range line
+        mags = np.abs(img.values)
+        half = window // 2
+        offsets = np.arange(-half, half + 1)
+        points = np.zeros((chosen.size, 3))
+        for row, (n, k) in enumerate(zip(chosen, peaks, strict=True)):
+            fy, fx = parabolic_peak(mags, int(k), int(n))  # sub-pixel peak along y and x
+            points[row, :2] = grid.x_m[0] + fx * dx, grid.y_m[0] + fy * dy
+        idx = peaks[:, None] + offsets[None, :]
+        mask = (idx >= 0) & (idx < ny)
+        idx = np.clip(idx, 0, ny - 1)
+        pixels = np.where(mask, lines[chosen[:, None], idx], 0.0)
+        rel = traces.positions_m[None, :, :] - (
+            points[:, None, :] + traces.slow_times_s[None, :, None] * velocity[None, None, :]
+        )
+        k_o = 2.0 * np.pi * traces.radar.carrier_hz / C
+        # A block: the models and their derivative (complex) and the distances (3 floats).
+        per_line = idx.shape[1] * traces.n_pulses * (16 + 16 + 24)
+        return cls(
+            traces=traces,
+            velocity=velocity,
+            points=points,
+            shifts=grid.x_m[chosen] - points[:, 0],
+            dists=grid.y_m[idx] - points[:, 1:2],
+            mask=mask,
+            pixels=pixels.astype(np.complex128),
+            slopes=2.0 * k_o * rel[:, :, 1] / np.linalg.norm(rel, axis=2),
+            block_bytes=max(per_line, phase_history_bytes(*traces.data.shape)),
+        )
+
+    @property
+    def n_lines(self) -> int:
+        """Number of lines."""
+        return self.points.shape[0]
+
+    def subset(self, keep: NDArray[np.bool_]) -> _Windows:
+        """The windows of the lines where ``keep``."""
+        return _Windows(
+            traces=self.traces,
+            velocity=self.velocity,
+            points=self.points[keep],
+            shifts=self.shifts[keep],
+            dists=self.dists[keep],
+            mask=self.mask[keep],
+            pixels=self.pixels[keep],
+            slopes=self.slopes[keep],
+            block_bytes=self.block_bytes,
+        )
+
+    def models(self, rows: slice) -> NDArray[np.complex128]:
+        """``exp(i omega_o (dtau_j(rho_y) - dtau_j(rho_t)))`` of lines ``rows``.
+
+        The window's pixels ``y`` of a point at ``rho_t`` whose pulse ``j`` carries a unit
+        phasor, shape ``(n_rows, window, n_pulses)`` (zero rows where the window is cut).
+        """
+        tr = self.traces
+        where = self.points[rows, None, :] + tr.slow_times_s[None, :, None] * self.velocity
+        rel = tr.positions_m[None, :, :] - where  # (rows, n_pulses, 3), target to antenna
+        r0 = np.linalg.norm(rel, axis=2)
+        shifted = np.repeat(rel[:, None, :, :], self.dists.shape[1], axis=1)
+        shifted[..., 0] -= self.shifts[rows, None, None]
+        shifted[..., 1] -= self.dists[rows, :, None]
+        r = np.linalg.norm(shifted, axis=3)
+        k_o = 2.0 * np.pi * tr.radar.carrier_hz / C
+        out = np.exp(2j * k_o * (r - r0[:, None, :]))
+        out[~self.mask[rows]] = 0.0
+        return out
+
+    def blocks(self) -> Iterator[tuple[slice, NDArray[np.complex128]]]:
+        """``(rows, models(rows))`` over all lines, a block of at most ``block_bytes``.
+
+        Where all lines fit in one block, it is computed once and kept.
+        """
+        per_line = self.dists.shape[1] * self.traces.n_pulses * (16 + 16 + 24)
+        step = max(1, self.block_bytes // per_line)
+        if step >= self.n_lines:
+            if not self.cache:
+                self.cache.append(self.models(slice(0, self.n_lines)))
+            yield slice(0, self.n_lines), self.cache[0]
+            return
+        for first in range(0, self.n_lines, step):
+            rows = slice(first, min(first + step, self.n_lines))
+            yield rows, self.models(rows)
 
 
 def _legendre_basis(s: NDArray[np.float64], orders: int) -> NDArray[np.float64]:
@@ -356,9 +429,7 @@ def _legendre_basis(s: NDArray[np.float64], orders: int) -> NDArray[np.float64]:
     )
 
 
-def _resolved_orders(
-    models: NDArray[np.complex128], slopes: NDArray[np.float64], dy: float, s: NDArray[np.float64]
-) -> int:
+def _resolved_orders(lines: _Windows, dy: float) -> int:
     """Highest Legendre order with at least half its linearised image energy in the window.
 
     A small error ``c P_l(s)`` adds ``i c P_l`` to a point's phase history; its image is
@@ -368,22 +439,22 @@ def _resolved_orders(
     ``v``), ``M`` the window's model of the line with the most pixels. Orders whose image
     lies mostly outside the window are not resolved by it.
     """
-    n = int(np.argmax(np.count_nonzero(np.any(models != 0, axis=2), axis=1)))
-    dkappa = abs(slopes[n, -1] - slopes[n, 0]) / (s.size - 1)
+    n = int(np.argmax(np.count_nonzero(lines.mask, axis=1)))
+    model = lines.models(slice(n, n + 1))[0]
+    s = lines.traces.slow_times_s
+    dkappa = abs(lines.slopes[n, -1] - lines.slopes[n, 0]) / (s.size - 1)
     n_period = 2.0 * np.pi / (dkappa * dy)
     order = 1
     while order + 1 < s.size:
         p = _legendre_basis(s, order + 1)[:, -1]
-        if np.sum(np.abs(models[n] @ p) ** 2) < 0.5 * n_period * np.sum(p**2):
+        if np.sum(np.abs(model @ p) ** 2) < 0.5 * n_period * np.sum(p**2):
             break
         order += 1
     return order
 
 
 def _fit_lines(
-    models: NDArray[np.complex128],
-    pixels: NDArray[np.complex128],
-    slopes: NDArray[np.float64],
+    lines: _Windows,
     applied: NDArray[np.float64],
     basis: NDArray[np.float64],
     coef: NDArray[np.float64],
@@ -391,7 +462,7 @@ def _fit_lines(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Least-squares fit of the lines' windows by points with the phase error ``basis @ coef``.
 
-    Model of line ``n`` (window pixels ``I_n``, see :func:`_windowed_lines`):
+    Model of line ``n`` (window pixels ``I_n``, models ``M_n``, see :class:`_Windows`):
     ``I_n = a_n M_n w_n``, ``w_nj = exp(i ((basis @ coef)_j - applied_j + slopes_nj d_n))``,
     with a complex amplitude ``a_n`` and a cross-range offset ``d_n`` (m) of the sub-pixel
     peak per line, and the common coefficients ``coef``. Levenberg-Marquardt on the
@@ -407,33 +478,44 @@ def _fit_lines(
     misfit : (n_lines,) ndarray
         Each line's unexplained window energy over its window energy.
     """
-    n_lines = models.shape[0]
+    pixels, slopes = lines.pixels, lines.slopes
+    n_lines, n_basis = lines.n_lines, basis.shape[1]
     energy = np.sum(np.abs(pixels) ** 2, axis=1)
 
     def phasors(c: NDArray[np.float64], d: NDArray[np.float64]) -> NDArray[np.complex128]:
         return np.exp(1j * ((basis @ c - applied)[None, :] + slopes * d[:, None]))
 
-    def amplitudes(v: NDArray[np.complex128]) -> NDArray[np.complex128]:
-        return np.sum(np.conj(v) * pixels, axis=1) / np.sum(np.abs(v) ** 2, axis=1)
+    def images(w: NDArray[np.complex128]) -> NDArray[np.complex128]:
+        v = np.empty_like(pixels)
+        for rows, models in lines.blocks():
+            v[rows] = np.einsum("nwk,nk->nw", models, w[rows])
+        return v
 
     d = np.zeros(n_lines)
     w = phasors(coef, d)
-    v = np.einsum("nwk,nk->nw", models, w)
-    a = amplitudes(v)
+    v = images(w)
+    a = np.sum(np.conj(v) * pixels, axis=1) / np.sum(np.abs(v) ** 2, axis=1)
     r = pixels - a[:, None] * v
     cost = float(np.sum(np.abs(r) ** 2))
     damping = 1e-3
     for _ in range(100):
-        dv = models * (1j * w)[:, None, :]  # d v / d theta_j, (n_lines, window, n_pulses)
-        jc = a[:, None, None] * np.einsum("nwk,kb->nwb", dv, basis)  # d (a v) / d coef
-        jl = np.stack(
-            [a[:, None] * np.einsum("nwk,nk->nw", dv, slopes), v, 1j * v], axis=2
-        )  # d (a v) / d (d_n, Re a_n, Im a_n)
-        hcc = np.einsum("nwb,nwe->be", np.conj(jc), jc).real
-        hcl = np.einsum("nwb,nwe->nbe", np.conj(jc), jl).real
-        hll = np.einsum("nwb,nwe->nbe", np.conj(jl), jl).real
-        gc = np.einsum("nwb,nw->b", np.conj(jc), r).real
-        gl = np.einsum("nwb,nw->nb", np.conj(jl), r).real
+        hcc = np.zeros((n_basis, n_basis))
+        gc = np.zeros(n_basis)
+        hcl = np.empty((n_lines, n_basis, 3))
+        hll = np.empty((n_lines, 3, 3))
+        gl = np.empty((n_lines, 3))
+        for rows, models in lines.blocks():
+            dv = models * (1j * w[rows])[:, None, :]  # d v / d theta_j
+            jc = a[rows, None, None] * np.einsum("nwk,kb->nwb", dv, basis)  # d (a v) / d coef
+            jl = np.stack(
+                [a[rows, None] * np.einsum("nwk,nk->nw", dv, slopes[rows]), v[rows], 1j * v[rows]],
+                axis=2,
+            )  # d (a v) / d (d_n, Re a_n, Im a_n)
+            hcc += np.einsum("nwb,nwe->be", np.conj(jc), jc).real
+            gc += np.einsum("nwb,nw->b", np.conj(jc), r[rows]).real
+            hcl[rows] = np.einsum("nwb,nwe->nbe", np.conj(jc), jl).real
+            hll[rows] = np.einsum("nwb,nwe->nbe", np.conj(jl), jl).real
+            gl[rows] = np.einsum("nwb,nw->nb", np.conj(jl), r[rows]).real
         while True:
             dll = hll + damping * np.einsum("nbb->nb", hll)[:, :, None] * np.eye(3)
             inv = np.linalg.pinv(dll)
@@ -446,7 +528,7 @@ def _fit_lines(
             d_new = d + step_l[:, 0]
             a_new = a + step_l[:, 1] + 1j * step_l[:, 2]
             w_new = phasors(c_new, d_new)
-            v_new = np.einsum("nwk,nk->nw", models, w_new)
+            v_new = images(w_new)
             r_new = pixels - a_new[:, None] * v_new
             cost_new = float(np.sum(np.abs(r_new) ** 2))
             if cost_new <= cost or damping > 1e8:
@@ -500,7 +582,7 @@ def _final_estimate(
     ``work`` are the traces corrected by ``applied`` (rad per pulse). The phase error is
     the Legendre series of the orders the final window resolves
     (:func:`_resolved_orders`), fitted by :func:`_fit_lines` to the bright lines'
-    windows (:func:`_bright_lines`, :func:`_windowed_lines`) of the image of ``work``;
+    windows (:func:`_bright_lines`, :class:`_Windows`) of the image of ``work``;
     or, where that explains the windows better by the tolerance's share (module
     docstring), ``applied`` above those orders plus the series fitted beneath it.
     A line is kept while the fit explains its window to the contrast asked of a line,
@@ -521,21 +603,20 @@ def _final_estimate(
         chosen, peak_idx, _ = _bright_lines(img, contrast, contrast_db, max_lines)
     except ValueError:
         return None
-    models, pixels, slopes = _windowed_lines(work, img, chosen, peak_idx[chosen], window, velocity)
+    lines = _Windows.cut(work, img, chosen, peak_idx[chosen], window, velocity)
     s = work.slow_times_s
-    order = _resolved_orders(models, slopes, grid.y_m[1] - grid.y_m[0], s)
+    order = _resolved_orders(lines, grid.y_m[1] - grid.y_m[0])
     if order < 2:
         return None
     basis = _legendre_basis(s, order)
     low = np.hstack([np.stack([np.ones_like(s), s - s.mean()], axis=1), basis])
     start = np.linalg.lstsq(low, applied, rcond=None)[0]
     resolved, coef = low @ start, start[2:]  # the iteration's estimate up to order L
-    energy = np.sum(np.abs(pixels) ** 2, axis=1)
+    energy = np.sum(np.abs(lines.pixels) ** 2, axis=1)
     keep = np.ones(chosen.size, dtype=bool)
     while keep.any():
-        fitted, misfit = _fit_lines(
-            models[keep], pixels[keep], slopes[keep], applied, basis, coef, tol_rad
-        )
+        kept = lines.subset(keep)
+        fitted, misfit = _fit_lines(kept, applied, basis, coef, tol_rad)
         bad = misfit > 1.0 / contrast
         if not bad.any():
             # Above order L the iteration's estimate is either its own residue (the
@@ -544,9 +625,7 @@ def _final_estimate(
             # of the windows by at least the share of a point's focused energy that a
             # phase error of tol_rad RMS moves, 1 - exp(-tol_rad^2): else the windows
             # cannot tell them apart within the tolerance, and the smaller stands.
-            above, misfit_above = _fit_lines(
-                models[keep], pixels[keep], slopes[keep], resolved, basis, coef, tol_rad
-            )
+            above, misfit_above = _fit_lines(kept, resolved, basis, coef, tol_rad)
             gain = np.sum((misfit - misfit_above) * energy[keep])
             if gain > -np.expm1(-(tol_rad**2)) * np.sum(energy[keep]):
                 return applied - resolved + basis @ above, order, int(keep.sum())
@@ -661,8 +740,10 @@ def pga(
         chosen, peak_idx, power = _bright_lines(img, contrast, min_contrast_db, max_lines)
         window = max(min_window, min(_window_width(power[chosen], peak_idx[chosen]),
                                      int(shrink * window), ny))  # fmt: skip
-        models, pixels, _ = _windowed_lines(work, img, chosen, peak_idx[chosen], window, vel_rot)
-        g = np.einsum("nwk,nw->nk", np.conj(models), pixels)
+        lines = _Windows.cut(work, img, chosen, peak_idx[chosen], window, vel_rot)
+        g = np.empty((chosen.size, traces.n_pulses), dtype=np.complex128)
+        for rows, models in lines.blocks():
+            g[rows] = np.einsum("nwk,nw->nk", np.conj(models), lines.pixels[rows])
         if kernel == "eigenvector":
             _, _, vh = np.linalg.svd(g, full_matrices=False)
             raw = np.unwrap(np.angle(vh[0]))
