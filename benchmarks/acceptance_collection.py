@@ -374,6 +374,9 @@ def main() -> None:
     parser.add_argument(
         "--score-only", action="store_true", help="score the previous run's output again"
     )
+    parser.add_argument(
+        "--generate-only", action="store_true", help="write the CPHD file and its truth only"
+    )
     args = parser.parse_args()
 
     scene, plan, region = build_scene(args)
@@ -382,10 +385,18 @@ def main() -> None:
     print(f"scene: {scene.acquisition.shape}, {len(plan.patches)} patches", flush=True)
     if (args.reuse or args.score_only) and path.exists():
         generation = json.loads((args.work / "generation.json").read_text())
+        kept = json.loads((args.work / "truth.json").read_text())
+        if kept["movers"] != json.loads(json.dumps(scene.truth()["movers"])):
+            raise SystemExit(
+                f"{path} holds another scene (the movers sit on the borders of the plan "
+                "of the analysed region, so --whole changes them): generate it again"
+            )
     else:
         generation = generate(scene, path, args.block_pulses)
         (args.work / "generation.json").write_text(json.dumps(generation))
     print(json.dumps(generation), flush=True)
+    if args.generate_only:
+        return
     if args.score_only:
         analysis = json.loads((args.work / "analysis.json").read_text())
     else:
