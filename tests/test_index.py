@@ -181,12 +181,13 @@ INDEX: dict[str, tuple[str, ...]] = {
     "pipeline.truth": ("test_analysis.py",),
     # report
     "report.analysis": ("test_api.py",),
-    "report.analysis_figures": ("test_results_known.py",),
+    "report.analysis_figures": ("test_results_known.py", "test_report_style.py"),
     "report.autofocus": ("test_cli_autofocus.py",),
-    "report.collection": ("test_collection_run.py",),
+    "report.collection": ("test_collection_run.py", "test_report_style.py"),
     "report.html": ("test_report_html.py",),
-    "report.plotting": ("test_report_html.py", "test_cli.py"),
-    "report.tracks": ("test_track.py", "test_results_known.py"),
+    "report.page": ("test_report_style.py",),
+    "report.plotting": ("test_report_html.py", "test_cli.py", "test_report_style.py"),
+    "report.tracks": ("test_track.py", "test_results_known.py", "test_report_style.py"),
     # separation
     "separation._ialm": ("test_rpca.py", "test_rpca_stacked.py"),
     "separation._stacked_ialm": ("test_rpca_stacked.py",),

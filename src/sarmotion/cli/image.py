@@ -10,7 +10,7 @@ import numpy as np
 
 from ..core.text import fixed
 from ..documents.peaks import peaks_document
-from ..imaging import backproject
+from ..imaging import backproject, resolution
 from ..imaging.quality import point_quality
 from ..io import DataError, save_image, staged_directory, write_json
 from ..io.sicd import check_sicd_grid, write_sicd
@@ -142,7 +142,8 @@ def image(
 
     Each pixel sums the traces at its round-trip travel time over the aperture
     [eq:image].
-    Writes OUT/image.png (dB, peak-normalised), OUT/image.h5 (complex image with its axes)
+    Writes OUT/image.png (dB, peak-normalised; an arrow shows the radar's look direction
+    on the ground at the aperture centre), OUT/image.h5 (complex image with its axes)
     and OUT/peaks.json (the brightest points).
     """
     if device == "cuda":
@@ -218,6 +219,7 @@ def image(
             title=_title(inputs, grid, velocity, dynamic_range_db),
             dynamic_range_db=dynamic_range_db,
             dpi=IMAGE_DPI,
+            look_direction=-resolution(traces).range_direction,  # e_r points to the antenna
         )
         save_figure(fig, stage / "image.png", dpi=IMAGE_DPI, tight=False)
         if focus is not None:

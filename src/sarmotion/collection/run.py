@@ -152,6 +152,10 @@ class CollectionResult:
     stationary_mover_images : int
         Listings that lie on a found mover's echo and were dropped
         (:func:`~sarmotion.collection.merge.drop_mover_images`).
+    range_direction : (2,) ndarray or None
+        Ground range direction ``e_r`` at the reference point at ``s = 0``: the ground
+        projection of the line of sight, normalised, pointing towards the antenna (the
+        results document's ``frame.range_direction``); the radar looks along ``-e_r``.
     mosaic : (ny, nx) ndarray
         Stationary image ``|I| / n_pulses`` over the region (float32).
     mosaic_extent_m : (float, float, float, float)
@@ -176,6 +180,7 @@ class CollectionResult:
     single_result: AnalysisResult | None = None
     stationary_sidelobes: int = 0
     stationary_mover_images: int = 0
+    range_direction: NDArray[np.float64] | None = None
 
 
 # ------------------------------------------------------------------ one patch
@@ -696,6 +701,7 @@ def _merge(
         mosaic=image,
         mosaic_extent_m=extent,
         options=opts,
+        range_direction=e_r,
     )
 
 

@@ -37,6 +37,7 @@ from .plotting import (
 __all__ = [
     "analysis_figures",
     "draw_family",
+    "look_direction",
     "traces_panels_figure",
     "objectives_figure",
     "images_figure",
@@ -198,6 +199,19 @@ def draw_family(
         ax.plot(x, y, "_", color=colour, ms=12, mew=2.0)
 
 
+def look_direction(document: dict[str, Any]) -> np.ndarray | None:
+    """Ground direction (2,) from the radar towards the scene: ``-frame.range_direction``.
+
+    ``range_direction`` (``e_r``) of the results document points from the reference point
+    towards the antenna at ``s = 0`` (docs/results.md); the radar looks the other way.
+    ``None`` for a ``sarmotion.results/1`` document (no ``frame``).
+    """
+    frame = document.get("frame")
+    if not frame:
+        return None
+    return -np.asarray(frame["range_direction"], dtype=np.float64)
+
+
 def _legend_below(ax: Any) -> None:
     """The axes' legend under them, where it hides nothing of the image."""
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), fontsize=LEGEND_PT, frameon=False)
@@ -208,7 +222,8 @@ def images_figure(result: AnalysisResult, document: dict[str, Any] | None = None
 
     Each mover is drawn as its cross-range family across the scene (:func:`draw_family`:
     the data fix its range, not where along the line it is); circles mark the listed
-    stationary targets on the stationary image.
+    stationary targets on the stationary image; an arrow on each shows the radar's look
+    direction (:func:`look_direction`).
     """
     doc = document if document is not None else results_document(result)
     g = result.preliminary_image.grid
@@ -221,6 +236,7 @@ def images_figure(result: AnalysisResult, document: dict[str, Any] | None = None
         x_m=g.x_m,
         y_m=g.y_m,
         markers=[[], found],
+        look_direction=look_direction(doc),
     )
     ax_pre, ax_stat = fig.axes[0], fig.axes[1]  # the panels first, then their colour bars
     for k, entry in enumerate(doc["movers"]):
@@ -244,7 +260,8 @@ def movers_figure(
 ) -> Figure:
     """Each mover's image from its own traces, compensated at its estimated velocity.
 
-    Over it, the mover's cross-range family (:func:`draw_family`). The panels fill rows
+    Over it, the mover's cross-range family (:func:`draw_family`) and the radar's look
+    direction (an arrow, :func:`look_direction`). The panels fill rows
     of :func:`_movers_per_row` (rows are added for more movers), so that the legends
     read at :data:`~sarmotion.report.plotting.LEGIBLE_PT` or more in the report's
     column whatever the number of movers.
@@ -269,6 +286,7 @@ def movers_figure(
             y_m=g.y_m,
             title=f"mover {k + 1}, u = ({u[0]:.2f}, {u[1]:.2f}) m/s\n(the member at the "
             "reference cross range)",
+            look_direction=look_direction(doc),
         )
         draw_family(ax, doc["movers"][k], _COLOURS[k % 6], f"mover {k + 1}")
         if truth and truth["errors"][k] is not None:
@@ -350,7 +368,8 @@ def analysis_figures(result: AnalysisResult, document: dict[str, Any]) -> list[R
         "Lines: each mover's cross-range family across the scene, the positions its data "
         "fit equally (the data of a few degrees fix its range, with the standard error in "
         "the legend, not where along the line it is); tick: the member at the reference "
-        "cross range, listed in the tables."
+        "cross range, listed in the tables. Arrow: the radar's look direction on the "
+        "ground at the aperture centre, from the radar towards the scene."
     )
     figures = [
         ReportFigure(

@@ -2,7 +2,8 @@
 
 Plotting layer. :func:`write_collection_report` saves ``mosaic.png`` (the stationary
 mosaic in dB, every patch's core outlined, each mover at its kept fit with its
-cross-range family drawn as a line clipped to the region) and a self-contained
+cross-range family drawn as a line clipped to the region, the radar's look direction
+as an arrow) and a self-contained
 ``report.html`` embedding it, with the movers' and patches' tables.
 """
 
@@ -18,6 +19,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..collection import CollectionResult
+from .plotting import draw_look_arrow
 
 __all__ = ["mosaic_figure", "write_collection_report"]
 
@@ -39,7 +41,11 @@ def _clip_line(p: np.ndarray, d: np.ndarray, box: tuple[float, float, float, flo
 
 
 def mosaic_figure(result: CollectionResult) -> Figure:
-    """Mosaic (dB re its peak), patch cores, movers and their families clipped to the region."""
+    """Mosaic (dB re its peak), patch cores, movers and their families clipped to the region.
+
+    An arrow shows the radar's look direction on the ground at the aperture centre
+    (``-result.range_direction``, :func:`~sarmotion.report.plotting.draw_look_arrow`).
+    """
     fig = Figure(figsize=(8, 8))
     ax = fig.add_subplot(1, 1, 1)
     img = result.mosaic
@@ -70,6 +76,8 @@ def mosaic_figure(result: CollectionResult) -> Figure:
         ax.text(pos[0], pos[1], f" {k + 1}", color="tab:red", fontsize=9)
     ax.set_xlim(region[0], region[2])
     ax.set_ylim(region[1], region[3])
+    if result.range_direction is not None:  # e_r points towards the antenna
+        draw_look_arrow(ax, -np.asarray(result.range_direction, dtype=np.float64))
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title("stationary mosaic (dB), patch cores, movers and their cross-range families")

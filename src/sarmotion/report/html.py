@@ -15,7 +15,6 @@ cross-range position as not determined, with the family of positions across the 
 from __future__ import annotations
 
 import base64
-import datetime as _dt
 import html
 import io
 from collections.abc import Sequence
@@ -26,7 +25,9 @@ from typing import Any, NamedTuple
 import numpy as np
 from matplotlib.figure import Figure
 
-from .._version import __version__
+from .page import figure as _figure_html
+from .page import header_line, page, section
+from .page import table as _html_table
 
 __all__ = ["COLUMN_PX", "REPORT_DPI", "ReportFigure", "write_html"]
 
@@ -88,25 +89,6 @@ def _fmt(v: Any, digits: int = 2) -> str:
     return html.escape(str(v))
 
 
-_CSS = """
-body{font-family:-apple-system,'Segoe UI',Helvetica,Arial,sans-serif;margin:0;color:#222;
-background:#f5f6f8}
-header{background:#1f3a5f;color:#fff;padding:18px 32px}
-header h1{margin:0;font-size:22px} header p{margin:4px 0 0;opacity:.85;font-size:13px}
-main{max-width:1400px;margin:0 auto;padding:16px 32px}
-section{background:#fff;border:1px solid #dde1e6;border-radius:6px;margin:16px 0;
-padding:12px 20px}
-h2{font-size:17px;border-bottom:1px solid #e5e7eb;padding-bottom:6px;color:#1f3a5f}
-table{border-collapse:collapse;font-size:13px;margin:8px 0}
-th,td{border:1px solid #d0d5dc;padding:4px 8px;text-align:right}
-th{background:#eef1f5} td.l,th.l{text-align:left}
-.kv td:first-child{text-align:left;color:#555}
-img{max-width:100%;height:auto;display:block;margin:6px 0}
-.note{font-size:12px;color:#555}
-.bad{color:#b42318;font-weight:600} .ok{color:#067647}
-"""
-
-
 def _detection_cell(m: dict[str, Any]) -> str:
     d = m.get("detection")
     if d is None:
@@ -125,14 +107,6 @@ def _errors_cell(m: dict[str, Any]) -> str:
         f"{e['range_position_m']:.2g}, {e['range_speed_mps']:.2g}, "
         f"{e['cross_range_speed_mps']:.2g}; {m['snr_db']:.1f}"
     )
-
-
-def _html_table(
-    head: Sequence[str], rows: Sequence[Sequence[str]], *, escape_head: bool = True
-) -> str:
-    h = "".join(f"<th>{html.escape(c) if escape_head else c}</th>" for c in head)
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><tr>{h}</tr>{body}</table>"
 
 
 def write_html(
@@ -174,29 +148,26 @@ def write_html(
     figures = [ReportFigure(*f) for f in figures]
     if doc.get("autofocus"):
         figures.append(ReportFigure(*_autofocus_figure(doc["autofocus"])))
-    for section, caption, fig, name in figures:
+    for where, caption, fig, name in figures:
         b64 = base64.b64encode(_png(fig, out / name)).decode("ascii")
-        sections.setdefault(section, []).append(
-            f'<img alt="{html.escape(caption)}" src="data:image/png;base64,{b64}">'
-            f'<p class="note">{html.escape(caption)}</p>'
-        )
+        sections.setdefault(where, []).append(_figure_html(b64, caption))
     movers = _movers_html(doc) + _not_estimated_html(doc) + (_truth_html(doc) if truth else "")
     parts = [
-        f"<section><h2>Acquisition</h2>{_acquisition_html(doc, inputs)}</section>",
-        f"<section><h2>Moving targets</h2>{movers}</section>",
+        section("Acquisition", _acquisition_html(doc, inputs)),
+        section("Moving targets", movers),
     ]
     for name in ("Autofocus", "Traces", "Motion estimation", "Images", "Trajectories"):
         if name in sections:
-            parts.append(f"<section><h2>{name}</h2>{''.join(sections[name])}</section>")
-    parts.append(f"<section><h2>Stationary targets</h2>{_stationary_html(doc)}</section>")
+            parts.append(section(name, "".join(sections[name])))
+    parts.append(section("Stationary targets", _stationary_html(doc)))
     timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in doc["timings_s"].items()]
-    parts.append(
-        "<section><h2>Timings</h2>"
-        + _html_table(["stage", "wall-clock (s)"], timing_rows)
-        + "</section>"
-    )
+    parts.append(section("Timings", _html_table(["stage", "wall-clock (s)"], timing_rows)))
     path = out / "report.html"
-    path.write_text(_page(title, doc, parts), encoding="utf-8")
+    found = (
+        f"{len(doc['movers'])} mover(s){_beyond(doc)}, {len(doc['stationary'])} "
+        "stationary target(s)"
+    )
+    path.write_text(page(title, header_line(found), parts), encoding="utf-8")
     return path
 
 
@@ -507,15 +478,3 @@ def _acquisition_html(doc: dict[str, Any], inputs: Sequence[str]) -> str:
 def _beyond(doc: dict[str, Any]) -> str:
     n = len(doc.get("movers_not_estimated") or [])
     return f" (and {n} detected, not estimated)" if n else ""
-
-
-def _page(title: str, doc: dict[str, Any], parts: list[str]) -> str:
-    now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    head = [
-        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
-        f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>",
-        f"<header><h1>{html.escape(title)}</h1><p>sarmotion {__version__} &middot; {now} "
-        f"&middot; {len(doc['movers'])} mover(s){_beyond(doc)}, {len(doc['stationary'])} "
-        "stationary target(s)</p></header><main>",
-    ]
-    return "\n".join([*head, *parts, "</main></body></html>"])

@@ -16,14 +16,17 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.text import Text
+from matplotlib.text import Annotation, Text
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "LEGEND_PT",
     "LEGIBLE_PT",
+    "LOOK_ARROW_GID",
+    "LOOK_LABEL",
     "CSS_PX_PER_IN",
     "displayed_pt",
+    "draw_look_arrow",
     "smallest_text_pt",
     "saved_width_px",
     "fit_to_column",
@@ -131,6 +134,88 @@ def fit_to_column(
     return float(shown)
 
 
+#: Label of the look-direction arrow (:func:`draw_look_arrow`).
+LOOK_LABEL = "radar look"
+
+#: ``gid`` of the arrow :func:`draw_look_arrow` draws (to find it among the artists).
+LOOK_ARROW_GID = "look-direction"
+
+
+def draw_look_arrow(
+    ax: Axes,
+    direction: ArrayLike,
+    *,
+    label: str = LOOK_LABEL,
+    where: tuple[float, float] = (0.13, 0.2),
+    length: float = 0.14,
+) -> Annotation:
+    """An arrow along the radar's look direction on the ground, in a corner of ``ax``.
+
+    The arrow points from the radar towards the scene, on the ground: minus the range
+    direction ``e_r`` of the results document's ``frame`` (``e_r`` points towards the
+    antenna, docs/results.md). It is drawn in data coordinates (x, y in metres), so its
+    direction is the look direction whatever the axes' aspect; white with a black edge,
+    to show on a dark or a bright image, with ``label`` under it. Call it once the axes'
+    limits are final: its place is taken from them.
+
+    Parameters
+    ----------
+    ax : Axes
+        Axes of a ground image (x, y in metres).
+    direction : (2,) array_like
+        Ground direction from the radar towards the scene (any length, not zero).
+    label : str
+        Text under the arrow.
+    where : (float, float)
+        Centre of the arrow (fractions of the axes' width and height).
+    length : float
+        Length of the arrow (fraction of the shorter side of the axes' data box).
+
+    Returns
+    -------
+    Annotation
+        The arrow: ``xyann`` its tail, ``xy`` its head (data coordinates); its ``gid`` is
+        :data:`LOOK_ARROW_GID`.
+    """
+    d = np.asarray(direction, dtype=np.float64)[:2]
+    norm = float(np.hypot(*d))
+    if not (np.isfinite(norm) and norm > 0):
+        raise ValueError(f"direction must be a finite non-zero ground vector, got {direction!r}")
+    d = d / norm
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    centre = np.array([x0 + where[0] * (x1 - x0), y0 + where[1] * (y1 - y0)])
+    half = 0.5 * length * min(abs(x1 - x0), abs(y1 - y0))
+    arrow = ax.annotate(
+        "",
+        xy=tuple(centre + half * d),
+        xytext=tuple(centre - half * d),
+        arrowprops={
+            "arrowstyle": "simple,head_width=0.7,head_length=0.7,tail_width=0.25",
+            "fc": "w",
+            "ec": "k",
+            "lw": 0.8,
+            "shrinkA": 0,
+            "shrinkB": 0,
+        },
+        annotation_clip=False,
+        zorder=6,
+    )
+    arrow.set_gid(LOOK_ARROW_GID)
+    ax.annotate(
+        label,
+        xy=(centre[0], centre[1] - half),
+        xytext=(0, -4),
+        textcoords="offset points",
+        ha="center",
+        va="top",
+        fontsize=LEGEND_PT,
+        bbox={"boxstyle": "round,pad=0.2", "fc": "w", "ec": "none", "alpha": 0.85},
+        annotation_clip=False,
+        zorder=6,
+    )
+    return arrow
+
+
 def to_db(
     values: ArrayLike, *, reference: float | None = None, floor_db: float = -120.0
 ) -> NDArray:
@@ -223,10 +308,13 @@ def plot_image(
     markers: Sequence[tuple[float, float]] = (),
     marker_label: str = "",
     colorbar: bool = True,
+    look_direction: ArrayLike | None = None,
 ) -> None:
     """Draw an image ``|I|`` (ny, nx) in dB re its peak (or ``reference``), axes in metres.
 
     ``markers`` are ground positions (m) drawn as open circles (e.g. true positions).
+    ``look_direction``, the ground direction from the radar towards the scene, is drawn
+    as an arrow (:func:`draw_look_arrow`).
     """
     x = np.asarray(x_m)
     y = np.asarray(y_m)
@@ -250,6 +338,8 @@ def plot_image(
     ax.set_aspect("equal")
     if title:
         ax.set_title(title, fontsize=9)
+    if look_direction is not None:
+        draw_look_arrow(ax, look_direction)
     if colorbar:
         ax.figure.colorbar(im, ax=ax, label="dB", fraction=0.046, pad=0.04)
 
@@ -312,8 +402,13 @@ def image_figure(
     dynamic_range_db: float = 40.0,
     common_reference: bool = False,
     markers: Sequence[Sequence[tuple[float, float]]] | None = None,
+    look_direction: ArrayLike | None = None,
 ) -> Figure:
-    """A row of image panels ``(title, values)`` in dB; optionally one common reference."""
+    """A row of image panels ``(title, values)`` in dB; optionally one common reference.
+
+    ``look_direction`` (ground direction from the radar towards the scene): an arrow on
+    each panel (:func:`draw_look_arrow`).
+    """
     n = len(panels)
     fig, axes = subplots(1, n, figsize=(4.6 * n, 4.0), squeeze=False)
     ref = None
@@ -330,6 +425,7 @@ def image_figure(
             reference=ref,
             title=title,
             markers=mk,
+            look_direction=look_direction,
         )
     fig.tight_layout()
     return fig
@@ -344,6 +440,7 @@ def full_resolution_image_figure(
     dynamic_range_db: float = 40.0,
     dpi: int = 100,
     min_side_px: int = 400,
+    look_direction: ArrayLike | None = None,
 ) -> Figure:
     """One image ``|I|`` (ny, nx) in dB re its peak, drawn with whole screen pixels per pixel.
 
@@ -368,6 +465,9 @@ def full_resolution_image_figure(
         The resolution the figure is laid out for (PNG pixels per inch).
     min_side_px : int
         Least length of the image's longer side on the PNG (pixels).
+    look_direction : (2,) array_like, optional
+        Ground direction from the radar towards the scene: drawn as an arrow
+        (:func:`draw_look_arrow`).
     """
     v = np.asarray(values)
     ny, nx = v.shape
@@ -400,6 +500,8 @@ def full_resolution_image_figure(
     ax.tick_params(labelsize=9)
     fig.suptitle(title, fontsize=10, y=1.0 - 0.08 / height, va="top")
     fig.colorbar(im, cax=cax, label="dB re peak")
+    if look_direction is not None:
+        draw_look_arrow(ax, look_direction)
     return fig
 
 

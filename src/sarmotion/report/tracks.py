@@ -6,9 +6,10 @@ a ring where the state was coasted on the prediction, the roads dashed) and each
 position uncertainty: its 1-sigma ellipse from the filter's covariance (without a road it
 stretches along the cross-range family, which the data of a sub-aperture do not fix) and,
 where a road fixed the position, the 1-sigma interval along the road. Right, each track's
-ground speed and range speed over slow time. :func:`write_tracks_report`
-saves it as ``tracks.png`` and writes a small self-contained ``report.html`` (the PNG
-embedded) with a table per track.
+ground speed and range speed over slow time; an arrow gives the radar's look direction.
+:func:`write_tracks_report` saves it as ``tracks.png`` and writes a self-contained
+``report.html`` (the PNG embedded; the analysis report's page,
+:mod:`sarmotion.report.page`) with the table of the tracks' states.
 """
 
 from __future__ import annotations
@@ -20,12 +21,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Patch
 
-from .._version import __version__
 from ..tracking import TrackingResult
-from .plotting import LEGEND_PT
+from .page import figure, header_line, page, section, table
+from .plotting import LEGEND_PT, draw_look_arrow
 
 __all__ = ["sigma_ellipse", "tracks_figure", "write_tracks_report"]
 
@@ -52,6 +54,31 @@ def sigma_ellipse(centre_m: Any, cov_m2: Any, **style: Any) -> Ellipse:
         angle=angle,
         **style,
     )
+
+
+#: Opacity of a 1-sigma ellipse's fill: the image shows through where a few overlap.
+ELLIPSE_FILL_ALPHA = 0.2
+
+#: Width of a 1-sigma ellipse's edge (pt): the least that shows on screen at the report's
+#: resolution beside the tracks' 1.8-pt lines.
+ELLIPSE_EDGE_PT = 1.3
+
+#: What the legend says of the ellipses.
+ELLIPSE_LABEL = "1\u03c3 uncertainty (long along the cross-range family)"
+
+
+def _ellipse_style(colour: Any) -> dict[str, Any]:
+    """A 1-sigma ellipse in ``colour``: filled at :data:`ELLIPSE_FILL_ALPHA`, solid edge.
+
+    The fill's opacity is the face colour's own (``alpha`` of the patch would fade the
+    edge with it); drawn under the track's line and markers (``zorder`` 1.5 < 2).
+    """
+    return {
+        "fc": to_rgba(colour, ELLIPSE_FILL_ALPHA),
+        "ec": to_rgba(colour, 1.0),
+        "lw": ELLIPSE_EDGE_PT,
+        "zorder": 1.5,
+    }
 
 
 def _road_interval(fix: Any) -> np.ndarray:
@@ -81,9 +108,7 @@ def tracks_figure(result: TrackingResult) -> Figure:
         ax_map.plot(p[~hit, 0], p[~hit, 1], "o", mfc="none", color=colour, ms=6)
         for s in trk.states:
             ax_map.add_patch(
-                sigma_ellipse(
-                    s.position_m, s.position_cov_m2, fc=colour, ec=colour, alpha=0.18, lw=0.8
-                )
+                sigma_ellipse(s.position_m, s.position_cov_m2, **_ellipse_style(colour))
             )
             if s.on_road:
                 seg = _road_interval(s.road)
@@ -97,14 +122,55 @@ def tracks_figure(result: TrackingResult) -> Figure:
     ax_map.set(xlim=(x0, x1), ylim=(y0, y1), xlabel="x (m)", ylabel="y (m)", title="tracks")
     if result.tracks:
         if any(s.on_road for trk in result.tracks for s in trk.states):
-            ax_map.plot([], [], "-", color="yellow", lw=3.0, label="1-sigma interval on a road")
+            ax_map.plot([], [], "-", color="yellow", lw=3.0, label="1\u03c3 interval on a road")
         handles, _ = ax_map.get_legend_handles_labels()
-        handles.append(Patch(fc="0.5", alpha=0.3, label="1-sigma position (filter)"))
+        handles.append(Patch(**_ellipse_style("0.45"), label=ELLIPSE_LABEL))
         ax_map.legend(handles=handles, loc="upper right", fontsize=LEGEND_PT)
         ax_speed.legend(fontsize=LEGEND_PT)
+    look = _look(result)
+    if look is not None:
+        draw_look_arrow(ax_map, look)
     ax_speed.set(xlabel="slow time s (s)", ylabel="m/s", title="speed and range speed")
     ax_speed.grid(alpha=0.3)
     return fig
+
+
+def _look(result: TrackingResult) -> np.ndarray | None:
+    """Ground look direction (radar towards the scene) of the middle sub-aperture, or None."""
+    subs = result.sub_apertures
+    if not subs:
+        return None
+    times = np.array([sub.time_s for sub in subs])
+    mid = subs[int(np.argmin(np.abs(times - np.median(times))))]
+    return -np.asarray(mid.range_direction, dtype=np.float64)  # e_r points to the antenna
+
+
+_HEAD = (
+    "track",
+    "s (s)",
+    "position (m)",
+    "position std (m)",
+    "velocity (m/s)",
+    "range speed (m/s)",
+    "detected",
+    "position from",
+)
+
+
+def _state_row(track_id: Any, s: dict[str, Any]) -> list[str]:
+    """One state of a track as the table's cells (from tracks.json)."""
+    road = s.get("road")
+    where = "on road" if road and road["fixed"] else "road parallel" if road else "family"
+    return [
+        html.escape(str(track_id)),
+        f"{s['time_s']:.2f}",
+        "({:.2f}, {:.2f})".format(*s["position_m"]),
+        f"{s['position_std_m']:.2f}",
+        "({:.2f}, {:.2f})".format(*s["velocity_mps"]),
+        f"{s['range_speed_mps']:.3f}",
+        "yes" if s["detected"] else "coasted",
+        where,
+    ]
 
 
 def write_tracks_report(
@@ -114,7 +180,12 @@ def write_tracks_report(
     document: dict[str, Any],
     title: str = "sarmotion tracks",
 ) -> list[Path]:
-    """Write ``tracks.png`` and ``report.html`` into ``directory``; return their paths."""
+    """Write ``tracks.png`` and ``report.html`` into ``directory``; return their paths.
+
+    The page is the analysis report's (:func:`sarmotion.report.page.page`: its stylesheet,
+    header and sections): the map and speeds, the table of every track's states, the
+    timings.
+    """
     d = Path(directory)
     fig = tracks_figure(result)
     buf = io.BytesIO()
@@ -122,58 +193,32 @@ def write_tracks_report(
     png = d / "tracks.png"
     png.write_bytes(buf.getvalue())
     uri = base64.b64encode(buf.getvalue()).decode("ascii")
-    rows = []
-    for trk in document["tracks"]:
-        for s in trk["states"]:
-            road = s.get("road")
-            where = "on road" if road and road["fixed"] else "road parallel" if road else "family"
-            rows.append(
-                "<tr>"
-                + "".join(
-                    f"<td>{c}</td>"
-                    for c in (
-                        trk["id"],
-                        f"{s['time_s']:.2f}",
-                        "({:.2f}, {:.2f})".format(*s["position_m"]),
-                        f"{s['position_std_m']:.2f}",
-                        "({:.2f}, {:.2f})".format(*s["velocity_mps"]),
-                        f"{s['range_speed_mps']:.3f}",
-                        "yes" if s["detected"] else "coasted",
-                        where,
-                    )
-                )
-                + "</tr>"
-            )
-    head = "".join(
-        f"<th>{h}</th>"
-        for h in (
-            "track",
-            "s (s)",
-            "position (m)",
-            "position std (m)",
-            "velocity (m/s)",
-            "range speed (m/s)",
-            "detected",
-            "position from",
-        )
-    )
+    rows = [_state_row(trk["id"], s) for trk in document["tracks"] for s in trk["states"]]
     n_sub = len(document["sub_apertures"])
-    text = f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
-<style>body{{font-family:Helvetica,Arial,sans-serif;margin:20px;color:#222}}
-table{{border-collapse:collapse;font-size:13px}} th,td{{border:1px solid #ccc;padding:3px 7px}}
-img{{max-width:100%}}</style></head><body>
-<h1>{html.escape(title)}</h1>
-<p>{len(document["tracks"])} track(s) over {n_sub} sub-aperture(s);
-{result.timings_s["total"]:.1f} s. sarmotion {__version__}. Without a road, a state's
-cross-range position is one point of its family (the data of a few degrees do not fix
-it): see <code>cross_range_family</code> in tracks.json. The map draws each state's
-1-sigma position ellipse from the filter's covariance (long along the family where no
-road fixes the position) and, on a road, the 1-sigma interval the road gives.</p>
-<img src="data:image/png;base64,{uri}" alt="tracks">
-<table><tr>{head}</tr>{"".join(rows)}</table>
-</body></html>
-"""
-    page = d / "report.html"
-    page.write_text(text)
-    return [png, page]
+    found = f"{len(document['tracks'])} track(s) over {n_sub} sub-aperture(s)"
+    caption = (
+        "Left: the tracks over the mean of the sub-apertures' stationary images (dB): "
+        "filtered positions, a dot per detection, a ring where the state was coasted on "
+        "the prediction, roads dashed. Shaded ellipses: each state's 1-sigma position "
+        "uncertainty from the filter's covariance (long along the cross-range family where "
+        "no road fixes the position); on a road, the 1-sigma interval the road gives. "
+        "Arrow: the radar's look direction on the ground at the middle sub-aperture. "
+        "Right: each track's ground speed and range speed over slow time."
+    )
+    note = (
+        '<p class="note">Without a road, a state\'s cross-range position is one point of '
+        "its family (the data of a few degrees do not fix it): see "
+        "<code>cross_range_family</code> in tracks.json.</p>"
+    )
+    timings = [[html.escape(k), f"{v:.2f}"] for k, v in result.timings_s.items()]
+    parts = [
+        section("Tracks", figure(uri, caption) + note),
+        section(
+            "States",
+            table(_HEAD, rows) if rows else "<p>No track: no mover was followed.</p>",
+        ),
+        section("Timings", table(["stage", "wall-clock (s)"], timings)),
+    ]
+    page_path = d / "report.html"
+    page_path.write_text(page(title, header_line(found), parts), encoding="utf-8")
+    return [png, page_path]
