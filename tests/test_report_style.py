@@ -64,7 +64,11 @@ def geometry(request):
     traces = simulate(scene).traces
     options = AnalysisOptions(trajectory=False)
     collection = analyze_collection(
-        traces, CollectionOptions(analysis=options), region_m=_REGION, n_workers=0
+        traces,
+        CollectionOptions(analysis=options),
+        region_m=_REGION,
+        n_workers=0,
+        describe=lambda r: results_document(r)["movers"],  # as the command line does
     )
     result = collection.single_result or analyze(traces, options)
     return traces, collection, result, results_document(result)
@@ -155,26 +159,41 @@ def _skeleton(text: str) -> list[str]:
     return re.findall(r"<(/?(?:html|head|title|style|body|header|h1|p|main))\b", body)
 
 
-def test_analysis_and_track_reports_share_one_page_style(geometry, tmp_path):
+def test_analysis_track_and_collection_reports_share_one_page_style(geometry, tmp_path):
+    """One stylesheet, one header (title, then version, time, what was found), the body
+    in sections; figures captioned alike."""
+    from sarmotion.collection import collection_document
+    from sarmotion.core.blocks import TracesBlocks
     from sarmotion.report.analysis_figures import write_report
+    from sarmotion.report.collection import write_collection_report
     from sarmotion.report.page import CSS
     from sarmotion.report.tracks import write_tracks_report
 
-    _, _, result, doc = geometry
-    analysis = write_report(result, tmp_path, document=doc).read_text()
-    track_dir = tmp_path / "tracks"
-    track_dir.mkdir()
+    traces, collection, result, doc = geometry
+    for name in ("analysis", "tracks", "collection"):
+        (tmp_path / name).mkdir()
+    analysis = write_report(result, tmp_path / "analysis", document=doc).read_text()
     tracking = _tracking_result(on_road=False)
     track_doc = {"tracks": [], "sub_apertures": []}
-    paths = write_tracks_report(tracking, track_dir, document=track_doc)
-    tracks = paths[1].read_text()
-    assert _style(analysis) == _style(tracks) == CSS
-    assert _skeleton(analysis) == _skeleton(tracks)
-    for text in (analysis, tracks):
+    tracks = write_tracks_report(tracking, tmp_path / "tracks", document=track_doc)[1]
+    write_collection_report(
+        collection,
+        tmp_path / "collection",
+        document=collection_document(collection, TracesBlocks(traces)),
+        title="collection",
+    )
+    pages = [analysis, tracks.read_text(), (tmp_path / "collection/report.html").read_text()]
+    assert [_style(p) for p in pages] == [CSS] * 3
+    assert [_skeleton(p) for p in pages] == [_skeleton(analysis)] * 3
+    for text in pages:
         assert re.search(r"<header><h1>[^<]+</h1><p>sarmotion [^<]+ &middot; \d{4}-", text)
         assert "<section><h2>" in text and text.rstrip().endswith("</main></body></html>")
-        assert "<section><h2>Timings</h2><table>" in text
-    assert '<p class="note">' in tracks  # figure captions as in the analysis report
+        figures = re.findall(
+            r'<img alt="[^"]+" src="data:image/png;base64,[^"]+"><p class="note">', text
+        )
+        assert figures  # every figure with its caption under it
+    assert pages[0].count("<section><h2>Timings</h2><table>") == 1
+    assert pages[1].count("<section><h2>Timings</h2><table>") == 1
 
 
 # ------------------------------------------------------------------ the track map

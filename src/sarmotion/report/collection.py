@@ -3,14 +3,13 @@
 Plotting layer. :func:`write_collection_report` saves ``mosaic.png`` (the stationary
 mosaic in dB, every patch's core outlined, each mover at its kept fit with its
 cross-range family drawn as a line clipped to the region, the radar's look direction
-as an arrow) and a self-contained
-``report.html`` embedding it, with the movers' and patches' tables.
+as an arrow) and a self-contained ``report.html`` embedding it, with the movers' and
+patches' tables (the analysis report's page, :mod:`sarmotion.report.page`).
 """
 
 from __future__ import annotations
 
 import base64
-import html
 import io
 from pathlib import Path
 from typing import Any
@@ -19,6 +18,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..collection import CollectionResult
+from .page import figure, header_line, page, section, table
 from .plotting import draw_look_arrow
 
 __all__ = ["mosaic_figure", "write_collection_report"]
@@ -109,40 +109,64 @@ def _not_estimated_html(document: dict[str, Any]) -> str:
 def write_collection_report(
     result: CollectionResult, directory: Path, *, document: dict[str, Any], title: str
 ) -> None:
-    """Write ``mosaic.png`` and ``report.html`` into ``directory``."""
+    """Write ``mosaic.png`` and ``report.html`` into ``directory``.
+
+    The page is the analysis report's (:func:`sarmotion.report.page.page`: its stylesheet,
+    header and sections).
+    """
     directory = Path(directory)
     buf = io.BytesIO()
     mosaic_figure(result).savefig(buf, format="png", dpi=110)
     png = buf.getvalue()
     (directory / "mosaic.png").write_bytes(png)
-    rows = []
-    for k, m in enumerate(document["movers"]):
-        x, y = m["position_m"]
-        ux, uy = m["velocity_mps"]
-        rows.append(
-            f"<tr><td>{k + 1}</td><td>({x:.2f}, {y:.2f})</td><td>({ux:.2f}, {uy:.2f})</td>"
-            f"<td>{m['range_speed_mps']:.2f}</td><td>{m['patch']}</td>"
-            f"<td>{', '.join(str(p) for p in m['patches'])}</td></tr>"
-        )
+    rows = [
+        [
+            str(k + 1),
+            "({:.2f}, {:.2f})".format(*m["position_m"]),
+            "({:.2f}, {:.2f})".format(*m["velocity_mps"]),
+            f"{m['range_speed_mps']:.2f}",
+            str(m["patch"]),
+            ", ".join(str(p) for p in m["patches"]),
+        ]
+        for k, m in enumerate(document["movers"])
+    ]
     patches = [
-        f"<tr><td>{p['index']}</td><td>{', '.join(f'{v:.1f}' for v in p['core_m'])}</td>"
-        f"<td>{p['n_pulses']} x {p['n_samples']}</td><td>{p['decimation']}</td></tr>"
+        [
+            str(p["index"]),
+            ", ".join(f"{v:.1f}" for v in p["core_m"]),
+            f"{p['n_pulses']} x {p['n_samples']}",
+            str(p["decimation"]),
+        ]
         for p in document["plan"]["patches"]
     ]
-    page = f"""<!doctype html><html><head><meta charset="utf-8"><title>{html.escape(title)}</title>
-<style>body{{font-family:sans-serif;margin:2em}}
-td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}</style>
-</head><body><h1>{html.escape(title)}</h1>
-<p>{len(document["plan"]["patches"])} patch(es) of {document["plan"]["patch_size_m"]:.1f} m;
-{len(document["movers"])} mover(s); {len(document["stationary"])} stationary target(s) listed,
-{document["stationary_dropped"]} beyond the cap not listed,
-{document.get("stationary_sidelobes_dropped", 0)} dropped as a brighter target's sidelobes,
-{document.get("stationary_mover_images_dropped", 0)} dropped as lying on a mover's echo.</p>
-<img src="data:image/png;base64,{base64.b64encode(png).decode()}" alt="mosaic">
-<h2>Movers</h2><table><tr><th>#</th><th>position (m)</th><th>velocity (m/s)</th>
-<th>range speed (m/s)</th><th>patch kept</th><th>found in patches</th></tr>{"".join(rows)}</table>
-{_not_estimated_html(document)}
-<h2>Patches</h2><table><tr><th>patch</th><th>core x0, y0, x1, y1 (m)</th><th>pulses x samples</th>
-<th>decimation</th></tr>{"".join(patches)}</table></body></html>
-"""
-    (directory / "report.html").write_text(page)
+    plan = document["plan"]
+    summary = (
+        f"<p>{len(plan['patches'])} patch(es) of {plan['patch_size_m']:.1f} m; "
+        f"{len(document['movers'])} mover(s); {len(document['stationary'])} stationary "
+        f"target(s) listed, {document['stationary_dropped']} beyond the cap not listed, "
+        f"{document.get('stationary_sidelobes_dropped', 0)} dropped as a brighter target's "
+        f"sidelobes, {document.get('stationary_mover_images_dropped', 0)} dropped as lying "
+        "on a mover's echo.</p>"
+    )
+    caption = (
+        "The stationary mosaic (dB re its peak), every patch's core outlined and numbered, "
+        "each mover (circle, numbered as in the table) with its cross-range family (line). "
+        "Arrow: the radar's look direction on the ground at the aperture centre."
+    )
+    movers_head = ["#", "position (m)", "velocity (m/s)", "range speed (m/s)", "patch kept"]
+    movers = (
+        table([*movers_head, "found in patches"], rows)
+        if rows
+        else "<p>No mover found: no candidate passed a patch's detector.</p>"
+    )
+    head = ["patch", "core x0, y0, x1, y1 (m)", "pulses x samples", "decimation"]
+    parts = [
+        section("Mosaic", summary + figure(base64.b64encode(png).decode(), caption)),
+        section("Movers", movers + _not_estimated_html(document)),
+        section("Patches", table(head, patches)),
+    ]
+    found = (
+        f"{len(plan['patches'])} patch(es), {len(document['movers'])} mover(s), "
+        f"{len(document['stationary'])} stationary target(s)"
+    )
+    (directory / "report.html").write_text(page(title, header_line(found), parts), encoding="utf-8")

@@ -199,9 +199,9 @@ def write_tracks_report(
     caption = (
         "Left: the tracks over the mean of the sub-apertures' stationary images (dB): "
         "filtered positions, a dot per detection, a ring where the state was coasted on "
-        "the prediction, roads dashed. Shaded ellipses: each state's 1-sigma position "
+        "the prediction, roads dashed. Shaded ellipses: each state's 1\u03c3 position "
         "uncertainty from the filter's covariance (long along the cross-range family where "
-        "no road fixes the position); on a road, the 1-sigma interval the road gives. "
+        "no road fixes the position); on a road, the 1\u03c3 interval the road gives. "
         "Arrow: the radar's look direction on the ground at the middle sub-aperture. "
         "Right: each track's ground speed and range speed over slow time."
     )
