@@ -130,10 +130,15 @@ def fisher_information(
 ) -> NDArray[np.float64]:
     """Fisher matrix of ``(x, u_r, u_p, A)`` with the unknown phase eliminated.
 
+    The same formula holds for any parameters of the range history: with ``p`` columns
+    of range derivatives (e.g. :func:`sarmotion.motion.acceleration_gradients`, four)
+    the matrix is ``(p + 1, p + 1)``, the amplitude last.
+
     Parameters
     ----------
-    gradients_m : (n_pulses, 3) array_like
-        :func:`range_gradients`.
+    gradients_m : (n_pulses, p) array_like
+        :func:`range_gradients` (``p = 3``), or the range derivatives of other
+        parameters.
     frequencies_hz : (n_freq,) array_like
         Absolute frequencies ``f_k`` (Hz).
     weights : (n_freq,) array_like
@@ -145,8 +150,9 @@ def fisher_information(
 
     Returns
     -------
-    (4, 4) ndarray
-        In units of the inverse squares of m, m/s, m/s and the amplitude.
+    (p + 1, p + 1) ndarray
+        In units of the inverse squares of the parameters (m, m/s, m/s for
+        :func:`range_gradients`) and the amplitude.
     """
     grad = np.asarray(gradients_m, dtype=np.float64)
     f = np.asarray(frequencies_hz, dtype=np.float64)
@@ -161,9 +167,10 @@ def fisher_information(
     second = m2 * (grad.T @ grad)
     mean = m1 * g_sum / (n_pulses * sw)
     cov = second - n_pulses * sw * np.outer(mean, mean)
-    J = np.zeros((4, 4))
-    J[:3, :3] = 2.0 * amplitude**2 / noise_variance * cov
-    J[3, 3] = 2.0 * n_pulses * sw / noise_variance
+    p = grad.shape[1]
+    J = np.zeros((p + 1, p + 1))
+    J[:p, :p] = 2.0 * amplitude**2 / noise_variance * cov
+    J[p, p] = 2.0 * n_pulses * sw / noise_variance
     return J
 
 

@@ -5,7 +5,8 @@
 - :mod:`~sarmotion.simulation.forward` — the traces of a scene (``eq:MOD1``), noise,
   injection of targets into measured data;
 - :mod:`~sarmotion.simulation.paths` — movers on piecewise-straight paths (turns,
-  stops) and radars with a longer range window, for long acquisitions;
+  stops), with a constant acceleration or a constant turn rate, and radars with a
+  longer range window, for long acquisitions;
 - :mod:`~sarmotion.simulation.signals` — chirps, Gaussian pulses, range compression;
 - :mod:`~sarmotion.simulation.collection` — large constant-density scenes computed a
   block of pulses at a time (:class:`CollectionScene`), never held whole.
@@ -13,15 +14,17 @@
 
 from .collection import CollectionScene, collection_acquisition, random_collection
 from .forward import Simulation, add_noise, inject, simulate, simulate_phase_history
-from .paths import PathTarget, radar_with_range_window
+from .paths import AcceleratingTarget, PathTarget, TurningTarget, radar_with_range_window
 from .scene import PointTarget, Scene, SceneError, builtin_scene_names, load_scene, random_scene
 
 __all__ = [
     "CollectionScene",
     "collection_acquisition",
     "random_collection",
+    "AcceleratingTarget",
     "PathTarget",
     "PointTarget",
+    "TurningTarget",
     "Scene",
     "SceneError",
     "Simulation",

@@ -1,4 +1,4 @@
-"""Movers on piecewise-straight paths (turns and stops) and long acquisitions.
+"""Movers that do not move uniformly (turns, stops, accelerations) and long acquisitions.
 
 Over a long acquisition (many degrees of a circular pass) a road vehicle does not move
 uniformly: it turns and stops. :class:`PathTarget` is a point reflector whose ground
@@ -9,6 +9,11 @@ legs' velocities. The forward model (:func:`sarmotion.simulation.simulate`,
 :func:`~sarmotion.simulation.inject`) asks of a target only its positions at the pulses,
 so such paths are simulated exactly (the displacement during the round trip neglected,
 as for uniform motion).
+
+Two smooth motions complete it: :class:`AcceleratingTarget`, a constant ground
+acceleration ``rho(s) = rho(0) + s u + s^2 a / 2``, and :class:`TurningTarget`, a
+constant speed on a circle (a constant turn rate ``omega``):
+its position in closed form (:meth:`TurningTarget.positions_at`).
 
 A long track also needs a long range window: the fast-time window of the data covers
 ``c / (2 df)`` of slant range (GOTCHA: ``df`` = 1.47 MHz, 102 m). A mover at 10 m/s
@@ -27,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core import C, Radar
 
-__all__ = ["PathTarget", "radar_with_range_window"]
+__all__ = ["AcceleratingTarget", "PathTarget", "TurningTarget", "radar_with_range_window"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -111,6 +116,155 @@ class PathTarget:
     @property
     def is_moving(self) -> bool:
         """True: a path is a mover (a stop is one of its legs)."""
+        return True
+
+
+def _ground_motion(
+    position_m: ArrayLike, velocity_mps: ArrayLike, reflectivity: complex
+) -> tuple[NDArray[np.float64], NDArray[np.float64], complex]:
+    """Validated ``(position (3,), ground velocity (2,), reflectivity)`` of a smooth mover."""
+    p = np.asarray(position_m, dtype=np.float64).ravel()
+    if p.shape not in ((2,), (3,)) or not np.all(np.isfinite(p)):
+        raise ValueError(f"position_m must be a finite (x, y) or (x, y, z) point, got {p}")
+    p = np.r_[p[:2], 0.0 if p.size == 2 else p[2]]
+    v = np.asarray(velocity_mps, dtype=np.float64).ravel()
+    if v.shape != (2,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"velocity_mps must be a finite ground velocity (ux, uy), got {v}")
+    r = complex(reflectivity)
+    if not np.isfinite(r):
+        raise ValueError(f"reflectivity must be finite, got {r}")
+    return p, v, r
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class AcceleratingTarget:
+    """A point reflector with a constant ground acceleration.
+
+    ``rho(s) = rho(0) + s u + s^2 a / 2`` and ``u(s) = u + s a``.
+
+    Parameters
+    ----------
+    position_m : (2,) or (3,) array_like
+        Position ``rho(0)`` at ``s = 0`` (m).
+    velocity_mps : (2,) array_like
+        Ground velocity ``u`` at ``s = 0`` (m/s).
+    acceleration_mps2 : (2,) array_like
+        Ground acceleration ``a`` (m/s^2).
+    reflectivity : complex
+        Complex reflectivity ``sigma``.
+    label : str
+        Optional name.
+    """
+
+    position_m: NDArray[np.float64]
+    velocity_mps: NDArray[np.float64]
+    acceleration_mps2: NDArray[np.float64]
+    reflectivity: complex = 1.0 + 0.0j
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        p, v, r = _ground_motion(self.position_m, self.velocity_mps, self.reflectivity)
+        a = np.asarray(self.acceleration_mps2, dtype=np.float64).ravel()
+        if a.shape != (2,) or not np.all(np.isfinite(a)):
+            raise ValueError(f"acceleration_mps2 must be a finite ground vector, got {a}")
+        object.__setattr__(self, "position_m", p)
+        object.__setattr__(self, "velocity_mps", v)
+        object.__setattr__(self, "acceleration_mps2", a)
+        object.__setattr__(self, "reflectivity", r)
+
+    def positions_at(self, slow_times_s: ArrayLike) -> NDArray[np.float64]:
+        """Positions at the slow times (m), shape (n, 3)."""
+        s = np.atleast_1d(np.asarray(slow_times_s, dtype=np.float64))[:, None]
+        v3, a3 = np.r_[self.velocity_mps, 0.0], np.r_[self.acceleration_mps2, 0.0]
+        return self.position_m[None, :] + s * v3[None, :] + 0.5 * s**2 * a3[None, :]
+
+    def velocities_at(self, slow_times_s: ArrayLike) -> NDArray[np.float64]:
+        """Ground velocities at the slow times (m/s), shape (n, 2)."""
+        s = np.atleast_1d(np.asarray(slow_times_s, dtype=np.float64))[:, None]
+        return self.velocity_mps[None, :] + s * self.acceleration_mps2[None, :]
+
+    @property
+    def velocity3_mps(self) -> NDArray[np.float64]:
+        """Velocity at ``s = 0`` lifted to 3-D ``(ux, uy, 0)`` (m/s)."""
+        return np.r_[self.velocity_mps, 0.0]
+
+    @property
+    def is_moving(self) -> bool:
+        """True: an accelerating reflector is a mover."""
+        return True
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class TurningTarget:
+    """A point reflector at constant speed turning at a constant rate (a circular arc).
+
+    With ``omega`` the turn rate (rad/s, positive counter-clockwise) and ``Q(x)`` the
+    rotation by ``x``: ``u(s) = Q(omega s) u`` and
+    ``rho(s) = rho(0) + [sin(omega s) I + (1 - cos(omega s)) J] u / omega``
+    (``J`` the rotation by 90 degrees), the straight line ``rho(0) + s u`` at
+    ``omega = 0``.
+
+    Parameters
+    ----------
+    position_m : (2,) or (3,) array_like
+        Position ``rho(0)`` at ``s = 0`` (m).
+    velocity_mps : (2,) array_like
+        Ground velocity ``u`` at ``s = 0`` (m/s).
+    turn_rate_deg_s : float
+        Turn rate (degrees per second, positive counter-clockwise).
+    reflectivity : complex
+        Complex reflectivity ``sigma``.
+    label : str
+        Optional name.
+    """
+
+    position_m: NDArray[np.float64]
+    velocity_mps: NDArray[np.float64]
+    turn_rate_deg_s: float
+    reflectivity: complex = 1.0 + 0.0j
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        p, v, r = _ground_motion(self.position_m, self.velocity_mps, self.reflectivity)
+        if not np.isfinite(self.turn_rate_deg_s):
+            raise ValueError(f"turn_rate_deg_s must be finite, got {self.turn_rate_deg_s!r}")
+        object.__setattr__(self, "position_m", p)
+        object.__setattr__(self, "velocity_mps", v)
+        object.__setattr__(self, "turn_rate_deg_s", float(self.turn_rate_deg_s))
+        object.__setattr__(self, "reflectivity", r)
+
+    def positions_at(self, slow_times_s: ArrayLike) -> NDArray[np.float64]:
+        """Positions at the slow times (m), shape (n, 3).
+
+        ``sin(w s) / w = s sinc(w s / pi)`` and ``(1 - cos(w s)) / w = (w s^2 / 2)
+        sinc(w s / (2 pi))^2`` (numpy's ``sinc(x) = sin(pi x) / (pi x)``): exact at
+        ``w = 0`` and without cancellation for small turn rates.
+        """
+        s = np.atleast_1d(np.asarray(slow_times_s, dtype=np.float64))
+        w = np.radians(self.turn_rate_deg_s)
+        along = s * np.sinc(w * s / np.pi)
+        across = 0.5 * w * s**2 * np.sinc(w * s / (2.0 * np.pi)) ** 2
+        u = self.velocity_mps
+        turned = np.array([-u[1], u[0]])
+        xy = along[:, None] * u[None, :] + across[:, None] * turned[None, :]
+        return self.position_m[None, :] + np.column_stack([xy, np.zeros(s.size)])
+
+    def velocities_at(self, slow_times_s: ArrayLike) -> NDArray[np.float64]:
+        """Ground velocities at the slow times (m/s), shape (n, 2)."""
+        s = np.atleast_1d(np.asarray(slow_times_s, dtype=np.float64))
+        x = np.radians(self.turn_rate_deg_s) * s
+        c, sn = np.cos(x), np.sin(x)
+        u = self.velocity_mps
+        return np.column_stack([c * u[0] - sn * u[1], sn * u[0] + c * u[1]])
+
+    @property
+    def velocity3_mps(self) -> NDArray[np.float64]:
+        """Velocity at ``s = 0`` lifted to 3-D ``(ux, uy, 0)`` (m/s)."""
+        return np.r_[self.velocity_mps, 0.0]
+
+    @property
+    def is_moving(self) -> bool:
+        """True: a turning reflector is a mover."""
         return True
 
 

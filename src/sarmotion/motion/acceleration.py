@@ -1,0 +1,433 @@
+r"""Range acceleration of a mover over a wide aperture, with its Cramér–Rao bound.
+
+**The quantity.** The uniform model (``eq:MOD9``) is extended by one parameter: the mover
+moves as
+
+.. math::
+
+    \rho(s) = \rho + s\, u + \tfrac{1}{2} s^2 \alpha\, b_r, \qquad
+    b_r = \texttt{ground\_velocity}(1, 0),
+
+``b_r`` the ground vector of unit range speed and zero cross-range speed. ``alpha`` is
+therefore the rate of change of the range speed, ``alpha = d u_r / ds`` (m/s^2, with the
+sign of ``u_r = u . m_o``: positive towards the radar), the cross-range speed held
+constant. Its range history is the uniform one's minus ``alpha (n . b_r) s^2 / 2`` to
+second order in ``s`` (``n`` the unit line of sight, ``n . b_r ~ m_o . b_r = 1``): ``-alpha``
+is the second derivative of the range at ``s = 0`` beyond what the uniform motion gives.
+
+**Why only over wide apertures.** Over about a degree the range history is fixed to
+second order in ``s`` (:mod:`sarmotion.motion.aperture`), and its curvature is shared by
+the two: a cross-range speed change ``du_p`` changes it by ``-2 (V - u_t) du_p / L``
+(``V`` platform speed, ``u_t`` the mover's speed along the flight, ``L`` range), a range
+acceleration by ``-alpha``. An acceleration ``alpha`` is thus a cross-range speed
+``alpha L / (2 V)`` away (77 s on GOTCHA's geometry: 1 m/s^2 looks like 77 m/s of
+cross-range speed). Only the higher orders of the range history (the circular flight's
+and the square root's) tell them apart, and they grow with the aperture: the fraction of
+the acceleration's Fisher information that the uniform parameters do not share,
+``1 / (J_aa [J^-1]_aa)``, grows as the square of the aperture's duration
+(:func:`separable_fraction`; ``docs/notes/acceleration.md``). Whether the data of one
+mover separate them is the bound's question:
+
+**The rule** (:func:`acceleration_estimable`). The acceleration is reported when the data
+say more about it than the motion model assumed before the data: its Fisher information
+(the uniform parameters and the phase eliminated, ``1 / CRB``) exceeds the information
+``T / q`` of the prior the tracker uses for a road vehicle, white-noise acceleration of
+spectral density ``q`` (:data:`ACCELERATION_PSD`, 1 m^2/s^3 as
+:class:`sarmotion.tracking.TrackingOptions`), whose mean over an aperture of duration
+``T`` has variance ``q / T``. Equivalently ``CRB(alpha) < q / T``. Over a GOTCHA degree
+that needs a matched-filter SNR above about 41 dB and over 2 degrees above 22 dB
+(:func:`separable_fraction` scales the bound as ``T^-3``); the analysis only runs the step
+where the aperture is wide (:mod:`sarmotion.pipeline.movers`), so one-degree data never
+pay for it.
+
+**The fit** (:func:`fit_range_acceleration`): from the uniform whole-aperture estimate
+(``alpha = 0``), a Newton ascent (:func:`sarmotion.core.ascent.newton_ascent`, analytic
+derivatives) of the matched filter ``|I|^2`` (:class:`sarmotion.motion.MatchedFilter`)
+over ``(x, u_r, u_p, alpha)``. The four are nearly collinear (correlation of ``u_p`` and
+``alpha`` within 1e-6 of -1), so the ascent moves ``alpha`` along the ridge of the
+likelihood: the fourth parameter is ``alpha`` with ``(x, u_r, u_p)`` shifted by their
+regression on it (the columns of the inverse Fisher matrix), in units of a quarter
+radian of the phase it leaves after that shift; the ridge is re-linearised at the point
+reached, ``rounds`` times. The bound (:func:`acceleration_bound`) is the five-parameter
+Fisher matrix (:func:`sarmotion.motion.fisher_information`) at the fit, with the fitted
+amplitude and the measured noise.
+
+Positions in m, speeds in m/s, accelerations in m/s^2, geometry in float64.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import least_squares, minimize
+
+from ..core import Acquisition, C, Traces, as_point, as_traces, ground_velocity
+from ..core.ascent import newton_ascent
+from ..imaging import resolution
+from .bounds import fisher_information
+from .likelihood import MatchedFilter
+
+__all__ = [
+    "ACCELERATION_PSD",
+    "RangeAcceleration",
+    "acceleration_bound",
+    "acceleration_estimable",
+    "acceleration_gradients",
+    "fit_range_acceleration",
+    "separable_fraction",
+]
+
+#: Spectral density ``q`` of the white-noise acceleration a road vehicle is assumed to
+#: have before the data (m^2/s^3): accelerations of about 1 m/s^2 sustained over a second,
+#: as :class:`sarmotion.tracking.TrackingOptions`' ``acceleration_psd``.
+ACCELERATION_PSD = 1.0
+
+#: Newton units: a quarter radian of the phase a parameter leaves (module notes).
+_QUARTER_RADIAN = 0.25
+
+#: Newton units of ``(x, u_r, u_p)`` at a fixed ``(y, alpha)``: about an eighth of a
+#: resolution over a GOTCHA degree (:mod:`sarmotion.motion.likelihood`).
+_LOCAL_UNITS = np.array([0.03, 0.0015, 0.09])
+
+
+def acceleration_gradients(
+    antenna_m: ArrayLike,
+    slow_times_s: ArrayLike,
+    position_m: ArrayLike,
+    velocity_mps: ArrayLike,
+    range_acceleration_mps2: float,
+    *,
+    range_direction: ArrayLike,
+    cross_range_direction: ArrayLike,
+    range_basis_mps: ArrayLike,
+    cross_basis_mps: ArrayLike,
+) -> NDArray[np.float64]:
+    """Derivatives of the range with respect to ``(x, u_r, u_p, y, alpha)`` (module notes).
+
+    Parameters
+    ----------
+    antenna_m : (n_pulses, 3) array_like
+        Antenna positions (m).
+    slow_times_s : (n_pulses,) array_like
+        Slow times (s), ``s = 0`` the time of ``position_m``.
+    position_m : (3,) array_like
+        Position at ``s = 0`` (m).
+    velocity_mps : (2,) array_like
+        Ground velocity at ``s = 0`` (m/s).
+    range_acceleration_mps2 : float
+        ``alpha`` (m/s^2).
+    range_direction, cross_range_direction : (2,) array_like
+        Unit ground-range and cross-range directions ``e_r``, ``e_c``.
+    range_basis_mps, cross_basis_mps : (2,) array_like
+        ``b_r = ground_velocity(1, 0)`` and ``b_p = ground_velocity(0, 1)``.
+
+    Returns
+    -------
+    (n_pulses, 5) ndarray
+        ``-n_j . e_r``, ``-s_j n_j . b_r``, ``-s_j n_j . b_p``, ``-n_j . e_c`` and
+        ``-(s_j^2 / 2) n_j . b_r`` (m per unit of each parameter), ``n_j`` the unit line
+        of sight to the antenna.
+    """
+    ant = np.asarray(antenna_m, dtype=np.float64)
+    s = np.asarray(slow_times_s, dtype=np.float64)
+    e_r, e_c, b_r, b_p = (
+        np.r_[np.asarray(v, dtype=np.float64).reshape(2), 0.0]
+        for v in (range_direction, cross_range_direction, range_basis_mps, cross_basis_mps)
+    )
+    where = _track(as_point(position_m), velocity_mps, range_acceleration_mps2, b_r, s)
+    los = ant - where
+    n = los / np.linalg.norm(los, axis=1)[:, None]
+    nb = n @ b_r
+    return np.stack([-(n @ e_r), -s * nb, -s * (n @ b_p), -(n @ e_c), -0.5 * s**2 * nb], axis=1)
+
+
+def _track(
+    position: NDArray[np.float64],
+    velocity_mps: ArrayLike,
+    alpha: float,
+    b_r: NDArray[np.float64],
+    s: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """``rho + s u + (s^2 / 2) alpha b_r`` at the slow times, shape (n, 3)."""
+    v3 = np.r_[np.asarray(velocity_mps, dtype=np.float64).reshape(2), 0.0]
+    return position[None, :] + s[:, None] * v3[None, :] + 0.5 * alpha * s[:, None] ** 2 * b_r
+
+
+def _phase_covariance(
+    gradients_m: NDArray[np.float64], frequencies_hz: NDArray[np.float64], weights: ArrayLike
+) -> NDArray[np.float64]:
+    """``sum w (psi_i - mean)(psi_j - mean) / sum w`` (rad^2 per unit^2): the bound without SNR.
+
+    The Fisher matrix of the parameters is ``2 SNR`` times it (:mod:`sarmotion.motion.bounds`).
+    """
+    J = fisher_information(gradients_m, frequencies_hz, weights, amplitude=1.0, noise_variance=1.0)
+    p = gradients_m.shape[1]
+    return J[:p, :p] / J[p, p]  # (2 A^2 / s2) cov / (2 n sum w / s2) with A = s2 = 1
+
+
+def _inverse(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Inverse of a symmetric positive matrix through its correlation matrix.
+
+    The parameters' units differ by orders of magnitude (m, m/s, m/s^2); scaling by the
+    diagonal first keeps the inverse to the correlation matrix's condition number.
+    """
+    d = np.sqrt(np.diag(matrix))
+    return np.linalg.inv(matrix / np.outer(d, d)) / np.outer(d, d)
+
+
+def separable_fraction(
+    gradients_m: ArrayLike, frequencies_hz: ArrayLike, weights: ArrayLike
+) -> float:
+    """Fraction of the last parameter's Fisher information the others do not share.
+
+    ``1 / (J_aa [J^-1]_aa)`` of the parameters' Fisher matrix (the phase eliminated;
+    SNR-free): 1 when the last parameter is orthogonal to the others, 0 when the others
+    explain it. With :func:`acceleration_gradients` it is the acceleration's
+    separability from the uniform motion ``(x, u_r, u_p, y)`` over the aperture (module
+    notes).
+    """
+    g = np.asarray(gradients_m, dtype=np.float64)
+    cov = _phase_covariance(g, np.asarray(frequencies_hz, dtype=np.float64), weights)
+    return float(1.0 / (cov[-1, -1] * _inverse(cov)[-1, -1]))
+
+
+def acceleration_bound(
+    gradients_m: ArrayLike,
+    frequencies_hz: ArrayLike,
+    weights: ArrayLike,
+    *,
+    amplitude: float,
+    noise_variance: float,
+) -> NDArray[np.float64]:
+    """Cramér–Rao bound of ``(x, u_r, u_p, y, alpha, |a|)`` (module notes).
+
+    Parameters
+    ----------
+    gradients_m : (n_pulses, 5) array_like
+        :func:`acceleration_gradients`.
+    frequencies_hz, weights, amplitude, noise_variance
+        As :func:`sarmotion.motion.fisher_information` (``noise_variance``: per
+        phase-history sample).
+
+    Returns
+    -------
+    (6, 6) ndarray
+        Covariance bound (m, m/s, m/s, m, m/s^2, amplitude units; squared).
+    """
+    if not (np.isfinite(amplitude) and amplitude > 0):
+        raise ValueError(f"amplitude must be > 0, got {amplitude!r}")
+    if not (np.isfinite(noise_variance) and noise_variance > 0):
+        raise ValueError(f"noise_variance must be > 0, got {noise_variance!r}")
+    J = fisher_information(
+        gradients_m, frequencies_hz, weights, amplitude=amplitude, noise_variance=noise_variance
+    )
+    return _inverse(J)
+
+
+def acceleration_estimable(
+    std_mps2: float, duration_s: float, *, acceleration_psd: float = ACCELERATION_PSD
+) -> bool:
+    """Whether the data tell more of ``alpha`` than the prior: ``std^2 < q / T`` (module notes).
+
+    Parameters
+    ----------
+    std_mps2 : float
+        Cramér–Rao bound of ``alpha`` (m/s^2).
+    duration_s : float
+        The aperture's duration ``T`` (s).
+    acceleration_psd : float
+        ``q`` (m^2/s^3).
+    """
+    return bool(np.isfinite(std_mps2) and std_mps2**2 < acceleration_psd / duration_s)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class RangeAcceleration:
+    """A mover's range acceleration over an aperture (:func:`fit_range_acceleration`).
+
+    Attributes
+    ----------
+    range_acceleration_mps2 : float
+        ``alpha = d u_r / ds`` (m/s^2; module notes).
+    std_mps2 : float
+        Its Cramér–Rao bound at the fitted amplitude and the given noise (m/s^2), the
+        uniform motion and the cross-range coordinate unknown.
+    estimable : bool
+        :func:`acceleration_estimable`: the bound is under the prior's spread.
+    prior_std_mps2 : float
+        That spread, ``sqrt(q / T)`` (m/s^2).
+    amplitude : complex
+        ``I / n_pulses`` at the fit (data units).
+    uniform_amplitude : complex
+        The same at the uniform start (``alpha = 0``).
+    separable_fraction : float
+        :func:`separable_fraction` at the fit.
+    covariance : (6, 6) ndarray
+        :func:`acceleration_bound` (``x, u_r, u_p, y, alpha, |a|``).
+    """
+
+    range_acceleration_mps2: float
+    std_mps2: float
+    estimable: bool
+    prior_std_mps2: float
+    amplitude: complex
+    uniform_amplitude: complex
+    separable_fraction: float
+    covariance: NDArray[np.float64]
+
+
+#: Half-width of the profile over ``alpha`` in prior standard deviations ``sqrt(q / T)``.
+_PROFILE_SPAN = 4.0
+
+#: Points of the profile over ``alpha`` on each side of zero.
+_PROFILE_HALF_POINTS = 8
+
+
+def fit_range_acceleration(
+    data: Traces | ArrayLike,
+    position_m: ArrayLike,
+    velocity_mps: ArrayLike,
+    *,
+    acquisition: Acquisition | None = None,
+    noise_variance: float,
+    acceleration_psd: float = ACCELERATION_PSD,
+    rounds: int = 3,
+    max_iter: int = 200,
+) -> RangeAcceleration:
+    """Maximum-likelihood ``alpha`` from a uniform estimate, and its bound (module notes).
+
+    Parameters
+    ----------
+    data : Traces or (n_pulses, n_samples) array_like
+        The mover's traces over the whole aperture (others removed).
+    position_m : (2,) or (3,) array_like
+        The uniform estimate's position at ``s = 0`` (m).
+    velocity_mps : (2,) array_like
+        Its ground velocity (m/s).
+    acquisition : Acquisition, optional
+        Required when ``data`` is an array.
+    noise_variance : float
+        Noise variance per fast-time sample (data units squared), for the bound.
+    acceleration_psd : float
+        ``q`` of :func:`acceleration_estimable` (m^2/s^3).
+    rounds : int
+        Newton ascents, each in the parameters whitened at the point reached (>= 1).
+    max_iter : int
+        Most evaluations of each ascent.
+
+    Returns
+    -------
+    RangeAcceleration
+    """
+    tr = as_traces(data, acquisition)
+    geom = tr.geometry
+    cells = resolution(tr)
+    e_r, e_c = np.r_[cells.range_direction, 0.0], np.r_[cells.cross_range_direction, 0.0]
+    b_r = np.r_[ground_velocity(1.0, 0.0, geom), 0.0]
+    b_p = np.r_[ground_velocity(0.0, 1.0, geom), 0.0]
+    s = tr.slow_times_s
+    freqs, weights = tr.frequencies_hz, tr.radar.spectral_weights()
+    p0 = as_point(position_m, name="position_m")
+    v0 = np.r_[np.asarray(velocity_mps, dtype=np.float64).reshape(2), 0.0]
+    response = MatchedFilter(tr).response_derivatives()
+    # d rho_j / d theta for theta = (x, u_r, u_p, y, alpha), (n, 3, 5): linear in theta
+    ones = np.ones((s.size, 1))
+    base = np.stack(
+        [ones * e_r, s[:, None] * b_r, s[:, None] * b_p, ones * e_c, 0.5 * s[:, None] ** 2 * b_r],
+        axis=2,
+    )
+
+    def unpack(theta: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        return p0 + theta[0] * e_r + theta[3] * e_c, v0 + theta[1] * b_r + theta[2] * b_p
+
+    def where(theta: NDArray[np.float64]) -> NDArray[np.float64]:
+        p, v = unpack(theta)
+        return _track(p, v[:2], theta[4], b_r, s)
+
+    def gradients(theta: NDArray[np.float64]) -> NDArray[np.float64]:
+        p, v = unpack(theta)
+        return acceleration_gradients(
+            tr.positions_m, s, p, v[:2], theta[4],
+            range_direction=e_r[:2], cross_range_direction=e_c[:2],
+            range_basis_mps=b_r[:2], cross_basis_mps=b_p[:2],
+        )  # fmt: skip
+
+    history = np.linalg.norm(tr.positions_m - where(np.zeros(5)), axis=1)
+
+    def on_ridge(ya: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(x, u_r, u_p)`` whose range history at ``(y, alpha)`` is nearest the start's."""
+
+        def residual(q: NDArray[np.float64]) -> NDArray[np.float64]:
+            return np.linalg.norm(tr.positions_m - where(np.r_[q, ya]), axis=1) - history
+
+        return least_squares(residual, np.zeros(3), x_scale=_LOCAL_UNITS, xtol=1e-10).x
+
+    def profiled(ya: NDArray[np.float64]) -> tuple[NDArray[np.float64], complex]:
+        """``(x, u_r, u_p)`` maximising ``|I|`` at ``(y, alpha) = ya``, and ``I`` there."""
+        q, value, _, _ = newton_ascent(
+            lambda q: response(where(np.r_[q, ya]), base[:, :, :3]),
+            on_ridge(ya), radius=1.0, tol=1e-2, max_iter=30, scale=_LOCAL_UNITS,
+        )  # fmt: skip
+        return q, value
+
+    start = complex(response(where(np.zeros(5)), base)[3])
+    theta = _profile(tr, profiled, acceleration_psd)
+    # units of y and alpha: a quarter radian of the phase each leaves once (x, u_r, u_p)
+    # follow it (the conditional deviation 1 / sqrt([C^-1]_ii) of the phase covariance)
+    cov = _phase_covariance(gradients(theta), freqs, weights)
+    unit = np.array(
+        [
+            _QUARTER_RADIAN * np.sqrt(_inverse(cov[np.ix_(k, k)])[3, 3])
+            for k in ([0, 1, 2, 3], [0, 1, 2, 4])
+        ]
+    )
+    res = minimize(
+        lambda z: -abs(profiled(theta[3:] + z * unit)[1]),
+        np.zeros(2),
+        method="Nelder-Mead",
+        options={"initial_simplex": np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]),
+                 "xatol": 1e-2, "fatol": 1e-9 * abs(start), "maxiter": max_iter},
+    )  # fmt: skip
+    ya = theta[3:] + res.x * unit
+    q, value = profiled(ya)
+    theta = np.r_[q, ya]
+    grads = gradients(theta)
+    amplitude = value / tr.n_pulses
+    cov6 = acceleration_bound(
+        grads,
+        freqs,
+        weights,
+        amplitude=max(abs(amplitude), 1e-300),
+        noise_variance=max(tr.n_samples * float(noise_variance), 1e-300),
+    )
+    std = float(np.sqrt(max(cov6[4, 4], 0.0)))
+    duration = float(s[-1] - s[0])
+    return RangeAcceleration(
+        range_acceleration_mps2=float(theta[4]),
+        std_mps2=std,
+        estimable=acceleration_estimable(std, duration, acceleration_psd=acceleration_psd),
+        prior_std_mps2=float(np.sqrt(acceleration_psd / duration)),
+        amplitude=complex(amplitude),
+        uniform_amplitude=start / tr.n_pulses,
+        separable_fraction=separable_fraction(grads, freqs, weights),
+        covariance=cov6,
+    )
+
+
+def _profile(tr, profiled, acceleration_psd):  # type: ignore[no-untyped-def]
+    """The start of the search over ``(y, alpha)``: the best ``alpha`` of a grid, ``y = 0``.
+
+    The grid spans ``_PROFILE_SPAN`` prior deviations ``sqrt(q / T)`` either side of 0;
+    at each ``alpha``, ``profiled`` gives ``(x, u_r, u_p)`` and ``|I|``. Returns
+    ``theta = (x, u_r, u_p, 0, alpha)`` of the largest ``|I|``.
+    """
+    s = tr.slow_times_s
+    span = _PROFILE_SPAN * np.sqrt(acceleration_psd / float(s[-1] - s[0]))
+    best, best_value = np.zeros(5), -1.0
+    for alpha in span * np.linspace(-1.0, 1.0, 2 * _PROFILE_HALF_POINTS + 1):
+        q, value = profiled(np.array([0.0, alpha]))
+        if abs(value) > best_value:
+            best, best_value = np.r_[q, 0.0, alpha], abs(value)
+    return best
