@@ -20,8 +20,11 @@ reference point's cross range; ``cross_range_family.in_scene`` lists the family'
 across the imaged scene (positions and velocities). Then the velocity, range and
 cross-range speeds, peak levels, ``detection``, ``standard_errors``, ``snr_db``,
 ``amplitude`` (``[re, im]``) and ``amplitude_complex`` (``{"re", "im"}``),
-``g_perp_cross_range_speed_mps``, ``likelihood_lobes`` and ``trajectory`` (knot times,
-velocities and the positions at the knot times).
+``g_perp_cross_range_speed_mps``, ``likelihood_lobes``, the range acceleration
+(``range_acceleration_mps2``, ``range_acceleration_std_mps2``,
+``range_acceleration_estimable``: :mod:`sarmotion.motion.acceleration`; null over one
+sub-aperture) and ``trajectory`` (knot times, velocities and the positions at the knot
+times).
 
 Version 2 (from ``sarmotion.results/1``): ``g_peak_db`` is the ``g(u)`` peak over its
 *local* floor (the detector's statistic), no longer over the global median; added
@@ -189,6 +192,12 @@ def _mover(m: Mover, tr: Traces, extent: tuple[float, float, float, float]) -> d
             else float(lobes.other_cross_range_speed_mps)
         ),
     }
+    acc = m.acceleration  # None on one sub-aperture: not separable from u_p there
+    entry["range_acceleration_mps2"] = (
+        float(acc.range_acceleration_mps2) if acc is not None and acc.estimable else None
+    )
+    entry["range_acceleration_std_mps2"] = None if acc is None else float(acc.std_mps2)
+    entry["range_acceleration_estimable"] = bool(acc is not None and acc.estimable)
     if m.trajectory is not None:
         knots = m.trajectory.knot_times_s
         times = np.r_[knots[:, 0], knots[-1, 1]]

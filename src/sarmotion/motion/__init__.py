@@ -33,9 +33,21 @@ then the generalized likelihood ratio of the fit) and its clairvoyant bound.
 - :mod:`~sarmotion.motion.bounds` -- the Cramér–Rao bound of a point mover.
 
 **The aperture** -- :mod:`~sarmotion.motion.aperture`: the cross-range family that fits
-the data equally well, and the focus of an estimate on a whole (wide) aperture.
+the data equally well, and the focus of an estimate on a whole (wide) aperture;
+:mod:`~sarmotion.motion.acceleration`: the range acceleration over a wide aperture, with
+its Cramér–Rao bound and the rule that says when the data separate it from the
+cross-range speed.
 """
 
+from .acceleration import (
+    ACCELERATION_PSD,
+    RangeAcceleration,
+    acceleration_bound,
+    acceleration_estimable,
+    acceleration_gradients,
+    fit_range_acceleration,
+    separable_fraction,
+)
 from .aperture import (
     ApertureFit,
     azimuth_span_deg,
@@ -157,4 +169,11 @@ __all__ = [
     "family_direction",
     "family_member",
     "refine_on_aperture",
+    "ACCELERATION_PSD",
+    "RangeAcceleration",
+    "acceleration_bound",
+    "acceleration_estimable",
+    "acceleration_gradients",
+    "fit_range_acceleration",
+    "separable_fraction",
 ]

@@ -61,12 +61,12 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares, minimize
 
 from ..core import Acquisition, C, Traces, as_point, as_traces, ground_velocity
 from ..core.ascent import newton_ascent
 from ..imaging import resolution
-from .bounds import fisher_information
 from .likelihood import MatchedFilter
 
 __all__ = [
@@ -155,26 +155,33 @@ def _track(
     return position[None, :] + s[:, None] * v3[None, :] + 0.5 * alpha * s[:, None] ** 2 * b_r
 
 
-def _phase_covariance(
+def _phase_factor(
     gradients_m: NDArray[np.float64], frequencies_hz: NDArray[np.float64], weights: ArrayLike
 ) -> NDArray[np.float64]:
-    """``sum w (psi_i - mean)(psi_j - mean) / sum w`` (rad^2 per unit^2): the bound without SNR.
+    """Upper-triangular ``R`` with ``R^T R = sum w (psi - mean)(psi - mean)^T / sum w``.
 
-    The Fisher matrix of the parameters is ``2 SNR`` times it (:mod:`sarmotion.motion.bounds`).
+    The right side is the Fisher matrix of the range parameters over ``2 SNR``
+    (:mod:`sarmotion.motion.bounds`, the phase eliminated), in rad^2 per unit^2. It is
+    formed as ``A^T A`` of the weighted, centred phase derivatives ``A`` (one row per
+    pulse and frequency) and factored by QR of ``A``, never by inverting ``A^T A``: the
+    acceleration shares all but ~1e-8 of its information with the uniform motion, a
+    condition number that the normal matrix squares past float64's precision while
+    ``R`` keeps it (``1 / R[-1, -1]^2`` is the last parameter's variance with the others
+    unknown).
     """
-    J = fisher_information(gradients_m, frequencies_hz, weights, amplitude=1.0, noise_variance=1.0)
-    p = gradients_m.shape[1]
-    return J[:p, :p] / J[p, p]  # (2 A^2 / s2) cov / (2 n sum w / s2) with A = s2 = 1
+    g = np.asarray(gradients_m, dtype=np.float64)
+    k = 4.0 * np.pi * np.asarray(frequencies_hz, dtype=np.float64) / C  # rad per metre
+    w = np.asarray(weights, dtype=np.float64) ** 2
+    w = w / (g.shape[0] * w.sum())  # every pulse the same spectrum
+    psi = k[None, :, None] * g[:, None, :]  # (n_pulses, n_freq, p)
+    mean = np.einsum("k,jkp->p", w, psi)
+    a = (np.sqrt(w)[None, :, None] * (psi - mean)).reshape(-1, g.shape[1])
+    return np.linalg.qr(a, mode="r")
 
 
-def _inverse(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Inverse of a symmetric positive matrix through its correlation matrix.
-
-    The parameters' units differ by orders of magnitude (m, m/s, m/s^2); scaling by the
-    diagonal first keeps the inverse to the correlation matrix's condition number.
-    """
-    d = np.sqrt(np.diag(matrix))
-    return np.linalg.inv(matrix / np.outer(d, d)) / np.outer(d, d)
+def _conditional_std(r: NDArray[np.float64]) -> float:
+    """``1 / |R[-1, -1]|``: the last parameter's deviation, the others unknown (rad^-1)."""
+    return float(1.0 / abs(r[-1, -1]))
 
 
 def separable_fraction(
@@ -189,8 +196,8 @@ def separable_fraction(
     notes).
     """
     g = np.asarray(gradients_m, dtype=np.float64)
-    cov = _phase_covariance(g, np.asarray(frequencies_hz, dtype=np.float64), weights)
-    return float(1.0 / (cov[-1, -1] * _inverse(cov)[-1, -1]))
+    r = _phase_factor(g, np.asarray(frequencies_hz, dtype=np.float64), weights)
+    return float(r[-1, -1] ** 2 / np.sum(r[:, -1] ** 2))
 
 
 def acceleration_bound(
@@ -202,6 +209,10 @@ def acceleration_bound(
     noise_variance: float,
 ) -> NDArray[np.float64]:
     """Cramér–Rao bound of ``(x, u_r, u_p, y, alpha, |a|)`` (module notes).
+
+    ``(2 SNR R^T R)^-1`` for the range parameters (:func:`_phase_factor`, inverted through
+    the triangular factor), ``sigma_P^2 / (2 n_pulses sum W^2)`` for ``|a|``
+    (:mod:`sarmotion.motion.bounds`).
 
     Parameters
     ----------
@@ -220,10 +231,17 @@ def acceleration_bound(
         raise ValueError(f"amplitude must be > 0, got {amplitude!r}")
     if not (np.isfinite(noise_variance) and noise_variance > 0):
         raise ValueError(f"noise_variance must be > 0, got {noise_variance!r}")
-    J = fisher_information(
-        gradients_m, frequencies_hz, weights, amplitude=amplitude, noise_variance=noise_variance
-    )
-    return _inverse(J)
+    g = np.asarray(gradients_m, dtype=np.float64)
+    w2 = np.asarray(weights, dtype=np.float64) ** 2
+    energy = g.shape[0] * float(w2.sum())
+    snr = amplitude**2 * energy / noise_variance
+    r = _phase_factor(g, np.asarray(frequencies_hz, dtype=np.float64), weights)
+    r_inv = solve_triangular(r, np.eye(r.shape[0]))
+    p = g.shape[1]
+    cov = np.zeros((p + 1, p + 1))
+    cov[:p, :p] = r_inv @ r_inv.T / (2.0 * snr)
+    cov[p, p] = noise_variance / (2.0 * energy)
+    return cov
 
 
 def acceleration_estimable(
@@ -282,7 +300,7 @@ class RangeAcceleration:
 _PROFILE_SPAN = 4.0
 
 #: Points of the profile over ``alpha`` on each side of zero.
-_PROFILE_HALF_POINTS = 8
+_PROFILE_HALF_POINTS = 4
 
 
 def fit_range_acceleration(
@@ -374,23 +392,20 @@ def fit_range_acceleration(
 
     start = complex(response(where(np.zeros(5)), base)[3])
     theta = _profile(tr, profiled, acceleration_psd)
-    # units of y and alpha: a quarter radian of the phase each leaves once (x, u_r, u_p)
-    # follow it (the conditional deviation 1 / sqrt([C^-1]_ii) of the phase covariance)
-    cov = _phase_covariance(gradients(theta), freqs, weights)
-    unit = np.array(
-        [
-            _QUARTER_RADIAN * np.sqrt(_inverse(cov[np.ix_(k, k)])[3, 3])
-            for k in ([0, 1, 2, 3], [0, 1, 2, 4])
-        ]
-    )
+    # (y, alpha) whitened: R22, the last block of the phase factor of (x, u_r, u_p, y,
+    # alpha), is their information once (x, u_r, u_p) follow them; z = R22 (y, alpha) / 4
+    # makes a unit of z a quarter radian of phase in every direction (the two are nearly
+    # collinear too: a simplex in (y, alpha) itself stalls across the ridge)
+    r = _phase_factor(gradients(theta), freqs, weights)
+    to_ya = _QUARTER_RADIAN * solve_triangular(r[3:, 3:], np.eye(2))
     res = minimize(
-        lambda z: -abs(profiled(theta[3:] + z * unit)[1]),
+        lambda z: -abs(profiled(theta[3:] + to_ya @ z)[1]),
         np.zeros(2),
         method="Nelder-Mead",
         options={"initial_simplex": np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]),
-                 "xatol": 1e-2, "fatol": 1e-9 * abs(start), "maxiter": max_iter},
+                 "xatol": 1e-2, "fatol": 1e-12 * abs(start), "maxiter": max_iter},
     )  # fmt: skip
-    ya = theta[3:] + res.x * unit
+    ya = theta[3:] + to_ya @ res.x
     q, value = profiled(ya)
     theta = np.r_[q, ya]
     grads = gradients(theta)

@@ -17,6 +17,9 @@ central sub-aperture:
    it, its Cramér–Rao bound and its cross-range family;
 5. **whole aperture** (:func:`~sarmotion.motion.refine_on_aperture`): for a wide
    aperture, each estimate moved to the aperture's ``s = 0`` and focused on all pulses;
+   then its range acceleration with its bound
+   (:func:`~sarmotion.motion.fit_range_acceleration`, :func:`with_acceleration`), which
+   one sub-aperture does not separate from the cross-range speed;
 6. **extraction** (:func:`extract_mover`): each mover's own traces taken from the
    residual in turn.
 
@@ -56,6 +59,7 @@ from ..motion import (
     estimate_cross_range_speed,
     family_direction,
     fit_point_mover,
+    fit_range_acceleration,
     matched_filter_noise_variance,
     point_model,
     point_mover_bound,
@@ -79,6 +83,7 @@ __all__ = [
     "fit_candidates",
     "mover_record",
     "extract_mover",
+    "with_acceleration",
 ]
 
 log = logging.getLogger(__name__)
@@ -194,6 +199,14 @@ def estimate_movers(
             with timed(timings, "movers.whole_aperture"):
                 mover = on_whole_aperture(
                     residual, mover, acquisition=whole, central=detection.central
+                )
+            with timed(timings, "movers.acceleration"):
+                sub_pulses = len(range(*detection.central.indices(whole.n_pulses)))
+                mover = with_acceleration(
+                    residual,
+                    mover,
+                    acquisition=whole,
+                    noise_variance=_bound_noise(mover, whole, sub_pulses),
                 )
         with timed(timings, "movers.extraction"):
             own = extract_mover(
@@ -641,6 +654,60 @@ def on_whole_aperture(
         cross_range_speed_mps=cross_range_speed(fit.velocity_mps, geom),
         aperture=fit,
     )
+
+
+def with_acceleration(
+    residual: NDArray[np.complexfloating],
+    mover: Mover,
+    *,
+    acquisition: Acquisition,
+    noise_variance: float,
+) -> Mover:
+    """Step 5, on a wide aperture: the mover's range acceleration with its bound.
+
+    :func:`~sarmotion.motion.fit_range_acceleration` from the whole-aperture estimate, on
+    the same traces as its focus. The mover's position and velocity stay the uniform
+    estimate's: the acceleration is reported beside them
+    (:attr:`~sarmotion.pipeline.Mover.acceleration`).
+
+    Parameters
+    ----------
+    residual : (n_pulses, n_samples) ndarray
+        ``S`` minus the movers extracted so far (whole aperture).
+    mover : Mover
+        The mover focused on the whole aperture (:func:`on_whole_aperture`).
+    acquisition : Acquisition
+        The whole acquisition.
+    noise_variance : float
+        Noise variance per fast-time sample around the mover (data units squared).
+    """
+    acc = fit_range_acceleration(
+        Traces(data=residual, acquisition=acquisition),
+        mover.position_m,
+        mover.velocity_mps,
+        noise_variance=noise_variance,
+    )
+    log.info(
+        "range acceleration %.4f +- %.3g m/s^2 (%s; |I| %.4g -> %.4g x n_pulses)",
+        acc.range_acceleration_mps2,
+        acc.std_mps2,
+        "estimable" if acc.estimable else "not estimable: bound over the prior",
+        abs(acc.uniform_amplitude),
+        abs(acc.amplitude),
+    )
+    return _with(mover, acceleration=acc)
+
+
+def _bound_noise(mover: Mover, acquisition: Acquisition, sub_pulses: int) -> float:
+    """The noise per fast-time sample the mover's bound was computed with (:func:`_bound`).
+
+    From the bound's amplitude deviation over the ``sub_pulses`` pulses of its
+    sub-aperture: ``var(|a|) = sigma_P^2 / (2 n_pulses sum W^2)`` and ``sigma_P^2 =
+    n_samples sigma_t^2`` (:mod:`sarmotion.motion.bounds`): the noise
+    :func:`_local_noise` measured around it.
+    """
+    energy = sub_pulses * float(np.sum(acquisition.radar.spectral_weights() ** 2))
+    return 2.0 * energy * mover.bound.amplitude**2 / acquisition.n_samples
 
 
 def _with(mover: Mover, **changes: object) -> Mover:

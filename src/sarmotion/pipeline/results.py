@@ -16,6 +16,7 @@ from ..motion import (
     PointBound,
     PointFit,
     RangeSpeedDetection,
+    RangeAcceleration,
     RangeSpeeds,
     TrajectoryEstimate,
     azimuth_span_deg,
@@ -135,6 +136,10 @@ class Mover:
         That peak relative to the brightest pixel of the stationary image (dB).
     trajectory : TrajectoryEstimate or None
         Phase-space trajectory, if requested.
+    acceleration : RangeAcceleration or None
+        Its range acceleration over the whole aperture with its Cramér–Rao bound
+        (:mod:`sarmotion.motion.acceleration`); ``None`` when the sub-aperture is the
+        whole aperture (about a degree does not separate it from the cross-range speed).
     """
 
     position_m: NDArray[np.float64]
@@ -155,6 +160,7 @@ class Mover:
     image_peak_m: NDArray[np.float64] | None = None
     image_peak_db: float | None = None
     trajectory: TrajectoryEstimate | None = None
+    acceleration: RangeAcceleration | None = None
 
     def __repr__(self) -> str:
         """One line: position at ``s = 0``, velocity, range and cross-range speeds, statistic."""
@@ -164,6 +170,24 @@ class Mover:
             f"cross_range_speed_mps={fixed(self.cross_range_speed_mps)}, "
             f"statistic_db={fixed(self.evidence.statistic_db, 1)})"
         )
+
+
+def acceleration_text(acc: RangeAcceleration | None) -> str:
+    """A mover's range acceleration in words: the value and its bound, or why there is none."""
+    if acc is None:
+        return (
+            "not estimable: the analysis ran on one sub-aperture, over which it is one "
+            "with the cross-range speed (sarmotion.motion.acceleration)"
+        )
+    if not acc.estimable:
+        return (
+            f"not estimable: its bound {acc.std_mps2:.2g} m/s^2 is over the prior's "
+            f"{acc.prior_std_mps2:.2g} m/s^2 (sarmotion.motion.acceleration)"
+        )
+    return (
+        f"{fixed(acc.range_acceleration_mps2, 3)} +- {acc.std_mps2:.2g} m/s^2 "
+        "(rate of change of the range speed)"
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -323,6 +347,7 @@ class AnalysisResult:
                 f"{_pair(m.family_position_per_m, 3)}, velocity + t "
                 f"{_pair(m.family_velocity_per_m, 3)} (t: m of cross-range offset)"
             )
+            lines.append(f"    range acceleration: {acceleration_text(m.acceleration)}")
         if self.movers:
             lines.append(
                 "  cross range: not known. The data fix each mover's range offset and speeds; "
