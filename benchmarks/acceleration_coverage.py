@@ -87,7 +87,11 @@ def run_draw(p: dict) -> dict:
     focus = refine_on_aperture(tr, fit.position_m, fit.velocity_mps, central=central)
     t1 = time.perf_counter()
     acc = fit_range_acceleration(
-        tr, focus.position_m, focus.velocity_mps, noise_variance=noise_variance(tr.data)
+        tr,
+        focus.position_m,
+        focus.velocity_mps,
+        noise_variance=noise_variance(tr.data),
+        cross_range_std_m=20.0,
     )
     t2 = time.perf_counter()
     err = acc.range_acceleration_mps2 - p["alpha_mps2"]

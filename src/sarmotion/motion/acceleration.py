@@ -62,7 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_triangular
-from scipy.optimize import least_squares, minimize
+from scipy.optimize import least_squares, minimize_scalar
 
 from ..core import Acquisition, C, Traces, as_point, as_traces, ground_velocity
 from ..core.ascent import newton_ascent
@@ -179,11 +179,6 @@ def _phase_factor(
     return np.linalg.qr(a, mode="r")
 
 
-def _conditional_std(r: NDArray[np.float64]) -> float:
-    """``1 / |R[-1, -1]|``: the last parameter's deviation, the others unknown (rad^-1)."""
-    return float(1.0 / abs(r[-1, -1]))
-
-
 def separable_fraction(
     gradients_m: ArrayLike, frequencies_hz: ArrayLike, weights: ArrayLike
 ) -> float:
@@ -207,12 +202,15 @@ def acceleration_bound(
     *,
     amplitude: float,
     noise_variance: float,
+    cross_range_std_m: float,
 ) -> NDArray[np.float64]:
     """Cramér–Rao bound of ``(x, u_r, u_p, y, alpha, |a|)`` (module notes).
 
-    ``(2 SNR R^T R)^-1`` for the range parameters (:func:`_phase_factor`, inverted through
-    the triangular factor), ``sigma_P^2 / (2 n_pulses sum W^2)`` for ``|a|``
-    (:mod:`sarmotion.motion.bounds`).
+    ``(2 SNR R^T R + P)^-1`` for the range parameters (:func:`_phase_factor`, inverted
+    through the triangular factor of the stacked rows), ``P`` the prior information
+    ``1 / cross_range_std_m^2`` on ``y`` alone (the data of a few degrees hardly fix it:
+    without a prior its bound runs to kilometres, and ``alpha``'s with it);
+    ``sigma_P^2 / (2 n_pulses sum W^2)`` for ``|a|`` (:mod:`sarmotion.motion.bounds`).
 
     Parameters
     ----------
@@ -221,6 +219,8 @@ def acceleration_bound(
     frequencies_hz, weights, amplitude, noise_variance
         As :func:`sarmotion.motion.fisher_information` (``noise_variance``: per
         phase-history sample).
+    cross_range_std_m : float
+        Prior standard deviation of the cross-range coordinate ``y`` (m, > 0).
 
     Returns
     -------
@@ -235,9 +235,14 @@ def acceleration_bound(
     w2 = np.asarray(weights, dtype=np.float64) ** 2
     energy = g.shape[0] * float(w2.sum())
     snr = amplitude**2 * energy / noise_variance
+    if not (np.isfinite(cross_range_std_m) and cross_range_std_m > 0):
+        raise ValueError(f"cross_range_std_m must be > 0, got {cross_range_std_m!r}")
     r = _phase_factor(g, np.asarray(frequencies_hz, dtype=np.float64), weights)
-    r_inv = solve_triangular(r, np.eye(r.shape[0]))
     p = g.shape[1]
+    prior = np.zeros((1, p))
+    prior[0, 3] = 1.0 / (cross_range_std_m * np.sqrt(2.0 * snr))  # in units of R's rows
+    r = np.linalg.qr(np.vstack([r, prior]), mode="r")
+    r_inv = solve_triangular(r, np.eye(p))
     cov = np.zeros((p + 1, p + 1))
     cov[:p, :p] = r_inv @ r_inv.T / (2.0 * snr)
     cov[p, p] = noise_variance / (2.0 * energy)
@@ -310,9 +315,8 @@ def fit_range_acceleration(
     *,
     acquisition: Acquisition | None = None,
     noise_variance: float,
+    cross_range_std_m: float,
     acceleration_psd: float = ACCELERATION_PSD,
-    rounds: int = 3,
-    max_iter: int = 200,
 ) -> RangeAcceleration:
     """Maximum-likelihood ``alpha`` from a uniform estimate, and its bound (module notes).
 
@@ -321,19 +325,19 @@ def fit_range_acceleration(
     data : Traces or (n_pulses, n_samples) array_like
         The mover's traces over the whole aperture (others removed).
     position_m : (2,) or (3,) array_like
-        The uniform estimate's position at ``s = 0`` (m).
+        The uniform estimate's position at ``s = 0`` (m); its cross-range coordinate is
+        held.
     velocity_mps : (2,) array_like
         Its ground velocity (m/s).
     acquisition : Acquisition, optional
         Required when ``data`` is an array.
     noise_variance : float
         Noise variance per fast-time sample (data units squared), for the bound.
+    cross_range_std_m : float
+        Spread of the true cross-range coordinate about the held one (m, > 0): e.g. half
+        the imaged scene. The bound counts it (:func:`acceleration_bound`).
     acceleration_psd : float
         ``q`` of :func:`acceleration_estimable` (m^2/s^3).
-    rounds : int
-        Newton ascents, each in the parameters whitened at the point reached (>= 1).
-    max_iter : int
-        Most evaluations of each ascent.
 
     Returns
     -------
@@ -350,64 +354,68 @@ def fit_range_acceleration(
     p0 = as_point(position_m, name="position_m")
     v0 = np.r_[np.asarray(velocity_mps, dtype=np.float64).reshape(2), 0.0]
     response = MatchedFilter(tr).response_derivatives()
-    # d rho_j / d theta for theta = (x, u_r, u_p, y, alpha), (n, 3, 5): linear in theta
+    # d rho_j / d (x, u_r, u_p) at a fixed alpha, (n, 3, 3): linear in them
     ones = np.ones((s.size, 1))
-    base = np.stack(
-        [ones * e_r, s[:, None] * b_r, s[:, None] * b_p, ones * e_c, 0.5 * s[:, None] ** 2 * b_r],
-        axis=2,
-    )
-
-    def unpack(theta: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        return p0 + theta[0] * e_r + theta[3] * e_c, v0 + theta[1] * b_r + theta[2] * b_p
+    jac = np.stack([ones * e_r, s[:, None] * b_r, s[:, None] * b_p], axis=2)
 
     def where(theta: NDArray[np.float64]) -> NDArray[np.float64]:
-        p, v = unpack(theta)
-        return _track(p, v[:2], theta[4], b_r, s)
+        """Positions at the pulses for ``theta = (x, u_r, u_p, alpha)`` (offsets)."""
+        v = v0 + theta[1] * b_r + theta[2] * b_p
+        return _track(p0 + theta[0] * e_r, v[:2], theta[3], b_r, s)
+
+    history = np.linalg.norm(tr.positions_m - where(np.zeros(4)), axis=1)
+
+    def profiled(alpha: float) -> tuple[NDArray[np.float64], complex]:
+        """``(x, u_r, u_p)`` maximising ``|I|`` at ``alpha``, and ``I`` there.
+
+        The start: the motion at ``alpha`` whose range history is nearest the uniform
+        start's (least squares over every pulse), i.e. the ridge of the likelihood
+        followed without linearising it (an acceleration is tens of m/s of cross-range
+        speed away, far outside the quadratic region); then the Newton ascent.
+        """
+
+        def residual(q: NDArray[np.float64]) -> NDArray[np.float64]:
+            return np.linalg.norm(tr.positions_m - where(np.r_[q, alpha]), axis=1) - history
+
+        q0 = least_squares(residual, np.zeros(3), x_scale=_LOCAL_UNITS, xtol=1e-10).x
+        q, value, _, _ = newton_ascent(
+            lambda q: response(where(np.r_[q, alpha]), jac),
+            q0, radius=1.0, tol=1e-2, max_iter=30, scale=_LOCAL_UNITS,
+        )  # fmt: skip
+        return q, value
 
     def gradients(theta: NDArray[np.float64]) -> NDArray[np.float64]:
-        p, v = unpack(theta)
+        v = v0 + theta[1] * b_r + theta[2] * b_p
         return acceleration_gradients(
-            tr.positions_m, s, p, v[:2], theta[4],
+            tr.positions_m, s, p0 + theta[0] * e_r, v[:2], theta[3],
             range_direction=e_r[:2], cross_range_direction=e_c[:2],
             range_basis_mps=b_r[:2], cross_basis_mps=b_p[:2],
         )  # fmt: skip
 
-    history = np.linalg.norm(tr.positions_m - where(np.zeros(5)), axis=1)
-
-    def on_ridge(ya: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``(x, u_r, u_p)`` whose range history at ``(y, alpha)`` is nearest the start's."""
-
-        def residual(q: NDArray[np.float64]) -> NDArray[np.float64]:
-            return np.linalg.norm(tr.positions_m - where(np.r_[q, ya]), axis=1) - history
-
-        return least_squares(residual, np.zeros(3), x_scale=_LOCAL_UNITS, xtol=1e-10).x
-
-    def profiled(ya: NDArray[np.float64]) -> tuple[NDArray[np.float64], complex]:
-        """``(x, u_r, u_p)`` maximising ``|I|`` at ``(y, alpha) = ya``, and ``I`` there."""
-        q, value, _, _ = newton_ascent(
-            lambda q: response(where(np.r_[q, ya]), base[:, :, :3]),
-            on_ridge(ya), radius=1.0, tol=1e-2, max_iter=30, scale=_LOCAL_UNITS,
-        )  # fmt: skip
-        return q, value
-
-    start = complex(response(where(np.zeros(5)), base)[3])
-    theta = _profile(tr, profiled, acceleration_psd)
-    # (y, alpha) whitened: R22, the last block of the phase factor of (x, u_r, u_p, y,
-    # alpha), is their information once (x, u_r, u_p) follow them; z = R22 (y, alpha) / 4
-    # makes a unit of z a quarter radian of phase in every direction (the two are nearly
-    # collinear too: a simplex in (y, alpha) itself stalls across the ridge)
-    r = _phase_factor(gradients(theta), freqs, weights)
-    to_ya = _QUARTER_RADIAN * solve_triangular(r[3:, 3:], np.eye(2))
-    res = minimize(
-        lambda z: -abs(profiled(theta[3:] + to_ya @ z)[1]),
-        np.zeros(2),
-        method="Nelder-Mead",
-        options={"initial_simplex": np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]),
-                 "xatol": 1e-2, "fatol": 1e-12 * abs(start), "maxiter": max_iter},
-    )  # fmt: skip
-    ya = theta[3:] + to_ya @ res.x
-    q, value = profiled(ya)
-    theta = np.r_[q, ya]
+    start = complex(response(where(np.zeros(4)), jac)[3])
+    duration = float(s[-1] - s[0])
+    prior_std = float(np.sqrt(acceleration_psd / duration))
+    # the grid: _PROFILE_SPAN prior deviations either side of 0, the uniform start in it
+    grid = _PROFILE_SPAN * prior_std * np.linspace(-1.0, 1.0, 2 * _PROFILE_HALF_POINTS + 1)
+    values = [abs(profiled(float(a))[1]) for a in grid]
+    k = int(np.argmax(values))
+    step = float(grid[1] - grid[0])
+    # the maximum between the grid's neighbours of the best point, to a hundredth of the
+    # quarter-radian unit of alpha once (x, u_r, u_p) follow it
+    g = gradients(np.r_[profiled(float(grid[k]))[0], grid[k]])
+    unit = _QUARTER_RADIAN / abs(_phase_factor(g[:, [0, 1, 2, 4]], freqs, weights)[-1, -1])
+    res = minimize_scalar(
+        lambda a: -abs(profiled(float(a))[1]),
+        bounds=(float(grid[k]) - step, float(grid[k]) + step),
+        method="bounded",
+        options={"xatol": 0.01 * unit},
+    )
+    alpha = float(res.x)
+    q, value = profiled(alpha)
+    if abs(value) < values[k]:  # the bounded search never ends below the grid's best
+        alpha = float(grid[k])
+        q, value = profiled(alpha)
+    theta = np.r_[q, alpha]
     grads = gradients(theta)
     amplitude = value / tr.n_pulses
     cov6 = acceleration_bound(
@@ -416,33 +424,16 @@ def fit_range_acceleration(
         weights,
         amplitude=max(abs(amplitude), 1e-300),
         noise_variance=max(tr.n_samples * float(noise_variance), 1e-300),
+        cross_range_std_m=cross_range_std_m,
     )
     std = float(np.sqrt(max(cov6[4, 4], 0.0)))
-    duration = float(s[-1] - s[0])
     return RangeAcceleration(
-        range_acceleration_mps2=float(theta[4]),
+        range_acceleration_mps2=alpha,
         std_mps2=std,
         estimable=acceleration_estimable(std, duration, acceleration_psd=acceleration_psd),
-        prior_std_mps2=float(np.sqrt(acceleration_psd / duration)),
+        prior_std_mps2=prior_std,
         amplitude=complex(amplitude),
         uniform_amplitude=start / tr.n_pulses,
         separable_fraction=separable_fraction(grads, freqs, weights),
         covariance=cov6,
     )
-
-
-def _profile(tr, profiled, acceleration_psd):  # type: ignore[no-untyped-def]
-    """The start of the search over ``(y, alpha)``: the best ``alpha`` of a grid, ``y = 0``.
-
-    The grid spans ``_PROFILE_SPAN`` prior deviations ``sqrt(q / T)`` either side of 0;
-    at each ``alpha``, ``profiled`` gives ``(x, u_r, u_p)`` and ``|I|``. Returns
-    ``theta = (x, u_r, u_p, 0, alpha)`` of the largest ``|I|``.
-    """
-    s = tr.slow_times_s
-    span = _PROFILE_SPAN * np.sqrt(acceleration_psd / float(s[-1] - s[0]))
-    best, best_value = np.zeros(5), -1.0
-    for alpha in span * np.linspace(-1.0, 1.0, 2 * _PROFILE_HALF_POINTS + 1):
-        q, value = profiled(np.array([0.0, alpha]))
-        if abs(value) > best_value:
-            best, best_value = np.r_[q, 0.0, alpha], abs(value)
-    return best

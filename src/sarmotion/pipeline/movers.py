@@ -202,11 +202,13 @@ def estimate_movers(
                 )
             with timed(timings, "movers.acceleration"):
                 sub_pulses = len(range(*detection.central.indices(whole.n_pulses)))
+                x0, x1, y0, y1 = detection.image.grid.extent
                 mover = with_acceleration(
                     residual,
                     mover,
                     acquisition=whole,
                     noise_variance=_bound_noise(mover, whole, sub_pulses),
+                    cross_range_std_m=0.5 * max(x1 - x0, y1 - y0),
                 )
         with timed(timings, "movers.extraction"):
             own = extract_mover(
@@ -662,6 +664,7 @@ def with_acceleration(
     *,
     acquisition: Acquisition,
     noise_variance: float,
+    cross_range_std_m: float,
 ) -> Mover:
     """Step 5, on a wide aperture: the mover's range acceleration with its bound.
 
@@ -680,12 +683,16 @@ def with_acceleration(
         The whole acquisition.
     noise_variance : float
         Noise variance per fast-time sample around the mover (data units squared).
+    cross_range_std_m : float
+        Spread of the mover's true cross-range coordinate about the held one (m): half
+        the imaged scene, as the tracker's ``family_std_m``.
     """
     acc = fit_range_acceleration(
         Traces(data=residual, acquisition=acquisition),
         mover.position_m,
         mover.velocity_mps,
         noise_variance=noise_variance,
+        cross_range_std_m=cross_range_std_m,
     )
     log.info(
         "range acceleration %.4f +- %.3g m/s^2 (%s; |I| %.4g -> %.4g x n_pulses)",

@@ -7,6 +7,8 @@
 - :mod:`~sarmotion.tracking.tracker` — Stone Soup association and Kalman filtering, and
   the paper's first scenario: the track's prediction as the known position;
 - :mod:`~sarmotion.tracking.roads` — the member of a cross-range family on a road;
+- :mod:`~sarmotion.tracking.turns` — a turn as a change of velocity between
+  sub-apertures: the chi-square test and the turn rate;
 - :mod:`~sarmotion.tracking.track` — :func:`track`, the whole chain.
 """
 
@@ -20,6 +22,7 @@ from .sub_apertures import (
 )
 from .track import TrackingResult, track
 from .tracker import Track, Tracker, TrackingOptions, TrackState
+from .turns import TurnTest, turn_test
 
 __all__ = [
     "Detection",
@@ -31,10 +34,12 @@ __all__ = [
     "Tracker",
     "TrackingOptions",
     "TrackingResult",
+    "TurnTest",
     "analyze_sub_aperture",
     "map_sub_apertures",
     "road_fix",
     "road_misses",
     "sub_aperture_slices",
     "track",
+    "turn_test",
 ]

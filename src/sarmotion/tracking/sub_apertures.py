@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import Traces
+from ..core import LookGeometry, Traces, ground_velocity
 from ..imaging import ImageGrid, resolution
 from ..motion import azimuth_span_deg
 from ..motion.speed_resolution import cross_range_speed_resolution, range_speed_resolution
@@ -187,6 +187,11 @@ class Detection:
         Its own separated traces over the sub-aperture (data units); None in what the
         tracker keeps (:meth:`light`): over a whole pass they would hold 0.8 MB per
         detection.
+    velocity_cov_m2ps2 : (2, 2) ndarray or None
+        Covariance of ``velocity_mps`` ((m/s)^2): the Cramér–Rao bound of the range and
+        cross-range speeds (:attr:`~sarmotion.pipeline.Mover.bound`) in the ground
+        frame, ``B C B^T`` with ``B = (b_r, b_p)`` the ground velocities of unit range
+        and cross-range speed; None when made without the geometry.
     """
 
     position_m: NDArray[np.float64]
@@ -197,11 +202,22 @@ class Detection:
     family_velocity_per_m: NDArray[np.float64]
     peak_db: float
     traces: NDArray[np.complexfloating] | None
+    velocity_cov_m2ps2: NDArray[np.float64] | None = None
 
     @classmethod
-    def from_mover(cls, mover: Mover) -> Detection:
-        """The detection of an analysis's mover (its position at ``s = 0``, on the ground)."""
+    def from_mover(cls, mover: Mover, geometry: LookGeometry | None = None) -> Detection:
+        """The detection of an analysis's mover (its position at ``s = 0``, on the ground).
+
+        ``geometry``: the sub-aperture's look geometry, for the velocity's covariance.
+        """
+        cov = None
+        if geometry is not None:
+            basis = np.column_stack(
+                [ground_velocity(1.0, 0.0, geometry), ground_velocity(0.0, 1.0, geometry)]
+            )
+            cov = basis @ mover.bound.covariance[1:3, 1:3] @ basis.T
         return cls(
+            velocity_cov_m2ps2=cov,
             position_m=np.asarray(mover.position_m, dtype=np.float64)[:2].copy(),
             velocity_mps=np.asarray(mover.velocity_mps, dtype=np.float64).copy(),
             range_speed_mps=float(mover.range_speed_mps),
@@ -301,7 +317,7 @@ def analyze_sub_aperture(
     result = analyze(traces, options)
     geom = traces.geometry
     cells = resolution(traces)
-    detections = tuple(Detection.from_mover(m) for m in result.movers)
+    detections = tuple(Detection.from_mover(m, geom) for m in result.movers)
     magnitude = np.abs(result.stationary_image.values)
     top = float(magnitude.max())
     with np.errstate(divide="ignore"):

@@ -77,6 +77,7 @@ from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
 from .roads import Road, RoadFix, road_fix, road_misses
 from .sub_apertures import Detection, SubApertureDetections, check_overlap
+from .turns import TurnTest, turn_test
 
 if TYPE_CHECKING:
     from stonesoup.types.detection import Detection as StoneDetection
@@ -182,6 +183,9 @@ class TrackingOptions:
     road_cross_speed_std_mps : float
         Speed across its road of a vehicle on it (m/s). Default 0.5 m/s (a road's bends
         and lane changes).
+    turn_false_alarm : float
+        Probability that a uniform mover's track is flagged as turning
+        (:mod:`sarmotion.tracking.turns`; 0 < p < 1). Default 0.01.
     """
 
     analysis: AnalysisOptions = dataclasses.field(
@@ -198,6 +202,7 @@ class TrackingOptions:
     road_std_m: float = 0.5
     max_road_std_m: float = 5.0
     road_cross_speed_std_mps: float = 0.5
+    turn_false_alarm: float = 0.01
 
     def __post_init__(self) -> None:
         if not isinstance(self.analysis, AnalysisOptions):
@@ -218,6 +223,8 @@ class TrackingOptions:
         positive(self.road_std_m, "road_std_m", unit="m")
         positive(self.max_road_std_m, "max_road_std_m", unit="m")
         positive(self.road_cross_speed_std_mps, "road_cross_speed_std_mps", unit="m/s")
+        if not (0.0 < self.turn_false_alarm < 1.0):
+            raise ValueError(f"turn_false_alarm must be in (0, 1), got {self.turn_false_alarm!r}")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -290,10 +297,15 @@ class Track:
         Identifier (1, 2, ... in order of first detection).
     states : tuple of TrackState
         From the first to the last detection, in time order.
+    turn : TurnTest or None
+        Whether its velocity changed between independent sub-apertures, and its turn
+        rate (:mod:`sarmotion.tracking.turns`); None when a detection lacks its
+        velocity's covariance.
     """
 
     id: int
     states: tuple[TrackState, ...]
+    turn: TurnTest | None = None
 
     @property
     def n_detections(self) -> int:
@@ -411,8 +423,31 @@ class Tracker:
             hits = [i for i, s in enumerate(states) if s.detection is not None]
             if len(hits) < self.options.min_detections:
                 continue
-            out.append(tuple(states[hits[0] : hits[-1] + 1]))
-        return tuple(Track(id=k + 1, states=s) for k, s in enumerate(out))
+            kept = trk.states[hits[0] : hits[-1] + 1]
+            out.append((tuple(states[hits[0] : hits[-1] + 1]), self._turn(kept)))
+        return tuple(Track(id=k + 1, states=s, turn=turn) for k, (s, turn) in enumerate(out))
+
+    def _turn(self, states: Sequence[GaussianState]) -> TurnTest | None:
+        """The turn test of a track's detections (:func:`~sarmotion.tracking.turns.turn_test`)."""
+        metas = [self._meta[id(s)] for s in states]
+        hits = [
+            m for s, m in zip(states, metas, strict=True)
+            if isinstance(s, _stonesoup().Update) and m.detection is not None
+        ]  # fmt: skip
+        if any(m.detection.velocity_cov_m2ps2 is None for m in hits):
+            return None
+        return turn_test(
+            [m.sub.time_s for m in hits],
+            [(m.sub.pulses.start, m.sub.pulses.stop) for m in hits],
+            [m.detection.position_m for m in hits],
+            [m.detection.velocity_mps for m in hits],
+            [m.detection.velocity_cov_m2ps2 for m in hits],
+            (
+                [m.detection.family_position_per_m for m in hits],
+                [m.detection.family_velocity_per_m for m in hits],
+            ),
+            false_alarm=self.options.turn_false_alarm,
+        )
 
     # ---------------------------------------------------------------- helpers
     def _known(

@@ -1,0 +1,181 @@
+"""A turn as a change of velocity between sub-apertures: the test and the turn rate.
+
+Each sub-aperture's analysis gives a mover's velocity with its Cramér–Rao covariance
+(:attr:`~sarmotion.tracking.sub_apertures.Detection.velocity_cov_m2ps2`). A mover that
+moves uniformly has the same velocity in every sub-aperture; a turn (or a change of
+speed) changes it.
+
+**Comparable velocities.** A detection is one member of its cross-range family
+(:mod:`sarmotion.motion.aperture`): the one at the reference point's cross range, whose
+velocity differs from the truth's by ``dy b`` for a mover ``dy`` metres off it (``b``
+the family's velocity change per metre, about ``(V - u_t) / L`` = 0.007 (m/s)/m of range
+speed on GOTCHA). Between two sub-apertures a mover's cross-range offset changes by its
+cross-range displacement, so the two members' velocities would differ for a uniform
+mover. The later detection is therefore slid along its family (its tangent ``a, b``,
+:func:`sarmotion.motion.family_direction`) to the point nearest the earlier one carried
+forward, ``p_i + v_i (t_j - t_i)``: the two then describe one uniform motion if there
+was one.
+
+**The test.** For detections ``i`` and ``j`` whose sub-apertures share no pulse (their
+errors independent; with overlapping sub-apertures, the next one that does not overlap)
+the difference ``d = v_j' - v_i`` (``v_j'`` the slid velocity) has, for a uniform mover,
+zero mean and covariance ``S = C_j + (I - b a^T dt / |a|^2) C_i (.)^T`` (the slide
+depends on ``v_i``; positions are exact enough to leave out). ``d^T S^-1 d`` is then
+chi-square with 2 degrees of freedom. A track is flagged as turning when any of its
+``n`` pairs exceeds the chi-square quantile at ``1 - p / n`` (Bonferroni): a uniform
+mover's track is flagged with probability at most ``p``
+(:attr:`~sarmotion.tracking.TrackingOptions.turn_false_alarm`), insofar as the
+detections' errors reach their bounds.
+
+**The turn rate** is the heading change between the track's first and last detections
+(when they share no pulse) over the time between them, ``(theta_j - theta_i) / dt``
+(``theta = atan2(u_y, u_x)``, the difference wrapped to +-180 degrees), with the standard
+error from the two covariances through ``d theta / d u = (-u_y, u_x) / |u|^2``.
+
+Times in s, velocities in m/s, angles in degrees.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["TurnTest", "turn_test"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class TurnTest:
+    """The turn test of one track (module notes).
+
+    Attributes
+    ----------
+    flagged : bool
+        The velocity changed beyond its uncertainty between two independent detections.
+    statistic : float or None
+        The largest ``d^T S^-1 d`` of the pairs (chi-square, 2 degrees of freedom); None
+        when no two detections are independent.
+    threshold : float or None
+        Its chi-square quantile at ``1 - false_alarm / n_pairs``.
+    false_alarm : float
+        ``p``: the probability that a uniform mover's track is flagged.
+    n_pairs : int
+        Pairs of detections tested.
+    turn_rate_deg_s, turn_rate_std_deg_s : float or None
+        Heading rate between the first and last detections and its standard error
+        (degrees per second, positive counter-clockwise); None when they are not
+        independent.
+    """
+
+    flagged: bool
+    statistic: float | None
+    threshold: float | None
+    false_alarm: float
+    n_pairs: int
+    turn_rate_deg_s: float | None
+    turn_rate_std_deg_s: float | None
+
+
+def _heading(v: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
+    """Heading (rad) of a ground velocity and its gradient (rad per m/s)."""
+    speed2 = float(v @ v)
+    return float(np.arctan2(v[1], v[0])), np.array([-v[1], v[0]]) / max(speed2, 1e-300)
+
+
+def turn_test(
+    times_s: ArrayLike,
+    pulses: Sequence[tuple[int, int]],
+    positions_m: ArrayLike,
+    velocities_mps: ArrayLike,
+    velocity_covs: ArrayLike,
+    family: tuple[ArrayLike, ArrayLike],
+    *,
+    false_alarm: float,
+) -> TurnTest:
+    """Test a track's detections for a change of velocity (module notes).
+
+    Parameters
+    ----------
+    times_s : (n,) array_like
+        Centre times of the detections' sub-apertures (s), increasing.
+    pulses : sequence of (int, int)
+        Each sub-aperture's ``(start, stop)`` pulses in the whole acquisition.
+    positions_m, velocities_mps : (n, 2) array_like
+        The detections' ground positions (m) and velocities (m/s): members of their
+        families.
+    velocity_covs : (n, 2, 2) array_like
+        Their velocities' covariances ((m/s)^2).
+    family : ((n, 2), (n, 2)) array_like
+        Each detection's family tangent: position (m/m) and velocity ((m/s)/m) per metre
+        of cross-range offset.
+    false_alarm : float
+        ``p`` of the test (0 < p < 1).
+
+    Returns
+    -------
+    TurnTest
+    """
+    if not 0.0 < false_alarm < 1.0:
+        raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm!r}")
+    t = np.asarray(times_s, dtype=np.float64)
+    p = np.asarray(positions_m, dtype=np.float64).reshape(-1, 2)
+    v = np.asarray(velocities_mps, dtype=np.float64).reshape(-1, 2)
+    c = np.asarray(velocity_covs, dtype=np.float64).reshape(-1, 2, 2)
+    fa = np.asarray(family[0], dtype=np.float64).reshape(-1, 2)
+    fb = np.asarray(family[1], dtype=np.float64).reshape(-1, 2)
+    n = t.size
+
+    def compared(i: int, j: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``v_j' - v_i`` and its covariance (``j`` slid to ``i`` carried forward)."""
+        dt = t[j] - t[i]
+        a, b = fa[j], fb[j]
+        aa = max(float(a @ a), 1e-300)
+        slide = float(a @ (p[i] + v[i] * dt - p[j])) / aa
+        d = v[j] + slide * b - v[i]
+        jac_i = np.outer(b, a) * dt / aa - np.eye(2)
+        return d, c[j] + jac_i @ c[i] @ jac_i.T
+
+    pairs = []
+    for i in range(n):
+        j = next((k for k in range(i + 1, n) if pulses[k][0] >= pulses[i][1]), None)
+        if j is not None:
+            pairs.append((i, j))
+    stats = []
+    for i, j in pairs:
+        d, s = compared(i, j)
+        stats.append(float(d @ np.linalg.solve(s, d)))
+    from scipy.stats import chi2  # scipy.stats takes ~0.7 s to import: when needed
+
+    statistic = max(stats) if stats else None
+    threshold = float(chi2.isf(false_alarm / len(pairs), 2)) if pairs else None
+    rate = rate_std = None
+    if n >= 2 and pulses[-1][0] >= pulses[0][1]:
+        d, s = compared(0, n - 1)
+        v_end = v[0] + d  # the last velocity, slid
+        h0, g0 = _heading(v[0])
+        h1, g1 = _heading(v_end)
+        dt = t[-1] - t[0]
+        dh = (h1 - h0 + np.pi) % (2.0 * np.pi) - np.pi
+        # var(h1 - h0): h1 through d = v_j' - v_i, whose covariance s holds both detections
+        g = np.concatenate([g1 - g0, g1])  # d(h1 - h0) / d(v_i, d) with v_j' = v_i + d
+        cov = np.zeros((4, 4))
+        cov[:2, :2] = c[0]
+        cov[2:, 2:] = s
+        # cov(v_i, d) = C_i J_i^T: d depends on v_i through J_i (compared)
+        a, b = fa[-1], fb[-1]
+        jac_i = np.outer(b, a) * dt / max(float(a @ a), 1e-300) - np.eye(2)
+        cov[:2, 2:] = c[0] @ jac_i.T
+        cov[2:, :2] = cov[:2, 2:].T
+        rate = float(np.degrees(dh / dt))
+        rate_std = float(np.degrees(np.sqrt(max(g @ cov @ g, 0.0)) / dt))
+    return TurnTest(
+        flagged=bool(statistic is not None and threshold is not None and statistic > threshold),
+        statistic=statistic,
+        threshold=threshold,
+        false_alarm=float(false_alarm),
+        n_pairs=len(pairs),
+        turn_rate_deg_s=rate,
+        turn_rate_std_deg_s=rate_std,
+    )
