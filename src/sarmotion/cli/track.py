@@ -13,7 +13,7 @@ from ..documents.roads import read_roads
 from ..documents.tracks import tracks_document
 from ..io import staged_directory, write_json
 from ..pipeline import AnalysisOptions
-from ..report.tracks import write_tracks_report
+from ..report.tracks import turn_line, write_tracks_report
 from ..separation import SeparationOptions
 from ..tracking import TrackingOptions, sub_aperture_slices
 from ..tracking import track as run_tracking
@@ -255,6 +255,7 @@ def track(
                 else ""
             )
         )
+        click.echo("    " + turn_line(t))
         missed = [s["road_missed"] for s in t["states"] if s.get("road_missed")]
         if missed:
             click.echo(f"    {len(missed)} detection(s) on no road; the first: {missed[0]}")

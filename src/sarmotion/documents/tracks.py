@@ -6,6 +6,8 @@
      "sub_apertures": [{"index", "time_s", "first_pulse", "stop_pulse", "look_direction",
                         "n_detections", "seconds"}],
      "tracks": [{"id": 1, "n_detections": 7,
+                 "turn": {"flagged", "statistic", "threshold", "dof", "false_alarm",
+                          "n_pairs", "apparent_turn_rate_deg_s", "apparent_turn_rate_std_deg_s"},
                  "states": [{"time_s", "sub_aperture", "position_m": [x, y],
                              "velocity_mps": [ux, uy], "position_std_m",
                              "position_cov_m2", "velocity_std_mps", "speed_mps",
@@ -25,7 +27,15 @@ no point); ``road_missed`` when roads were given and none gave the detection a m
 why, road by road (:func:`sarmotion.tracking.roads.road_misses`; a key added without
 changing any other); ``cross_range_family`` when no road fixed the state: the data are then as
 consistent with ``position + t position_per_m``, ``velocity + t velocity_per_m`` for
-any ``t`` (m), and ``position_std_m`` is large accordingly.
+any ``t`` (m), and ``position_std_m`` is large accordingly. ``turn`` (a key added without
+changing any other; null when a detection lacks its velocity's covariance) is the test
+of :mod:`sarmotion.tracking.turns`: the largest chi-square statistic (``dof`` 2) of the
+velocity change between detections that share no pulse, its threshold at the track's
+false-alarm probability ``false_alarm`` (Bonferroni over ``n_pairs``), whether it was
+exceeded, and the heading rate of the velocity estimates between the first and last
+detections with its standard error (degrees per second, counter-clockwise positive; null
+when they overlap): the *apparent* turn rate, which for a mover that accelerates differs
+from its own (:mod:`sarmotion.tracking.turns`).
 """
 
 from __future__ import annotations
@@ -36,7 +46,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # annotations only: Stone Soup takes ~0.9 s to import
-    from ..tracking import TrackingResult, TrackState
+    from ..tracking import TrackingResult, TrackState, TurnTest
 
 __all__ = ["TRACKS_SCHEMA", "tracks_document"]
 
@@ -66,6 +76,7 @@ def tracks_document(result: TrackingResult) -> dict[str, Any]:
             {
                 "id": t.id,
                 "n_detections": t.n_detections,
+                "turn": _turn(t.turn),
                 "states": [_state(s, result) for s in t.states],
             }
             for t in result.tracks
@@ -73,6 +84,22 @@ def tracks_document(result: TrackingResult) -> dict[str, Any]:
         "roads": [{"name": r.name, "points_m": r.points_m.tolist()} for r in result.roads],
         "options": opts,
         "timings_s": dict(result.timings_s),
+    }
+
+
+def _turn(turn: TurnTest | None) -> dict[str, Any] | None:
+    """The turn test of a track (:mod:`sarmotion.tracking.turns`)."""
+    if turn is None:
+        return None
+    return {
+        "flagged": turn.flagged,
+        "statistic": turn.statistic,
+        "threshold": turn.threshold,
+        "dof": 2,
+        "false_alarm": turn.false_alarm,
+        "n_pairs": turn.n_pairs,
+        "apparent_turn_rate_deg_s": turn.apparent_turn_rate_deg_s,
+        "apparent_turn_rate_std_deg_s": turn.apparent_turn_rate_std_deg_s,
     }
 
 

@@ -29,7 +29,7 @@ from ..tracking import TrackingResult
 from .page import figure, header_line, page, section, table
 from .plotting import LEGEND_PT, draw_look_arrow
 
-__all__ = ["sigma_ellipse", "tracks_figure", "write_tracks_report"]
+__all__ = ["sigma_ellipse", "tracks_figure", "turn_line", "write_tracks_report"]
 
 _COLOURS = ("tab:red", "tab:cyan", "tab:green", "tab:orange", "tab:purple", "tab:pink")
 
@@ -173,6 +173,28 @@ def _state_row(track_id: Any, s: dict[str, Any]) -> list[str]:
     ]
 
 
+def turn_line(track: dict[str, Any]) -> str:
+    """One line on a track's turn test (``tracks.json``'s ``turn``)."""
+    turn = track.get("turn")
+    head = f"track {track['id']}: "
+    if turn is None:
+        return head + "no turn test (a detection has no velocity covariance)"
+    if turn["statistic"] is None:
+        return head + "no turn test (no two detections from disjoint sub-apertures)"
+    verdict = "turning" if turn["flagged"] else "no change of velocity"
+    rate = (
+        ""
+        if turn["apparent_turn_rate_deg_s"] is None
+        else f", apparent turn rate {turn['apparent_turn_rate_deg_s']:.2f} +- "
+        f"{turn['apparent_turn_rate_std_deg_s']:.2f} deg/s (of the estimates' heading)"
+    )
+    return (
+        head + f"{verdict}: chi-square {turn['statistic']:.3g} against {turn['threshold']:.3g} "
+        f"(2 dof, false-alarm probability {turn['false_alarm']:g} per track over "
+        f"{turn['n_pairs']} pair(s)){rate}"
+    )
+
+
 def write_tracks_report(
     result: TrackingResult,
     directory: str | Path,
@@ -213,6 +235,14 @@ def write_tracks_report(
     timings = [[html.escape(k), f"{v:.2f}"] for k, v in result.timings_s.items()]
     parts = [
         section("Tracks", figure(uri, caption) + note),
+        section(
+            "Turns",
+            "<ul>"
+            + "".join(f"<li>{html.escape(turn_line(t))}</li>" for t in document["tracks"])
+            + "</ul>"
+            if document["tracks"]
+            else "<p>No track.</p>",
+        ),
         section(
             "States",
             table(_HEAD, rows) if rows else "<p>No track: no mover was followed.</p>",

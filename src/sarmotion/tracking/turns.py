@@ -27,10 +27,21 @@ mover's track is flagged with probability at most ``p``
 (:attr:`~sarmotion.tracking.TrackingOptions.turn_false_alarm`), insofar as the
 detections' errors reach their bounds.
 
-**The turn rate** is the heading change between the track's first and last detections
-(when they share no pulse) over the time between them, ``(theta_j - theta_i) / dt``
-(``theta = atan2(u_y, u_x)``, the difference wrapped to +-180 degrees), with the standard
-error from the two covariances through ``d theta / d u = (-u_y, u_x) / |u|^2``.
+**The apparent turn rate** is the heading change of the detections' velocities between
+the track's first and last detections (when they share no pulse) over the time between
+them, ``(theta_j - theta_i) / dt`` (``theta = atan2(u_y, u_x)``, the difference wrapped to
++-180 degrees, the last velocity slid as above), with the standard error from the two
+covariances through ``d theta / d u = (-u_y, u_x) / |u|^2``. It is the rate of the
+*estimates'* heading, not the mover's: over a sub-aperture of about a degree a range
+acceleration ``alpha`` is one with a cross-range speed ``alpha L / (2 (V - u_t))`` away
+(73 s x alpha on GOTCHA, :mod:`sarmotion.motion.acceleration`), and a turn's centripetal
+acceleration has a range component, so each sub-aperture's cross-range speed carries it.
+A mover turning at 3 deg/s at 7 m/s (0.37 m/s^2) is thus estimated metres per second off
+in cross-range speed, by an amount that changes along the turn; the test above still
+sees the change, the apparent rate need not have the true rate's size or sign
+(``tests/test_turns.py``). The mover's own turn rate needs sub-apertures wide enough to
+estimate its acceleration (:func:`sarmotion.motion.fit_range_acceleration`, 2 degrees
+and more).
 
 Times in s, velocities in m/s, angles in degrees.
 """
@@ -63,9 +74,10 @@ class TurnTest:
         ``p``: the probability that a uniform mover's track is flagged.
     n_pairs : int
         Pairs of detections tested.
-    turn_rate_deg_s, turn_rate_std_deg_s : float or None
-        Heading rate between the first and last detections and its standard error
-        (degrees per second, positive counter-clockwise); None when they are not
+    apparent_turn_rate_deg_s, apparent_turn_rate_std_deg_s : float or None
+        Heading rate of the velocity estimates between the first and last detections and
+        its standard error (degrees per second, positive counter-clockwise; module notes:
+        not the mover's own rate when it accelerates); None when they are not
         independent.
     """
 
@@ -74,8 +86,8 @@ class TurnTest:
     threshold: float | None
     false_alarm: float
     n_pairs: int
-    turn_rate_deg_s: float | None
-    turn_rate_std_deg_s: float | None
+    apparent_turn_rate_deg_s: float | None
+    apparent_turn_rate_std_deg_s: float | None
 
 
 def _heading(v: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
@@ -176,6 +188,6 @@ def turn_test(
         threshold=threshold,
         false_alarm=float(false_alarm),
         n_pairs=len(pairs),
-        turn_rate_deg_s=rate,
-        turn_rate_std_deg_s=rate_std,
+        apparent_turn_rate_deg_s=rate,
+        apparent_turn_rate_std_deg_s=rate_std,
     )
