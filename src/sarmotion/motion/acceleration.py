@@ -20,37 +20,49 @@ second order in ``s`` (:mod:`sarmotion.motion.aperture`), and its curvature is s
 the two: a cross-range speed change ``du_p`` changes it by ``-2 (V - u_t) du_p / L``
 (``V`` platform speed, ``u_t`` the mover's speed along the flight, ``L`` range), a range
 acceleration by ``-alpha``. An acceleration ``alpha`` is thus a cross-range speed
-``alpha L / (2 V)`` away (77 s on GOTCHA's geometry: 1 m/s^2 looks like 77 m/s of
-cross-range speed). Only the higher orders of the range history (the circular flight's
-and the square root's) tell them apart, and they grow with the aperture: the fraction of
-the acceleration's Fisher information that the uniform parameters do not share,
-``1 / (J_aa [J^-1]_aa)``, grows as the square of the aperture's duration
-(:func:`separable_fraction`; ``docs/notes/acceleration.md``). Whether the data of one
-mover separate them is the bound's question:
+``alpha L / (2 (V - u_t))`` away (73 s x alpha on GOTCHA's geometry at ``u_t = 0``:
+1 m/s^2 looks like 73 m/s of cross-range speed). Only the higher orders of the range
+history (the circular flight's and the square root's) tell them apart, and they grow
+with the aperture (:func:`separable_fraction`: the fraction of the acceleration's Fisher
+information the uniform motion does not share). The cross-range coordinate ``y`` of the
+position, which the pipeline holds at the reference point's cross range (the data of a
+few degrees hardly fix it), enters at the same orders: it is a nuisance parameter of the
+bound, with the prior spread ``cross_range_std_m`` (half the imaged scene in the
+analysis), and a mover ``dy`` off the held cross range gives an estimate that the bound
+with that prior covers.
+
+**The limit of the uniform start.** A uniform motion's range curvature is about
+``(V - u_t)^2 / L`` or more (0.48 m/s^2 on GOTCHA at ``u_t = 0``): a mover accelerating
+towards the radar by more than that has a range history that bends the other way over
+the central degree, no uniform motion matches it, and the uniform stage, which this step
+starts from, does not hold it (``benchmarks/results/acceleration_coverage.md``).
+Accelerations away from the radar, and towards it below that, look like a cross-range
+speed (beyond the default search interval of +-30 m/s from about 0.4 m/s^2).
 
 **The rule** (:func:`acceleration_estimable`). The acceleration is reported when the data
 say more about it than the motion model assumed before the data: its Fisher information
-(the uniform parameters and the phase eliminated, ``1 / CRB``) exceeds the information
-``T / q`` of the prior the tracker uses for a road vehicle, white-noise acceleration of
-spectral density ``q`` (:data:`ACCELERATION_PSD`, 1 m^2/s^3 as
-:class:`sarmotion.tracking.TrackingOptions`), whose mean over an aperture of duration
-``T`` has variance ``q / T``. Equivalently ``CRB(alpha) < q / T``. Over a GOTCHA degree
-that needs a matched-filter SNR above about 41 dB and over 2 degrees above 22 dB
-(:func:`separable_fraction` scales the bound as ``T^-3``); the analysis only runs the step
-where the aperture is wide (:mod:`sarmotion.pipeline.movers`), so one-degree data never
-pay for it.
+(the uniform parameters, ``y`` with its prior and the phase eliminated, ``1 / CRB``)
+exceeds the information ``T / q`` of the prior the tracker uses for a road vehicle,
+white-noise acceleration of spectral density ``q`` (:data:`ACCELERATION_PSD`, 1 m^2/s^3
+as :class:`sarmotion.tracking.TrackingOptions`), whose mean over an aperture of duration
+``T`` has variance ``q / T``. Equivalently ``CRB(alpha) < q / T``. It depends on the
+mover's SNR, not only on the aperture; the analysis runs the step only where the
+aperture is wide enough to be refined on (:mod:`sarmotion.pipeline.movers`: more than 1.5
+sub-apertures of a degree), so one-degree data never pay for it and report the
+acceleration as not estimable (``docs/notes/acceleration.md``: the bound against the
+aperture).
 
-**The fit** (:func:`fit_range_acceleration`): from the uniform whole-aperture estimate
-(``alpha = 0``), a Newton ascent (:func:`sarmotion.core.ascent.newton_ascent`, analytic
-derivatives) of the matched filter ``|I|^2`` (:class:`sarmotion.motion.MatchedFilter`)
-over ``(x, u_r, u_p, alpha)``. The four are nearly collinear (correlation of ``u_p`` and
-``alpha`` within 1e-6 of -1), so the ascent moves ``alpha`` along the ridge of the
-likelihood: the fourth parameter is ``alpha`` with ``(x, u_r, u_p)`` shifted by their
-regression on it (the columns of the inverse Fisher matrix), in units of a quarter
-radian of the phase it leaves after that shift; the ridge is re-linearised at the point
-reached, ``rounds`` times. The bound (:func:`acceleration_bound`) is the five-parameter
-Fisher matrix (:func:`sarmotion.motion.fisher_information`) at the fit, with the fitted
-amplitude and the measured noise.
+**The fit** (:func:`fit_range_acceleration`): the maximum of the matched filter ``|I|``
+(:class:`sarmotion.motion.MatchedFilter`) over ``(x, u_r, u_p, alpha)``, ``y`` held,
+profiled in ``alpha``: at each ``alpha`` the motion whose range history is nearest the
+uniform start's (least squares over every pulse: the ridge of the likelihood, curved
+over the tens of m/s of cross-range speed an acceleration moves) is refined by a Newton
+ascent of ``|I|^2`` (:func:`sarmotion.core.ascent.newton_ascent`, analytic derivatives);
+``alpha`` is searched on a grid of ``_PROFILE_SPAN`` prior deviations either side of 0,
+then by a bounded scalar search between the best point's neighbours. The bound
+(:func:`acceleration_bound`) is the Fisher matrix of ``(x, u_r, u_p, y, alpha, |a|)`` at
+the fit with the fitted amplitude and the measured noise, factored by QR (the normal
+matrix's condition number is past float64's precision).
 
 Positions in m, speeds in m/s, accelerations in m/s^2, geometry in float64.
 """
