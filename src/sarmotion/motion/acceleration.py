@@ -26,10 +26,10 @@ history (the circular flight's and the square root's) tell them apart, and they 
 with the aperture (:func:`separable_fraction`: the fraction of the acceleration's Fisher
 information the uniform motion does not share). The cross-range coordinate ``y`` of the
 position, which the pipeline holds at the reference point's cross range (the data of a
-few degrees hardly fix it), enters at the same orders: it is a nuisance parameter of the
-bound, with the prior spread ``cross_range_std_m`` (half the imaged scene in the
-analysis), and a mover ``dy`` off the held cross range gives an estimate that the bound
-with that prior covers.
+few degrees hardly fix it), enters at the same orders: a mover ``dy`` off the held cross
+range has its acceleration estimated ``beta dy`` off (``beta`` the shift of the fit that
+best mimics ``dy``, :func:`acceleration_bound`), which the standard error counts for a
+``dy`` of spread ``cross_range_std_m`` (half the imaged scene in the analysis).
 
 **The limit of the uniform start.** A uniform motion's range curvature is about
 ``(V - u_t)^2 / L`` or more (0.48 m/s^2 on GOTCHA at ``u_t = 0``): a mover accelerating
@@ -41,8 +41,8 @@ speed (beyond the default search interval of +-30 m/s from about 0.4 m/s^2).
 
 **The rule** (:func:`acceleration_estimable`). The acceleration is reported when the data
 say more about it than the motion model assumed before the data: its Fisher information
-(the uniform parameters, ``y`` with its prior and the phase eliminated, ``1 / CRB``)
-exceeds the information ``T / q`` of the prior the tracker uses for a road vehicle,
+(the uniform parameters and the phase eliminated, with the held ``y``'s spread: one over
+the squared standard error) exceeds the information ``T / q`` of the prior the tracker uses for a road vehicle,
 white-noise acceleration of spectral density ``q`` (:data:`ACCELERATION_PSD`, 1 m^2/s^3
 as :class:`sarmotion.tracking.TrackingOptions`), whose mean over an aperture of duration
 ``T`` has variance ``q / T``. Equivalently ``CRB(alpha) < q / T``. It depends on the
@@ -59,10 +59,10 @@ uniform start's (least squares over every pulse: the ridge of the likelihood, cu
 over the tens of m/s of cross-range speed an acceleration moves) is refined by a Newton
 ascent of ``|I|^2`` (:func:`sarmotion.core.ascent.newton_ascent`, analytic derivatives);
 ``alpha`` is searched on a grid of ``_PROFILE_SPAN`` prior deviations either side of 0,
-then by a bounded scalar search between the best point's neighbours. The bound
-(:func:`acceleration_bound`) is the Fisher matrix of ``(x, u_r, u_p, y, alpha, |a|)`` at
+then by a bounded scalar search between the best point's neighbours. The standard error
+(:func:`acceleration_bound`) is the Cramér–Rao bound of ``(x, u_r, u_p, alpha, |a|)`` at
 the fit with the fitted amplitude and the measured noise, factored by QR (the normal
-matrix's condition number is past float64's precision).
+matrix's condition number is past float64's precision), plus the held ``y``'s spread.
 
 Positions in m, speeds in m/s, accelerations in m/s^2, geometry in float64.
 """
@@ -216,13 +216,15 @@ def acceleration_bound(
     noise_variance: float,
     cross_range_std_m: float,
 ) -> NDArray[np.float64]:
-    """Cramér–Rao bound of ``(x, u_r, u_p, y, alpha, |a|)`` (module notes).
+    """Error covariance of ``(x, u_r, u_p, alpha, |a|)`` estimated with ``y`` held (module notes).
 
-    ``(2 SNR R^T R + P)^-1`` for the range parameters (:func:`_phase_factor`, inverted
-    through the triangular factor of the stacked rows), ``P`` the prior information
-    ``1 / cross_range_std_m^2`` on ``y`` alone (the data of a few degrees hardly fix it:
-    without a prior its bound runs to kilometres, and ``alpha``'s with it);
-    ``sigma_P^2 / (2 n_pulses sum W^2)`` for ``|a|`` (:mod:`sarmotion.motion.bounds`).
+    Two parts. The Cramér–Rao bound with ``y`` at its true value,
+    ``(2 SNR R^T R)^-1`` for ``(x, u_r, u_p, alpha)`` (:func:`_phase_factor`, inverted
+    through the triangular factor) and ``sigma_P^2 / (2 n_pulses sum W^2)`` for ``|a|``
+    (:mod:`sarmotion.motion.bounds`); plus what a held ``y`` that is ``dy`` off the truth
+    adds: the estimate moves by ``beta dy``, ``beta`` the least-squares coefficients of
+    ``y``'s phase derivatives on the others' (the parameters' shift that best mimics
+    ``dy``), so ``beta beta^T cross_range_std_m^2`` for a ``dy`` of that spread.
 
     Parameters
     ----------
@@ -232,32 +234,29 @@ def acceleration_bound(
         As :func:`sarmotion.motion.fisher_information` (``noise_variance``: per
         phase-history sample).
     cross_range_std_m : float
-        Prior standard deviation of the cross-range coordinate ``y`` (m, > 0).
+        Spread of the true cross-range coordinate about the held one (m, >= 0).
 
     Returns
     -------
-    (6, 6) ndarray
-        Covariance bound (m, m/s, m/s, m, m/s^2, amplitude units; squared).
+    (5, 5) ndarray
+        Covariance (m, m/s, m/s, m/s^2, amplitude units; squared).
     """
     if not (np.isfinite(amplitude) and amplitude > 0):
         raise ValueError(f"amplitude must be > 0, got {amplitude!r}")
     if not (np.isfinite(noise_variance) and noise_variance > 0):
         raise ValueError(f"noise_variance must be > 0, got {noise_variance!r}")
-    g = np.asarray(gradients_m, dtype=np.float64)
+    if not (np.isfinite(cross_range_std_m) and cross_range_std_m >= 0):
+        raise ValueError(f"cross_range_std_m must be >= 0, got {cross_range_std_m!r}")
+    g = np.asarray(gradients_m, dtype=np.float64)[:, [0, 1, 2, 4, 3]]  # y last
     w2 = np.asarray(weights, dtype=np.float64) ** 2
     energy = g.shape[0] * float(w2.sum())
     snr = amplitude**2 * energy / noise_variance
-    if not (np.isfinite(cross_range_std_m) and cross_range_std_m > 0):
-        raise ValueError(f"cross_range_std_m must be > 0, got {cross_range_std_m!r}")
     r = _phase_factor(g, np.asarray(frequencies_hz, dtype=np.float64), weights)
-    p = g.shape[1]
-    prior = np.zeros((1, p))
-    prior[0, 3] = 1.0 / (cross_range_std_m * np.sqrt(2.0 * snr))  # in units of R's rows
-    r = np.linalg.qr(np.vstack([r, prior]), mode="r")
-    r_inv = solve_triangular(r, np.eye(p))
-    cov = np.zeros((p + 1, p + 1))
-    cov[:p, :p] = r_inv @ r_inv.T / (2.0 * snr)
-    cov[p, p] = noise_variance / (2.0 * energy)
+    r_inv = solve_triangular(r[:4, :4], np.eye(4))
+    beta = r_inv @ r[:4, 4]  # least squares of y's column on the others'
+    cov = np.zeros((5, 5))
+    cov[:4, :4] = r_inv @ r_inv.T / (2.0 * snr) + cross_range_std_m**2 * np.outer(beta, beta)
+    cov[4, 4] = noise_variance / (2.0 * energy)
     return cov
 
 
@@ -287,8 +286,9 @@ class RangeAcceleration:
     range_acceleration_mps2 : float
         ``alpha = d u_r / ds`` (m/s^2; module notes).
     std_mps2 : float
-        Its Cramér–Rao bound at the fitted amplitude and the given noise (m/s^2), the
-        uniform motion and the cross-range coordinate unknown.
+        Its standard error (m/s^2): the Cramér–Rao bound at the fitted amplitude and the
+        given noise, the uniform motion unknown, plus the spread the held cross-range
+        coordinate gives it (:func:`acceleration_bound`).
     estimable : bool
         :func:`acceleration_estimable`: the bound is under the prior's spread.
     prior_std_mps2 : float
@@ -299,8 +299,8 @@ class RangeAcceleration:
         The same at the uniform start (``alpha = 0``).
     separable_fraction : float
         :func:`separable_fraction` at the fit.
-    covariance : (6, 6) ndarray
-        :func:`acceleration_bound` (``x, u_r, u_p, y, alpha, |a|``).
+    covariance : (5, 5) ndarray
+        :func:`acceleration_bound` (``x, u_r, u_p, alpha, |a|``).
     """
 
     range_acceleration_mps2: float
@@ -412,7 +412,7 @@ def fit_range_acceleration(
     values = [abs(profiled(float(a))[1]) for a in grid]
     k = int(np.argmax(values))
     step = float(grid[1] - grid[0])
-    # the maximum between the grid's neighbours of the best point, to a hundredth of the
+    # the maximum between the grid's neighbours of the best point, to a thousandth of the
     # quarter-radian unit of alpha once (x, u_r, u_p) follow it
     g = gradients(np.r_[profiled(float(grid[k]))[0], grid[k]])
     unit = _QUARTER_RADIAN / abs(_phase_factor(g[:, [0, 1, 2, 4]], freqs, weights)[-1, -1])
@@ -420,7 +420,7 @@ def fit_range_acceleration(
         lambda a: -abs(profiled(float(a))[1]),
         bounds=(float(grid[k]) - step, float(grid[k]) + step),
         method="bounded",
-        options={"xatol": 0.01 * unit},
+        options={"xatol": 1e-3 * unit},
     )
     alpha = float(res.x)
     q, value = profiled(alpha)
@@ -430,7 +430,7 @@ def fit_range_acceleration(
     theta = np.r_[q, alpha]
     grads = gradients(theta)
     amplitude = value / tr.n_pulses
-    cov6 = acceleration_bound(
+    cov5 = acceleration_bound(
         grads,
         freqs,
         weights,
@@ -438,7 +438,7 @@ def fit_range_acceleration(
         noise_variance=max(tr.n_samples * float(noise_variance), 1e-300),
         cross_range_std_m=cross_range_std_m,
     )
-    std = float(np.sqrt(max(cov6[4, 4], 0.0)))
+    std = float(np.sqrt(max(cov5[3, 3], 0.0)))
     return RangeAcceleration(
         range_acceleration_mps2=alpha,
         std_mps2=std,
@@ -447,5 +447,5 @@ def fit_range_acceleration(
         amplitude=complex(amplitude),
         uniform_amplitude=start / tr.n_pulses,
         separable_fraction=separable_fraction(grads, freqs, weights),
-        covariance=cov6,
+        covariance=cov5,
     )
