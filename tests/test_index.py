@@ -143,8 +143,9 @@ INDEX: dict[str, tuple[str, ...]] = {
     "io.staging": ("test_outputs.py", "test_cli_hardening.py"),
     # motion
     "motion._aligned": ("test_aligned_fast.py",),
+    "motion.acceleration": ("test_acceleration.py",),
     "motion.aperture": ("test_tracking.py", "test_fast_movers.py"),
-    "motion.bounds": ("test_movers_detection.py",),
+    "motion.bounds": ("test_movers_detection.py", "test_acceleration.py"),
     "motion.coherent": ("test_coherent_detection.py",),
     "motion.cross_range": ("test_velocity.py",),
     "motion.detector": ("test_movers_detection.py", "test_detector_null.py"),
@@ -206,7 +207,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     # simulation
     "simulation.collection": ("test_collection_cphd.py",),
     "simulation.forward": ("test_simulate.py", "test_signals.py"),
-    "simulation.paths": ("test_paths.py",),
+    "simulation.paths": ("test_paths.py", "test_acceleration.py", "test_turns.py"),
     "simulation.scene": ("test_scene.py",),
     "simulation.signals": ("test_signals.py",),
     # tracking
@@ -214,7 +215,8 @@ INDEX: dict[str, tuple[str, ...]] = {
     "tracking.scale": ("test_track.py", "test_scheduler_security.py"),
     "tracking.sub_apertures": ("test_track.py",),
     "tracking.track": ("test_track.py",),
-    "tracking.tracker": ("test_track.py",),
+    "tracking.tracker": ("test_track.py", "test_turns.py"),
+    "tracking.turns": ("test_turns.py",),
 }
 
 

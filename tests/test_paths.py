@@ -5,9 +5,11 @@ import pytest
 
 from sarmotion.core import C, Trajectory, delay_phase, delta_tau, target_positions, to_fast_time
 from sarmotion.simulation import (
+    AcceleratingTarget,
     PathTarget,
     PointTarget,
     Scene,
+    TurningTarget,
     radar_with_range_window,
     simulate,
     simulate_phase_history,
@@ -110,3 +112,33 @@ def test_turning_mover_trace_follows_its_range_in_a_wide_window():
     assert np.allclose(
         tr.data, to_fast_time(simulate_phase_history([path], tr.trajectory, radar, np.zeros(3)))
     )
+
+
+def test_accelerating_target_is_the_constant_acceleration_formula():
+    """rho(s) = rho + s u + s^2 a / 2, u(s) = u + s a; zero acceleration is the uniform mover."""
+    m = AcceleratingTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0], acceleration_mps2=[0.5, 0.2])
+    s = np.array([-2.0, 0.0, 3.0])
+    expected = np.array([1.0, 2.0])[None] + s[:, None] * [3.0, -1.0] + 0.5 * s[:, None] ** 2 * [0.5, 0.2]
+    np.testing.assert_allclose(m.positions_at(s)[:, :2], expected, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(m.velocities_at(s), [3.0, -1.0] + s[:, None] * [0.5, 0.2])
+    flat = AcceleratingTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0], acceleration_mps2=[0, 0])
+    uniform = PointTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0])
+    np.testing.assert_array_equal(flat.positions_at(s), uniform.positions_at(s))
+    with pytest.raises(ValueError, match="acceleration_mps2"):
+        AcceleratingTarget(position_m=[0, 0], velocity_mps=[1, 0], acceleration_mps2=[1.0])
+
+
+def test_turning_target_keeps_its_speed_and_turns_at_its_rate():
+    """Constant speed, heading rate omega, positions the integral of the velocity."""
+    m = TurningTarget(position_m=[0.0, 0.0], velocity_mps=[6.0, -4.0], turn_rate_deg_s=3.0)
+    s = np.linspace(-5.0, 5.0, 201)
+    v = m.velocities_at(s)
+    np.testing.assert_allclose(np.hypot(*v.T), np.hypot(6.0, -4.0), rtol=1e-12)
+    heading = np.unwrap(np.arctan2(v[:, 1], v[:, 0]))
+    np.testing.assert_allclose(np.degrees(np.diff(heading) / np.diff(s)), 3.0, rtol=1e-9)
+    p = m.positions_at(s)[:, :2]
+    # central differences of the closed form are the velocity to O(h^2 omega^2 |u|)
+    np.testing.assert_allclose(np.gradient(p, s, axis=0)[1:-1], v[1:-1], atol=1e-4)
+    straight = TurningTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0], turn_rate_deg_s=0.0)
+    uniform = PointTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0])
+    np.testing.assert_allclose(straight.positions_at(s), uniform.positions_at(s), atol=1e-12)
