@@ -116,12 +116,18 @@ def test_turning_mover_trace_follows_its_range_in_a_wide_window():
 
 def test_accelerating_target_is_the_constant_acceleration_formula():
     """rho(s) = rho + s u + s^2 a / 2, u(s) = u + s a; zero acceleration is the uniform mover."""
-    m = AcceleratingTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0], acceleration_mps2=[0.5, 0.2])
+    m = AcceleratingTarget(
+        position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0], acceleration_mps2=[0.5, 0.2]
+    )
     s = np.array([-2.0, 0.0, 3.0])
-    expected = np.array([1.0, 2.0])[None] + s[:, None] * [3.0, -1.0] + 0.5 * s[:, None] ** 2 * [0.5, 0.2]
+    expected = (
+        np.array([1.0, 2.0])[None] + s[:, None] * [3.0, -1.0] + 0.5 * s[:, None] ** 2 * [0.5, 0.2]
+    )
     np.testing.assert_allclose(m.positions_at(s)[:, :2], expected, rtol=0, atol=1e-12)
     np.testing.assert_allclose(m.velocities_at(s), [3.0, -1.0] + s[:, None] * [0.5, 0.2])
-    flat = AcceleratingTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0], acceleration_mps2=[0, 0])
+    flat = AcceleratingTarget(
+        position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0], acceleration_mps2=[0, 0]
+    )
     uniform = PointTarget(position_m=[1.0, 2.0], velocity_mps=[3.0, -1.0])
     np.testing.assert_array_equal(flat.positions_at(s), uniform.positions_at(s))
     with pytest.raises(ValueError, match="acceleration_mps2"):

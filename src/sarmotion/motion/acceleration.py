@@ -40,12 +40,13 @@ Accelerations away from the radar, and towards it below that, look like a cross-
 speed (beyond the default search interval of +-30 m/s from about 0.4 m/s^2).
 
 **The rule** (:func:`acceleration_estimable`). The acceleration is reported when the data
-say more about it than the motion model assumed before the data: its Fisher information
-(the uniform parameters and the phase eliminated, with the held ``y``'s spread: one over
-the squared standard error) exceeds the information ``T / q`` of the prior the tracker uses for a road vehicle,
-white-noise acceleration of spectral density ``q`` (:data:`ACCELERATION_PSD`, 1 m^2/s^3
-as :class:`sarmotion.tracking.TrackingOptions`), whose mean over an aperture of duration
-``T`` has variance ``q / T``. Equivalently ``CRB(alpha) < q / T``. It depends on the
+say more about it than the motion model assumed before the data: its information (one
+over its squared standard error: the uniform parameters and the phase eliminated, the
+held ``y``'s spread counted) exceeds the information ``T / q`` of the prior the tracker
+uses for a road vehicle, white-noise acceleration of spectral density ``q``
+(:data:`ACCELERATION_PSD`, 1 m^2/s^3 as :class:`sarmotion.tracking.TrackingOptions`),
+whose mean over an aperture of duration ``T`` has variance ``q / T``. Equivalently
+``std(alpha)^2 < q / T``. It depends on the
 mover's SNR, not only on the aperture; the analysis runs the step only where the
 aperture is wide enough to be refined on (:mod:`sarmotion.pipeline.movers`: more than 1.5
 sub-apertures of a degree), so one-degree data never pay for it and report the
