@@ -39,9 +39,9 @@ acceleration has a range component, so each sub-aperture's cross-range speed car
 A mover turning at 3 deg/s at 7 m/s (0.37 m/s^2) is thus estimated metres per second off
 in cross-range speed, by an amount that changes along the turn; the test above still
 sees the change, the apparent rate need not have the true rate's size or sign
-(``tests/test_turns.py``). The mover's own turn rate needs sub-apertures wide enough to
-estimate its acceleration (:func:`sarmotion.motion.fit_range_acceleration`, 2 degrees
-and more).
+(``docs/notes/acceleration.md``). The mover's own turn rate needs sub-apertures wide
+enough to estimate its acceleration (:func:`sarmotion.motion.fit_range_acceleration`, 2
+degrees and more).
 
 Times in s, velocities in m/s, angles in degrees.
 """
