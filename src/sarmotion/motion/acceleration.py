@@ -97,10 +97,11 @@ __all__ = [
 #: as :class:`sarmotion.tracking.TrackingOptions`' ``acceleration_psd``.
 ACCELERATION_PSD = 1.0
 
-#: Newton units: a quarter radian of the phase a parameter leaves (module notes).
+#: Unit of ``alpha`` for the tolerance of its search: the change that leaves a quarter
+#: radian of phase once ``(x, u_r, u_p)`` follow it (module notes).
 _QUARTER_RADIAN = 0.25
 
-#: Newton units of ``(x, u_r, u_p)`` at a fixed ``(y, alpha)``: about an eighth of a
+#: Newton units of ``(x, u_r, u_p)`` at a fixed ``alpha``: about an eighth of a
 #: resolution over a GOTCHA degree (:mod:`sarmotion.motion.likelihood`).
 _LOCAL_UNITS = np.array([0.03, 0.0015, 0.09])
 
@@ -314,10 +315,14 @@ class RangeAcceleration:
     covariance: NDArray[np.float64]
 
 
-#: Half-width of the profile over ``alpha`` in prior standard deviations ``sqrt(q / T)``.
+#: Half-width of the profile over ``alpha`` in prior standard deviations ``sqrt(q / T)``:
+#: a road vehicle's mean acceleration beyond four of them has a prior probability of 6e-5.
 _PROFILE_SPAN = 4.0
 
-#: Points of the profile over ``alpha`` on each side of zero.
+#: Points of the profile over ``alpha`` on each side of zero: one prior deviation apart.
+#: Each starts from the range history of the uniform start, so the grid only has to land
+#: on the lobe's slope; the bounded search refines between the best point's neighbours
+#: (``benchmarks/acceleration_coverage.py`` checks the two together).
 _PROFILE_HALF_POINTS = 4
 
 
