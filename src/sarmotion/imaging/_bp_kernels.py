@@ -29,7 +29,7 @@ from .grid import ImageGrid
 #: The version of :mod:`._simd`'s inner loop compiled into this module's kernels. numba's
 #: on-disk cache keys on this file's contents, not on :mod:`._simd`'s: change this line
 #: whenever the inner loop or its table layout changes, or a stale kernel is loaded.
-SIMD_VERSION = "hermite-float16-1"
+SIMD_VERSION = "hermite-float16-planes-permute-1"
 
 #: Memory bound of the float64 tables held by the float64 kernel at once (bytes).
 _TABLE_BYTES = 128 * 2**20
@@ -289,6 +289,28 @@ def tile_shape(
     return None
 
 
+def lanes_along_y(positions: NDArray[np.float64], x_m: NDArray, y_m: NDArray) -> bool:
+    """Whether the SIMD lanes should run along ``y`` (image columns) rather than ``x``.
+
+    Neighbouring lanes read neighbouring table entries when the range changes slowly along
+    the lanes (:mod:`._simd`: a window of ``LANES`` entries is read without gathers). The
+    range's change per pixel along ``x`` is ``dx |x - a_x| / R``, along ``y``
+    ``dy |y - a_y| / R``, here averaged over the pulses at the grid's centre; the lanes take
+    the axis where it is smaller.
+    """
+    nx, ny = x_m.size, y_m.size
+    if ny < LANES:
+        return False
+    dx = abs(float(x_m[-1]) - float(x_m[0])) / max(nx - 1, 1)
+    dy = abs(float(y_m[-1]) - float(y_m[0])) / max(ny - 1, 1)
+    cx = 0.5 * (float(x_m[0]) + float(x_m[-1]))
+    cy = 0.5 * (float(y_m[0]) + float(y_m[-1]))
+    ex = cx - positions[:, 0]
+    ey = cy - positions[:, 1]
+    r = np.sqrt(ex * ex + ey * ey + positions[:, 2] ** 2)
+    return bool(dy * np.mean(np.abs(ey) / r) < dx * np.mean(np.abs(ex) / r))
+
+
 def backproject_f32(
     table_values: NDArray[np.uint64],
     positions: NDArray[np.float64],
@@ -308,8 +330,28 @@ def backproject_f32(
     ``pulse_ranges`` ``(n_images, 2)`` gives each image's pulses ``[start, stop)`` (default
     one image of every pulse). Returns ``(re, im)``, shape
     ``(n_images, y_m.size, x_m.size)``, float64. ``steps`` parallel regions, each followed
-    by a progress report.
+    by a progress report. ``tile`` (rows, columns) is :func:`tile_shape`'s for this grid.
+    When :func:`lanes_along_y`, the sum runs on the grid mirrored about ``x = y`` (antennas
+    too: every range is unchanged) with the tile :func:`tile_shape` gives there, and the
+    images are transposed back.
     """
+    if lanes_along_y(positions, x_m, y_m):
+        mirrored = np.ascontiguousarray(positions[:, [1, 0, 2]])
+        tile_t = tile_shape(mirrored, y_m, x_m, constants[2])
+        if tile_t is not None:
+            re, im = _backproject_f32(table_values, mirrored, ref_ranges, y_m, x_m, constants,
+                                      n_up, tile_t, progress, steps, pulse_ranges)  # fmt: skip
+            return (np.ascontiguousarray(re.transpose(0, 2, 1)),
+                    np.ascontiguousarray(im.transpose(0, 2, 1)))  # fmt: skip
+    return _backproject_f32(table_values, positions, ref_ranges, x_m, y_m, constants, n_up, tile,
+                            progress, steps, pulse_ranges)  # fmt: skip
+
+
+def _backproject_f32(
+    table_values, positions, ref_ranges, x_m, y_m, constants, n_up, tile, progress, steps,
+    pulse_ranges,
+):  # fmt: skip
+    """:func:`backproject_f32` with the lanes along ``x``."""
     ny, nx = y_m.size, x_m.size
     dx = (float(x_m[-1]) - float(x_m[0])) / (nx - 1) if nx > 1 else 1.0
     dy = (float(y_m[-1]) - float(y_m[0])) / (ny - 1) if ny > 1 else 1.0

@@ -102,19 +102,32 @@ def hermite_coefficients(
     return out
 
 
+#: Words after each plane of a :class:`TraceTable` row: a window of 16 entries read from any
+#: entry stays inside the row.
+PLANE_PAD = 16
+
+
+def plane_length(n_up: int) -> int:
+    """Words per plane of a :class:`TraceTable` row: ``n_up + 2`` entries and the padding."""
+    return n_up + 2 + PLANE_PAD
+
+
 @dataclass(frozen=True, eq=False)
 class TraceTable:
     """The cubic pieces of one traces object, packed as the float32 kernel reads them.
 
-    ``values`` is ``(n_pulses, 1 + 3 (n_up + 2))`` uint64: per pulse, word 0 holds
-    ``e + 1024``, then three words per entry of :func:`hermite_coefficients`: ``c0`` and
-    ``c1`` as complex64, and ``(Re c2, Im c2, Re c3, Im c3) / 2^e`` as four float16, ``2^e``
-    the pulse's largest of those (a power of two: the scaling is exact). So one pixel reads
-    three 64-bit words, not four. Rounding: ``6e-8`` relative for ``c0``, ``c1``;
-    ``2^-11`` relative (``2^-25`` absolute below the float16 normal range, of ``2^e``) for
-    ``c2``, ``c3``, which are ``(pi / upsample)^2 / 2`` and ``(pi / upsample)^3 / 6`` of the
-    trace's amplitude at most: at ``upsample = 6`` an error below ``7e-5`` of the amplitude
-    at the band edge, some 30 dB under the interpolation's own in mean square.
+    ``values`` is ``(n_pulses, 1 + 3 L)`` uint64, ``L = plane_length(n_up)``: per pulse,
+    word 0 holds ``e + 1024``, then three planes of ``L`` words, entry ``p`` of
+    :func:`hermite_coefficients` at word ``p`` of each: ``c0`` as complex64, ``c1`` as
+    complex64, and ``(Re c2, Im c2, Re c3, Im c3) / 2^e`` as four float16, ``2^e`` the
+    pulse's largest of those (a power of two: the scaling is exact); the last
+    :data:`PLANE_PAD` words of a plane are zero. So one pixel reads three 64-bit words, not
+    four, and the entries of neighbouring pixels are contiguous in each plane. Rounding:
+    ``6e-8`` relative for ``c0``, ``c1``; ``2^-11`` relative (``2^-25`` absolute below the
+    float16 normal range, of ``2^e``) for ``c2``, ``c3``, which are ``(pi / upsample)^2 / 2``
+    and ``(pi / upsample)^3 / 6`` of the trace's amplitude at most: at ``upsample = 6`` an
+    error below ``7e-5`` of the amplitude at the band edge, some 30 dB under the
+    interpolation's own in mean square.
     """
 
     values: NDArray[np.uint64]
@@ -127,17 +140,18 @@ def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
     m, n = data.shape
     coef = hermite_coefficients(data, factor)
     big = factor * n
+    length = plane_length(big)
     high = np.stack([coef[..., 2].real, coef[..., 2].imag, coef[..., 3].real, coef[..., 3].imag],
                     axis=-1).reshape(m, -1)  # fmt: skip
     peak = np.abs(high).max(axis=1)
     e = np.where(peak > 0, np.ceil(np.log2(np.where(peak > 0, peak, 1.0))), 0.0).astype(np.int64)
-    values = np.zeros((m, 1 + 3 * (big + 2)), np.uint64)
+    values = np.zeros((m, 1 + 3 * length), np.uint64)
     values[:, 0] = (e + 1024).astype(np.uint64)
-    words = values[:, 1:].reshape(m, big + 2, 3)
-    words[:, :, 0] = np.ascontiguousarray(coef[..., 0], np.complex64).view(np.uint64)
-    words[:, :, 1] = np.ascontiguousarray(coef[..., 1], np.complex64).view(np.uint64)
+    planes = values[:, 1:].reshape(m, 3, length)
+    planes[:, 0, : big + 2] = np.ascontiguousarray(coef[..., 0], np.complex64).view(np.uint64)
+    planes[:, 1, : big + 2] = np.ascontiguousarray(coef[..., 1], np.complex64).view(np.uint64)
     scaled = np.ldexp(high, -e[:, None]).astype(np.float16).reshape(m, big + 2, 4)
-    words[:, :, 2] = np.ascontiguousarray(scaled).view(np.uint64)[..., 0]
+    planes[:, 2, : big + 2] = np.ascontiguousarray(scaled).view(np.uint64)[..., 0]
     return TraceTable(values=values, upsample=factor, n_up=big)
 
 
@@ -145,11 +159,12 @@ def unpack_table(table: TraceTable) -> NDArray[np.complex128]:
     """The coefficients a :class:`TraceTable` holds, ``(n_pulses, n_up + 2, 4)`` complex128."""
     m = table.values.shape[0]
     e = table.values[:, 0].astype(np.int64) - 1024
-    words = np.ascontiguousarray(table.values[:, 1:]).reshape(m, table.n_up + 2, 3)
-    out = np.empty((m, table.n_up + 2, 4), np.complex128)
-    out[..., 0] = np.ascontiguousarray(words[..., 0]).view(np.complex64)
-    out[..., 1] = np.ascontiguousarray(words[..., 1]).view(np.complex64)
-    half = np.ascontiguousarray(words[..., 2]).view(np.float16).reshape(m, table.n_up + 2, 4)
+    n = table.n_up + 2
+    planes = table.values[:, 1:].reshape(m, 3, plane_length(table.n_up))[:, :, :n]
+    out = np.empty((m, n, 4), np.complex128)
+    out[..., 0] = np.ascontiguousarray(planes[:, 0]).view(np.complex64)
+    out[..., 1] = np.ascontiguousarray(planes[:, 1]).view(np.complex64)
+    half = np.ascontiguousarray(planes[:, 2]).view(np.float16).reshape(m, n, 4)
     high = np.ldexp(half.astype(np.float64), e[:, None, None])
     out[..., 2] = high[..., 0] + 1j * high[..., 1]
     out[..., 3] = high[..., 2] + 1j * high[..., 3]

@@ -51,9 +51,25 @@ LANES = 16
 _SIN = (1.5707885026931763, -0.6457120180130005, 0.07766739279031754)
 _COS = (1.0, -1.2336970567703247, 0.2535986304283142, -0.020408352836966515)
 
+
+
+def _has_avx512() -> bool:
+    """Whether numba compiles for a CPU with AVX-512F (``NUMBA_CPU_FEATURES`` if set)."""
+    features = numba.config.CPU_FEATURES
+    if features is None:
+        if numba.config.CPU_NAME not in (None, "host"):
+            return False  # a named target CPU without a feature list: assume the least
+        features = llvm.get_host_cpu_features().flatten()
+    return "+avx512f" in features.split(",")
+
+
+#: Whether the inner loop reads windows of the table with permutes (AVX-512) before
+#: falling back to gathers.
+PERMUTE = LANES == 16 and _has_avx512()
+
 #: Change ``SIMD_VERSION`` in :mod:`._bp_kernels` and :mod:`._ffbp_kernels` with this IR
 #: (numba's cache of their kernels does not see this file).
-_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_hermite16"
+_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_planes{'_permute' if PERMUTE else ''}"
 
 
 def _f32(x: float) -> str:
@@ -61,7 +77,7 @@ def _f32(x: float) -> str:
     return f"0x{int(np.array(np.float32(x), np.float64).view(np.uint64)):016X}"
 
 
-def _build_ir(v: int = LANES) -> str:
+def _build_ir(v: int = LANES, permute: bool = False) -> str:
     vf, vi, vl, vp, vb = (f"<{v} x float>", f"<{v} x i32>", f"<{v} x i64>", f"<{v} x ptr>",
                           f"<{v} x i1>")  # fmt: skip
     fma = f"@llvm.fmuladd.v{v}f32"
@@ -79,9 +95,10 @@ def _build_ir(v: int = LANES) -> str:
     scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi", "sc"]
     a(f"define weak_odr void @{_NAME}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tx,"
       " ptr noalias %ty, ptr noalias %tab,"
-      " ptr noalias %acc_re, ptr noalias %acc_im, i64 %n, i64 %n_rows, i64 %stride, "
+      " ptr noalias %acc_re, ptr noalias %acc_im, i64 %n, i64 %n_rows, i64 %stride, i64 %plane, "
       + ", ".join(f"float %{s}" for s in scalars) + ") #0 {")  # fmt: skip
     a("entry:")
+    a("  %plane2 = shl i64 %plane, 1")
     for s in scalars:
         a(f"  %{s}.i = insertelement {vf} poison, float %{s}, i64 0")
         a(f"  %{s}.v = shufflevector {vf} %{s}.i, {vf} poison, {vi} zeroinitializer")
@@ -101,7 +118,7 @@ def _build_ir(v: int = LANES) -> str:
     a("  %row.im = getelementptr inbounds float, ptr %acc_im, i64 %off")
     a("  br label %px")
     a("px:")
-    a("  %k = phi i64 [0, %row], [%k.next, %px]")
+    a(f"  %k = phi i64 [0, %row], [%k.next, %{'got' if permute else 'px'}]")
     a("  %nx.p = getelementptr inbounds float, ptr %nx, i64 %k")
     a(f"  %nxk = load {vf}, ptr %nx.p, align 4")
     a(f"  %N = fadd fast {vf} %nxk, %nyr.v")
@@ -125,12 +142,50 @@ def _build_ir(v: int = LANES) -> str:
     a(f"  %wk = select {vb} %ok, {vf} %w, {vf} zeroinitializer")
     gather = f"@llvm.masked.gather.v{v}i64.v{v}p0"
     vh = f"<{v} x half>"
-    a(f"  %ixe = mul {vi} %ix, splat (i32 3)")  # 3 words per entry
-    a(f"  %pa = getelementptr inbounds i64, ptr %tab, {vi} %ixe")
-    a(f"  %pb = getelementptr inbounds i64, {vp} %pa, i64 1")
-    a(f"  %pc = getelementptr inbounds i64, {vp} %pa, i64 2")
+    if permute:
+        # The lanes' entries within a window of ``v`` entries (the usual case on fine
+        # grids): two vector loads and two two-source permutes per plane, no gather.
+        a(f"  %mn = call i32 @llvm.vector.reduce.smin.v{v}i32({vi} %ix)")
+        a(f"  %mx = call i32 @llvm.vector.reduce.smax.v{v}i32({vi} %ix)")
+        a("  %span = sub i32 %mx, %mn")
+        a(f"  %narrow = icmp ult i32 %span, {v}")
+        a("  br i1 %narrow, label %win, label %gat")
+        a("win:")
+        a("  %mn64 = sext i32 %mn to i64")
+        a(f"  %mn.i = insertelement {vi} poison, i32 %mn, i64 0")
+        a(f"  %mn.v = shufflevector {vi} %mn.i, {vi} poison, {vi} zeroinitializer")
+        a(f"  %rel = sub {vi} %ix, %mn.v")
+        a(f"  %rel64 = zext {vi} %rel to {vl}")
+        h = v // 2
+        v8 = f"<{h} x i64>"
+        lo = ", ".join(f"i32 {i}" for i in range(h))
+        hi_ = ", ".join(f"i32 {i}" for i in range(h, v))
+        both = ", ".join(f"i32 {i}" for i in range(v))
+        a(f"  %rlo = shufflevector {vl} %rel64, {vl} poison, <{h} x i32> <{lo}>")
+        a(f"  %rhi = shufflevector {vl} %rel64, {vl} poison, <{h} x i32> <{hi_}>")
+        for k, g in enumerate("abc"):
+            a(f"  %off{g} = add i64 %mn64, {'0' if k == 0 else ('%plane' if k == 1 else '%plane2')}")
+            a(f"  %w{g}0.p = getelementptr inbounds i64, ptr %tab, i64 %off{g}")
+            a(f"  %w{g}1.p = getelementptr inbounds i64, ptr %w{g}0.p, i64 {h}")
+            a(f"  %w{g}0 = load {v8}, ptr %w{g}0.p, align 8")
+            a(f"  %w{g}1 = load {v8}, ptr %w{g}1.p, align 8")
+            for part in ("lo", "hi"):
+                a(f"  %w{g}{part} = call {v8} @llvm.x86.avx512.vpermi2var.q.512({v8} %w{g}0,"
+                  f" {v8} %r{part}, {v8} %w{g}1)")
+            a(f"  %w{g} = shufflevector {v8} %w{g}lo, {v8} %w{g}hi, {vi} <{both}>")
+        a("  br label %got")
+        a("gat:")
+    a(f"  %pa = getelementptr inbounds i64, ptr %tab, {vi} %ix")
+    a(f"  %pb = getelementptr inbounds i64, {vp} %pa, i64 %plane")
+    a(f"  %pc = getelementptr inbounds i64, {vp} %pa, i64 %plane2")
     for g in "abc":
-        a(f"  %g{g} = call {vl} {gather}({vp} %p{g}, i32 8, {vb} splat (i1 true), {vl} poison)")
+        name = f"%q{g}" if permute else f"%g{g}"
+        a(f"  {name} = call {vl} {gather}({vp} %p{g}, i32 8, {vb} splat (i1 true), {vl} poison)")
+    if permute:
+        a("  br label %got")
+        a("got:")
+        for g in "abc":
+            a(f"  %g{g} = phi {vl} [%w{g}, %win], [%q{g}, %gat]")
     even = ", ".join(f"i32 {2 * i}" for i in range(v))
     odd = ", ".join(f"i32 {2 * i + 1}" for i in range(v))
     for g in "ab":  # c0, c1: complex64
@@ -197,19 +252,23 @@ def _build_ir(v: int = LANES) -> str:
     a(f"declare {vf} @llvm.floor.v{v}f32({vf})")
     a(f"declare {vf} @llvm.rint.v{v}f32({vf})")
     a(f"declare {vl} @llvm.masked.gather.v{v}i64.v{v}p0({vp}, i32, {vb}, {vl})")
+    if permute:
+        a(f"declare i32 @llvm.vector.reduce.smin.v{v}i32({vi})")
+        a(f"declare i32 @llvm.vector.reduce.smax.v{v}i32({vi})")
+        a("declare <8 x i64> @llvm.x86.avx512.vpermi2var.q.512(<8 x i64>, <8 x i64>, <8 x i64>)")
     width = 32 * v
     a(f'attributes #0 = {{ noinline nounwind "prefer-vector-width"="{width}" '
       f'"min-legal-vector-width"="{width}" }}')  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
-_IR = _build_ir()
+_IR = _build_ir(permute=PERMUTE)
 llvm.parse_assembly(_IR).verify()  # fail at import, not inside a compilation
 
 
 @intrinsic
 def tile_pulse(
-    typingctx, nx, ny, tx, ty, tab, tab_offset, acc_re, acc_im, n, n_rows, stride,
+    typingctx, nx, ny, tx, ty, tab, tab_offset, acc_re, acc_im, n, n_rows, stride, plane,
     f0, i0f, a1, a2, a3, a4, si, sq, hi, sc,
 ):  # fmt: skip
     """Add one pulse to one tile (see the module docstring); compiled code only.
@@ -220,13 +279,14 @@ def tile_pulse(
     """
     f = types.float32
     i = types.int64
-    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, f, f, f, f, f, f, f, f, f, f)
+    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, i, f, f, f, f, f, f, f, f, f,
+                     f)  # fmt: skip
 
     def codegen(context, builder, signature, args):
         context.active_code_library.add_llvm_module(llvm.parse_assembly(_IR))
         byte_ptr = ir.IntType(8).as_pointer()
         i64 = ir.IntType(64)
-        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 7 + [i64] * 3 + [ir.FloatType()] * 10)
+        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 7 + [i64] * 4 + [ir.FloatType()] * 10)
         fn = cgutils.get_or_insert_function(builder.module, fnty, _NAME)
 
         def data(k: int, offset=None):
@@ -258,6 +318,7 @@ def tile_pulses(
     by exact backprojection and the FFBP leaves.
     """
     stride = tab.shape[1]
+    plane = (stride - 1) // 3
     f32 = np.float32
     si = f32(idx_scale)
     sq = f32(quarter_scale)
@@ -293,7 +354,7 @@ def tile_pulses(
             tyv[r] = t - 4.0 * np.rint(0.25 * t)
         scale = f32(math.ldexp(1.0, np.int64(tab[j, 0]) - 1024))
         tile_pulse(
-            nxv, nyv, txv, tyv, tab, j * stride + 1, acc_re, acc_im, ncp, nr, ncp,
+            nxv, nyv, txv, tyv, tab, j * stride + 1, acc_re, acc_im, ncp, nr, ncp, plane,
             f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
             f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
             si, sq, hi, scale,

@@ -578,7 +578,7 @@ class FfbpPulses:
 
     Attributes
     ----------
-    table_values : (n_pulses, 1 + 3 (n_up + 2)) ndarray
+    table_values : (n_pulses, 1 + 3 plane_length(n_up)) ndarray
         Trace table (:attr:`~._bp_table.TraceTable.values`).
     positions : (n_pulses, 3) ndarray
         Effective antenna positions ``r(s_j) - s_j u`` (m), float64.
