@@ -289,26 +289,25 @@ def tile_shape(
     return None
 
 
-def lanes_along_y(positions: NDArray[np.float64], x_m: NDArray, y_m: NDArray) -> bool:
-    """Whether the SIMD lanes should run along ``y`` (image columns) rather than ``x``.
+def lane_spans(
+    positions: NDArray[np.float64], x_m: NDArray, y_m: NDArray, idx_scale: float
+) -> tuple[float, float]:
+    """Table entries spanned by ``LANES`` neighbouring pixels along ``x`` and along ``y``.
 
-    Neighbouring lanes read neighbouring table entries when the range changes slowly along
-    the lanes (:mod:`._simd`: a window of ``LANES`` entries is read without gathers). The
-    range's change per pixel along ``x`` is ``dx |x - a_x| / R``, along ``y``
-    ``dy |y - a_y| / R``, here averaged over the pulses at the grid's centre; the lanes take
-    the axis where it is smaller.
+    The range changes by ``dx |x - a_x| / R`` per pixel along ``x`` and ``dy |y - a_y| / R``
+    along ``y`` (here at the grid's centre, averaged over the pulses), ``idx_scale`` table
+    entries per metre. Neighbouring lanes read neighbouring table entries when the span is
+    under ``LANES`` (:mod:`._simd`: a window of ``LANES`` entries is read without gathers).
     """
     nx, ny = x_m.size, y_m.size
-    if ny < LANES:
-        return False
     dx = abs(float(x_m[-1]) - float(x_m[0])) / max(nx - 1, 1)
     dy = abs(float(y_m[-1]) - float(y_m[0])) / max(ny - 1, 1)
-    cx = 0.5 * (float(x_m[0]) + float(x_m[-1]))
-    cy = 0.5 * (float(y_m[0]) + float(y_m[-1]))
-    ex = cx - positions[:, 0]
-    ey = cy - positions[:, 1]
+    ex = 0.5 * (float(x_m[0]) + float(x_m[-1])) - positions[:, 0]
+    ey = 0.5 * (float(y_m[0]) + float(y_m[-1])) - positions[:, 1]
     r = np.sqrt(ex * ex + ey * ey + positions[:, 2] ** 2)
-    return bool(dy * np.mean(np.abs(ey) / r) < dx * np.mean(np.abs(ex) / r))
+    scale = (LANES - 1) * idx_scale
+    return (scale * dx * float(np.mean(np.abs(ex) / r)),
+            scale * dy * float(np.mean(np.abs(ey) / r)))  # fmt: skip
 
 
 def backproject_f32(
@@ -331,11 +330,13 @@ def backproject_f32(
     one image of every pulse). Returns ``(re, im)``, shape
     ``(n_images, y_m.size, x_m.size)``, float64. ``steps`` parallel regions, each followed
     by a progress report. ``tile`` (rows, columns) is :func:`tile_shape`'s for this grid.
-    When :func:`lanes_along_y`, the sum runs on the grid mirrored about ``x = y`` (antennas
+    When the lanes would span fewer table entries along ``y`` than along ``x``
+    (:func:`lane_spans`), the sum runs on the grid mirrored about ``x = y`` (antennas
     too: every range is unchanged) with the tile :func:`tile_shape` gives there, and the
     images are transposed back.
     """
-    if lanes_along_y(positions, x_m, y_m):
+    span_x, span_y = lane_spans(positions, x_m, y_m, constants[0])
+    if y_m.size >= LANES and span_y < span_x:
         mirrored = np.ascontiguousarray(positions[:, [1, 0, 2]])
         tile_t = tile_shape(mirrored, y_m, x_m, constants[2])
         if tile_t is not None:

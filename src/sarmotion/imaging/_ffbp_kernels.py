@@ -24,7 +24,7 @@ from ._simd import LANES, tile_pulses
 #: The version of :mod:`._simd`'s inner loop compiled into this module's kernels. numba's
 #: on-disk cache keys on this file's contents, not on :mod:`._simd`'s: change this line
 #: whenever the inner loop or its table layout changes, or a stale kernel is loaded.
-SIMD_VERSION = "hermite-float16-planes-permute-1"
+SIMD_VERSION = "hermite-float16-planes-permute-3"
 
 _FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
 
@@ -58,25 +58,38 @@ def _add_child(dre, dim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compi
 
 @numba.njit(fastmath=_FASTMATH, inline="always")
 def _leaf_tile(
-    tab, j0, j1, ant_x, ant_y, ant_z2, ref, x0, dx, nx, y0, dy, r0, c0, nr, nc, idx_scale,
-    idx_offset, hi, quarter_scale, cu, cv, cz2, rref, ore, oim,
+    tab, j0, j1, ant_x, ant_y, ant_z2, ref, x0, dx, y0, dy, r0, c0, nr, nc, idx_scale,
+    idx_offset, hi, quarter_scale, cu, cv, cz2, rref, ore, oim, lanes_v,
 ):  # pragma: no cover - compiled  # fmt: skip
     """Pulses ``j0:j1`` on one tile (rows ``r0:r0 + nr``, columns ``c0:c0 + nc``), demodulated.
 
     The pulses are added as by exact backprojection
-    (:func:`~sarmotion.imaging._simd.tile_pulses`: float64 anchor, float32 pixels).
+    (:func:`~sarmotion.imaging._simd.tile_pulses`: float64 anchor, float32 pixels), its
+    SIMD lanes along the columns or, ``lanes_v``, along the rows (the tile's axes and the
+    antennas' ``x``, ``y`` swapped: every range is unchanged).
     """
-    ncp = (nc + LANES - 1) // LANES * LANES
     rc = r0 + nr // 2
     cc = c0 + nc // 2
     xc = x0 + cc * dx
     yc = y0 + rc * dy
-    acc_re = np.zeros(nr * ncp, np.float32)
-    acc_im = np.zeros(nr * ncp, np.float32)
-    tile_pulses(
-        tab, j0, j1, ant_x, ant_y, ant_z2, ref, xc, yc, dx, dy, c0, cc, r0, rc, nr, ncp,
-        idx_scale, idx_offset, hi, quarter_scale, acc_re, acc_im,
-    )  # fmt: skip
+    nrp = (nr + LANES - 1) // LANES * LANES if lanes_v else nr
+    ncp = nc if lanes_v else (nc + LANES - 1) // LANES * LANES
+    acc_re = np.zeros(nrp * ncp, np.float32)
+    acc_im = np.zeros(nrp * ncp, np.float32)
+    if lanes_v:  # acc[k * nrp + r]
+        tile_pulses(
+            tab, j0, j1, ant_y, ant_x, ant_z2, ref, yc, xc, dy, dx, r0, rc, c0, cc, nc, nrp,
+            idx_scale, idx_offset, hi, quarter_scale, acc_re, acc_im,
+        )  # fmt: skip
+        tre = acc_re.reshape(ncp, nrp).T.copy()  # acc[r * ncp + k], as below
+        tim = acc_im.reshape(ncp, nrp).T.copy()
+        acc_re = tre.reshape(-1)
+        acc_im = tim.reshape(-1)
+    else:  # acc[r * ncp + k]
+        tile_pulses(
+            tab, j0, j1, ant_x, ant_y, ant_z2, ref, xc, yc, dx, dy, c0, cc, r0, rc, nr, ncp,
+            idx_scale, idx_offset, hi, quarter_scale, acc_re, acc_im,
+        )  # fmt: skip
     for r in range(nr):
         dv = y0 + (r0 + r) * dy - cv
         c2 = dv * dv + cz2
@@ -93,14 +106,14 @@ def _leaf_tile(
 def level(
     re, im, tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale,
     idx_offset, n_up, quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim,
-    k0, ratio, g,
+    k0, ratio, g, lanes_v,
 ):  # pragma: no cover - compiled  # fmt: skip
     """One tree level: leaves ``0..L-1`` and parents ``L..L+P-1`` of ``re``, ``im``, in place.
 
     Leaf ``i < L = starts.size`` is the backprojection of pulses ``starts[i]:stops[i]``
     (table ``tab``, antennas ``ant_*``, reference ranges ``ref``) on rows
     ``v0[i] + r dv[i]``, ``r < nv[i]``, and columns ``x0 + k dx``, demodulated; one task per
-    ``tile_rows x tile_cols`` tile. Parent ``L + p`` (``p < P = kids.shape[0]``) is the sum of
+    ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v``. Parent ``L + p`` (``p < P = kids.shape[0]``) is the sum of
     children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
     ``g[child]``) resampled to its rows (:func:`_add_child`); one task per row.
     """
@@ -122,9 +135,9 @@ def level(
             nr = min(nv[i], r0 + tile_rows) - r0
             nc = min(nx, c0 + tile_cols) - c0
             _leaf_tile(
-                tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, nx, v0[i], dv[i],
+                tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, v0[i], dv[i],
                 r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv, cz2, rref,
-                re[i], im[i],
+                re[i], im[i], lanes_v,
             )  # fmt: skip
         else:
             p = (task - n_leaf_tasks) // n_rows
@@ -169,12 +182,15 @@ def root_rows(
             continue
         dv = ys[r] - cv
         c2 = dv * dv + cz2
-        for k in range(nu):
+        pc = np.empty(nu)
+        ps = np.empty(nu)
+        for k in range(nu):  # the phasors apart: this loop vectorises
             du = us[k] - cu
-            cs, sn = quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
+            pc[k], ps[k] = quarter_turns((math.sqrt(du * du + c2) - rref) * quarter_scale)
+        for k in range(nu):
             a = np.float64(dre[k])
             b = np.float64(dim[k])
-            out[r, k_lo + k] = complex(a * cs - b * sn, a * sn + b * cs)
+            out[r, k_lo + k] = complex(a * pc[k] - b * ps[k], a * ps[k] + b * pc[k])
 
 
 @numba.njit(fastmath=_FASTMATH, inline="always")
@@ -270,25 +286,55 @@ def resample(
 
 
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
-def window_edges(xs, ys, px, py, pz2, ref, d_lo, d_hi, margin):  # pragma: no cover - compiled
+def window_edges(xs, ys, px, py, pz2, ref, d_lo, d_hi, margin, block=32):
+    # pragma: no cover - compiled
     """``(ny, nx)`` mask of the pixels near an end of the fast-time window.
 
     Pixel ``(r, k)`` is marked when ``[min_j d_j - margin, max_j d_j + margin]`` holds
     ``d_lo`` or ``d_hi``, ``d_j = |p_j - rho| - ref[j]`` over the given antennas ``p_j``
-    (``pz2`` their squared heights).
+    (``pz2`` their squared heights). The pixels are visited in ``block x block`` squares;
+    a square is skipped when the same test fails for the extremes of ``d_j`` over its
+    rectangle (the nearest point: the antenna's ground position clamped into it; the
+    farthest: a corner, the distance being convex), widened by 1 um for rounding: no
+    pixel of it can be marked.
     """
     mask = np.zeros((ys.size, xs.size), np.bool_)
-    for r in numba.prange(ys.size):
-        for k in range(xs.size):
+    n_rb = (ys.size + block - 1) // block
+    n_kb = (xs.size + block - 1) // block
+    for rb in numba.prange(n_rb):
+        r0 = rb * block
+        r1 = min(ys.size, r0 + block)
+        ylo = min(ys[r0], ys[r1 - 1])
+        yhi = max(ys[r0], ys[r1 - 1])
+        for kb in range(n_kb):
+            k0 = kb * block
+            k1 = min(xs.size, k0 + block)
+            xlo = min(xs[k0], xs[k1 - 1])
+            xhi = max(xs[k0], xs[k1 - 1])
             lo = np.inf
             hi = -np.inf
             for j in range(px.size):
-                dx = xs[k] - px[j]
-                dy = ys[r] - py[j]
-                d = math.sqrt(dx * dx + dy * dy + pz2[j]) - ref[j]
-                lo = min(lo, d)
-                hi = max(hi, d)
-            lo -= margin
-            hi += margin
-            mask[r, k] = (lo <= d_lo <= hi) or (lo <= d_hi <= hi)
+                nx_ = min(max(px[j], xlo), xhi) - px[j]
+                ny_ = min(max(py[j], ylo), yhi) - py[j]
+                fx = max(abs(xlo - px[j]), abs(xhi - px[j]))
+                fy = max(abs(ylo - py[j]), abs(yhi - py[j]))
+                lo = min(lo, math.sqrt(nx_ * nx_ + ny_ * ny_ + pz2[j]) - ref[j])
+                hi = max(hi, math.sqrt(fx * fx + fy * fy + pz2[j]) - ref[j])
+            lo -= margin + 1e-6
+            hi += margin + 1e-6
+            if not ((lo <= d_lo <= hi) or (lo <= d_hi <= hi)):
+                continue
+            for r in range(r0, r1):
+                for k in range(k0, k1):
+                    lo = np.inf
+                    hi = -np.inf
+                    for j in range(px.size):
+                        dx = xs[k] - px[j]
+                        dy = ys[r] - py[j]
+                        d = math.sqrt(dx * dx + dy * dy + pz2[j]) - ref[j]
+                        lo = min(lo, d)
+                        hi = max(hi, d)
+                    lo -= margin
+                    hi += margin
+                    mask[r, k] = (lo <= d_lo <= hi) or (lo <= d_hi <= hi)
     return mask

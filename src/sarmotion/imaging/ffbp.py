@@ -116,6 +116,8 @@ from numpy.typing import NDArray
 
 from ..core import C, ProgressCallback
 from . import _ffbp_kernels as _kernels
+from ._bp_kernels import lane_spans
+from ._simd import LANES
 
 __all__ = ["FfbpPulses", "ffbp_values"]
 
@@ -389,6 +391,12 @@ def _filters(nodes: list[_Node], allowed: float) -> tuple[NDArray[np.float32], f
     return g, worst
 
 
+def _rows(grid: tuple[float, float, int]) -> NDArray[np.float64]:
+    """The rows ``v`` (m) of a sub-image grid ``(v0, dv, nv)``."""
+    v0, dv, nv = grid
+    return v0 + np.arange(nv) * dv
+
+
 def _evaluate(depths, frame: dict, tile_for, info: dict, report):
     """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes.
 
@@ -415,9 +423,22 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         re = np.empty((len(nodes), n_rows, us.size), np.float32)
         im = np.empty_like(re)
         tile = (n_rows, 64)
-        for v0, dv, nv in {(n.v0, n.dv, n.nv) for n in leaves}:
+        grids = sorted({(n.v0, n.dv, n.nv) for n in leaves})
+        # SIMD lanes along v where along u they would span more than a window of the
+        # table and along v less (:mod:`._simd` reads a window without gathers); else along
+        # u, where the tile's demodulation vectorises.
+        lanes_v = False
+        if grids:
+            span_u, span_v = lane_spans(frame["pos"], us, _rows(grids[0]),
+                                        frame["constants"][0])  # fmt: skip
+            lanes_v = span_u >= LANES and span_v < span_u
+        mirrored = np.ascontiguousarray(frame["pos"][:, [1, 0, 2]])
+        for grid in grids:
             # the smallest tile any leaf grid needs (in bounds for all)
-            rows, cols = tile_for(frame["pos"], us, v0 + np.arange(nv) * dv)
+            if lanes_v:  # the tile of the mirrored frame, its axes swapped back
+                cols, rows = tile_for(mirrored, _rows(grid), us)
+            else:
+                rows, cols = tile_for(frame["pos"], us, _rows(grid))
             tile = (min(tile[0], rows), min(tile[1], cols))
         starts = np.array([n.j0 for n in leaves], np.int64)
         stops = np.array([n.j1 for n in leaves], np.int64)
@@ -428,7 +449,7 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
                 np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]),
                 np.array([n.nv for n in nodes], np.int64), *frame["constants"][:2],
                 frame["n_up"], frame["constants"][2], tile[0], tile[1], *frame["centre"], kids,
-                cre, cim, k0, 2, g,
+                cre, cim, k0, 2, g, lanes_v,
             )  # fmt: skip
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
