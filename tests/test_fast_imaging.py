@@ -44,7 +44,7 @@ def four_degrees():
 @pytest.mark.parametrize("spacing_m", [0.25, 1.0])
 @pytest.mark.parametrize("velocity", [None, (11.0, -6.5)])
 def test_float32_kernel_matches_the_numpy_reference(four_degrees, spacing_m, velocity):
-    # 0.25 m: 64 x 64 tiles of 16 m; 1 m: tiles of 64 m, the largest phase offsets the
+    # 0.25 m: 32 x 64 tiles of 8 x 16 m; 1 m: tiles of 64 m, the largest phase offsets the
     # bounds allow. Partial tiles on both axes (90 x 70 pixels).
     grid = ImageGrid.from_extent(
         x_range_m=(-45 * spacing_m, 44.5 * spacing_m),
@@ -82,7 +82,7 @@ def test_near_range_geometry_uses_the_float64_kernel():
 def test_tile_bounds():
     pos = np.array([[7000.0, 0.0, 7300.0], [7000.0, 400.0, 7300.0]])
     x = np.arange(-64.0, 64.0, 0.25)
-    assert _bp_kernels.tile_shape(pos, x, x, 256.0) == (64, 64)
+    assert _bp_kernels.tile_shape(pos, x, x, 256.0) == _bp_kernels.TILES[0]  # the largest
     # 2 m pixels: 64-pixel tiles would span 128 m; smaller tiles keep the phase offsets.
     x2 = np.arange(-200.0, 200.0, 2.0)
     assert _bp_kernels.tile_shape(pos, x2, x2, 256.0) in ((32, 32), (16, 16))

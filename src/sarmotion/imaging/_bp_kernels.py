@@ -3,7 +3,7 @@
 Both evaluate ``sum_j D_j(dtau_j) exp(+i omega_o dtau_j)`` with ``D_j`` the cubic pieces of
 :mod:`._bp_table` (the error analysis is in :mod:`.backprojection`).
 
-- :func:`backproject_f32`, the default: image tiles of up to 64 x 64 pixels, one parallel
+- :func:`backproject_f32`, the default: image tiles of up to 32 x 64 pixels, one parallel
   task each; per pulse and tile the anchor pixel's range, table position and phase in
   float64, every other pixel as a float32 offset (:mod:`._simd`).
 - :func:`run_numba_f64`: the same sum in float64, for geometries where :func:`tile_shape`
@@ -29,7 +29,7 @@ from .grid import ImageGrid
 #: The version of :mod:`._simd`'s inner loop compiled into this module's kernels. numba's
 #: on-disk cache keys on this file's contents, not on :mod:`._simd`'s: change this line
 #: whenever the inner loop or its table layout changes, or a stale kernel is loaded.
-SIMD_VERSION = "hermite-float16-planes-permute-1"
+SIMD_VERSION = "hermite-float16-planes-window-4"
 
 #: Memory bound of the float64 tables held by the float64 kernel at once (bytes).
 _TABLE_BYTES = 128 * 2**20
@@ -48,8 +48,10 @@ _SERIES_TOLERANCE_M = 2e-8
 #: rounding stays below 1e-4 of an upsampled sample.
 _MAX_QUARTER_CYCLES = 4096.0
 #: Candidate tile shapes (rows, columns), preferred first; columns a multiple of LANES.
-#: Wide, short tiles serve grids with coarse rows (the sub-images of :mod:`.ffbp`).
-TILES = ((64, 64), (32, 64), (16, 64), (8, 64), (32, 32), (16, 32), (16, 16), (8, 16), (4, 16))
+#: Wide, short tiles serve grids with coarse rows (the sub-images of :mod:`.ffbp`). The
+#: largest, 32 x 64, keeps a tile's float32 accumulators (16 KiB) in a 32 KiB L1 data cache
+#: beside the table rows it reads.
+TILES = ((32, 64), (16, 64), (8, 64), (32, 32), (16, 32), (16, 16), (8, 16), (4, 16))
 
 
 class Antennas(NamedTuple):

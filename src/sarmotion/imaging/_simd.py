@@ -69,7 +69,7 @@ PERMUTE = LANES == 16 and _has_avx512()
 
 #: Change ``SIMD_VERSION`` in :mod:`._bp_kernels` and :mod:`._ffbp_kernels` with this IR
 #: (numba's cache of their kernels does not see this file).
-_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_planes{'_permute' if PERMUTE else ''}"
+_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_planes{'_window' if PERMUTE else ''}"
 
 
 def _f32(x: float) -> str:
@@ -145,16 +145,23 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
     if permute:
         # The lanes' entries within a window of ``v`` entries (the usual case on fine
         # grids): two vector loads and two two-source permutes per plane, no gather.
-        a(f"  %mn = call i32 @llvm.vector.reduce.smin.v{v}i32({vi} %ix)")
-        a(f"  %mx = call i32 @llvm.vector.reduce.smax.v{v}i32({vi} %ix)")
-        a("  %span = sub i32 %mx, %mn")
-        a(f"  %narrow = icmp ult i32 %span, {v}")
-        a("  br i1 %narrow, label %win, label %gat")
-        a("win:")
-        a("  %mn64 = sext i32 %mn to i64")
+        # The window starts 2 entries before the smaller of the end lanes' entries (a row
+        # of pixels reads monotone or nearly monotone entries), at entry 0 at the least.
+        a(f"  %ia = extractelement {vi} %ix, i64 0")
+        a(f"  %ib = extractelement {vi} %ix, i64 {v - 1}")
+        a("  %ab = icmp slt i32 %ia, %ib")
+        a("  %iab = select i1 %ab, i32 %ia, i32 %ib")
+        a("  %wlo = sub i32 %iab, 2")
+        a("  %mpos = icmp sgt i32 %wlo, 0")
+        a("  %mn = select i1 %mpos, i32 %wlo, i32 0")
         a(f"  %mn.i = insertelement {vi} poison, i32 %mn, i64 0")
         a(f"  %mn.v = shufflevector {vi} %mn.i, {vi} poison, {vi} zeroinitializer")
         a(f"  %rel = sub {vi} %ix, %mn.v")
+        a(f"  %inw = icmp ult {vi} %rel, splat (i32 {v})")
+        a(f"  %narrow = call i1 @llvm.vector.reduce.and.v{v}i1({vb} %inw)")
+        a("  br i1 %narrow, label %win, label %gat")
+        a("win:")
+        a("  %mn64 = sext i32 %mn to i64")
         a(f"  %rel64 = zext {vi} %rel to {vl}")
         h = v // 2
         v8 = f"<{h} x i64>"
@@ -253,8 +260,7 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
     a(f"declare {vf} @llvm.rint.v{v}f32({vf})")
     a(f"declare {vl} @llvm.masked.gather.v{v}i64.v{v}p0({vp}, i32, {vb}, {vl})")
     if permute:
-        a(f"declare i32 @llvm.vector.reduce.smin.v{v}i32({vi})")
-        a(f"declare i32 @llvm.vector.reduce.smax.v{v}i32({vi})")
+        a(f"declare i1 @llvm.vector.reduce.and.v{v}i1({vb})")
         a("declare <8 x i64> @llvm.x86.avx512.vpermi2var.q.512(<8 x i64>, <8 x i64>, <8 x i64>)")
     width = 32 * v
     a(f'attributes #0 = {{ noinline nounwind "prefer-vector-width"="{width}" '
