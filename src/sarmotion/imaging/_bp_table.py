@@ -15,8 +15,8 @@ matches ``D`` and ``D'`` at both ends; its error bound is derived in
 coefficients: entry ``p`` is the piece starting at upsampled sample ``p - 1``; entries 0
 and ``N + 1`` are zero (read for delays outside the fast-time window, with ``w = 0``).
 
-The float32 kernel's tables are packed in 24 bytes per entry (:class:`TraceTable`) and kept
-in a small cache
+The float32 kernel's tables are packed in eight float32 planes (:class:`TraceTable`) and
+kept in a small cache
 (:data:`TABLES`) keyed by the traces object; the cache is locked, so threads (Dask
 workers) may image concurrently.
 """
@@ -102,13 +102,13 @@ def hermite_coefficients(
     return out
 
 
-#: Words after each plane of a :class:`TraceTable` row: a window of 16 entries read from any
-#: entry stays inside the row.
-PLANE_PAD = 16
+#: Entries after each plane of a :class:`TraceTable` row: a window of 32 entries read from
+#: any entry stays inside the row.
+PLANE_PAD = 32
 
 
 def plane_length(n_up: int) -> int:
-    """Words per plane of a :class:`TraceTable` row: ``n_up + 2`` entries and the padding."""
+    """Floats per plane of a :class:`TraceTable` row: ``n_up + 2`` entries and the padding."""
     return n_up + 2 + PLANE_PAD
 
 
@@ -116,21 +116,15 @@ def plane_length(n_up: int) -> int:
 class TraceTable:
     """The cubic pieces of one traces object, packed as the float32 kernel reads them.
 
-    ``values`` is ``(n_pulses, 1 + 3 L)`` uint64, ``L = plane_length(n_up)``: per pulse,
-    word 0 holds ``e + 1024``, then three planes of ``L`` words, entry ``p`` of
-    :func:`hermite_coefficients` at word ``p`` of each: ``c0`` as complex64, ``c1`` as
-    complex64, and ``(Re c2, Im c2, Re c3, Im c3) / 2^e`` as four float16, ``2^e`` the
-    pulse's largest of those (a power of two: the scaling is exact); the last
-    :data:`PLANE_PAD` words of a plane are zero. So one pixel reads three 64-bit words, not
-    four, and the entries of neighbouring pixels are contiguous in each plane. Rounding:
-    ``6e-8`` relative for ``c0``, ``c1``; ``2^-11`` relative (``2^-25`` absolute below the
-    float16 normal range, of ``2^e``) for ``c2``, ``c3``, which are ``(pi / upsample)^2 / 2``
-    and ``(pi / upsample)^3 / 6`` of the trace's amplitude at most: at ``upsample = 6`` an
-    error below ``7e-5`` of the amplitude at the band edge, some 30 dB under the
-    interpolation's own in mean square.
+    ``values`` is ``(n_pulses, 8 L)`` float32, ``L = plane_length(n_up)``: per pulse, eight
+    planes of ``L`` floats, the real and imaginary parts of ``c0``, ``c1``, ``c2``, ``c3`` of
+    :func:`hermite_coefficients` (entry ``p`` at float ``p`` of each plane), the last
+    :data:`PLANE_PAD` floats of a plane zero. The entries of neighbouring pixels are
+    contiguous in each plane (:mod:`._simd`). Rounding: ``6e-8`` relative for each
+    coefficient.
     """
 
-    values: NDArray[np.uint64]
+    values: NDArray[np.float32]
     upsample: int
     n_up: int
 
@@ -141,34 +135,20 @@ def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
     coef = hermite_coefficients(data, factor)
     big = factor * n
     length = plane_length(big)
-    high = np.stack([coef[..., 2].real, coef[..., 2].imag, coef[..., 3].real, coef[..., 3].imag],
-                    axis=-1).reshape(m, -1)  # fmt: skip
-    peak = np.abs(high).max(axis=1)
-    e = np.where(peak > 0, np.ceil(np.log2(np.where(peak > 0, peak, 1.0))), 0.0).astype(np.int64)
-    values = np.zeros((m, 1 + 3 * length), np.uint64)
-    values[:, 0] = (e + 1024).astype(np.uint64)
-    planes = values[:, 1:].reshape(m, 3, length)
-    planes[:, 0, : big + 2] = np.ascontiguousarray(coef[..., 0], np.complex64).view(np.uint64)
-    planes[:, 1, : big + 2] = np.ascontiguousarray(coef[..., 1], np.complex64).view(np.uint64)
-    scaled = np.ldexp(high, -e[:, None]).astype(np.float16).reshape(m, big + 2, 4)
-    planes[:, 2, : big + 2] = np.ascontiguousarray(scaled).view(np.uint64)[..., 0]
+    values = np.zeros((m, 8 * length), np.float32)
+    planes = values.reshape(m, 8, length)
+    for k in range(4):
+        planes[:, 2 * k, : big + 2] = coef[..., k].real
+        planes[:, 2 * k + 1, : big + 2] = coef[..., k].imag
     return TraceTable(values=values, upsample=factor, n_up=big)
 
 
 def unpack_table(table: TraceTable) -> NDArray[np.complex128]:
     """The coefficients a :class:`TraceTable` holds, ``(n_pulses, n_up + 2, 4)`` complex128."""
     m = table.values.shape[0]
-    e = table.values[:, 0].astype(np.int64) - 1024
     n = table.n_up + 2
-    planes = table.values[:, 1:].reshape(m, 3, plane_length(table.n_up))[:, :, :n]
-    out = np.empty((m, n, 4), np.complex128)
-    out[..., 0] = np.ascontiguousarray(planes[:, 0]).view(np.complex64)
-    out[..., 1] = np.ascontiguousarray(planes[:, 1]).view(np.complex64)
-    half = np.ascontiguousarray(planes[:, 2]).view(np.float16).reshape(m, n, 4)
-    high = np.ldexp(half.astype(np.float64), e[:, None, None])
-    out[..., 2] = high[..., 0] + 1j * high[..., 1]
-    out[..., 3] = high[..., 2] + 1j * high[..., 3]
-    return out
+    planes = table.values.reshape(m, 8, plane_length(table.n_up))[:, :, :n].astype(np.float64)
+    return np.stack([planes[:, 2 * k] + 1j * planes[:, 2 * k + 1] for k in range(4)], axis=-1)
 
 
 class TableCache:

@@ -7,23 +7,26 @@ pixels (``n`` a multiple of :data:`LANES`) it evaluates, ``LANES`` pixels at a t
     nl     = N^2 (a2 + N (a3 + N a4))                         (range series beyond linear, m)
     delta  = a1 N + nl                                        (range offset from the anchor, m)
     q      = f0 + delta si ;  i = floor(q) ;  w = q - i         (fast-time table position)
-    v      = c0 + w (c1 + w sc (c2 + w c3))                    (cubic piece i0 + i, complex)
+    v      = c0 + w (c1 + w (c2 + w c3))                       (cubic piece i0 + i, complex)
     T      = Tx[k] + Ty[r] + nl sq                             (carrier phase, quarter cycles)
     acc   += v exp(i pi T / 2)
 
 ``Tx``, ``Ty`` carry the anchor's phase and the phase of the linear term ``a1 N``, formed in
 float64 and reduced to ``[-2, 2)`` by the caller (:func:`tile_pulses`), so only ``nl sq``
 (a few quarter cycles) is float32. ``tab`` holds the pulse's cubic pieces
-(:class:`~sarmotion.imaging._bp_table.TraceTable`): per entry three 64-bit words, ``c0`` and
-``c1`` as complex64 and ``c2``, ``c3`` as four float16 scaled by ``1 / sc``; one 64-bit
-gather per word, two shuffles to de-interleave, a float16 conversion. Positions outside
-``[1, hi)`` read entry 0 (zero) with ``w = 0``. ``exp(i pi T / 2)`` is
-``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``, with minimax polynomials on
-``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4 terms, 5.4e-8).
+(:class:`~sarmotion.imaging._bp_table.TraceTable`) in eight float32 planes (the real and
+imaginary parts of ``c0 .. c3``), so the lanes' entries of one plane arrive in one vector
+without de-interleaving: where they lie within a window of ``2 LANES`` entries (neighbouring
+pixels read neighbouring entries: the usual case, see
+:func:`~sarmotion.imaging._bp_kernels.lane_spans`), two vector loads and one two-source
+permute per plane (AVX-512, :data:`PERMUTE`); otherwise, and on other CPUs, one gather per
+plane. Positions outside ``[1, hi)`` read entry 0 (zero) with ``w = 0``.
+``exp(i pi T / 2)`` is ``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``, with minimax
+polynomials on ``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4 terms, 5.4e-8).
 
 Why IR and not a numba loop: numba's auto-vectoriser gives 8-lane loops with 64-bit-index
-gathers of single floats; this loop is written for 16 lanes and fetches whole 64-bit words.
-The IR is generic LLVM (vector types, ``llvm.masked.gather``, ``half``): on a CPU without
+gathers; this loop is written for 16 lanes and reads the table by windows. Without
+AVX-512 the IR is generic LLVM (vector types, ``llvm.masked.gather``): on a CPU without
 gathers or 512-bit registers LLVM splits or scalarises it, and the result is the same.
 
 The function is linked into each numba function that calls :func:`tile_pulse` (weak ODR
@@ -69,7 +72,9 @@ PERMUTE = LANES == 16 and _has_avx512()
 
 #: Change ``SIMD_VERSION`` in :mod:`._bp_kernels` and :mod:`._ffbp_kernels` with this IR
 #: (numba's cache of their kernels does not see this file).
-_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_planes{'_window' if PERMUTE else ''}"
+_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_f32planes{'_window' if PERMUTE else ''}"
+#: The table's planes, in order (:class:`~sarmotion.imaging._bp_table.TraceTable`).
+_PLANES = ("c0re", "c0im", "c1re", "c1im", "c2re", "c2im", "c3re", "c3im")
 
 
 def _f32(x: float) -> str:
@@ -92,13 +97,14 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
             acc = f"%{name}{i}"
         return acc
 
-    scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi", "sc"]
+    scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi"]
     a(f"define weak_odr void @{_NAME}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tx,"
       " ptr noalias %ty, ptr noalias %tab,"
       " ptr noalias %acc_re, ptr noalias %acc_im, i64 %n, i64 %n_rows, i64 %stride, i64 %plane, "
       + ", ".join(f"float %{s}" for s in scalars) + ") #0 {")  # fmt: skip
     a("entry:")
-    a("  %plane2 = shl i64 %plane, 1")
+    for p in range(len(_PLANES)):
+        a(f"  %pl{p} = mul i64 %plane, {p}")
     for s in scalars:
         a(f"  %{s}.i = insertelement {vf} poison, float %{s}, i64 0")
         a(f"  %{s}.v = shufflevector {vf} %{s}.i, {vf} poison, {vi} zeroinitializer")
@@ -140,78 +146,53 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
     a(f"  %ix0 = fptosi {vf} %fa to {vi}")
     a(f"  %ix = select {vb} %ok, {vi} %ix0, {vi} zeroinitializer")
     a(f"  %wk = select {vb} %ok, {vf} %w, {vf} zeroinitializer")
-    gather = f"@llvm.masked.gather.v{v}i64.v{v}p0"
-    vh = f"<{v} x half>"
+    gather = f"@llvm.masked.gather.v{v}f32.v{v}p0"
+    window = 2 * v  # entries a two-source permute reaches
     if permute:
-        # The lanes' entries within a window of ``v`` entries (the usual case on fine
-        # grids): two vector loads and two two-source permutes per plane, no gather.
-        # The window starts 2 entries before the smaller of the end lanes' entries (a row
-        # of pixels reads monotone or nearly monotone entries), at entry 0 at the least.
+        # The lanes' entries within a window of 2 v entries (the usual case): two vector
+        # loads and one two-source permute per plane, no gather. The window starts 4
+        # entries before the smaller of the end lanes' entries (a row of pixels reads
+        # monotone or nearly monotone entries), at entry 0 at the least.
         a(f"  %ia = extractelement {vi} %ix, i64 0")
         a(f"  %ib = extractelement {vi} %ix, i64 {v - 1}")
         a("  %ab = icmp slt i32 %ia, %ib")
         a("  %iab = select i1 %ab, i32 %ia, i32 %ib")
-        a("  %wlo = sub i32 %iab, 2")
+        a("  %wlo = sub i32 %iab, 4")
         a("  %mpos = icmp sgt i32 %wlo, 0")
         a("  %mn = select i1 %mpos, i32 %wlo, i32 0")
         a(f"  %mn.i = insertelement {vi} poison, i32 %mn, i64 0")
         a(f"  %mn.v = shufflevector {vi} %mn.i, {vi} poison, {vi} zeroinitializer")
         a(f"  %rel = sub {vi} %ix, %mn.v")
-        a(f"  %inw = icmp ult {vi} %rel, splat (i32 {v})")
+        a(f"  %inw = icmp ult {vi} %rel, splat (i32 {window})")
         a(f"  %narrow = call i1 @llvm.vector.reduce.and.v{v}i1({vb} %inw)")
         a("  br i1 %narrow, label %win, label %gat")
         a("win:")
         a("  %mn64 = sext i32 %mn to i64")
-        a(f"  %rel64 = zext {vi} %rel to {vl}")
-        h = v // 2
-        v8 = f"<{h} x i64>"
-        lo = ", ".join(f"i32 {i}" for i in range(h))
-        hi_ = ", ".join(f"i32 {i}" for i in range(h, v))
-        both = ", ".join(f"i32 {i}" for i in range(v))
-        a(f"  %rlo = shufflevector {vl} %rel64, {vl} poison, <{h} x i32> <{lo}>")
-        a(f"  %rhi = shufflevector {vl} %rel64, {vl} poison, <{h} x i32> <{hi_}>")
-        for k, g in enumerate("abc"):
-            a(f"  %off{g} = add i64 %mn64, {'0' if k == 0 else ('%plane' if k == 1 else '%plane2')}")
-            a(f"  %w{g}0.p = getelementptr inbounds i64, ptr %tab, i64 %off{g}")
-            a(f"  %w{g}1.p = getelementptr inbounds i64, ptr %w{g}0.p, i64 {h}")
-            a(f"  %w{g}0 = load {v8}, ptr %w{g}0.p, align 8")
-            a(f"  %w{g}1 = load {v8}, ptr %w{g}1.p, align 8")
-            for part in ("lo", "hi"):
-                a(f"  %w{g}{part} = call {v8} @llvm.x86.avx512.vpermi2var.q.512({v8} %w{g}0,"
-                  f" {v8} %r{part}, {v8} %w{g}1)")
-            a(f"  %w{g} = shufflevector {v8} %w{g}lo, {v8} %w{g}hi, {vi} <{both}>")
+        for p, name in enumerate(_PLANES):
+            a(f"  %w{name}.o = add i64 %mn64, %pl{p}")
+            a(f"  %w{name}.p0 = getelementptr inbounds float, ptr %tab, i64 %w{name}.o")
+            a(f"  %w{name}.p1 = getelementptr inbounds float, ptr %w{name}.p0, i64 {v}")
+            a(f"  %w{name}.0 = load {vf}, ptr %w{name}.p0, align 4")
+            a(f"  %w{name}.1 = load {vf}, ptr %w{name}.p1, align 4")
+            a(f"  %w{name} = call {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf} %w{name}.0,"
+              f" {vi} %rel, {vf} %w{name}.1)")
         a("  br label %got")
         a("gat:")
-    a(f"  %pa = getelementptr inbounds i64, ptr %tab, {vi} %ix")
-    a(f"  %pb = getelementptr inbounds i64, {vp} %pa, i64 %plane")
-    a(f"  %pc = getelementptr inbounds i64, {vp} %pa, i64 %plane2")
-    for g in "abc":
-        name = f"%q{g}" if permute else f"%g{g}"
-        a(f"  {name} = call {vl} {gather}({vp} %p{g}, i32 8, {vb} splat (i1 true), {vl} poison)")
+    a(f"  %pbase = getelementptr inbounds float, ptr %tab, {vi} %ix")
+    for p, name in enumerate(_PLANES):
+        a(f"  %p{name} = getelementptr inbounds float, {vp} %pbase, i64 %pl{p}")
+        target = f"%q{name}" if permute else f"%{name}"
+        a(f"  {target} = call {vf} {gather}({vp} %p{name}, i32 4, {vb} splat (i1 true),"
+          f" {vf} poison)")
     if permute:
         a("  br label %got")
         a("got:")
-        for g in "abc":
-            a(f"  %g{g} = phi {vl} [%w{g}, %win], [%q{g}, %gat]")
-    even = ", ".join(f"i32 {2 * i}" for i in range(v))
-    odd = ", ".join(f"i32 {2 * i + 1}" for i in range(v))
-    for g in "ab":  # c0, c1: complex64
-        a(f"  %{g}f = bitcast {vl} %g{g} to <{2 * v} x float>")
-        pair = f"<{2 * v} x float> %{g}f, <{2 * v} x float> poison"
-        a(f"  %{g}re = shufflevector {pair}, {vi} <{even}>")
-        a(f"  %{g}im = shufflevector {pair}, {vi} <{odd}>")
-    # c2, c3: four float16 (c2 re, c2 im, c3 re, c3 im) scaled by 1 / sc
-    a(f"  %cf = bitcast {vl} %gc to <{4 * v} x half>")
-    for name, q in (("cre", 0), ("cim", 1), ("dre", 2), ("dim", 3)):
-        idx = ", ".join(f"i32 {4 * i + q}" for i in range(v))
-        halves = f"<{4 * v} x half> %cf, <{4 * v} x half> poison"
-        a(f"  %{name}.h = shufflevector {halves}, {vi} <{idx}>")
-        a(f"  %{name} = fpext {vh} %{name}.h to {vf}")
+        for name in _PLANES:
+            a(f"  %{name} = phi {vf} [%w{name}, %win], [%q{name}, %gat]")
     for part in ("re", "im"):
-        a(f"  %h2{part} = call fast {vf} {fma}({vf} %wk, {vf} %d{part}, {vf} %c{part})")
-        a(f"  %h2s{part} = fmul fast {vf} %h2{part}, %sc.v")
-        a(f"  %h1{part} = call fast {vf} {fma}({vf} %wk, {vf} %h2s{part}, {vf} %b{part})")
-        a(f"  %v{part} = call fast {vf} {fma}({vf} %wk, {vf} %h1{part}, {vf} %a{part})")
+        a(f"  %h2{part} = call fast {vf} {fma}({vf} %wk, {vf} %c3{part}, {vf} %c2{part})")
+        a(f"  %h1{part} = call fast {vf} {fma}({vf} %wk, {vf} %h2{part}, {vf} %c1{part})")
+        a(f"  %v{part} = call fast {vf} {fma}({vf} %wk, {vf} %h1{part}, {vf} %c0{part})")
     a(f"  %T = call fast {vf} {fma}({vf} %nl, {vf} %sq.v, {vf} %txy)")
     a(f"  %kq = call fast {vf} @llvm.rint.v{v}f32({vf} %T)")
     a(f"  %x = fsub fast {vf} %T, %kq")
@@ -258,10 +239,10 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
     a(f"declare {vf} {fma}({vf}, {vf}, {vf})")
     a(f"declare {vf} @llvm.floor.v{v}f32({vf})")
     a(f"declare {vf} @llvm.rint.v{v}f32({vf})")
-    a(f"declare {vl} @llvm.masked.gather.v{v}i64.v{v}p0({vp}, i32, {vb}, {vl})")
+    a(f"declare {vf} {gather}({vp}, i32, {vb}, {vf})")
     if permute:
         a(f"declare i1 @llvm.vector.reduce.and.v{v}i1({vb})")
-        a("declare <8 x i64> @llvm.x86.avx512.vpermi2var.q.512(<8 x i64>, <8 x i64>, <8 x i64>)")
+        a(f"declare {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf}, {vi}, {vf})")
     width = 32 * v
     a(f'attributes #0 = {{ noinline nounwind "prefer-vector-width"="{width}" '
       f'"min-legal-vector-width"="{width}" }}')  # fmt: skip
@@ -275,24 +256,24 @@ llvm.parse_assembly(_IR).verify()  # fail at import, not inside a compilation
 @intrinsic
 def tile_pulse(
     typingctx, nx, ny, tx, ty, tab, tab_offset, acc_re, acc_im, n, n_rows, stride, plane,
-    f0, i0f, a1, a2, a3, a4, si, sq, hi, sc,
+    f0, i0f, a1, a2, a3, a4, si, sq, hi,
 ):  # fmt: skip
     """Add one pulse to one tile (see the module docstring); compiled code only.
 
-    ``nx``, ``tx`` (float32, >= n), ``ny``, ``ty`` (float32, >= n_rows), ``tab`` (the uint64
+    ``nx``, ``tx`` (float32, >= n), ``ny``, ``ty`` (float32, >= n_rows), ``tab`` (the float32
     table, the pulse's entries starting at flat index ``tab_offset``), ``acc_re`` /
-    ``acc_im`` (float32, row ``r`` at ``r * stride``); the ten scalars are float32.
+    ``acc_im`` (float32, row ``r`` at ``r * stride``), ``plane`` the floats per plane of
+    ``tab``; the nine scalars are float32.
     """
     f = types.float32
     i = types.int64
-    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, i, f, f, f, f, f, f, f, f, f,
-                     f)  # fmt: skip
+    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, i, f, f, f, f, f, f, f, f, f)
 
     def codegen(context, builder, signature, args):
         context.active_code_library.add_llvm_module(llvm.parse_assembly(_IR))
         byte_ptr = ir.IntType(8).as_pointer()
         i64 = ir.IntType(64)
-        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 7 + [i64] * 4 + [ir.FloatType()] * 10)
+        fnty = ir.FunctionType(ir.VoidType(), [byte_ptr] * 7 + [i64] * 4 + [ir.FloatType()] * 9)
         fn = cgutils.get_or_insert_function(builder.module, fnty, _NAME)
 
         def data(k: int, offset=None):
@@ -324,7 +305,7 @@ def tile_pulses(
     by exact backprojection and the FFBP leaves.
     """
     stride = tab.shape[1]
-    plane = (stride - 1) // 3
+    plane = stride // 8
     f32 = np.float32
     si = f32(idx_scale)
     sq = f32(quarter_scale)
@@ -358,10 +339,9 @@ def tile_pulses(
             nyv[r] = nr_
             t = lin * nr_
             tyv[r] = t - 4.0 * np.rint(0.25 * t)
-        scale = f32(math.ldexp(1.0, np.int64(tab[j, 0]) - 1024))
         tile_pulse(
-            nxv, nyv, txv, tyv, tab, j * stride + 1, acc_re, acc_im, ncp, nr, ncp, plane,
+            nxv, nyv, txv, tyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp, plane,
             f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
             f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
-            si, sq, hi, scale,
+            si, sq, hi,
         )  # fmt: skip

@@ -55,10 +55,9 @@ a degree-4 series in ``N = Nx[column] + Ny[row]``. The phase of the term linear 
 formed per column and per row in float64 and reduced exactly to a quarter cycle; only the
 series' higher terms (a few quarter cycles at most, float32 rounding ``~1e-7`` of them) and
 the table position (a few hundred samples from the anchor, float32 rounding ``< 3e-5`` of a
-sample, an error below ``(pi / upsample) 3e-5 A``) are float32. The table holds ``c0``,
-``c1`` as complex64 (``6e-8`` relative) and ``c2``, ``c3`` as float16 scaled per pulse
-(``2^-11`` relative, an error below ``2^-11 ((pi / upsample)^2 / 2 + (pi / upsample)^3 / 6)
-A``, ``7e-5 A`` at 6, :class:`~._bp_table.TraceTable`). Each of these bounds lies under the
+sample, an error below ``(pi / upsample) 3e-5 A``) are float32. The table holds ``c0`` to
+``c3`` as complex64 (``6e-8`` relative, :class:`~._bp_table.TraceTable`). Each of these
+bounds lies under the
 interpolation's, and they are uncorrelated with it and with each other, so they add in
 power to a small fraction of it. Before each call the
 truncation error of the series and the largest offsets are bounded from the geometry;

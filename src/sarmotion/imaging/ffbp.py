@@ -599,7 +599,7 @@ class FfbpPulses:
 
     Attributes
     ----------
-    table_values : (n_pulses, 1 + 3 plane_length(n_up)) ndarray
+    table_values : (n_pulses, 8 plane_length(n_up)) ndarray
         Trace table (:attr:`~._bp_table.TraceTable.values`).
     positions : (n_pulses, 3) ndarray
         Effective antenna positions ``r(s_j) - s_j u`` (m), float64.
@@ -615,7 +615,7 @@ class FfbpPulses:
         ``nu_o`` and ``B`` (Hz).
     """
 
-    table_values: NDArray[np.uint64]
+    table_values: NDArray[np.float32]
     positions: NDArray[np.float64]
     ref_ranges: NDArray[np.float64]
     reference_point_m: NDArray[np.float64]
