@@ -108,6 +108,7 @@ sub-images; here the sub-images share the image columns and a common demodulatio
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field, replace
 
 import numba
@@ -141,6 +142,8 @@ DEFAULT_ALPHA = 1.4
 #: (:func:`default_taps`). Each depth of a tree uses the fewest taps its own bands need
 #: (:func:`_filters`).
 TAPS = 14
+#: Bytes of sub-image planes a thread keeps between calls (:func:`_planes`).
+SCRATCH_BYTES = 512 * 2**20
 #: Smallest leaf (pulses).
 _MIN_LEAF = 2
 #: Cost of a merged sample in pixel-pulses (two children, half the rows interpolated).
@@ -391,6 +394,31 @@ def _filters(nodes: list[_Node], allowed: float) -> tuple[NDArray[np.float32], f
     return g, worst
 
 
+_SCRATCH = threading.local()
+
+
+def _planes(slot: int, shape: tuple[int, int, int]) -> tuple[NDArray, NDArray]:
+    """Uninitialised float32 planes ``(re, im)`` of ``shape`` for one depth of the tree.
+
+    Views of the calling thread's scratch buffer ``slot`` (depths alternate between 0 and
+    1: a depth's planes and its children's are never the same), kept between calls while
+    the buffers stay within :data:`SCRATCH_BYTES`: the operating system zeroes fresh memory
+    on first touch, which at 2048 x 2048 costs about as much as all the merges. The planes
+    are valid until the thread's next FFBP call.
+    """
+    pool = getattr(_SCRATCH, "pool", None)
+    if pool is None:
+        pool = _SCRATCH.pool = {}
+    n = math.prod(shape)
+    buf = pool.get(slot)
+    if buf is None or buf.shape[1] < n:
+        pool.pop(slot, None)
+        buf = np.empty((2, n), np.float32)
+        if buf.nbytes + sum(b.nbytes for b in pool.values()) <= SCRATCH_BYTES:
+            pool[slot] = buf
+    return buf[0, :n].reshape(shape), buf[1, :n].reshape(shape)
+
+
 def _rows(grid: tuple[float, float, int]) -> NDArray[np.float64]:
     """The rows ``v`` (m) of a sub-image grid ``(v0, dv, nv)``."""
     v0, dv, nv = grid
@@ -420,8 +448,7 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         split = nodes[len(leaves) :]
         n_rows = max(n.nv for n in nodes)
         # Every row a parent reads is written (leaf tiles and merged rows below nv).
-        re = np.empty((len(nodes), n_rows, us.size), np.float32)
-        im = np.empty_like(re)
+        re, im = _planes(d % 2, (len(nodes), n_rows, us.size))
         tile = (n_rows, 64)
         grids = sorted({(n.v0, n.dv, n.nv) for n in leaves})
         # SIMD lanes along v where along u they would span more than a window of the
