@@ -10,7 +10,19 @@ import numpy as np
 import pytest
 
 from sarmotion.core import Trajectory
-from sarmotion.imaging import ImageGrid, _bp_kernels, _bp_table, backproject, ffbp
+from llvmlite import binding as llvm
+
+from sarmotion.imaging import (
+    ImageGrid,
+    _bp_kernels,
+    _bp_table,
+    _ffbp_kernels,
+    _simd,
+    backproject,
+    ffbp,
+)
+from sarmotion.imaging._bp_common import kernel_constants
+from sarmotion.imaging._simd import LANES
 from sarmotion.imaging.ffbp import half_sample_filter
 from sarmotion.io import read_gotcha
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate
@@ -66,6 +78,68 @@ def test_float32_kernel_on_gotcha(gotcha_files):
     fast = backproject(tr, grid).values
     ref = backproject(tr, grid, kernel="numpy").values
     assert _ser_db(ref, fast) >= 100.0  # as above
+
+
+@pytest.mark.parametrize(
+    ("look_deg", "spacing_m", "path"),
+    [(0.0, 0.25, "window, lanes along y"), (90.0, 0.25, "window, lanes along x"),
+     (45.0, 1.0, "gathers")],
+)  # fmt: skip
+def test_float32_kernel_reads_the_table_by_windows_or_gathers(look_deg, spacing_m, path):
+    # The table is read by windows of 2 LANES entries where neighbouring lanes read
+    # neighbouring entries, else gathered (sarmotion.imaging._simd); the lanes run along
+    # the axis where the range changes slowest. Every path sums the same pieces.
+    tr = _scene(centre_azimuth_deg=look_deg)
+    grid = ImageGrid.from_extent(x_range_m=(-45 * spacing_m, 44.5 * spacing_m),
+                                 y_range_m=(-40 * spacing_m, 39.5 * spacing_m),
+                                 spacing_m=spacing_m)  # fmt: skip
+    consts = kernel_constants(tr.radar.sample_interval_s, tr.radar.carrier_hz, 6,
+                              6 * tr.n_samples)  # fmt: skip
+    span_x, span_y = _bp_kernels.lane_spans(tr.positions_m, grid.x_m, grid.y_m, consts[0])
+    if path == "gathers":  # the premise: no axis keeps the lanes within a window
+        assert min(span_x, span_y) > 2 * LANES
+    else:
+        assert min(span_x, span_y) < LANES / 2
+        assert (span_y < span_x) == path.endswith("along y")
+    fast = backproject(tr, grid)
+    assert fast.metadata["kernel_variant"] == "numba-float32"
+    ref = backproject(tr, grid, kernel="numpy").values
+    assert _ser_db(ref, fast.values) >= 100.0  # as in the test above
+
+
+def test_inner_loop_ir_with_and_without_windows():
+    # Both variants of the inner loop are valid IR (the window path needs AVX-512; CPUs
+    # without it compile the gathers alone).
+    for permute in (False, True):
+        ir = _simd._build_ir(permute=permute)
+        llvm.parse_assembly(ir).verify()
+        assert ("vpermi2var" in ir) == permute
+
+
+def test_window_edge_mask_skips_only_blocks_without_edges(four_degrees):
+    # The mask of pixels near an end of the fast-time window, computed block by block with
+    # the range's extremes over each block first, equals the pixel-by-pixel test.
+    tr = four_degrees
+    consts = kernel_constants(tr.radar.sample_interval_s, tr.radar.carrier_hz, 6,
+                              6 * tr.n_samples)  # fmt: skip
+    d_lo = (1.0 - consts[1]) / consts[0]
+    d_hi = (6 * tr.n_samples - consts[1]) / consts[0]
+    half = 2.0 * max(-d_lo, d_hi)  # ground metres: the window's ends cross the grid
+    x = np.arange(-half, half, 0.7)
+    y = np.arange(-half, half, 0.9)[::-1].copy()
+    p = tr.positions_m[:: max(1, tr.n_pulses // 5)]
+    ref = np.linalg.norm(p - tr.reference_point_m, axis=1)
+    margin = 0.5
+    mask = _ffbp_kernels.window_edges(x, y, p[:, 0].copy(), p[:, 1].copy(), p[:, 2] ** 2, ref,
+                                      d_lo, d_hi, margin)  # fmt: skip
+    d = np.sqrt((x[None, None, :] - p[:, 0, None, None]) ** 2
+                + (y[None, :, None] - p[:, 1, None, None]) ** 2
+                + p[:, 2, None, None] ** 2) - ref[:, None, None]  # fmt: skip
+    lo = d.min(axis=0) - margin
+    hi = d.max(axis=0) + margin
+    want = ((lo <= d_lo) & (d_lo <= hi)) | ((lo <= d_hi) & (d_hi <= hi))
+    assert 0 < want.sum() < want.size  # the premise: edges and blocks without them
+    np.testing.assert_array_equal(mask, want)
 
 
 def test_near_range_geometry_uses_the_float64_kernel():
