@@ -8,10 +8,9 @@ import math
 
 import numpy as np
 import pytest
-
-from sarmotion.core import Trajectory
 from llvmlite import binding as llvm
 
+from sarmotion.core import Trajectory
 from sarmotion.imaging import (
     ImageGrid,
     _bp_kernels,

@@ -113,7 +113,8 @@ def level(
     Leaf ``i < L = starts.size`` is the backprojection of pulses ``starts[i]:stops[i]``
     (table ``tab``, antennas ``ant_*``, reference ranges ``ref``) on rows
     ``v0[i] + r dv[i]``, ``r < nv[i]``, and columns ``x0 + k dx``, demodulated; one task per
-    ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v``. Parent ``L + p`` (``p < P = kids.shape[0]``) is the sum of
+    ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v``. Parent
+    ``L + p`` (``p < P = kids.shape[0]``) is the sum of
     children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
     ``g[child]``) resampled to its rows (:func:`_add_child`); one task per row.
     """

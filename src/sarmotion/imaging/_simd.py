@@ -55,7 +55,6 @@ _SIN = (1.5707885026931763, -0.6457120180130005, 0.07766739279031754)
 _COS = (1.0, -1.2336970567703247, 0.2535986304283142, -0.020408352836966515)
 
 
-
 def _has_avx512() -> bool:
     """Whether numba compiles for a CPU with AVX-512F (``NUMBA_CPU_FEATURES`` if set)."""
     features = numba.config.CPU_FEATURES
@@ -83,8 +82,7 @@ def _f32(x: float) -> str:
 
 
 def _build_ir(v: int = LANES, permute: bool = False) -> str:
-    vf, vi, vl, vp, vb = (f"<{v} x float>", f"<{v} x i32>", f"<{v} x i64>", f"<{v} x ptr>",
-                          f"<{v} x i1>")  # fmt: skip
+    vf, vi, vp, vb = f"<{v} x float>", f"<{v} x i32>", f"<{v} x ptr>", f"<{v} x i1>"
     fma = f"@llvm.fmuladd.v{v}f32"
     lines: list[str] = []
     a = lines.append
@@ -174,16 +172,20 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
             a(f"  %w{name}.p1 = getelementptr inbounds float, ptr %w{name}.p0, i64 {v}")
             a(f"  %w{name}.0 = load {vf}, ptr %w{name}.p0, align 4")
             a(f"  %w{name}.1 = load {vf}, ptr %w{name}.p1, align 4")
-            a(f"  %w{name} = call {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf} %w{name}.0,"
-              f" {vi} %rel, {vf} %w{name}.1)")
+            a(
+                f"  %w{name} = call {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf} %w{name}.0,"
+                f" {vi} %rel, {vf} %w{name}.1)"
+            )
         a("  br label %got")
         a("gat:")
     a(f"  %pbase = getelementptr inbounds float, ptr %tab, {vi} %ix")
     for p, name in enumerate(_PLANES):
         a(f"  %p{name} = getelementptr inbounds float, {vp} %pbase, i64 %pl{p}")
         target = f"%q{name}" if permute else f"%{name}"
-        a(f"  {target} = call {vf} {gather}({vp} %p{name}, i32 4, {vb} splat (i1 true),"
-          f" {vf} poison)")
+        a(
+            f"  {target} = call {vf} {gather}({vp} %p{name}, i32 4, {vb} splat (i1 true),"
+            f" {vf} poison)"
+        )
     if permute:
         a("  br label %got")
         a("got:")
