@@ -109,6 +109,7 @@ from __future__ import annotations
 
 import math
 import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 
 import numba
@@ -142,6 +143,9 @@ DEFAULT_ALPHA = 1.4
 #: (:func:`default_taps`). Each depth of a tree uses the fewest taps its own bands need
 #: (:func:`_filters`).
 TAPS = 14
+#: Work (pixel-pulses) under which a parallel region runs on one thread
+#: (:func:`_threads_for`): about half a millisecond of one core.
+SERIAL_WORK = 2.0**19
 #: Bytes of sub-image planes a thread keeps between calls (:func:`_planes`).
 SCRATCH_BYTES = 512 * 2**20
 #: Smallest leaf (pulses).
@@ -397,6 +401,26 @@ def _filters(nodes: list[_Node], allowed: float) -> tuple[NDArray[np.float32], f
 _SCRATCH = threading.local()
 
 
+@contextmanager
+def _threads_for(work: float):
+    """Run the parallel region inside on the calling thread alone when ``work`` is small.
+
+    ``work`` in pixel-pulses (a merged sample counted as :data:`_MERGE_COST`). Below
+    :data:`SERIAL_WORK` the region's barrier, which on a busy machine waits for a
+    descheduled thread, would cost more than the second thread saves. ``numba``'s thread
+    count is the calling thread's own, so concurrent calls do not interfere.
+    """
+    if work >= SERIAL_WORK:
+        yield
+        return
+    n = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(n)
+
+
 def _planes(slot: int, shape: tuple[int, int, int]) -> tuple[NDArray, NDArray]:
     """Uninitialised float32 planes ``(re, im)`` of ``shape`` for one depth of the tree.
 
@@ -470,7 +494,9 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         starts = np.array([n.j0 for n in leaves], np.int64)
         stops = np.array([n.j1 for n in leaves], np.int64)
         kids = np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2)
-        with numba.parallel_chunksize(1):  # tiles and rows handed out one at a time
+        work = sum((n.j1 - n.j0) * n.nv for n in leaves) * us.size
+        work += _MERGE_COST * sum(n.nv for n in split) * us.size
+        with _threads_for(work), numba.parallel_chunksize(1):  # tiles, rows one at a time
             _kernels.level(
                 re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
                 np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]),
@@ -512,10 +538,11 @@ def _image_rows(
     ny = out.shape[0]
     row_strip = np.repeat(np.arange(n_strips), np.diff(bounds)).astype(np.int64)
     row_local = (np.arange(ny) - bounds[row_strip]).astype(np.int64)
-    _kernels.root_rows(
-        out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, frame["us"],
-        frame["y"], *frame["centre"], frame["constants"][2], remodulate,
-    )  # fmt: skip
+    with _threads_for(_MERGE_COST * ny * frame["us"].size):
+        _kernels.root_rows(
+            out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, frame["us"],
+            frame["y"], *frame["centre"], frame["constants"][2], remodulate,
+        )  # fmt: skip
 
 
 def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
@@ -1061,11 +1088,12 @@ def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32
     d_lo = (1.0 - idx_offset) / idx_scale
     d_hi = (n_up - idx_offset) / idx_scale
     js = np.unique(np.linspace(0, pos.shape[0] - 1, N_EDGE_PULSES).round().astype(int))
-    mask = _kernels.window_edges(
-        x, y, np.ascontiguousarray(pos[js, 0]), np.ascontiguousarray(pos[js, 1]),
-        np.ascontiguousarray(pos[js, 2] ** 2), np.ascontiguousarray(ref_ranges[js], np.float64),
-        float(d_lo), float(d_hi), float(margin),
-    )  # fmt: skip
+    with _threads_for(float(x.size * y.size)):  # blocks mostly skipped: ~a pixel each
+        mask = _kernels.window_edges(
+            x, y, np.ascontiguousarray(pos[js, 0]), np.ascontiguousarray(pos[js, 1]),
+            np.ascontiguousarray(pos[js, 2] ** 2), np.ascontiguousarray(ref_ranges[js], np.float64),
+            float(d_lo), float(d_hi), float(margin),
+        )  # fmt: skip
     out = []
     for r0 in range(0, y.size, block):
         rows = slice(r0, min(r0 + block, y.size))
