@@ -147,7 +147,7 @@ TAPS = 14
 #: (:func:`_threads_for`): about half a millisecond of one core.
 SERIAL_WORK = 2.0**19
 #: Bytes of sub-image planes a thread keeps between calls (:func:`_planes`).
-SCRATCH_BYTES = 512 * 2**20
+SCRATCH_BYTES = 256 * 2**20
 #: Smallest leaf (pulses).
 _MIN_LEAF = 2
 #: Cost of a merged sample in pixel-pulses (two children, half the rows interpolated).
