@@ -57,6 +57,44 @@ def _add_child(dre, dim, m, cre, cim, k0, ratio, g):  # pragma: no cover - compi
 
 
 @numba.njit(fastmath=_FASTMATH, inline="always")
+def _merge_row(dre, dim, m, are, aim, bre, bim, k0, ratio, ga, gb):
+    # pragma: no cover - compiled
+    """Parent row ``m`` of two children into ``dre + 1j dim`` (overwritten), in one pass.
+
+    The sum of :func:`_add_child` of both children (the same taps, ``k0`` and ``ratio``),
+    each tap of both read in the same loop, so the row is read and written once per tap.
+    """
+    nu = dre.shape[0]
+    if ratio == 1 or m % 2 == 0:
+        mc = k0 + m if ratio == 1 else k0 + m // 2
+        xa = are[mc]
+        ya = aim[mc]
+        xb = bre[mc]
+        yb = bim[mc]
+        for i in range(nu):
+            dre[i] = xa[i] + xb[i]
+            dim[i] = ya[i] + yb[i]
+        return
+    taps = ga.shape[1]
+    b = k0 + (m - 1) // 2 - taps // 2 + 1
+    for i in range(nu):
+        dre[i] = 0.0
+        dim[i] = 0.0
+    for t in range(taps):
+        gar = ga[0, t]
+        gai = ga[1, t]
+        gbr = gb[0, t]
+        gbi = gb[1, t]
+        xa = are[b + t]
+        ya = aim[b + t]
+        xb = bre[b + t]
+        yb = bim[b + t]
+        for i in range(nu):
+            dre[i] += (gar * xa[i] - gai * ya[i]) + (gbr * xb[i] - gbi * yb[i])
+            dim[i] += (gar * ya[i] + gai * xa[i]) + (gbr * yb[i] + gbi * xb[i])
+
+
+@numba.njit(fastmath=_FASTMATH, inline="always")
 def _leaf_tile(
     tab, j0, j1, ant_x, ant_y, ant_z2, ref, x0, dx, y0, dy, r0, c0, nr, nc, idx_scale,
     idx_offset, hi, quarter_scale, cu, cv, cz2, rref, ore, oim, lanes_v,
@@ -148,11 +186,8 @@ def level(
                 continue
             dre = re[q, m]
             dim = im[q, m]
-            for k in range(nx):
-                dre[k] = 0.0
-                dim[k] = 0.0
-            for c in (kids[p, 0], kids[p, 1]):
-                _add_child(dre, dim, m, cre[c], cim[c], k0, ratio, g[c])
+            _merge_row(dre, dim, m, cre[kids[p, 0]], cim[kids[p, 0]], cre[kids[p, 1]],
+                       cim[kids[p, 1]], k0, ratio, g[kids[p, 0]], g[kids[p, 1]])  # fmt: skip
 
 
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
