@@ -4,7 +4,9 @@ Top-level keys: ``schema``, ``reference_point_m``, ``n_pulses``, ``n_samples``,
 ``region_m``, ``plan`` (core side, the movers' margins, the unambiguous scene and the
 patch table: each patch's core, centre, pulses, samples, decimation, pass band),
 ``movers`` (each patch's ``sarmotion.results/2`` mover entry, plus ``patch``, the patch
-whose fit was kept, and ``patches``, every patch that found it), ``stationary``
+whose fit was kept, and ``patches``, every patch that found it; the entry's ``range_m``
+and its family are measured from that patch's centre, ``plan.patches[patch].centre_m``,
+its reference point), ``stationary``
 (position, level in dB re the brightest of the mosaic, patch), ``stationary_dropped``
 (targets beyond the cap, not listed), ``stationary_sidelobes_dropped`` (listings taken
 for a brighter target's sidelobes, :func:`~sarmotion.collection.merge.drop_sidelobes`),
