@@ -297,8 +297,14 @@ def test_ctrl_c_stops_every_worker(cphd, tmp_path):
     out = tmp_path / "out"
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     cmd = [sys.executable, "-m", "sarmotion", "-v", "analyze", str(cphd), "--out", str(out)]
+    # 40 m patches (25 tasks): the run is still on the workers a second after the
+    # cluster is up, however fast a patch is
     proc = subprocess.Popen(
-        [*cmd, "--workers", "2"], env=env, stderr=subprocess.PIPE, text=True, cwd=tmp_path
+        [*cmd, "--workers", "2", "--patch-size", "40"],
+        env=env,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=tmp_path,
     )
     try:
         lines = []
