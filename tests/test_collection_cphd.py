@@ -305,6 +305,9 @@ def test_ctrl_c_stops_every_worker(cphd, tmp_path):
         stderr=subprocess.PIPE,
         text=True,
         cwd=tmp_path,
+        # a child inherits an ignored SIGINT (and Python then installs no handler): the
+        # test process may have had it ignored by an earlier test; a user's shell has not
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         lines = []
