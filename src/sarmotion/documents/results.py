@@ -171,6 +171,15 @@ def _mover(m: Mover, tr: Traces, extent: tuple[float, float, float, float]) -> d
             "threshold_db": float(ev.coherent_threshold_db),
             "p_value": float(ev.coherent_p_value),
         }
+    if ev.defocus is not None:  # found in the stationary band by its focus
+        d = ev.defocus
+        entry["detection"]["defocus"] = {
+            "statistic_db": float(d.statistic_db),
+            "threshold_db": float(d.threshold_db),
+            "p_value": float(d.p_value),
+            "smear_margin_db": float(d.smear_margin_db),
+            "bank_cross_range_speed_mps": float(d.bank_cross_range_speed_mps),
+        }
     entry["standard_errors"] = {
         "range_position_m": b.range_position_m,
         "range_speed_mps": b.range_speed_mps,

@@ -24,7 +24,9 @@ position and seeks only the velocity):
 local-floor statistic of the ``g(u)`` peaks, its measured null distribution and
 threshold, the shape test and the focus gain against a stationary explanation;
 :mod:`~sarmotion.motion.coherent`: the two-stage coherent detector (``g(u)`` screen,
-then the generalized likelihood ratio of the fit) and its clairvoyant bound.
+then the generalized likelihood ratio of the fit) and its clairvoyant bound;
+:mod:`~sarmotion.motion.defocus`: movers whose traces look stationary (the stationary
+band ``g(u)`` leaves untested), found by their focus over a bank of cross-range speeds.
 
 **Maximum likelihood** -- the estimator of :func:`sarmotion.pipeline.analyze`:
 
@@ -69,6 +71,7 @@ from .coherent import (
     screen_threshold_db,
 )
 from .cross_range import CrossRangeSpeed, cross_range_objective, estimate_cross_range_speed
+from .defocus import DefocusCandidate, DefocusScan, defocus_scan
 from .detector import (
     NULL_TAIL,
     PeakStatistics,
@@ -89,6 +92,7 @@ from .likelihood import (
     PointFit,
     duplicate_fits,
     fit_point_mover,
+    fit_point_mover_at,
     matched_filter_noise_variance,
     noise_variance,
     point_model,
@@ -149,10 +153,14 @@ __all__ = [
     "matched_filter_variance",
     "neighbourhood_noise",
     "screen_threshold_db",
+    "DefocusCandidate",
+    "DefocusScan",
+    "defocus_scan",
     # maximum likelihood
     "MatchedFilter",
     "PointFit",
     "fit_point_mover",
+    "fit_point_mover_at",
     "matched_filter_noise_variance",
     "noise_variance",
     "point_model",

@@ -86,6 +86,7 @@ __all__ = [
     "NEAR_EQUAL_LOBES",
     "PointFit",
     "fit_point_mover",
+    "fit_point_mover_at",
     "duplicate_fits",
     "point_model",
     "refine_jointly",
@@ -508,6 +509,64 @@ def fit_point_mover(
         lobe_ratio=float(ratio),
         other_cross_range_speed_mps=None if other is None else float(other[2]),
         ambiguous=bool(ratio >= NEAR_EQUAL_LOBES),
+    )
+
+
+def fit_point_mover_at(
+    data: Traces | ArrayLike,
+    delay_s: float,
+    range_speed_mps: float,
+    cross_range_speed_mps: float,
+    *,
+    acquisition: Acquisition | None = None,
+    profile_resolutions: float = 3.0,
+) -> PointFit:
+    """Maximum-likelihood ``(x, u_r, u_p)`` of one mover from a point of its range history.
+
+    The start is the motion whose range history is ``|r(s) - rho_o - s u| + c delay / 2``
+    (``u`` the ground velocity of ``(range_speed_mps, cross_range_speed_mps)``, the
+    position on the reference point's cross range, :func:`_model_start`), refined on its
+    lobe as in :func:`fit_point_mover` (:func:`_local_fit`). For a candidate that a
+    search over cross-range speeds has already placed (the defocus bank,
+    :mod:`sarmotion.motion.defocus`): no global search, only its profile within
+    ``profile_resolutions`` cross-range-speed resolutions of the fit, for the record.
+
+    Parameters
+    ----------
+    data : Traces or (n_pulses, n_samples) array_like
+        Traces holding the mover.
+    delay_s : float
+        Fast time of its trace at ``s = 0`` relative to the motion's (s).
+    range_speed_mps, cross_range_speed_mps : float
+        ``u_r``, ``u_p`` of the start (m/s).
+    acquisition : Acquisition, optional
+        Required when ``data`` is an array.
+    profile_resolutions : float
+        Half-width of the recorded profile (cross-range-speed resolutions).
+
+    Returns
+    -------
+    PointFit
+        Its position on the reference point's cross range; ``lobe_ratio`` 0 (no other
+        lobe was fitted).
+    """
+    tr = as_traces(data, acquisition)
+    start, ur0, up0 = _model_start(
+        tr, float(delay_s), float(range_speed_mps), float(cross_range_speed_mps)
+    )
+    pos, ur, up, value = _local_fit(tr, MatchedFilter(tr), start, ur0, up0)
+    res_c = cross_range_speed_resolution(tr)
+    k = int(np.ceil(2.0 * profile_resolutions))
+    grid = up + 0.5 * res_c * np.arange(-k, k + 1)
+    search = _global_cross_search(tr, ur, grid)
+    return PointFit(
+        position_m=pos,
+        range_speed_mps=ur,
+        cross_range_speed_mps=up,
+        velocity_mps=ground_velocity(ur, up, tr.geometry),
+        amplitude=value / tr.n_pulses,
+        grid_mps=grid,
+        profile=search.values,
     )
 
 

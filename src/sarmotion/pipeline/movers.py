@@ -72,6 +72,7 @@ from ..motion import (
 )
 from ..separation import aligned_constant_part
 from ._timing import timed
+from .defocused import defocused_movers
 from .detection import DetectionResult
 from .options import AnalysisOptions
 from .refit import at_full_amplitude, data_without_stationary, refit_in_cell
@@ -160,6 +161,21 @@ def estimate_movers(
             len(beyond),
             opts.max_movers,
         )
+    in_band: list[PointFit] = []
+    if opts.defocus_search and len(found) < opts.max_movers:
+        with timed(timings, "movers.defocus"):
+            extra = defocused_movers(
+                detection,
+                at_full_amplitude(sub, [f for f, _ in found]),
+                max_movers=opts.max_movers - len(found),
+            )
+        if extra:
+            # S holds little of these movers: the moving traces become D - L'
+            in_band = [f for f, _ in extra]
+            full = at_full_amplitude(sub, [f for f, _ in found]) + in_band
+            threshold = opts.separation.candidate_threshold_db
+            moving_sub = data_without_stationary(sub, detection.image, full, threshold_db=threshold)
+            found = list(found) + extra
     if keep is not None:
         declined = [f for f, _ in found if not keep(f)]
         if declined:
@@ -192,19 +208,29 @@ def estimate_movers(
             moving_sub, data_sub, found, separated, fits, kept, opts, acquisition=sub.acquisition
         )
     residual = np.array(detection.separation.moving, dtype=np.complex128)
+    band_data = None  # D - L' on the whole aperture: where the movers in the band are
+    if in_band:
+        band_data = data_without_stationary(
+            detection.traces,
+            detection.image,
+            at_full_amplitude(detection.traces, fits),
+            threshold_db=opts.separation.candidate_threshold_db,
+        )
     whole = detection.traces.acquisition
     out = []
     for k, mover in enumerate(movers):
+        banded = band_data is not None and mover.evidence.defocus is not None
+        source = band_data if banded else residual
         if not detection.whole_aperture:
             with timed(timings, "movers.whole_aperture"):
                 mover = on_whole_aperture(
-                    residual, mover, acquisition=whole, central=detection.central
+                    source, mover, acquisition=whole, central=detection.central
                 )
             with timed(timings, "movers.acceleration"):
                 sub_pulses = len(range(*detection.central.indices(whole.n_pulses)))
                 x0, x1, y0, y1 = detection.image.grid.extent
                 mover = with_acceleration(
-                    residual,
+                    source,
                     mover,
                     acquisition=whole,
                     noise_variance=_bound_noise(mover, whole, sub_pulses),
@@ -212,13 +238,16 @@ def estimate_movers(
                 )
         with timed(timings, "movers.extraction"):
             own = extract_mover(
-                residual,
+                source,
                 acquisition=whole,
                 position_m=mover.position_m,
                 velocity_mps=mover.velocity_mps,
                 half_window=opts.mover_half_window,
             )
-        residual = residual - own
+        if banded:
+            band_data = band_data - own
+        else:
+            residual = residual - own
         out.append(_with(mover, traces=own))
         log.info(
             "mover %d: position (%.2f, %.2f) m, velocity (%.2f, %.2f) m/s, the member of its "

@@ -79,6 +79,11 @@ class AnalysisOptions:
         same range history, when that point lies within the alias-free cross-range
         extent (dB). Default 1 dB: a stationary target's gain is 0 up to the search
         tolerance, well under 1 dB (``docs/notes/detector.md``).
+    defocus_search : bool
+        Whether movers are also sought in the stationary band ``g(u)`` leaves untested,
+        by their focus over a bank of cross-range speeds (:mod:`sarmotion.pipeline.defocused`):
+        a mover whose image lands inside the scene, which the separation takes for
+        stationary. Default ``True``.
     joint_rounds : int
         Rounds of joint maximum-likelihood refinement of all movers, each with the
         others' fitted traces subtracted (>= 0). Default 2.
@@ -121,6 +126,7 @@ class AnalysisOptions:
     stationary_speed_mps: float | None = None
     max_peak_width: float = 2.5
     min_focus_gain_db: float = 1.0
+    defocus_search: bool = True
     joint_rounds: int = 2
     stationary_threshold_db: float = -20.0
     max_stationary: int = 100

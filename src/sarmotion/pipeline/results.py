@@ -62,6 +62,11 @@ class MoverEvidence:
         generalized likelihood ratio ``10 log10(|I|^2 / sigma_I^2)`` (dB), the threshold
         it passed (dB) and its per-scene significance; ``None`` with the ``g(u)``
         detector.
+    defocus : DefocusEvidence or None
+        For a mover in the stationary band, found by its focus over the cross-range-speed
+        bank (:mod:`sarmotion.pipeline.defocused`): the bank's record. The ``g(u)``
+        numbers above are then ``g``'s at its range speed, for the record (in the band
+        ``g`` does not test).
     """
 
     statistic_db: float
@@ -75,6 +80,32 @@ class MoverEvidence:
     coherent_statistic_db: float | None = None
     coherent_threshold_db: float | None = None
     coherent_p_value: float | None = None
+    defocus: DefocusEvidence | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class DefocusEvidence:
+    """Why a mover in the stationary band was declared (:mod:`sarmotion.motion.defocus`).
+
+    Attributes
+    ----------
+    statistic_db : float
+        Its bank cell's power over the noise level (dB).
+    threshold_db : float
+        The level noise reaches with probability ``false_alarm_rate`` (dB).
+    p_value : float
+        Union-bound probability that noise alone reaches ``statistic_db`` in some cell.
+    smear_margin_db : float
+        Its amplitude over the brightest stationary smear at its cell (dB).
+    bank_cross_range_speed_mps : float
+        The bank's cross-range speed that focused it (m/s).
+    """
+
+    statistic_db: float
+    threshold_db: float
+    p_value: float
+    smear_margin_db: float
+    bank_cross_range_speed_mps: float
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -112,11 +112,18 @@ def stationary_image(
 ) -> Image:
     """``eq:image`` of the stationary traces: ``L``, or ``M`` minus the movers' traces.
 
+    ``L`` less the traces of the movers found in the stationary band
+    (:mod:`sarmotion.pipeline.defocused`), whose echoes the separation left there.
+
     ``device``: where to backproject (:func:`~sarmotion.imaging.backproject`). Traces
     that are zero (a separation that found no stationary target) image to zero.
     """
     if separation.stationary is not None:
         data = separation.stationary
+        # a mover found in the stationary band left its echo in L (pipeline.defocused)
+        banded = [m.traces for m in movers if m.evidence.defocus is not None]
+        if banded:
+            data = data - sum(banded, np.zeros(traces.shape, dtype=np.complex128))
     else:
         data = traces.data - sum((m.traces for m in movers), np.zeros(traces.shape))
     if not np.any(data):

@@ -1,0 +1,296 @@
+r"""Movers whose traces look stationary, found by their defocus over a cross-range-speed bank.
+
+**Why.** ``g(u)`` (:mod:`~sarmotion.motion.detector`) finds a mover by the range speed of
+its trace and leaves the stationary band untested: the range speeds of the imaged
+scene's own stationary points, where their residue lies. A mover whose apparent range
+speed falls in that band, whose image lands inside the scene (most movers of a large
+collection, whose patches tile the whole unambiguous scene), has to first order the
+range history of a stationary point of the scene: the separation takes its echo for
+stationary and it is listed as a string of stationary points along cross range. What
+tells it apart is the second order: its cross-range speed ``u_p`` changes the curvature
+of its range history, a quadratic phase over the aperture that the stationary image
+does not focus.
+
+**The bank.** For each cross-range speed ``w`` of a grid, the data are aligned to a point
+at the reference moving at ``w`` with no range speed, ``D(s, t) -> D(s, t + delta_w(s))``
+with ``delta_w(s) = 2 (|x(s) - rho_ref - s v_w| - |x(s) - rho_ref|) / c`` (carrier
+included, :func:`~sarmotion.core.delay_phase`), and transformed over slow time. A target
+whose range history is the hypothesis' up to a range offset and a range rate becomes a
+peak at its fast time ``t`` and Doppler ``f``: focused where ``w`` is its cross-range
+speed, smeared elsewhere; its apparent range speed (the ``g(u)`` sense, relative to the
+reference) is ``u = u_w - lambda_c f / 2``, ``u_w`` the hypothesis' own at ``s = 0``.
+``w = 0`` is the stationary range-Doppler image. Adjacent hypotheses' quadratic phases
+differ by ``pi / 2`` at the aperture's edges (:func:`edge_phase_rad`): a mover between
+two is seen with at most ``pi / 4`` of quadratic phase, a loss of
+``|mean_x exp(i pi x^2 / 4)|`` over ``x in [-1, 1]``, 0.24 dB. The transform over slow
+time is exact for the hypothesis at the reference; a stationary point elsewhere in the
+scene has a range curvature of its own (on a circular flight about ``x Omega^2`` for a
+range offset ``x``, ``Omega`` the turn rate; 0.53 rad at the edges of a GOTCHA degree for
+50 m of range, 0.002 rad for 50 m of cross range), so it focuses at ``w = 0`` while that
+phase is under half the bank's first step: scenes of the size the analysis images
+(patches of a collection). Range migration within the band is neglected likewise (the
+band is the scene's own range rates: a few resolution cells over the aperture at most),
+except in the smear test below.
+
+**Screen.** Noise in a cell is complex Gaussian, ``|X|^2`` exponential with mean ``p``,
+estimated per hypothesis as ``median |X|^2 / ln 2`` over the cells searched (targets
+barely move a median; clutter can only raise it, which is conservative). Over ``N``
+cells and hypotheses a noise cell exceeds ``p ln(N / alpha)`` with probability at most
+``alpha`` (the union bound, as :func:`~sarmotion.separation.noise_only`). A candidate is
+a cell of some ``w != 0`` that reaches it, is a local maximum in fast time, Doppler and
+``w``, and is brighter than a stationary point's smear could make it: a stationary
+point of value ``X_0(t', f')`` reads ``|X_0(t', f')| H_w(f - f')`` in hypothesis ``w``
+(``H_w`` the transform of the quadratic phase between the two hypotheses), and the cell
+must exceed the largest such, over the range bins a stationary point of the band
+crosses during the aperture (``band T``) and one more either side, by
+``SMEAR_MARGIN_DB``: 6.02 dB, what two smears of equal size reach in phase (the model
+takes each stationary point alone). Candidates are ranked by power (a mover's own
+smears at other ``w`` have less). The screen does not decide: the mover stage fits
+each candidate by maximum likelihood and tests the fit's likelihood ratio and its focus
+over the stationary explanation (:mod:`sarmotion.pipeline.defocused`).
+
+Times in s, speeds in m/s, phases in rad; geometry in float64.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.ndimage import maximum_filter
+
+from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_frequency
+from ..core.constants import C
+
+__all__ = [
+    "DefocusCandidate",
+    "DefocusScan",
+    "EDGE_PHASE_STEP_RAD",
+    "SMEAR_MARGIN_DB",
+    "cross_speed_bank",
+    "defocus_scan",
+    "edge_phase_rad",
+    "hypothesis_delays_s",
+]
+
+#: Quadratic phase (rad, at the aperture's edges) between adjacent hypotheses of the bank.
+EDGE_PHASE_STEP_RAD = 0.5 * np.pi
+
+#: Least margin of a candidate over the brightest stationary smear at its cell (dB):
+#: two equal smears in phase, ``20 log10 2``.
+SMEAR_MARGIN_DB = float(20.0 * np.log10(2.0))
+
+
+@dataclass(frozen=True, kw_only=True)
+class DefocusCandidate:
+    """One cell of the bank that passed the screen (:func:`defocus_scan`).
+
+    Attributes
+    ----------
+    range_speed_mps : float
+        Apparent range speed of its trace relative to the reference (the ``g(u)`` sense).
+    cross_range_speed_mps : float
+        The hypothesis ``w`` that focuses it best.
+    delay_s : float
+        Fast time of its trace at ``s = 0`` relative to the reference's (s).
+    statistic_db : float
+        ``10 log10(|X|^2 / p)``: its power over the hypothesis' noise level (dB).
+    leak_db : float
+        Its amplitude over the brightest stationary smear at its cell (dB, > 0).
+    """
+
+    range_speed_mps: float
+    cross_range_speed_mps: float
+    delay_s: float
+    statistic_db: float
+    leak_db: float
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class DefocusScan:
+    """What :func:`defocus_scan` found.
+
+    Attributes
+    ----------
+    candidates : tuple of DefocusCandidate
+        By decreasing ``statistic_db``, at most ``max_candidates``.
+    n_beyond : int
+        Candidates that passed but were beyond ``max_candidates`` (not returned).
+    threshold_db : float
+        ``10 log10 ln(N / alpha)``: the statistic a noise cell reaches with probability
+        at most ``alpha`` over the ``N`` cells and hypotheses (dB).
+    n_cells : int
+        ``N``.
+    speeds_mps : (n_w,) ndarray
+        The bank's cross-range speeds (m/s), 0 included.
+    """
+
+    candidates: tuple[DefocusCandidate, ...]
+    n_beyond: int
+    threshold_db: float
+    n_cells: int
+    speeds_mps: NDArray[np.float64]
+
+    def p_value(self, statistic_db: float) -> float:
+        """Union-bound probability that noise alone reaches ``statistic_db`` in some cell."""
+        return float(min(1.0, self.n_cells * np.exp(-(10.0 ** (statistic_db / 10.0)))))
+
+
+def hypothesis_delays_s(traces: Traces, cross_range_speed_mps: float) -> NDArray[np.float64]:
+    """``delta_w(s)`` (s), shape ``(n_pulses,)``: a point at the reference moving at ``w``.
+
+    ``2 (|x(s) - rho_ref - s v_w| - |x(s) - rho_ref|) / c`` with ``v_w`` the ground velocity
+    of zero range speed and cross-range speed ``w`` (:func:`~sarmotion.core.ground_velocity`).
+    """
+    v = np.r_[ground_velocity(0.0, float(cross_range_speed_mps), traces.geometry), 0.0]
+    ref = traces.reference_point_m
+    s = traces.slow_times_s
+    x = traces.positions_m
+    moved = np.linalg.norm(x - (ref[None, :] + s[:, None] * v[None, :]), axis=1)
+    still = np.linalg.norm(x - ref[None, :], axis=1)
+    return 2.0 * (moved - still) / C
+
+
+def edge_phase_rad(traces: Traces, cross_range_speed_mps: float) -> float:
+    """Quadratic phase (rad) of ``delta_w`` at the aperture's edges, ``|a| (T / 2)^2``.
+
+    ``a`` the quadratic coefficient of the least-squares fit of ``2 pi f_c delta_w(s)``
+    by a parabola in ``s``, ``T`` the aperture's duration.
+    """
+    s = traces.slow_times_s
+    phase = (
+        2.0 * np.pi * traces.radar.carrier_hz * hypothesis_delays_s(traces, cross_range_speed_mps)
+    )
+    a = np.polyfit(s - s.mean(), phase, 2)[0]
+    return float(abs(a) * (0.5 * np.ptp(s)) ** 2)
+
+
+def cross_speed_bank(traces: Traces, max_speed_mps: float) -> NDArray[np.float64]:
+    """The bank's cross-range speeds (m/s): 0 and steps of ``EDGE_PHASE_STEP_RAD`` to ``max``.
+
+    The edge phase is linear in ``w`` over the speeds of ground movers (``2 V w`` against
+    ``V^2`` in the curvature); its slope is taken at 1 m/s.
+    """
+    per_mps = edge_phase_rad(traces, 1.0)
+    if not per_mps > 0.0:
+        raise ValueError("the aperture has no quadratic phase to focus: it is too short")
+    step = EDGE_PHASE_STEP_RAD / per_mps
+    n = int(np.floor(float(max_speed_mps) / step))
+    return step * np.arange(-n, n + 1, dtype=np.float64)
+
+
+def defocus_scan(
+    traces: Traces,
+    *,
+    max_speed_mps: float,
+    band_mps: float,
+    half_span_s: float,
+    false_alarm_rate: float,
+    max_candidates: int = 8,
+) -> DefocusScan:
+    """Cells of the cross-range-speed bank that noise and stationary smears cannot explain.
+
+    Parameters
+    ----------
+    traces : Traces
+        The data of about a degree, stationary targets included (their smears are tested
+        against, not removed).
+    max_speed_mps : float
+        Largest cross-range speed of the bank (m/s).
+    band_mps : float
+        Apparent range speeds searched: ``|u| <= band_mps`` (m/s; the stationary band
+        ``g(u)`` leaves untested).
+    half_span_s : float
+        Fast times searched: ``|t| <= half_span_s`` (s), the scene's range span.
+    false_alarm_rate : float
+        ``alpha`` of the union bound, in (0, 1).
+    max_candidates : int
+        At most this many are returned, the most powerful first; the others are counted.
+
+    Returns
+    -------
+    DefocusScan
+    """
+    if not 0.0 < false_alarm_rate < 1.0:
+        raise ValueError(f"false_alarm_rate must be in (0, 1), got {false_alarm_rate!r}")
+    speeds = cross_speed_bank(traces, max_speed_mps)
+    n_p = traces.n_pulses
+    n_dop = int(2 ** np.ceil(np.log2(2 * n_p)))  # twice oversampled in Doppler
+    prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
+    lam = C / traces.radar.carrier_hz
+    doppler = np.fft.fftfreq(n_dop, d=1.0 / prf)
+    t = traces.fast_times_s
+    rows = np.flatnonzero(np.abs(t) <= half_span_s)
+    spectrum = to_frequency(traces.data)
+    freqs = traces.frequencies_hz
+    s = traces.slow_times_s
+    u_w = np.empty(speeds.size)
+    maps = np.empty((speeds.size, rows.size, n_dop), dtype=np.float32)
+    smears = np.empty((speeds.size, n_dop), dtype=np.float64)
+    for k, w in enumerate(speeds):
+        delays = hypothesis_delays_s(traces, w)
+        u_w[k] = 0.5 * C * float(np.polyfit(s, delays, 1)[0])
+        aligned = to_fast_time(spectrum * delay_phase(delays, freqs))[:, rows]
+        maps[k] = (np.abs(np.fft.fft(aligned, n=n_dop, axis=0)) ** 2).T
+        # a stationary point's smear in hypothesis w: its phase relative to hypothesis 0
+        smear = np.exp(
+            2j * np.pi * traces.radar.carrier_hz * (delays - hypothesis_delays_s(traces, 0.0))
+        )
+        smears[k] = np.abs(np.fft.fft(smear, n=n_dop)) / n_p
+    # the Doppler of each cell in each hypothesis, as an apparent range speed
+    speed_of = u_w[:, None] - 0.5 * lam * doppler[None, :]
+    searched = np.abs(speed_of) <= band_mps  # (n_w, n_dop)
+    zero = int(np.argmin(np.abs(speeds)))
+    moving = np.ones(speeds.size, bool)
+    moving[zero] = False
+    # independent cells: range resolutions within the span, Doppler resolutions in the band
+    range_cells = max(1.0, 2.0 * half_span_s * traces.radar.bandwidth_hz)
+    dop_cells = max(1.0, 2.0 * band_mps / (0.5 * lam * prf / n_p))
+    n_cells = int(np.ceil(range_cells * dop_cells * moving.sum()))
+    level = np.log(n_cells / false_alarm_rate)
+    noise = np.empty(speeds.size)
+    for k in range(speeds.size):
+        sel = maps[k][:, searched[k]]
+        noise[k] = float(np.median(sel)) / np.log(2.0) if sel.size else np.inf
+    stationary = np.sqrt(maps[zero])  # |X_0|, (rows, n_dop)
+    # a stationary point of the band migrates by up to band * T in range over the
+    # aperture: its smear is sought over the rows it crosses, and one more either side
+    dt = float(np.median(np.diff(t)))
+    reach = 1 + int(np.ceil(2.0 * band_mps * float(np.ptp(s)) / C / dt))
+    found: list[DefocusCandidate] = []
+    # the searched Doppler columns and one either side, in increasing Doppler (contiguous)
+    order = np.argsort(doppler, kind="stable")
+    wanted = np.convolve(searched.any(axis=0)[order], np.ones(3), mode="same") > 0
+    cols = order[wanted]
+    local = maximum_filter(maps[:, :, cols], size=(3, 3, 3), mode="nearest")
+    for k in np.flatnonzero(moving):
+        if not np.isfinite(noise[k]) or noise[k] <= 0:
+            continue
+        mk = maps[k][:, cols]
+        ok = (mk >= level * noise[k]) & (mk >= local[k]) & searched[k][cols][None, :]
+        for r, j in zip(*np.nonzero(ok), strict=True):
+            f = int(cols[j])
+            amp = float(np.sqrt(maps[k, r, f]))
+            lo, hi = max(0, r - reach), min(rows.size, r + reach + 1)
+            shifts = (f - np.arange(n_dop)) % n_dop
+            leak = float(np.max(stationary[lo:hi] * smears[k][shifts][None, :]))
+            if amp <= leak * 10.0 ** (SMEAR_MARGIN_DB / 20.0):
+                continue
+            found.append(
+                DefocusCandidate(
+                    range_speed_mps=float(speed_of[k, f]),
+                    cross_range_speed_mps=float(speeds[k]),
+                    delay_s=float(t[rows[r]]),
+                    statistic_db=float(10.0 * np.log10(maps[k, r, f] / noise[k])),
+                    leak_db=float(20.0 * np.log10(amp / max(leak, 1e-300))),
+                )
+            )
+    found.sort(key=lambda c: -c.statistic_db)
+    return DefocusScan(
+        candidates=tuple(found[:max_candidates]),
+        n_beyond=max(0, len(found) - max_candidates),
+        threshold_db=float(10.0 * np.log10(level)),
+        n_cells=n_cells,
+        speeds_mps=speeds,
+    )

@@ -1,0 +1,115 @@
+"""Movers whose traces look stationary: the cross-range-speed bank and the mover stage.
+
+A mover moving across the line of sight only (no range speed) at (15, -10) m has the
+range rate of the stationary point under it: its image lands inside the scene, in the
+stationary band ``g(u)`` does not test, and the separation keeps its echo in ``L``.
+Its cross-range speed defocuses it by ``edge_phase_rad`` per m/s at the aperture's
+edges; the bank focuses it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
+from sarmotion.imaging import resolution
+from sarmotion.motion import central_sub_aperture, defocus_scan, family_member
+from sarmotion.motion.defocus import EDGE_PHASE_STEP_RAD, cross_speed_bank, edge_phase_rad
+from sarmotion.pipeline import AnalysisOptions, analyze
+from sarmotion.simulation import PointTarget, add_noise, simulate_phase_history
+
+MOVER_AT = np.array([15.0, -10.0])
+
+
+def _scene(seed: int, cross_speed_mps: float | None, snr_db: float | None = None):
+    """Traces of 20 unit stationary points in +-45 m and an optional cross-range mover."""
+    rng = np.random.default_rng(seed)
+    traj, radar = Trajectory.circular(), Radar()
+    targets = [PointTarget(position_m=p) for p in rng.uniform(-45.0, 45.0, size=(20, 2))]
+    mover = None
+    if cross_speed_mps is not None:
+        mover = PointTarget(position_m=MOVER_AT, velocity_mps=(0.0, cross_speed_mps), label="m")
+        targets.append(mover)
+    ph = simulate_phase_history(targets, traj, radar, (0.0, 0.0, 0.0))
+    if snr_db is not None:
+        ph = add_noise(ph, snr_db=snr_db, rng=np.random.default_rng(seed + 1))
+    tr = Traces(
+        data=to_fast_time(ph).astype(np.complex64),
+        trajectory=traj,
+        radar=radar,
+        reference_point_m=(0.0, 0.0, 0.0),
+    )
+    return tr, targets[:20], mover
+
+
+def _central(tr: Traces) -> Traces:
+    c = central_sub_aperture(tr, 1.0)
+    return tr.select_pulses(c.start, c.stop)
+
+
+def test_bank_steps_are_a_quarter_turn_of_edge_phase():
+    tr, _, _ = _scene(0, None)
+    sub = _central(tr)
+    bank = cross_speed_bank(sub, 30.0)
+    assert bank[bank.size // 2] == 0.0 and np.allclose(bank, -bank[::-1])
+    step = bank[1] - bank[0]
+    # the edge phase is linear in w over road speeds: one step is pi/2 of it
+    assert edge_phase_rad(sub, step) == pytest.approx(EDGE_PHASE_STEP_RAD, rel=0.02)
+    assert edge_phase_rad(sub, 10 * step) == pytest.approx(10 * EDGE_PHASE_STEP_RAD, rel=0.05)
+
+
+def test_scan_places_the_mover_in_its_cell():
+    tr, _, mover = _scene(1, 12.0)
+    sub = _central(tr)
+    geom = sub.geometry
+    band = geom.speed_mps * (100.0 / np.sqrt(2.0)) / geom.range_m
+    scan = defocus_scan(
+        sub, max_speed_mps=30.0, band_mps=band, half_span_s=2 * 75.0 / 3e8, false_alarm_rate=0.01
+    )
+    best = scan.candidates[0]
+    # the truth's range history relative to the reference: rate and delay at s = 0
+    s, x, ref = sub.slow_times_s, sub.positions_m, sub.reference_point_m
+    p, v = np.r_[MOVER_AT, 0.0], np.r_[mover.velocity_mps, 0.0]
+    r = np.linalg.norm(x - (p + s[:, None] * v), axis=1) - np.linalg.norm(x - ref, axis=1)
+    rate, r0 = np.polyfit(s, r, 1)
+    step = scan.speeds_mps[1] - scan.speeds_mps[0]
+    doppler_mps = 0.5 * 3e8 / sub.radar.carrier_hz / float(np.ptp(s))  # lambda / (2 T)
+    assert abs(best.cross_range_speed_mps - 12.0) <= step
+    assert abs(best.range_speed_mps - rate) <= doppler_mps
+    assert abs(best.delay_s - 2.0 * r0 / 3e8) <= 1.0 / sub.radar.bandwidth_hz
+
+
+@pytest.mark.parametrize(("seed", "speed"), [(1, 12.0), (5, -25.0), (6, 2.5)])
+def test_analysis_finds_the_mover_on_its_family(seed, speed):
+    tr, stationary, mover = _scene(seed, speed)
+    result = analyze(tr)
+    assert len(result.movers) == 1
+    m = result.movers[0]
+    assert m.evidence.defocus is not None
+    sub = _central(tr)
+    cells = resolution(sub)
+    dy = float((m.position_m[:2] - MOVER_AT) @ cells.cross_range_direction)
+    tp, tv, _ = family_member(sub, np.r_[MOVER_AT, 0.0], mover.velocity_mps, dy)
+    # on the truth's family: range position within a ground-range cell, speeds within
+    # a range-speed resolution and 0.5 m/s of cross-range speed
+    assert abs(float((m.position_m[:2] - tp[:2]) @ cells.range_direction)) < cells.ground_range_m
+    assert abs(m.cross_range_speed_mps - float(tv @ cells.cross_range_direction)) < 0.5
+    # its smear is not listed as stationary points: every listing is near a true point
+    true = np.array([t.position_m[:2] for t in stationary])
+    for t in result.stationary:
+        if abs(t.position_m[0] - MOVER_AT[0]) < 1.0:
+            assert np.min(np.hypot(*(true - np.asarray(t.position_m)).T)) < 3.0
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_no_mover_in_stationary_clutter(seed):
+    tr, _, _ = _scene(seed, None, snr_db=10.0)
+    result = analyze(tr)
+    assert result.movers == ()
+
+
+def test_the_search_can_be_turned_off():
+    tr, _, _ = _scene(1, 12.0)
+    result = analyze(tr, AnalysisOptions(defocus_search=False))
+    assert all(m.evidence.defocus is None for m in result.movers)
