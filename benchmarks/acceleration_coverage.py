@@ -106,6 +106,8 @@ def run_draw(p: dict) -> dict:
         "amplitude": abs(acc.amplitude),
         "uniform_seconds": t1 - t0,
         "acceleration_seconds": t2 - t1,
+        "holds": acc.uniform_start_holds,
+        "central": acc.central_search,
     }
 
 

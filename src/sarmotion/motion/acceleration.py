@@ -76,20 +76,25 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares, minimize_scalar
+from scipy.stats import gamma
 
-from ..core import Acquisition, C, Traces, as_point, as_traces, ground_velocity
+from ..core import Acquisition, C, Traces, as_point, as_traces, ground_velocity, range_speed
 from ..core.ascent import newton_ascent
+from ..core.spectral import phased_row_sums, shift_fast_time
 from ..imaging import resolution
-from .likelihood import MatchedFilter
+from .aperture import central_sub_aperture, ranges_m
+from .likelihood import MatchedFilter, PointFit, fit_point_mover
 
 __all__ = [
     "ACCELERATION_PSD",
+    "HOLD_FALSE_ALARM",
     "RangeAcceleration",
     "acceleration_bound",
     "acceleration_estimable",
     "acceleration_gradients",
     "fit_range_acceleration",
     "separable_fraction",
+    "uniform_start_holds",
 ]
 
 #: Spectral density ``q`` of the white-noise acceleration a road vehicle is assumed to
@@ -303,6 +308,12 @@ class RangeAcceleration:
         :func:`separable_fraction` at the fit.
     covariance : (5, 5) ndarray
         :func:`acceleration_bound` (``x, u_r, u_p, alpha, |a|``).
+    uniform_start_holds : bool
+        The uniform start holds the mover over the central degree
+        (:func:`uniform_start_holds`); when it does not, the central searches ran.
+    central_search : bool
+        The fit is the profile's from the central searches' range history (its ``|I|``
+        above the uniform start's profile's; module notes).
     """
 
     range_acceleration_mps2: float
@@ -313,6 +324,8 @@ class RangeAcceleration:
     uniform_amplitude: complex
     separable_fraction: float
     covariance: NDArray[np.float64]
+    uniform_start_holds: bool = True
+    central_search: bool = False
 
 
 #: Half-width of the profile over ``alpha`` in prior standard deviations ``sqrt(q / T)``:
@@ -320,10 +333,132 @@ class RangeAcceleration:
 _PROFILE_SPAN = 4.0
 
 #: Points of the profile over ``alpha`` on each side of zero: one prior deviation apart.
-#: Each starts from the range history of the uniform start, so the grid only has to land
-#: on the lobe's slope; the bounded search refines between the best point's neighbours
+#: Each starts from a measured range history (the uniform start's, or the central
+#: searches', module notes), so the grid only has to land on the lobe's slope; the
+#: bounded search refines between the best point's neighbours
 #: (``benchmarks/acceleration_coverage.py`` checks the two together).
 _PROFILE_HALF_POINTS = 4
+
+#: False-alarm probability of the test that the uniform start holds the central degree
+#: (:func:`uniform_start_holds`). A false alarm only spends the central searches' time
+#: (the larger ``|I|`` of the two profiles is kept); a mover the uniform start does not
+#: hold gives a statistic of tens to thousands of times its threshold.
+HOLD_FALSE_ALARM = 1e-3
+
+
+def uniform_start_holds(
+    data: Traces | ArrayLike,
+    positions_m: ArrayLike,
+    *,
+    acquisition: Acquisition | None = None,
+    noise_variance: float,
+    false_alarm: float = HOLD_FALSE_ALARM,
+) -> tuple[bool, float, float]:
+    """Whether a motion holds a mover coherently over pulses: the spread of their terms.
+
+    The matched filter is a sum over pulses, ``I = sum_j z_j``, ``z_j`` one pulse's
+    coherent sum over frequency (:class:`sarmotion.motion.MatchedFilter`). Where the
+    motion is the mover's, every ``z_j`` is the amplitude ``a`` plus noise of variance
+    ``sigma_z^2 = sigma_P^2 / sum W^2`` (``sigma_P^2 = n_samples`` times the noise per
+    fast-time sample), so ``S = sum_j |z_j - mean(z)|^2 / sigma_z^2`` is a sum of
+    ``n - 1`` unit exponentials (Gamma(``n - 1``)). A motion whose range history departs
+    from the mover's by a fraction of a wavelength turns the ``z_j``' phases and ``S``
+    grows by ``n |a|^2 (1 - coherence) / sigma_z^2``. The motion holds the mover when
+    ``S`` is under the Gamma's ``1 - false_alarm`` quantile.
+
+    Parameters
+    ----------
+    data : Traces or (n_pulses, n_samples) array_like
+        The traces (the pulses tested).
+    positions_m : (n_pulses, 3) array_like
+        The motion's positions at those pulses (m).
+    acquisition : Acquisition, optional
+        Required when ``data`` is an array.
+    noise_variance : float
+        Noise variance per fast-time sample (data units squared, > 0).
+    false_alarm : float
+        Probability that a motion that holds the mover fails the test, in (0, 1).
+
+    Returns
+    -------
+    holds : bool
+    statistic : float
+        ``S``.
+    threshold : float
+        The quantile.
+    """
+    if not (np.isfinite(noise_variance) and noise_variance > 0):
+        raise ValueError(f"noise_variance must be > 0, got {noise_variance!r}")
+    if not (0.0 < false_alarm < 1.0):
+        raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm!r}")
+    tr = as_traces(data, acquisition)
+    where = np.asarray(positions_m, dtype=np.float64)
+    if where.shape != (tr.n_pulses, 3):
+        raise ValueError(f"positions_m must have shape ({tr.n_pulses}, 3), got {where.shape}")
+    mf = MatchedFilter(tr)
+    delays = 2.0 * (np.linalg.norm(mf.antenna - where, axis=1) - mf.ref_range) / C
+    z = phased_row_sums(mf.weighted, np.ascontiguousarray(delays), float(mf.freq[0]),
+                        mf.freq_step) / mf.norm  # fmt: skip
+    var_z = tr.n_samples * float(noise_variance) / mf.norm
+    statistic = float(np.sum(np.abs(z - z.mean()) ** 2) / var_z)
+    threshold = float(gamma.isf(false_alarm, tr.n_pulses - 1))
+    return statistic <= threshold, statistic, threshold
+
+
+@dataclass(frozen=True)
+class _Start:
+    """A measured range history the profile over ``alpha`` starts from at every ``alpha``.
+
+    ``ranges_m`` at the pulses ``pulses``; ``offsets`` a first guess of ``(x, u_r,
+    u_p)`` relative to the uniform start.
+    """
+
+    pulses: slice
+    ranges_m: NDArray[np.float64]
+    offsets: NDArray[np.float64]
+
+
+def _central_search(
+    tr: Traces,
+    central: slice,
+    alphas: NDArray[np.float64],
+    *,
+    range_speed_mps: float,
+    window_mps: float,
+) -> tuple[float, PointFit, NDArray[np.float64]]:
+    """The central degree's range history, searched at every ``alpha`` (module notes).
+
+    At each ``alpha`` the traces of the central pulses are shifted in range by
+    ``+alpha s^2 / 2`` (``s`` the whole aperture's slow time), which takes that much
+    range acceleration off every echo, and the uniform search :func:`fit_point_mover`
+    runs on them over cross-range speeds ``+-window_mps``. The fit of largest ``|I|``
+    gives the data's range history over those pulses: its own range history minus the
+    shift (the shift is known exactly, so the history does not depend on how well the
+    shift models an acceleration).
+
+    Returns
+    -------
+    alpha : float
+        The shift's ``alpha`` of the kept fit (m/s^2).
+    fit : PointFit
+        The fit, on the shifted central traces.
+    ranges : (n_central,) ndarray
+        The data's range history at the central pulses (m).
+    """
+    sub = tr.select_pulses(central.start, central.stop)
+    s = tr.slow_times_s[central]
+    best: tuple[float, PointFit] | None = None
+    for a in alphas:
+        shifted = shift_fast_time(sub.data, -float(a) * s**2 / C, frequencies_hz=sub.frequencies_hz)
+        fit = fit_point_mover(
+            sub.with_data(shifted), range_speed_mps, cross_speed_range_mps=(-window_mps, window_mps)
+        )
+        if best is None or abs(fit.amplitude) > abs(best[1].amplitude):
+            best = (float(a), fit)
+    assert best is not None
+    alpha, fit = best
+    ranges = ranges_m(sub, fit.position_m, fit.velocity_mps) - 0.5 * alpha * s**2
+    return alpha, fit, ranges
 
 
 def fit_range_acceleration(
@@ -350,7 +485,8 @@ def fit_range_acceleration(
     acquisition : Acquisition, optional
         Required when ``data`` is an array.
     noise_variance : float
-        Noise variance per fast-time sample (data units squared), for the bound.
+        Noise variance per fast-time sample (data units squared), for the bound and the
+        test of the uniform start (:func:`uniform_start_holds`).
     cross_range_std_m : float
         Spread of the true cross-range coordinate about the held one (m, > 0): e.g. half
         the imaged scene. The bound counts it (:func:`acceleration_bound`).
@@ -381,21 +517,21 @@ def fit_range_acceleration(
         v = v0 + theta[1] * b_r + theta[2] * b_p
         return _track(p0 + theta[0] * e_r, v[:2], theta[3], b_r, s)
 
-    history = np.linalg.norm(tr.positions_m - where(np.zeros(4)), axis=1)
-
-    def profiled(alpha: float) -> tuple[NDArray[np.float64], complex]:
+    def profiled(alpha: float, start: _Start) -> tuple[NDArray[np.float64], complex]:
         """``(x, u_r, u_p)`` maximising ``|I|`` at ``alpha``, and ``I`` there.
 
-        The start: the motion at ``alpha`` whose range history is nearest the uniform
-        start's (least squares over every pulse), i.e. the ridge of the likelihood
+        The start: the motion at ``alpha`` whose range history is nearest the start's
+        measured one (least squares over its pulses), i.e. the ridge of the likelihood
         followed without linearising it (an acceleration is tens of m/s of cross-range
         speed away, far outside the quadratic region); then the Newton ascent.
         """
+        antenna = tr.positions_m[start.pulses]
 
         def residual(q: NDArray[np.float64]) -> NDArray[np.float64]:
-            return np.linalg.norm(tr.positions_m - where(np.r_[q, alpha]), axis=1) - history
+            track = where(np.r_[q, alpha])[start.pulses]
+            return np.linalg.norm(antenna - track, axis=1) - start.ranges_m
 
-        q0 = least_squares(residual, np.zeros(3), x_scale=_LOCAL_UNITS, xtol=1e-10).x
+        q0 = least_squares(residual, start.offsets, x_scale=_LOCAL_UNITS, xtol=1e-10).x
         q, value, _, _ = newton_ascent(
             lambda q: response(where(np.r_[q, alpha]), jac),
             q0, radius=1.0, tol=1e-2, max_iter=30, scale=_LOCAL_UNITS,
@@ -410,29 +546,64 @@ def fit_range_acceleration(
             range_basis_mps=b_r[:2], cross_basis_mps=b_p[:2],
         )  # fmt: skip
 
-    start = complex(response(where(np.zeros(4)), jac)[3])
     duration = float(s[-1] - s[0])
     prior_std = float(np.sqrt(acceleration_psd / duration))
     # the grid: _PROFILE_SPAN prior deviations either side of 0, the uniform start in it
     grid = _PROFILE_SPAN * prior_std * np.linspace(-1.0, 1.0, 2 * _PROFILE_HALF_POINTS + 1)
-    values = [abs(profiled(float(a))[1]) for a in grid]
-    k = int(np.argmax(values))
     step = float(grid[1] - grid[0])
-    # the maximum between the grid's neighbours of the best point, to a thousandth of the
-    # quarter-radian unit of alpha once (x, u_r, u_p) follow it
-    g = gradients(np.r_[profiled(float(grid[k]))[0], grid[k]])
-    unit = _QUARTER_RADIAN / abs(_phase_factor(g[:, [0, 1, 2, 4]], freqs, weights)[-1, -1])
-    res = minimize_scalar(
-        lambda a: -abs(profiled(float(a))[1]),
-        bounds=(float(grid[k]) - step, float(grid[k]) + step),
-        method="bounded",
-        options={"xatol": 1e-3 * unit},
+
+    def ascend(start: _Start) -> tuple[float, NDArray[np.float64], complex]:
+        """The profile's maximum from ``start``: the grid, then the bounded search."""
+        values = [abs(profiled(float(a), start)[1]) for a in grid]
+        k = int(np.argmax(values))
+        # the maximum between the grid's neighbours of the best point, to a thousandth of
+        # the quarter-radian unit of alpha once (x, u_r, u_p) follow it
+        g = gradients(np.r_[profiled(float(grid[k]), start)[0], grid[k]])
+        unit = _QUARTER_RADIAN / abs(_phase_factor(g[:, [0, 1, 2, 4]], freqs, weights)[-1, -1])
+        res = minimize_scalar(
+            lambda a: -abs(profiled(float(a), start)[1]),
+            bounds=(float(grid[k]) - step, float(grid[k]) + step),
+            method="bounded",
+            options={"xatol": 1e-3 * unit},
+        )
+        alpha = float(res.x)
+        q, value = profiled(alpha, start)
+        if abs(value) < values[k]:  # the bounded search never ends below the grid's best
+            alpha = float(grid[k])
+            q, value = profiled(alpha, start)
+        return alpha, q, value
+
+    uniform_track = where(np.zeros(4))
+    everything = slice(0, tr.n_pulses)
+    alpha, q, value = ascend(
+        _Start(everything, np.linalg.norm(tr.positions_m - uniform_track, axis=1), np.zeros(3))
     )
-    alpha = float(res.x)
-    q, value = profiled(alpha)
-    if abs(value) < values[k]:  # the bounded search never ends below the grid's best
-        alpha = float(grid[k])
-        q, value = profiled(alpha)
+    central = central_sub_aperture(tr)
+    central_traces = tr.select_pulses(central.start, central.stop)
+    holds, _, _ = uniform_start_holds(
+        central_traces,
+        uniform_track[central],
+        noise_variance=max(float(noise_variance), 1e-300),
+    )
+    searched = False
+    if not holds:
+        # each alpha of the grid shifts the curvature a uniform search over +-window
+        # reaches by 4 (V - u_t) window / L = 2 grid steps at u_t = 0: every curvature
+        # of the grid's span lies in two neighbours' windows, and in at least one for
+        # |u_t| up to V / 2 (module notes)
+        window = step * geom.range_m / (2.0 * geom.speed_mps)
+        a_c, fit, ranges = _central_search(
+            tr, central, grid, range_speed_mps=range_speed(v0[:2], geom), window_mps=window
+        )
+        # first guess of the offsets: the fit's motion at the whole aperture's s = 0
+        t_c = float(s[central][0] - central_traces.slow_times_s[0])
+        dv = np.linalg.lstsq(np.stack([b_r, b_p], axis=1), np.r_[fit.velocity_mps, 0.0] - v0,
+                             rcond=None)[0]  # fmt: skip
+        x_c = float((fit.position_m - t_c * np.r_[fit.velocity_mps, 0.0] - p0) @ e_r)
+        a2, q2, value2 = ascend(_Start(central, ranges, np.r_[x_c, dv]))
+        if abs(value2) > abs(value):
+            alpha, q, value, searched = a2, q2, value2, True
+    start = complex(response(uniform_track, jac)[3])
     theta = np.r_[q, alpha]
     grads = gradients(theta)
     amplitude = value / tr.n_pulses
@@ -454,4 +625,6 @@ def fit_range_acceleration(
         uniform_amplitude=start / tr.n_pulses,
         separable_fraction=separable_fraction(grads, freqs, weights),
         covariance=cov5,
+        uniform_start_holds=holds,
+        central_search=searched,
     )
