@@ -18,12 +18,18 @@ searched over +-100 m/s: an acceleration looks like ``alpha L / (2 V)`` = 73 s x
 cross-range speed there), its focus on the whole aperture (``refine_on_aperture``), then
 ``fit_range_acceleration`` with the noise ``noise_variance`` measures on the traces.
 
-Reported per draw: the error over the bound, whether the rule calls it estimable, and
-the uniform stage's ``|I|`` over the mover's amplitude (below 1 when no uniform motion
+Reported per draw: the error over the bound, whether the rule calls it estimable, the
+uniform stage's ``|I|`` over the mover's amplitude (below 1 when no uniform motion
 matches the central degree: an acceleration towards the radar beyond the curvature
-``(V - u_t)^2 / L`` of the uniform range history). Coverage = the fraction within 3
-bounds, over all draws, over the estimable ones, and over those the uniform stage held
-(``|I|`` at least half the amplitude). Writes ``acceleration_coverage.json`` and ``.md``.
+``(V - u_t)^2 / L`` of the uniform range history), the fit's ``|I|`` over it (1 where
+the fit is the mover's maximum), whether the step's test found that the uniform start
+holds the central degree (``uniform_start_holds``; where it does not, the central
+searches run), and the range history the estimate's profile started from (``start``;
+module notes of ``sarmotion.motion.acceleration``). Coverage = the fraction
+within 3 bounds, over all draws, over the estimable ones, and over those the uniform
+stage held (``|I|`` at least half the amplitude) or did not. The median time of the step
+is given over all draws and over those whose uniform start held (the step's time for a
+uniform mover). Writes ``acceleration_coverage.json`` and ``.md``.
 """
 
 from __future__ import annotations
@@ -106,8 +112,8 @@ def run_draw(p: dict) -> dict:
         "amplitude": abs(acc.amplitude),
         "uniform_seconds": t1 - t0,
         "acceleration_seconds": t2 - t1,
-        "holds": acc.uniform_start_holds,
-        "central": acc.central_search,
+        "uniform_start_holds": acc.uniform_start_holds,
+        "start": acc.start,
     }
 
 
@@ -136,21 +142,31 @@ def main() -> None:
             f"{k:3d} {r['aperture_deg']:.2f} deg alpha {r['alpha_mps2']:+.3f} est "
             f"{r['estimate_mps2']:+.3f} +- {r['std_mps2']:.3f} ({r['error_over_bound']:+.2f}) "
             f"estimable {r['estimable']} focus {r['uniform_focus']:.3f} "
+            f"holds {r['uniform_start_holds']} start {r['start']} "
             f"{r['acceleration_seconds']:.1f} s",
             flush=True,
         )
     acc = [r for r in rows if r["alpha_mps2"] != 0.0]
     uni = [r for r in rows if r["alpha_mps2"] == 0.0]
     held = [r for r in acc if r["uniform_focus"] >= 0.5]
+    lost = [r for r in acc if r["uniform_focus"] < 0.5]
+    seconds = [r["acceleration_seconds"] for r in rows]
+    seconds_held = [r["acceleration_seconds"] for r in rows if r["uniform_start_holds"]]
     summary = {
         "seed": args.seed,
         "accelerating_all": coverage(acc),
         "accelerating_estimable": coverage([r for r in acc if r["estimable"]]),
         "accelerating_held_by_uniform_stage": coverage(held),
         "accelerating_held_and_estimable": coverage([r for r in held if r["estimable"]]),
+        "accelerating_not_held_by_uniform_stage": coverage(lost),
         "uniform_all": coverage(uni),
         "uniform_estimable": coverage([r for r in uni if r["estimable"]]),
-        "acceleration_seconds_median": float(np.median([r["acceleration_seconds"] for r in rows])),
+        "acceleration_seconds_median": float(np.median(seconds)),
+        "acceleration_seconds_median_start_held": (
+            float(np.median(seconds_held)) if seconds_held else float("nan")
+        ),
+        "central_searches_run": sum(not r["uniform_start_holds"] for r in rows),
+        "estimates_from_central_history": sum(r["start"] != "uniform" for r in rows),
         "load_average": os.getloadavg(),
     }
     args.out.mkdir(parents=True, exist_ok=True)
@@ -172,17 +188,22 @@ def main() -> None:
     lines += [
         "",
         f"Median time of the acceleration step: {summary['acceleration_seconds_median']:.2f} s "
-        f"(load average {summary['load_average'][0]:.1f} on the machine that ran it).",
+        f"over all draws, {summary['acceleration_seconds_median_start_held']:.2f} s over those "
+        f"whose uniform start held (load average {summary['load_average'][0]:.1f} on the "
+        "machine that ran it). Central searches run on "
+        f"{summary['central_searches_run']} of {len(rows)} draws; the estimate came from the "
+        f"central degree's range history on {summary['estimates_from_central_history']}.",
         "",
         "| aperture (deg) | alpha (m/s^2) | estimate | bound | error / bound | estimable | "
-        "uniform |I| / amplitude |",
-        "|---|---|---|---|---|---|---|",
+        "uniform |I| / amplitude | fit |I| / amplitude | uniform start holds | start |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
             f"| {r['aperture_deg']:.2f} | {r['alpha_mps2']:+.3f} | {r['estimate_mps2']:+.3f} | "
             f"{r['std_mps2']:.3f} | {r['error_over_bound']:+.2f} | {r['estimable']} | "
-            f"{r['uniform_focus']:.3f} |"
+            f"{r['uniform_focus']:.3f} | {r['amplitude']:.3f} | {r['uniform_start_holds']} | "
+            f"{r['start']} |"
         )
     (args.out / "acceleration_coverage.md").write_text("\n".join(lines) + "\n")
 

@@ -8,8 +8,9 @@ fit on the central degree, its focus on the whole aperture, then the acceleratio
 The seeded draws (seed 2211, fixed before any run) are accelerations away from the radar,
 |alpha| in [0.3, 1] m/s^2, over 2-4 degrees: the population the uniform stage holds. An
 acceleration towards the radar beyond about (V - u_t)^2 / L has a range history no
-uniform motion has over the central degree (the module notes' limit; the benchmark
-``benchmarks/acceleration_coverage.py`` draws both signs and reports it).
+uniform motion has over the central degree; the step then finds it by the central
+searches (the module notes' "limit of the uniform start"), tested on one such mover here;
+the benchmark ``benchmarks/acceleration_coverage.py`` draws both signs.
 """
 
 import numpy as np
@@ -30,6 +31,7 @@ from sarmotion.motion import (
     refine_on_aperture,
     separable_fraction,
 )
+from sarmotion.motion.acceleration import uniform_start_holds
 from sarmotion.pipeline import AnalysisOptions, analyze
 from sarmotion.simulation import AcceleratingTarget, Scene, add_noise, load_scene, simulate
 
@@ -177,6 +179,71 @@ def test_held_cross_range_offset_is_within_its_spread():
     tr = simulate(_scene((mover,), 4.0)).traces
     acc = _estimate(tr, 0.19, noise=1e-6)
     assert 0.0 < abs(acc.range_acceleration_mps2 + 0.5) <= 3.0 * acc.std_mps2
+
+
+def test_hold_share_is_one_at_the_mover_and_small_off_its_range_history():
+    """kappa at the mover's motion: 1, or (mean f)^2 / mean(f^2) for echoes scaled by f.
+
+    A mover of amplitude 1 at 0 dB per sample over the central degree of 2 degrees (seed
+    2211). With the noise's expected power taken off, the first-order noise terms cancel
+    between the coherent and the per-pulse power, and kappa deviates from its value by
+    about 1 / (sqrt(n) SNR_p) (SNR_p = |a|^2 / sigma_z^2 per pulse): checked within 5 of
+    them, with the echoes as simulated and with each pulse's scaled by a random factor
+    in [0.5, 1.5] (an in-phase change, the ratio of the factors' squared mean to their
+    mean square). At the motion 2 m/s off in cross-range speed (about three
+    cross-range-speed resolutions of a degree: the range history departs by wavelengths):
+    under the half-power point, the test fails. Without any echo: NaN, not held.
+    """
+    tr0 = _geometry(2.0)
+    mover = _mover(tr0, [6.0, -3.0], 2.5, -4.0, 0.0)
+    whole = simulate(_scene((mover,), 2.0)).traces
+    central = central_sub_aperture(whole, 1.0)
+    clean = whole.select_pulses(central.start, central.stop)
+    s = whole.slow_times_s[central]
+    track = mover.positions_at(s)
+    power = float(np.mean(np.abs(clean.data) ** 2))  # the noise's at 0 dB per sample
+    w2 = float(np.sum(clean.radar.spectral_weights() ** 2))
+    snr_pulse = w2 / (clean.n_samples * power)  # |a| = 1
+    n = clean.n_pulses
+    tol = 5.0 / (np.sqrt(n) * snr_pulse)
+    rng = np.random.default_rng(SEED)
+    tr = clean.with_data(add_noise(clean.data, snr_db=0.0, rng=rng))
+    holds, kappa = uniform_start_holds(tr, track, noise_variance=power)
+    assert holds and abs(kappa - 1.0) <= tol
+    f = rng.uniform(0.5, 1.5, n)
+    tr = clean.with_data(add_noise(clean.data * f[:, None], snr_db=0.0, rng=rng))
+    holds, kappa = uniform_start_holds(tr, track, noise_variance=power)
+    expected = np.mean(f) ** 2 / np.mean(f**2)
+    assert holds and abs(kappa - expected) <= tol / np.mean(f**2)
+    off = track + s[:, None] * np.r_[ground_velocity(0.0, 2.0, whole.geometry), 0.0]
+    holds, kappa = uniform_start_holds(tr, off, noise_variance=power)
+    assert not holds and kappa < 0.5
+    holds, kappa = uniform_start_holds(tr.with_data(np.zeros_like(tr.data)), track,
+                                       noise_variance=power)  # fmt: skip
+    assert not holds and np.isnan(kappa)
+
+
+def test_acceleration_towards_the_radar_is_recovered():
+    """0.8 m/s^2 towards the radar over 3 degrees: the uniform start fails, the step does not.
+
+    Beyond the curvature (V - u_t)^2 / L of any uniform range history (0.48 m/s^2 here), no
+    uniform motion holds the central degree: the test of the uniform start must fail and
+    the central searches give the estimate, within 3 standard errors of the truth, with
+    the mover's amplitude (1) where the uniform start keeps under half of it. Seeded
+    (2211), per-sample SNR -5 dB.
+    """
+    tr0 = _geometry(3.0)
+    mover = _mover(tr0, [-6.0, 4.0], 3.0, 2.0, 0.8)
+    clean = simulate(_scene((mover,), 3.0)).traces
+    tr = clean.with_data(add_noise(clean.data, snr_db=-5.0, rng=SEED))
+    noise = float(np.mean(np.abs(clean.data) ** 2)) / 10.0 ** (-5.0 / 10.0)
+    acc = _estimate(tr, 3.0, noise=noise)
+    assert not acc.uniform_start_holds
+    assert acc.start == "central search"
+    assert abs(acc.uniform_amplitude) < 0.5
+    assert abs(abs(acc.amplitude) - 1.0) < 0.05
+    assert abs(acc.range_acceleration_mps2 - 0.8) <= 3.0 * acc.std_mps2
+    assert acc.estimable
 
 
 @pytest.mark.slow

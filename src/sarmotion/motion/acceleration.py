@@ -31,13 +31,38 @@ range has its acceleration estimated ``beta dy`` off (``beta`` the shift of the 
 best mimics ``dy``, :func:`acceleration_bound`), which the standard error counts for a
 ``dy`` of spread ``cross_range_std_m`` (half the imaged scene in the analysis).
 
-**The limit of the uniform start.** A uniform motion's range curvature is about
-``(V - u_t)^2 / L`` or more (0.48 m/s^2 on GOTCHA at ``u_t = 0``): a mover accelerating
-towards the radar by more than that has a range history that bends the other way over
-the central degree, no uniform motion matches it, and the uniform stage, which this step
-starts from, does not hold it (``benchmarks/results/acceleration_coverage.md``).
+**The limit of the uniform start, and the central searches.** A uniform motion's range
+curvature is about ``(V - u_t)^2 / L`` or more (0.48 m/s^2 on GOTCHA at ``u_t = 0``): a
+mover accelerating towards the radar by more than that has a range history that bends
+the other way over the central degree, no uniform motion matches it, and the uniform
+stage does not hold it (its ``|I|`` a small fraction of the mover's amplitude).
 Accelerations away from the radar, and towards it below that, look like a cross-range
-speed (beyond the default search interval of +-30 m/s from about 0.4 m/s^2).
+speed (beyond the default search interval of +-30 m/s from about 0.4 m/s^2). And where
+the uniform stage holds the mover over the central degree, its focus on the whole
+aperture is a uniform motion's compromise with the acceleration, whose range history
+away from the centre is not the mover's. The profile (below) therefore runs from two
+measured range histories, and of their maxima the higher ``|I|`` is kept (both are
+maxima of the same likelihood; the first is kept unless the second's log-likelihood,
+``|I|^2 sum W^2 / (n sigma_P^2)``, is higher by more than 1/2, the drop one standard
+error away from a maximum: two ascents that end closer found the same maximum):
+
+1. the uniform start's over the whole aperture;
+2. the data's over the central degree, where a uniform motion and the acceleration
+   share the range history to second order. Where the uniform start holds the mover
+   there (:func:`uniform_start_holds`: its coherent sum keeps at least
+   :data:`HOLD_COHERENCE` of the per-pulse terms' power, the main lobe's half-power
+   point), it is the uniform start's. Where it does not, it is measured without assuming
+   a uniform motion, by the *central searches*: at each ``alpha`` of the profile's grid
+   the central traces are shifted in range by ``+alpha s^2 / 2`` (which takes that much
+   acceleration off every echo) and searched by the uniform search
+   (:func:`sarmotion.motion.fit_point_mover`) over cross-range speeds ``+-w``; the fit of
+   largest ``|I|`` gives the data's range history (its own minus the known shift). ``w =
+   step L / (2 V)``, ``step`` the grid's spacing: a grid step of acceleration moves the
+   curvature as ``L step / (2 (V - u_t))`` of cross-range speed, so each curvature of
+   the grid's span falls in the windows of two neighbouring grid points at ``u_t = 0``
+   and of at least one for ``|u_t|`` up to ``V / 2``.
+
+A uniform mover's answer is the first start's (the second's maximum is the same one).
 
 **The rule** (:func:`acceleration_estimable`). The acceleration is reported when the data
 say more about it than the motion model assumed before the data: its information (one
@@ -56,11 +81,12 @@ aperture).
 **The fit** (:func:`fit_range_acceleration`): the maximum of the matched filter ``|I|``
 (:class:`sarmotion.motion.MatchedFilter`) over ``(x, u_r, u_p, alpha)``, ``y`` held,
 profiled in ``alpha``: at each ``alpha`` the motion whose range history is nearest the
-uniform start's (least squares over every pulse: the ridge of the likelihood, curved
-over the tens of m/s of cross-range speed an acceleration moves) is refined by a Newton
-ascent of ``|I|^2`` (:func:`sarmotion.core.ascent.newton_ascent`, analytic derivatives);
-``alpha`` is searched on a grid of ``_PROFILE_SPAN`` prior deviations either side of 0,
-then by a bounded scalar search between the best point's neighbours. The standard error
+measured one (least squares over the pulses it was measured on: the ridge of the
+likelihood, curved over the tens of m/s of cross-range speed an acceleration moves) is
+refined by a Newton ascent of ``|I|^2`` (:func:`sarmotion.core.ascent.newton_ascent`,
+analytic derivatives); ``alpha`` is searched on a grid of ``_PROFILE_SPAN`` prior
+deviations either side of 0, then by a bounded scalar search between the best point's
+neighbours. The standard error
 (:func:`acceleration_bound`) is the Cramér–Rao bound of ``(x, u_r, u_p, alpha, |a|)`` at
 the fit with the fitted amplitude and the measured noise, factored by QR (the normal
 matrix's condition number is past float64's precision), plus the held ``y``'s spread.
@@ -76,7 +102,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_triangular
 from scipy.optimize import least_squares, minimize_scalar
-from scipy.stats import gamma
 
 from ..core import Acquisition, C, Traces, as_point, as_traces, ground_velocity, range_speed
 from ..core.ascent import newton_ascent
@@ -87,7 +112,7 @@ from .likelihood import MatchedFilter, PointFit, fit_point_mover
 
 __all__ = [
     "ACCELERATION_PSD",
-    "HOLD_FALSE_ALARM",
+    "HOLD_COHERENCE",
     "RangeAcceleration",
     "acceleration_bound",
     "acceleration_estimable",
@@ -310,10 +335,12 @@ class RangeAcceleration:
         :func:`acceleration_bound` (``x, u_r, u_p, alpha, |a|``).
     uniform_start_holds : bool
         The uniform start holds the mover over the central degree
-        (:func:`uniform_start_holds`); when it does not, the central searches ran.
-    central_search : bool
-        The fit is the profile's from the central searches' range history (its ``|I|``
-        above the uniform start's profile's; module notes).
+        (:func:`uniform_start_holds`); where it does not, the central searches ran.
+    start : str
+        The range history the kept maximum of the profile started from (module notes):
+        ``"uniform"`` (the uniform start's over the whole aperture), ``"central"`` (the
+        uniform start's over the central degree) or ``"central search"`` (the central
+        searches').
     """
 
     range_acceleration_mps2: float
@@ -325,7 +352,7 @@ class RangeAcceleration:
     separable_fraction: float
     covariance: NDArray[np.float64]
     uniform_start_holds: bool = True
-    central_search: bool = False
+    start: str = "uniform"
 
 
 #: Half-width of the profile over ``alpha`` in prior standard deviations ``sqrt(q / T)``:
@@ -339,11 +366,10 @@ _PROFILE_SPAN = 4.0
 #: (``benchmarks/acceleration_coverage.py`` checks the two together).
 _PROFILE_HALF_POINTS = 4
 
-#: False-alarm probability of the test that the uniform start holds the central degree
-#: (:func:`uniform_start_holds`). A false alarm only spends the central searches' time
-#: (the larger ``|I|`` of the two profiles is kept); a mover the uniform start does not
-#: hold gives a statistic of tens to thousands of times its threshold.
-HOLD_FALSE_ALARM = 1e-3
+#: Share of the per-pulse terms' power a motion's coherent sum must keep to hold the mover
+#: (:func:`uniform_start_holds`): the main lobe's half-power point. A motion that keeps
+#: more is on the lobe's slope in every combination of its parameters.
+HOLD_COHERENCE = 0.5
 
 
 def uniform_start_holds(
@@ -352,19 +378,26 @@ def uniform_start_holds(
     *,
     acquisition: Acquisition | None = None,
     noise_variance: float,
-    false_alarm: float = HOLD_FALSE_ALARM,
-) -> tuple[bool, float, float]:
-    """Whether a motion holds a mover coherently over pulses: the spread of their terms.
+    coherence: float = HOLD_COHERENCE,
+) -> tuple[bool, float]:
+    """Whether a motion holds a mover coherently over pulses: its coherent share of their power.
 
     The matched filter is a sum over pulses, ``I = sum_j z_j``, ``z_j`` one pulse's
-    coherent sum over frequency (:class:`sarmotion.motion.MatchedFilter`). Where the
-    motion is the mover's, every ``z_j`` is the amplitude ``a`` plus noise of variance
-    ``sigma_z^2 = sigma_P^2 / sum W^2`` (``sigma_P^2 = n_samples`` times the noise per
-    fast-time sample), so ``S = sum_j |z_j - mean(z)|^2 / sigma_z^2`` is a sum of
-    ``n - 1`` unit exponentials (Gamma(``n - 1``)). A motion whose range history departs
-    from the mover's by a fraction of a wavelength turns the ``z_j``' phases and ``S``
-    grows by ``n |a|^2 (1 - coherence) / sigma_z^2``. The motion holds the mover when
-    ``S`` is under the Gamma's ``1 - false_alarm`` quantile.
+    coherent sum over frequency (:class:`sarmotion.motion.MatchedFilter`), with noise of
+    variance ``sigma_z^2 = sigma_P^2 / sum W^2`` (``sigma_P^2 = n_samples`` times the noise
+    per fast-time sample). Where the motion's range history is the mover's, the ``z_j``
+    share one phase and ``|I|^2`` is ``n`` times their power; where it departs by a
+    fraction of a wavelength the phases turn and ``|I|^2`` keeps a share of it. The
+    share, the noise's expected power taken off both,
+
+        kappa = (|I|^2 - n sigma_z^2) / (n (sum_j |z_j|^2 - n sigma_z^2)),
+
+    is 1 for a mover whose echo changes only in amplitude from pulse to pulse (a
+    separation that takes part of it in some pulses, a reflectivity that varies with
+    aspect: in-phase changes that cost ``|I|`` a few per cent, the square of their mean
+    over their root mean square), and the motion holds the mover when ``kappa >=
+    coherence``. Without power above the noise the test cannot confirm it (``kappa``
+    NaN, not held).
 
     Parameters
     ----------
@@ -375,22 +408,20 @@ def uniform_start_holds(
     acquisition : Acquisition, optional
         Required when ``data`` is an array.
     noise_variance : float
-        Noise variance per fast-time sample (data units squared, > 0).
-    false_alarm : float
-        Probability that a motion that holds the mover fails the test, in (0, 1).
+        Noise variance per fast-time sample (data units squared, >= 0).
+    coherence : float
+        Share required, in (0, 1].
 
     Returns
     -------
     holds : bool
-    statistic : float
-        ``S``.
-    threshold : float
-        The quantile.
+    kappa : float
+        The share (NaN without power above the noise).
     """
-    if not (np.isfinite(noise_variance) and noise_variance > 0):
-        raise ValueError(f"noise_variance must be > 0, got {noise_variance!r}")
-    if not (0.0 < false_alarm < 1.0):
-        raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm!r}")
+    if not (np.isfinite(noise_variance) and noise_variance >= 0):
+        raise ValueError(f"noise_variance must be >= 0, got {noise_variance!r}")
+    if not (0.0 < coherence <= 1.0):
+        raise ValueError(f"coherence must be in (0, 1], got {coherence!r}")
     tr = as_traces(data, acquisition)
     where = np.asarray(positions_m, dtype=np.float64)
     if where.shape != (tr.n_pulses, 3):
@@ -399,10 +430,13 @@ def uniform_start_holds(
     delays = 2.0 * (np.linalg.norm(mf.antenna - where, axis=1) - mf.ref_range) / C
     z = phased_row_sums(mf.weighted, np.ascontiguousarray(delays), float(mf.freq[0]),
                         mf.freq_step) / mf.norm  # fmt: skip
-    var_z = tr.n_samples * float(noise_variance) / mf.norm
-    statistic = float(np.sum(np.abs(z - z.mean()) ** 2) / var_z)
-    threshold = float(gamma.isf(false_alarm, tr.n_pulses - 1))
-    return statistic <= threshold, statistic, threshold
+    n = z.size
+    noise = n * tr.n_samples * float(noise_variance) / mf.norm  # n sigma_z^2
+    power = float(np.sum(np.abs(z) ** 2)) - noise
+    if not power > 0:
+        return False, float("nan")
+    kappa = (abs(complex(z.sum())) ** 2 - noise) / (n * power)
+    return bool(kappa >= coherence), float(kappa)
 
 
 @dataclass(frozen=True)
@@ -573,26 +607,40 @@ def fit_range_acceleration(
             q, value = profiled(alpha, start)
         return alpha, q, value
 
+    def bound(theta: NDArray[np.float64], value: complex) -> NDArray[np.float64]:
+        return acceleration_bound(
+            gradients(theta),
+            freqs,
+            weights,
+            amplitude=max(abs(value) / tr.n_pulses, 1e-300),
+            noise_variance=max(tr.n_samples * float(noise_variance), 1e-300),
+            cross_range_std_m=cross_range_std_m,
+        )
+
+    # start 1: the uniform start's range history over the whole aperture
     uniform_track = where(np.zeros(4))
     everything = slice(0, tr.n_pulses)
     alpha, q, value = ascend(
         _Start(everything, np.linalg.norm(tr.positions_m - uniform_track, axis=1), np.zeros(3))
     )
+    cov5 = bound(np.r_[q, alpha], value)
+    # start 2: the data's range history over the central degree, the uniform start's where
+    # it holds the mover there, else the central searches' (module notes)
     central = central_sub_aperture(tr)
     central_traces = tr.select_pulses(central.start, central.stop)
-    holds, _, _ = uniform_start_holds(
-        central_traces,
-        uniform_track[central],
-        noise_variance=max(float(noise_variance), 1e-300),
+    holds, _ = uniform_start_holds(
+        central_traces, uniform_track[central], noise_variance=max(float(noise_variance), 0.0)
     )
-    searched = False
-    if not holds:
+    if holds:
+        measured = _Start(central, np.linalg.norm(
+            tr.positions_m[central] - uniform_track[central], axis=1), np.zeros(3))  # fmt: skip
+    else:
         # each alpha of the grid shifts the curvature a uniform search over +-window
         # reaches by 4 (V - u_t) window / L = 2 grid steps at u_t = 0: every curvature
         # of the grid's span lies in two neighbours' windows, and in at least one for
         # |u_t| up to V / 2 (module notes)
         window = step * geom.range_m / (2.0 * geom.speed_mps)
-        a_c, fit, ranges = _central_search(
+        _, fit, ranges = _central_search(
             tr, central, grid, range_speed_mps=range_speed(v0[:2], geom), window_mps=window
         )
         # first guess of the offsets: the fit's motion at the whole aperture's s = 0
@@ -600,21 +648,19 @@ def fit_range_acceleration(
         dv = np.linalg.lstsq(np.stack([b_r, b_p], axis=1), np.r_[fit.velocity_mps, 0.0] - v0,
                              rcond=None)[0]  # fmt: skip
         x_c = float((fit.position_m - t_c * np.r_[fit.velocity_mps, 0.0] - p0) @ e_r)
-        a2, q2, value2 = ascend(_Start(central, ranges, np.r_[x_c, dv]))
-        if abs(value2) > abs(value):
-            alpha, q, value, searched = a2, q2, value2, True
-    start = complex(response(uniform_track, jac)[3])
-    theta = np.r_[q, alpha]
-    grads = gradients(theta)
+        measured = _Start(central, ranges, np.r_[x_c, dv])
+    a2, q2, value2 = ascend(measured)
+    # the second start's maximum replaces the first's where its log-likelihood
+    # |I|^2 sum W^2 / (n sigma_P^2) is higher by more than 1/2, the drop one standard
+    # error away from a maximum: two ascents that end closer found the same maximum
+    start = "uniform"
+    gain = (abs(value2) ** 2 - abs(value) ** 2) * float(np.sum(weights**2))
+    if gain > 0.5 * tr.n_pulses * tr.n_samples * float(noise_variance):
+        alpha, q, value = a2, q2, value2
+        cov5 = bound(np.r_[q, alpha], value)
+        start = "central" if holds else "central search"
+    grads = gradients(np.r_[q, alpha])
     amplitude = value / tr.n_pulses
-    cov5 = acceleration_bound(
-        grads,
-        freqs,
-        weights,
-        amplitude=max(abs(amplitude), 1e-300),
-        noise_variance=max(tr.n_samples * float(noise_variance), 1e-300),
-        cross_range_std_m=cross_range_std_m,
-    )
     std = float(np.sqrt(max(cov5[3, 3], 0.0)))
     return RangeAcceleration(
         range_acceleration_mps2=alpha,
@@ -622,9 +668,9 @@ def fit_range_acceleration(
         estimable=acceleration_estimable(std, duration, acceleration_psd=acceleration_psd),
         prior_std_mps2=prior_std,
         amplitude=complex(amplitude),
-        uniform_amplitude=start / tr.n_pulses,
+        uniform_amplitude=complex(response(uniform_track, jac)[3]) / tr.n_pulses,
         separable_fraction=separable_fraction(grads, freqs, weights),
         covariance=cov5,
         uniform_start_holds=holds,
-        central_search=searched,
+        start=start,
     )
