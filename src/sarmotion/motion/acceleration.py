@@ -392,10 +392,10 @@ def uniform_start_holds(
 
         kappa = (|I|^2 - n sigma_z^2) / (n (sum_j |z_j|^2 - n sigma_z^2)),
 
-    is 1 for a mover whose echo changes only in amplitude from pulse to pulse (a
+    is 1 at the mover's motion where its echo is the same in every pulse, and the squared
+    mean of its amplitudes over their mean square where it changes in amplitude only (a
     separation that takes part of it in some pulses, a reflectivity that varies with
-    aspect: in-phase changes that cost ``|I|`` a few per cent, the square of their mean
-    over their root mean square), and the motion holds the mover when ``kappa >=
+    aspect: 0.94 for changes of 25 % rms); the motion holds the mover when ``kappa >=
     coherence``. Without power above the noise the test cannot confirm it (``kappa``
     NaN, not held).
 
@@ -465,10 +465,11 @@ def _central_search(
     At each ``alpha`` the traces of the central pulses are shifted in range by
     ``+alpha s^2 / 2`` (``s`` the whole aperture's slow time), which takes that much
     range acceleration off every echo, and the uniform search :func:`fit_point_mover`
-    runs on them over cross-range speeds ``+-window_mps``. The fit of largest ``|I|``
-    gives the data's range history over those pulses: its own range history minus the
-    shift (the shift is known exactly, so the history does not depend on how well the
-    shift models an acceleration).
+    runs on them over cross-range speeds ``+-window_mps``, from ``range_speed_mps`` (it
+    refines the range speed on ``g`` and over its Doppler span ``+-lambda PRF / 4``). The
+    fit of largest ``|I|`` gives the data's range history over those pulses: its own
+    range history minus the shift (the shift is known exactly, so the history does not
+    depend on how well the shift models an acceleration).
 
     Returns
     -------
@@ -608,6 +609,7 @@ def fit_range_acceleration(
         return alpha, q, value
 
     def bound(theta: NDArray[np.float64], value: complex) -> NDArray[np.float64]:
+        """:func:`acceleration_bound` at ``theta`` with the amplitude ``|value| / n``."""
         return acceleration_bound(
             gradients(theta),
             freqs,

@@ -724,12 +724,14 @@ def with_acceleration(
         cross_range_std_m=cross_range_std_m,
     )
     log.info(
-        "range acceleration %.4f +- %.3g m/s^2 (%s; |I| %.4g -> %.4g x n_pulses)",
+        "range acceleration %.4f +- %.3g m/s^2 (%s; |I| %.4g -> %.4g x n_pulses; "
+        "from the %s range history)",
         acc.range_acceleration_mps2,
         acc.std_mps2,
         "estimable" if acc.estimable else "not estimable: bound over the prior",
         abs(acc.uniform_amplitude),
         abs(acc.amplitude),
+        acc.start,
     )
     return _with(mover, acceleration=acc)
 
