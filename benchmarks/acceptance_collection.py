@@ -113,12 +113,14 @@ def generate(scene, path: Path, block_pulses: int) -> dict:
     }
 
 
-def analyse(path: Path, out: Path, region, workers: int, timeout_s: float) -> dict:
+def analyse(
+    path: Path, out: Path, region, workers: int, timeout_s: float, extra: tuple[str, ...] = ()
+) -> dict:
     """``sarmotion analyze`` in a child process: wall, peak RSS, load while it ran."""
     cmd = [sys.executable, "-m", "sarmotion", "-q", "analyze", str(path), "--out", str(out)]
     if region is not None:
         cmd += ["--region", *(f"{v:g}" for v in region)]
-    cmd += ["--workers", str(workers), "--force"]
+    cmd += ["--workers", str(workers), "--force", *extra]
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
     loads: list[float] = []
     done = threading.Event()
@@ -408,6 +410,11 @@ def main() -> None:
     parser.add_argument("--max-speed", type=float, default=15.0)
     parser.add_argument("--seed", type=int, default=2028)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument(
+        "--defocus-search",
+        action="store_true",
+        help="analyse with --defocus-search (movers in each patch's stationary band)",
+    )
     parser.add_argument("--block-pulses", type=int, default=128)
     parser.add_argument("--timeout", type=float, default=MAX_WALL_S + 60.0)
     parser.add_argument("--work", type=Path, required=True, help="folder for the CPHD and output")
@@ -443,7 +450,8 @@ def main() -> None:
     if args.score_only:
         analysis = json.loads((args.work / "analysis.json").read_text())
     else:
-        analysis = analyse(path, args.work / "out", region, args.workers, args.timeout)
+        extra = ("--defocus-search",) if args.defocus_search else ()
+        analysis = analyse(path, args.work / "out", region, args.workers, args.timeout, extra)
         (args.work / "analysis.json").write_text(json.dumps(analysis))
     print(json.dumps({k: v for k, v in analysis.items() if "tail" not in k}), flush=True)
     result = {

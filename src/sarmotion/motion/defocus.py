@@ -32,11 +32,15 @@ phase is under half the bank's first step: scenes of the size the analysis image
 band is the scene's own range rates: a few resolution cells over the aperture at most),
 except in the smear test below.
 
-**Screen.** Noise in a cell is complex Gaussian, ``|X|^2`` exponential with mean ``p``,
-estimated per hypothesis as ``median |X|^2 / ln 2`` over the cells searched (targets
-barely move a median; clutter can only raise it, which is conservative). Over ``N``
-cells and hypotheses a noise cell exceeds ``p ln(N / alpha)`` with probability at most
-``alpha`` (the union bound, as :func:`~sarmotion.separation.noise_only`). A candidate is
+**Screen.** Interference in a cell is taken as complex Gaussian, ``|X|^2`` exponential
+with mean ``p``: the noise, estimated per hypothesis as ``median |X|^2 / ln 2`` over the
+cells searched (targets barely move a median), or, where larger, the mean power of the
+cell's range bin over its Doppler cells beyond a guard of a focused point's main lobe
+either side (cell-averaging: the smears and side lobes of the stationary points in that
+bin, which at a moving hypothesis add with unrelated phases; the guard keeps the cell's
+own target out). Over ``N`` cells and hypotheses such a cell exceeds ``p ln(N / alpha)`` with
+probability at most ``alpha`` (the union bound, as
+:func:`~sarmotion.separation.noise_only`). A candidate is
 a cell of some ``w != 0`` that reaches it, is a local maximum in fast time, Doppler and
 ``w``, and is brighter than a stationary point's smear could make it: a stationary
 point of value ``X_0(t', f')`` reads ``|X_0(t', f')| H_w(f - f')`` in hypothesis ``w``
@@ -64,12 +68,15 @@ from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_freque
 from ..core.constants import C
 
 __all__ = [
+    "DEFOCUS_NULL_TAIL",
     "DefocusCandidate",
     "DefocusScan",
     "EDGE_PHASE_STEP_RAD",
     "SMEAR_MARGIN_DB",
     "cross_speed_bank",
+    "defocus_false_alarm_probability",
     "defocus_scan",
+    "defocus_threshold_db",
     "edge_phase_rad",
     "hypothesis_delays_s",
 ]
@@ -80,6 +87,31 @@ EDGE_PHASE_STEP_RAD = 0.5 * np.pi
 #: Least margin of a candidate over the brightest stationary smear at its cell (dB):
 #: two equal smears in phase, ``20 log10 2``.
 SMEAR_MARGIN_DB = float(20.0 * np.log10(2.0))
+
+
+#: Exponential tail of the statistic of the bank's candidates that no stationary point
+#: explains, on data without movers, above its 90 % quantile (``t0_db``, dB; ``scale_db``
+#: the mean excess; ``p0`` = 0.1): the populations pooled, real GOTCHA degrees and
+#: simulated point clutter with and without noise (``benchmarks/detector_null.py
+#: --detector defocus``, ``benchmarks/results/detector_null_defocus.md``).
+DEFOCUS_NULL_TAIL = {"t0_db": 15.76, "scale_db": 6.82, "p0": 0.10}
+
+
+def defocus_threshold_db(false_alarm_rate: float, n_candidates: int) -> float:
+    """Least statistic (dB) of a declared candidate over ``N`` tested in a scene.
+
+    ``t_0 + s ln(p_0 N / alpha)`` with :data:`DEFOCUS_NULL_TAIL` (the union bound).
+    """
+    t = DEFOCUS_NULL_TAIL
+    n = max(int(n_candidates), 1)
+    return float(t["t0_db"] + t["scale_db"] * np.log(t["p0"] * n / float(false_alarm_rate)))
+
+
+def defocus_false_alarm_probability(statistic_db: float, n_candidates: int) -> float:
+    """Per-scene probability that ``N`` null candidates reach ``statistic_db`` (union bound)."""
+    t = DEFOCUS_NULL_TAIL
+    p = t["p0"] * np.exp(-(float(statistic_db) - t["t0_db"]) / t["scale_db"])
+    return float(min(1.0, max(int(n_candidates), 1) * min(p, 1.0)))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -95,7 +127,7 @@ class DefocusCandidate:
     delay_s : float
         Fast time of its trace at ``s = 0`` relative to the reference's (s).
     statistic_db : float
-        ``10 log10(|X|^2 / p)``: its power over the hypothesis' noise level (dB).
+        ``10 log10(|X|^2 / p)``: its power over its interference level (dB, module notes).
     leak_db : float
         Its amplitude over the brightest stationary smear at its cell (dB, > 0).
     """
@@ -135,6 +167,24 @@ class DefocusScan:
     def p_value(self, statistic_db: float) -> float:
         """Union-bound probability that noise alone reaches ``statistic_db`` in some cell."""
         return float(min(1.0, self.n_cells * np.exp(-(10.0 ** (statistic_db / 10.0)))))
+
+
+def _guarded_mean(power: NDArray, cols: NDArray[np.int64], guard: int) -> NDArray[np.float64]:
+    """Mean of ``power`` (rows, n) along each row beyond ``+-guard`` cells of each of ``cols``.
+
+    Circular in the second axis (Doppler); shape ``(rows, cols.size)``.
+    """
+    n = power.shape[1]
+    c = np.concatenate([np.zeros((power.shape[0], 1)), np.cumsum(power, axis=1)], axis=1)
+    total = c[:, -1:]
+    lo = cols - guard
+    hi = cols + guard + 1
+    inside = np.zeros((power.shape[0], cols.size))
+    for shift in (-n, 0, n):  # the window may wrap around
+        a = np.clip(lo + shift, 0, n)
+        b = np.clip(hi + shift, 0, n)
+        inside += c[:, b] - c[:, a]
+    return (total - inside) / max(n - (2 * guard + 1), 1)
 
 
 def hypothesis_delays_s(traces: Traces, cross_range_speed_mps: float) -> NDArray[np.float64]:
@@ -188,6 +238,7 @@ def defocus_scan(
     half_span_s: float,
     false_alarm_rate: float,
     max_candidates: int = 8,
+    threshold_db: float | None = None,
 ) -> DefocusScan:
     """Cells of the cross-range-speed bank that noise and stationary smears cannot explain.
 
@@ -207,6 +258,9 @@ def defocus_scan(
         ``alpha`` of the union bound, in (0, 1).
     max_candidates : int
         At most this many are returned, the most powerful first; the others are counted.
+    threshold_db : float, optional
+        The screen's level over the interference (dB), overriding that of
+        ``false_alarm_rate`` (to measure the candidates' null below it).
 
     Returns
     -------
@@ -249,6 +303,8 @@ def defocus_scan(
     dop_cells = max(1.0, 2.0 * band_mps / (0.5 * lam * prf / n_p))
     n_cells = int(np.ceil(range_cells * dop_cells * moving.sum()))
     level = np.log(n_cells / false_alarm_rate)
+    if threshold_db is not None:
+        level = 10.0 ** (float(threshold_db) / 10.0)
     noise = np.empty(speeds.size)
     for k in range(speeds.size):
         sel = maps[k][:, searched[k]]
@@ -259,6 +315,8 @@ def defocus_scan(
     dt = float(np.median(np.diff(t)))
     reach = 1 + int(np.ceil(2.0 * band_mps * float(np.ptp(s)) / C / dt))
     found: list[DefocusCandidate] = []
+    # a focused point's main lobe, null to null, in Doppler cells (either side)
+    guard = 2 * int(np.ceil(n_dop / n_p))
     # the searched Doppler columns and one either side, in increasing Doppler (contiguous)
     order = np.argsort(doppler, kind="stable")
     wanted = np.convolve(searched.any(axis=0)[order], np.ones(3), mode="same") > 0
@@ -268,7 +326,10 @@ def defocus_scan(
         if not np.isfinite(noise[k]) or noise[k] <= 0:
             continue
         mk = maps[k][:, cols]
-        ok = (mk >= level * noise[k]) & (mk >= local[k]) & searched[k][cols][None, :]
+        # the interference of a cell: the noise, or the mean power of its range bin over
+        # the Doppler cells beyond its guard if larger (cell-averaging, module notes)
+        floor = np.maximum(noise[k], _guarded_mean(maps[k], cols, guard))
+        ok = (mk >= level * floor) & (mk >= local[k]) & searched[k][cols][None, :]
         for r, j in zip(*np.nonzero(ok), strict=True):
             f = int(cols[j])
             amp = float(np.sqrt(maps[k, r, f]))
@@ -282,7 +343,7 @@ def defocus_scan(
                     range_speed_mps=float(speed_of[k, f]),
                     cross_range_speed_mps=float(speeds[k]),
                     delay_s=float(t[rows[r]]),
-                    statistic_db=float(10.0 * np.log10(maps[k, r, f] / noise[k])),
+                    statistic_db=float(10.0 * np.log10(maps[k, r, f] / floor[r, j])),
                     leak_db=float(20.0 * np.log10(amp / max(leak, 1e-300))),
                 )
             )

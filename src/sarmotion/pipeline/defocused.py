@@ -5,26 +5,28 @@ untested (:func:`~sarmotion.pipeline.find_range_speeds`) images inside the scene
 string of stationary points, and the separation leaves most of its echo in ``L``
 (:mod:`sarmotion.motion.defocus`). Such movers are sought on the data ``D`` of the
 central sub-aperture, less the movers already accepted (their models at full
-amplitude), one at a time:
+amplitude: :func:`search_data`), one at a time:
 
 1. the cross-range-speed bank (:func:`~sarmotion.motion.defocus_scan`) over the
    stationary band and the scene's range span, at the analysis's false-alarm rate;
-2. its candidates, most powerful first, are fitted by
-   maximum likelihood from their cell (:func:`~sarmotion.motion.fit_point_mover_at`)
-   and tested: the generalized likelihood ratio of the fit against the interference
-   around it (:func:`~sarmotion.motion.coherent_statistic_db`, whose neighbourhood
-   level counts the smears of the stationary clutter the data still hold) must reach
-   the coherent detector's threshold for the candidates fitted so far
-   (:func:`~sarmotion.motion.coherent_threshold_db`, the measured null tail and the union
-   bound), the best stationary point with the same range history must not focus them
-   within ``min_focus_gain_db`` (:func:`~sarmotion.motion.stationary_explanation`), and
-   the fit's cross-range speed must be at least the bank's first step from zero (else
-   it is a stationary point, focused);
+2. the strongest cell of each of its first ``MAX_REJECTED`` echoes (an echo: cells
+   within two range cells and two range-speed resolutions, one target seen at several
+   ``w``), most powerful first, is fitted by maximum likelihood from its cell
+   (:func:`~sarmotion.motion.fit_point_mover_at`) and rejected when stationary points
+   explain it (:meth:`CandidateTest.stationary`): the fit is focused as a stationary
+   point (its cross-range speed under the bank's first step), or the best stationary
+   point with its range history focuses it within ``min_focus_gain_db``
+   (:func:`~sarmotion.motion.stationary_explanation`), or the stationary points near its
+   range history, fitted jointly with it, leave it less than half its amplitude
+   (:func:`joint_amplitude`: several stationary points whose Doppler tones lie along
+   a moving signature's sweep match it in part, and none of them alone does); a
+   candidate they do not explain is declared when its statistic (power over its
+   interference) reaches the threshold of the analysis's false-alarm rate over the
+   candidates tested so far, from the statistic's measured null tail
+   (:func:`~sarmotion.motion.defocus_threshold_db`, :data:`~sarmotion.motion.DEFOCUS_NULL_TAIL`);
 3. an accepted fit's model is subtracted and the bank runs again, until a bank gives
-   no candidate that passes, ``max_movers`` is reached, or ``MAX_REJECTED`` echoes
-   were rejected (the bank ranks by power, so those after are weaker still; a rejected
-   echo's cells at other ``w``, within two range cells and two range-speed resolutions,
-   are not tried again).
+   no candidate that passes, ``max_movers`` is reached, or its first ``MAX_REJECTED``
+   echoes were rejected (the bank ranks by power, so those after are weaker still).
 
 The mover stage then takes the data without the stationary targets near these movers
 (``D - L'``, :func:`~sarmotion.pipeline.refit.data_without_stationary`) as their moving
@@ -35,36 +37,63 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.ndimage import maximum_filter
 
 from ..core import Traces
 from ..core.constants import C
 from ..core.geometry import range_direction_velocity
+from ..imaging import backproject_points, resolution
 from ..motion import (
     PointFit,
-    coherent_false_alarm_probability,
-    coherent_statistic_db,
-    coherent_threshold_db,
+    StationaryExplanation,
     defocus_scan,
     fit_point_mover_at,
     point_model,
     stationary_explanation,
 )
-from ..motion.defocus import DefocusCandidate, DefocusScan
+from ..motion.defocus import (
+    DefocusCandidate,
+    DefocusScan,
+    defocus_false_alarm_probability,
+    defocus_threshold_db,
+)
 from ..motion.detector import peak_statistics
 from ..motion.range_speed import range_speed_objective
 from ..motion.speed_resolution import range_speed_resolution
+from ..separation.combined import stationary_location
 from .detection import DetectionResult
 from .results import DefocusEvidence, MoverEvidence
 
 log = logging.getLogger(__name__)
 
-__all__ = ["MAX_REJECTED", "defocused_movers"]
+__all__ = [
+    "MAX_REJECTED",
+    "CandidateTest",
+    "defocused_movers",
+    "distinct_echoes",
+    "JOINT_RATIO",
+    "joint_amplitude",
+    "scan_detection",
+    "search_data",
+    "stationary_near",
+    "test_candidate",
+]
 
 #: Echoes rejected after which a bank's remaining candidates are not tried.
 MAX_REJECTED = 3
+
+#: Ground-range cells either side of a fit's range where stationary points that may
+#: explain it are sought (:func:`stationary_near`): a point's range side lobes there are
+#: within the compressed pulse's first three.
+NEAR_CELLS = 3
+
+#: Least fraction of a candidate's amplitude left when fitted with the stationary points
+#: near its range history (:func:`joint_amplitude`): half, the bank's 6 dB smear margin.
+JOINT_RATIO = 0.5
 
 
 def _g_speed(traces: Traces, rate_mps: float) -> float:
@@ -106,43 +135,180 @@ def _same_echo(a: DefocusCandidate, b: DefocusCandidate, cell_s: float, res_u: f
     )
 
 
-def _try(
-    data: NDArray[np.complexfloating],
-    cand: DefocusCandidate,
-    sub: Traces,
-    min_step_mps: float,
-    min_focus_gain_db: float,
-    glr_threshold_db: float,
-) -> tuple[PointFit, object, float] | None:
-    """The fit of one candidate and its stationary explanation, or ``None`` if rejected."""
-    tr = sub.with_data(data)
-    fit = fit_point_mover_at(
-        tr, cand.delay_s, _g_speed(sub, cand.range_speed_mps), cand.cross_range_speed_mps
+@dataclass(frozen=True, kw_only=True, eq=False)
+class CandidateTest:
+    """One bank candidate fitted and tested (:func:`test_candidate`).
+
+    Attributes
+    ----------
+    candidate : DefocusCandidate
+        The bank's cell.
+    fit : PointFit
+        The maximum-likelihood fit from it, on the data searched.
+    explanation : StationaryExplanation
+        The best stationary point with the fit's range history, and the focus gain.
+    focused_stationary : bool
+        The fit's cross-range speed is under the bank's first step: a stationary point.
+    joint_ratio : float
+        ``|a_joint| / |a|``: the fit's amplitude when fitted jointly (least squares) with
+        the stationary points whose range histories pass near its own, over its
+        amplitude alone (:func:`joint_amplitude`).
+    """
+
+    candidate: DefocusCandidate
+    fit: PointFit
+    explanation: StationaryExplanation
+    focused_stationary: bool
+    joint_ratio: float
+
+    def stationary(self, min_focus_gain_db: float) -> bool:
+        """Whether stationary points explain it (then it is not a mover).
+
+        The fit is focused as a stationary point, or the best stationary point with its
+        range history focuses it within ``min_focus_gain_db``, or the stationary points
+        near its range history, fitted with it, leave it less than half its amplitude
+        (``JOINT_RATIO``: the 6 dB of the bank's smear margin).
+        """
+        why = self.explanation
+        return (
+            self.focused_stationary
+            or (why.within_extent and why.focus_gain_db < min_focus_gain_db)
+            or self.joint_ratio < JOINT_RATIO
+        )
+
+
+def joint_amplitude(data: Traces, fit: PointFit, stationary_m: NDArray[np.float64]) -> complex:
+    """The fit's amplitude, least squares jointly with stationary points (data units).
+
+    The columns are the fit's signature and each stationary point's
+    (:func:`~sarmotion.motion.point_model`, unit amplitude); the data are ``data``. A
+    mover's signature, defocused against every stationary one, keeps its amplitude; a
+    structure of several stationary points that a moving signature partly matches
+    (their Doppler tones along its sweep) goes to the stationary columns.
+    """
+    cols = [point_model(data, fit.position_m, fit.velocity_mps, 1.0).ravel()]
+    cols += [point_model(data, p, np.zeros(2), 1.0).ravel() for p in stationary_m]
+    a = np.stack(cols, axis=1)
+    coef = np.linalg.lstsq(a, np.asarray(data.data, dtype=np.complex128).ravel(), rcond=None)[0]
+    return complex(coef[0])
+
+
+def stationary_near(
+    data: Traces, fit: PointFit, cross_offset_m: float, *, phase_history: NDArray | None = None
+) -> NDArray[np.float64]:
+    """Stationary points that may explain a fit (m), shape ``(k, 3)``.
+
+    The local maxima of the stationary image ``|I_0|`` within ``NEAR_CELLS`` ground-range
+    cells of the fit's range (whose range side lobes reach it) over the cross ranges its
+    Doppler sweeps (the
+    zero-range-speed member's, ``cross_offset_m`` from the fit, plus or minus ``|u_p| T``
+    and two cross-range cells), sampled at a quarter of a cross-range cell, that are at
+    least half as bright as the fit's ``|I|`` (a defocused mover's own image breaks into
+    peaks of about ``1 / sqrt(TB)`` of its amplitude, ``TB`` its Doppler sweep over the
+    resolution: under half beyond the bank's first steps), each refined and
+    Doppler-tested as the combined separation takes its stationary points
+    (:func:`~sarmotion.separation.combined.stationary_location`).
+    """
+    cells = resolution(data)
+    e_r = np.r_[cells.range_direction, 0.0]
+    e_c = np.r_[cells.cross_range_direction, 0.0]
+    duration = float(np.ptp(data.slow_times_s))
+    half = abs(fit.cross_range_speed_mps) * duration + 2.0 * cells.cross_range_m
+    step = 0.25 * cells.cross_range_m
+    ys = cross_offset_m + np.arange(-half, half + step, step)  # along cross range
+    xs = 0.5 * cells.ground_range_m * np.arange(-2 * NEAR_CELLS, 2 * NEAR_CELLS + 1)
+    pts = (
+        np.asarray(fit.position_m, dtype=np.float64)[None, None, :]
+        + xs[:, None, None] * e_r[None, None, :]
+        + ys[None, :, None] * e_c[None, None, :]
     )
-    if abs(fit.cross_range_speed_mps) < min_step_mps:
-        log.info("defocus candidate: the fit is focused as a stationary point")
-        return None
-    value = fit.amplitude * sub.n_pulses
-    glr = coherent_statistic_db(tr, fit.position_m, fit.velocity_mps, value=value)
-    if glr < glr_threshold_db:
-        log.info(
-            "defocus candidate at u_p %.2f m/s: likelihood ratio %.2f dB under %.2f dB",
-            fit.cross_range_speed_mps,
-            glr,
-            glr_threshold_db,
-        )
-        return None
-    why = stationary_explanation(tr, fit.position_m, fit.velocity_mps, value)
-    if why.within_extent and why.focus_gain_db < min_focus_gain_db:
-        log.info(
-            "defocus candidate at u_p %.2f m/s: a stationary point at (%.1f, %.1f) m explains "
-            "it (focus gain %.2f dB)",
-            fit.cross_range_speed_mps,
-            *why.position_m[:2],
-            why.focus_gain_db,
-        )
-        return None
-    return fit, why, glr
+    mag = np.abs(backproject_points(data, pts))  # (rows, ny)
+    level = 0.5 * abs(fit.amplitude) * data.n_pulses
+    peak = (mag == maximum_filter(mag, size=3, mode="constant")) & (mag >= level)
+    out = []
+    for r, i in zip(*np.nonzero(peak), strict=True):
+        p = stationary_location(data, pts[r, i], phase_history=phase_history)
+        if p is not None and all(np.hypot(*(p[:2] - q[:2])) > 0.5 * step for q in out):
+            out.append(p)
+    return np.array(out, dtype=np.float64).reshape(-1, 3)
+
+
+def test_candidate(data: Traces, cand: DefocusCandidate, min_step_mps: float) -> CandidateTest:
+    """Fit one bank candidate on ``data`` from its cell and test it against stationary points.
+
+    The stationary points that may explain it (:func:`stationary_near`) are fitted with
+    it (:func:`joint_amplitude`).
+    """
+    fit = fit_point_mover_at(
+        data, cand.delay_s, _g_speed(data, cand.range_speed_mps), cand.cross_range_speed_mps
+    )
+    value = fit.amplitude * data.n_pulses
+    why = stationary_explanation(data, fit.position_m, fit.velocity_mps, value)
+    near = stationary_near(data, fit, why.cross_offset_m, phase_history=data.phase_history())
+    joint = joint_amplitude(data, fit, near) if len(near) else fit.amplitude
+    return CandidateTest(
+        candidate=cand,
+        fit=fit,
+        explanation=why,
+        focused_stationary=abs(fit.cross_range_speed_mps) < min_step_mps,
+        joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300),
+    )
+
+
+def search_data(detection: DetectionResult, accepted: Sequence[PointFit] = ()) -> NDArray:
+    """The data the bank searches: ``D`` of the central sub-aperture less accepted movers.
+
+    The accepted movers' models (at full amplitude on ``D``) are subtracted; the
+    stationary points stay, their smears tested against by the screen and their
+    explanations by :meth:`CandidateTest.stationary` (removing them first, as the
+    combined separation does, also removes up to half of a defocused mover, whose smear
+    it partly takes for stationary points).
+    """
+    sub = detection.sub
+    data = np.array(sub.data, dtype=np.complex128)
+    for f in accepted:
+        data -= point_model(sub, f.position_m, f.velocity_mps, f.amplitude)
+    return data
+
+
+def scan_detection(
+    detection: DetectionResult, data: Traces, *, threshold_db: float | None = None
+) -> DefocusScan:
+    """The bank on ``data`` over the detection's stationary band and its image's range span.
+
+    ``threshold_db`` overrides the screen's level (:func:`~sarmotion.motion.defocus_scan`).
+    """
+    opts = detection.options
+    x0, x1, y0, y1 = detection.image.grid.extent
+    half_diagonal = 0.5 * float(np.hypot(x1 - x0, y1 - y0))
+    return defocus_scan(
+        data,
+        max_speed_mps=float(max(abs(v) for v in opts.speed_range_mps)),
+        band_mps=float(detection.candidates.min_speed_mps),
+        half_span_s=2.0 * half_diagonal / C,
+        false_alarm_rate=opts.false_alarm_rate,
+        max_candidates=64,
+        threshold_db=threshold_db,
+    )
+
+
+def distinct_echoes(scan: DefocusScan, data: Traces) -> list[list[DefocusCandidate]]:
+    """The scan's candidates grouped by echo, the groups in the order of their strongest.
+
+    One echo: cells within two range cells and two range-speed resolutions of the
+    group's strongest; each group by decreasing power.
+    """
+    cell_s = 1.0 / data.radar.bandwidth_hz
+    res_u = range_speed_resolution(data)
+    groups: list[list[DefocusCandidate]] = []
+    for c in scan.candidates:
+        for g in groups:
+            if _same_echo(c, g[0], cell_s, res_u):
+                g.append(c)
+                break
+        else:
+            groups.append([c])
+    return groups
 
 
 def defocused_movers(
@@ -171,53 +337,62 @@ def defocused_movers(
     """
     opts = detection.options
     sub = detection.sub
-    data = np.array(sub.data, dtype=np.complex128)
-    for f in accepted:
-        data -= point_model(sub, f.position_m, f.velocity_mps, f.amplitude)
-    x0, x1, y0, y1 = detection.image.grid.extent
-    half_diagonal = 0.5 * float(np.hypot(x1 - x0, y1 - y0))
-    band = float(detection.candidates.min_speed_mps)
-    max_speed = float(max(abs(v) for v in opts.speed_range_mps))
+    data = search_data(detection, accepted)
     out: list[tuple[PointFit, MoverEvidence]] = []
-    tried = 0  # candidates fitted: the N of the likelihood ratio's union bound
+    tried = 0  # candidates tested: the N of the union bound
+    taken: list[DefocusCandidate] = []
     cell_s = 1.0 / sub.radar.bandwidth_hz
     res_u = range_speed_resolution(sub)
     while len(out) < max_movers:
-        scan = defocus_scan(
-            sub.with_data(data),
-            max_speed_mps=max_speed,
-            band_mps=band,
-            half_span_s=2.0 * half_diagonal / C,
-            false_alarm_rate=opts.false_alarm_rate,
-        )
+        here = sub.with_data(data)
+        scan = scan_detection(detection, here)
         step = float(np.min(np.abs(scan.speeds_mps[scan.speeds_mps != 0.0])))
         found = None
-        rejected: list[DefocusCandidate] = []
-        for cand in scan.candidates:
-            if len(rejected) >= MAX_REJECTED:
-                break
-            if any(_same_echo(cand, r, cell_s, res_u) for r in rejected):
-                continue  # that echo's focus at another w: rejected already
+        echoes = [
+            e
+            for e in distinct_echoes(scan, here)
+            if not any(_same_echo(e[0], a, cell_s, res_u) for a in taken)
+        ]
+        for echo in echoes[:MAX_REJECTED]:
             tried += 1
-            threshold = coherent_threshold_db(opts.false_alarm_rate, tried)
-            got = _try(data, cand, sub, step, opts.min_focus_gain_db, threshold)
-            if got is not None:
-                found = (cand, *got)
+            test = test_candidate(here, echo[0], step)
+            threshold = defocus_threshold_db(opts.false_alarm_rate, tried)
+            stationary = test.stationary(opts.min_focus_gain_db)
+            if not stationary and test.candidate.statistic_db >= threshold:
+                found = test
                 break
-            rejected.append(cand)
+            if not stationary:
+                log.info(
+                    "defocus candidate at u_p %.2f m/s: %.2f dB over its interference, under "
+                    "%.2f dB",
+                    test.fit.cross_range_speed_mps,
+                    test.candidate.statistic_db,
+                    threshold,
+                )
+                continue
+            why = test.explanation
+            log.info(
+                "defocus candidate at u_p %.2f m/s: stationary (focus gain %.2f dB over "
+                "(%.1f, %.1f) m, %.2f of its amplitude left by the stationary points near it)",
+                test.fit.cross_range_speed_mps,
+                why.focus_gain_db,
+                *why.position_m[:2],
+                test.joint_ratio,
+            )
         if found is None:
             break
-        cand, fit, why, glr = found
+        fit = found.fit
+        taken.append(found.candidate)  # what its model leaves there is not another mover
         data -= point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
-        coherent = (glr, coherent_threshold_db(opts.false_alarm_rate, tried), tried)
-        out.append((fit, _evidence(sub.with_data(data), detection, scan, cand, fit, why, coherent)))
+        out.append((fit, _evidence(sub.with_data(data), detection, found, tried)))
         log.info(
             "defocus: mover at u_r %.2f m/s, u_p %.2f m/s (margin %.1f dB over the stationary "
-            "smear, %.1f dB over noise)",
+            "smear, %.1f dB over noise, %.2f of its amplitude left by the stationary points)",
             fit.range_speed_mps,
             fit.cross_range_speed_mps,
-            cand.leak_db,
-            cand.statistic_db,
+            found.candidate.leak_db,
+            found.candidate.statistic_db,
+            found.joint_ratio,
         )
     return out
 
@@ -225,14 +400,12 @@ def defocused_movers(
 def _evidence(
     left: Traces,
     detection: DetectionResult,
-    scan: DefocusScan,
-    cand: DefocusCandidate,
-    fit: PointFit,
-    why: object,
-    coherent: tuple[float, float, int],
+    test: CandidateTest,
+    tried: int,
 ) -> MoverEvidence:
     """The record of a mover found by its defocus: the bank's numbers and ``g``'s."""
     det = detection.candidates
+    fit, cand, why = test.fit, test.candidate, test.explanation
     alone = left.with_data(
         left.data + point_model(left, fit.position_m, fit.velocity_mps, fit.amplitude)
     )
@@ -246,13 +419,10 @@ def _evidence(
         focus_gain_db=why.focus_gain_db,
         stationary_point_m=(float(why.position_m[0]), float(why.position_m[1])),
         stationary_within_extent=why.within_extent,
-        coherent_statistic_db=coherent[0],
-        coherent_threshold_db=coherent[1],
-        coherent_p_value=coherent_false_alarm_probability(coherent[0], coherent[2]),
         defocus=DefocusEvidence(
             statistic_db=cand.statistic_db,
-            threshold_db=scan.threshold_db,
-            p_value=scan.p_value(cand.statistic_db),
+            threshold_db=defocus_threshold_db(det.false_alarm_rate, tried),
+            p_value=defocus_false_alarm_probability(cand.statistic_db, tried),
             smear_margin_db=cand.leak_db,
             bank_cross_range_speed_mps=cand.cross_range_speed_mps,
         ),

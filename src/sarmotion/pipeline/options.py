@@ -83,7 +83,9 @@ class AnalysisOptions:
         Whether movers are also sought in the stationary band ``g(u)`` leaves untested,
         by their focus over a bank of cross-range speeds (:mod:`sarmotion.pipeline.defocused`):
         a mover whose image lands inside the scene, which the separation takes for
-        stationary. Default ``True``.
+        stationary. Default ``False``: on real GOTCHA clutter its measured null reaches
+        the statistic a mover reaches among point clutter of its own brightness
+        (``benchmarks/results/detector_null_defocus.md``).
     joint_rounds : int
         Rounds of joint maximum-likelihood refinement of all movers, each with the
         others' fitted traces subtracted (>= 0). Default 2.
@@ -126,7 +128,7 @@ class AnalysisOptions:
     stationary_speed_mps: float | None = None
     max_peak_width: float = 2.5
     min_focus_gain_db: float = 1.0
-    defocus_search: bool = True
+    defocus_search: bool = False
     joint_rounds: int = 2
     stationary_threshold_db: float = -20.0
     max_stationary: int = 100

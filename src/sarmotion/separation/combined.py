@@ -25,7 +25,16 @@ from .transforms import travel_time_delays
 
 log = logging.getLogger(__name__)
 
-__all__ = ["separate_combined", "aligned_constant_part", "default_half_window"]
+__all__ = [
+    "separate_combined",
+    "aligned_constant_part",
+    "default_half_window",
+    "DOPPLER_CONTRAST_DB",
+    "stationary_location",
+]
+
+#: Doppler contrast (dB) a stationary candidate must reach (:func:`separate_combined`).
+DOPPLER_CONTRAST_DB = 10.0
 
 
 def default_half_window(traces: Acquisition | Traces) -> int:
@@ -99,7 +108,7 @@ def separate_combined(
     max_targets: int = 200,
     half_window: int | None = None,
     passes: int = 2,
-    contrast_db: float = 10.0,
+    contrast_db: float = DOPPLER_CONTRAST_DB,
     refine: bool = True,
     progress: ProgressCallback | None = None,
 ) -> Separation:
@@ -239,6 +248,26 @@ def _candidates(
         threshold_db=threshold_db,
         max_targets=max_targets,
     )
+
+
+def stationary_location(
+    traces: Traces, point_m: NDArray[np.float64], *, phase_history: ArrayLike | None = None
+) -> NDArray[np.float64] | None:
+    """A candidate refined on the point response if it passes the Doppler test, else ``None``.
+
+    As :func:`separate_combined` takes its stationary points: the Doppler contrast
+    (:func:`~sarmotion.separation.doppler_contrast_db`) must reach
+    ``DOPPLER_CONTRAST_DB`` before and after the refinement (m).
+    """
+    spectrum = traces.phase_history() if phase_history is None else np.asarray(phase_history)
+    p, _, accepted = _test_location(
+        traces,
+        spectrum,
+        np.asarray(point_m, dtype=np.float64),
+        contrast_db=DOPPLER_CONTRAST_DB,
+        refine=True,
+    )
+    return p if accepted else None
 
 
 def _test_location(
