@@ -180,10 +180,8 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
     noise, dB) of the candidates the tests do not explain (each one a false mover) and
     of those they do, with each one's joint-fit ratio.
     """
-    from sarmotion.motion import defocus_threshold_db
     from sarmotion.pipeline import AnalysisOptions, detect
     from sarmotion.pipeline.defocused import (
-        MAX_REJECTED,
         distinct_echoes,
         scan_detection,
         search_data,
@@ -204,7 +202,8 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
     step = float(np.min(np.abs(scan.speeds_mps[moving]))) if moving.any() else np.inf
     tests = [test_candidate(data, e[0], step) for e in distinct_echoes(scan, data)[:NULL_ECHOES]]
     left = [t for t in tests if not t.stationary(opts.min_focus_gain_db)]
-    thr = defocus_threshold_db(opts.false_alarm_rate, MAX_REJECTED)
+    # the screen's own level at the analysis's rate: what a candidate left must reach
+    thr = float(10.0 * np.log10(np.log(scan.n_cells / opts.false_alarm_rate)))
     return {
         "population": {
             "real": "real, RPCA",
@@ -217,6 +216,7 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
             t.candidate.statistic_db for t in tests if t.stationary(opts.min_focus_gain_db)
         ],
         "joint_ratios": [t.joint_ratio for t in tests],
+        "coherences": [t.coherence for t in tests],
         "focus_gains_db": [t.explanation.focus_gain_db for t in tests],
         "screen_db": scan.threshold_db,
         "n_candidates": len(tests),
@@ -276,33 +276,25 @@ def summarise(records: list[dict], detector: str = "g") -> dict:
 
 
 def write_defocus(records: list[dict], out: Path, seconds: float) -> None:
-    """The defocus bank's null: candidates, those explained, the tail of the others."""
-    from sarmotion.motion import DEFOCUS_NULL_TAIL
-
+    """The defocus bank's null: candidates, those explained, those left over the screen."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "detector_null_defocus.json").write_text(json.dumps({"records": records}, indent=1))
     lines = [
-        "| population | scenes | candidates fitted | explained by stationary points "
-        "| left | left: 50 % | 90 % (t0) | max | s | scenes with a false mover |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| population | scenes | candidates fitted | explained by the stationary scene "
+        "| left | left: largest statistic (dB) | left over the 1 % screen "
+        "| scenes with a false mover |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     pops = sorted({r["population"] for r in records})
     for name in pops + ["all"]:
         rs = [r for r in records if name in ("all", r["population"])]
-        values = np.concatenate([np.asarray(r["statistic_db"], dtype=float) for r in rs])
-        t = tail(values) if values.size else None
-        cells = (
-            f"{t['quantiles_db'][0]:.2f} | {t['t0_db']:.2f} | {t['max_db']:.2f} | "
-            f"{t['scale_db']:.2f}"
-            if t
-            else "- | - | - | -"
-        )
+        values = [v for r in rs for v in r["statistic_db"]]
+        top = f"{max(values):.2f}" if values else "-"
         lines.append(
             f"| {name} | {len(rs)} | {sum(r['n_candidates'] for r in rs)} | "
-            f"{sum(len(r['stationary_db']) for r in rs)} | {values.size} | {cells} | "
-            f"{sum(r['declared'] > 0 for r in rs)} |"
+            f"{sum(len(r['stationary_db']) for r in rs)} | {len(values)} | {top} | "
+            f"{sum(r['declared'] for r in rs)} | {sum(r['declared'] > 0 for r in rs)} |"
         )
-    m = DEFOCUS_NULL_TAIL
     text = "\n".join(
         [
             "# The defocus bank on data without movers",
@@ -311,13 +303,13 @@ def write_defocus(records: list[dict], out: Path, seconds: float) -> None:
             "(sarmotion.pipeline.defocused) over the stationary band of the central degree, "
             f"its screen lowered to {SCREEN_DB:g} dB over the interference: the strongest cell "
             f"of each of its first {NULL_ECHOES} echoes, fitted from its cell and tested "
-            "against the stationary points (focused as stationary, focus gain, joint fit with "
-            "the stationary points near it). 'left': the candidates the stationary points do "
-            "not explain, whose statistic (dB over the interference) is the null of the "
-            "decision; t0 its 90 % quantile, s the mean excess over t0. 'scenes with a false "
-            "mover': a candidate left reaches the threshold of the model in use for 1 % per "
-            f"scene over {3} candidates (DEFOCUS_NULL_TAIL: t0 = {m['t0_db']} dB, "
-            f"s = {m['scale_db']} dB, p0 = {m['p0']}).",
+            "against the stationary scene (focused as stationary; the best stationary point's "
+            "focus gain under 1 dB; the stationary points near its range history, fitted "
+            "jointly with it, leaving under half its amplitude; its per-pulse sums keeping "
+            "under half their power in their coherent sum). 'left': the candidates those "
+            "tests do not explain; 'left over the 1 % screen': those whose statistic (dB over "
+            "the interference) reaches the screen's level for a 1 % rate, each a false mover "
+            "of the analysis.",
             "",
             *lines,
             "",
@@ -353,7 +345,7 @@ def write(summary: dict, records: list[dict], out: Path, seconds: float) -> None
             f"{100 * m['0.01']['fraction']:.2f} % | {100 * m['0.001']['fraction']:.2f} % | "
             f"{p['scenes_reaching_threshold']} | {p['declared_movers']} |"
         )
-    name = "DEFOCUS_NULL_TAIL" if defocus else "COHERENT_NULL_TAIL" if coherent else "NULL_TAIL"
+    name = "COHERENT_NULL_TAIL" if coherent else "NULL_TAIL"
     title = (
         "# Null distribution of the coherent statistic (dB: fitted |I|^2 over sigma_I^2)"
         if coherent

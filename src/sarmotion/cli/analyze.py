@@ -160,8 +160,8 @@ def _write_sicd_images(result, stage: Path) -> None:
     show_default=True,
     help="Also seek movers whose range rate is that of a stationary point of the scene "
     "(their image lands inside it, where the separation takes them for stationary), by "
-    "their focus over a bank of cross-range speeds. Off by default: on real clutter its "
-    "false-alarm rate is not yet held to --false-alarm-rate.",
+    "their focus over a bank of cross-range speeds. Off by default: its false-alarm rate "
+    "on point clutter is not yet held to --false-alarm-rate.",
 )
 @click.option(
     "--trajectory/--no-trajectory",

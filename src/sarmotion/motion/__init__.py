@@ -71,14 +71,7 @@ from .coherent import (
     screen_threshold_db,
 )
 from .cross_range import CrossRangeSpeed, cross_range_objective, estimate_cross_range_speed
-from .defocus import (
-    DEFOCUS_NULL_TAIL,
-    DefocusCandidate,
-    DefocusScan,
-    defocus_false_alarm_probability,
-    defocus_scan,
-    defocus_threshold_db,
-)
+from .defocus import DefocusCandidate, DefocusScan, defocus_scan
 from .detector import (
     NULL_TAIL,
     PeakStatistics,
@@ -160,12 +153,9 @@ __all__ = [
     "matched_filter_variance",
     "neighbourhood_noise",
     "screen_threshold_db",
-    "DEFOCUS_NULL_TAIL",
     "DefocusCandidate",
     "DefocusScan",
-    "defocus_false_alarm_probability",
     "defocus_scan",
-    "defocus_threshold_db",
     # maximum likelihood
     "MatchedFilter",
     "PointFit",

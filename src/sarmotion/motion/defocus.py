@@ -68,15 +68,12 @@ from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_freque
 from ..core.constants import C
 
 __all__ = [
-    "DEFOCUS_NULL_TAIL",
     "DefocusCandidate",
     "DefocusScan",
     "EDGE_PHASE_STEP_RAD",
     "SMEAR_MARGIN_DB",
     "cross_speed_bank",
-    "defocus_false_alarm_probability",
     "defocus_scan",
-    "defocus_threshold_db",
     "edge_phase_rad",
     "hypothesis_delays_s",
 ]
@@ -87,31 +84,6 @@ EDGE_PHASE_STEP_RAD = 0.5 * np.pi
 #: Least margin of a candidate over the brightest stationary smear at its cell (dB):
 #: two equal smears in phase, ``20 log10 2``.
 SMEAR_MARGIN_DB = float(20.0 * np.log10(2.0))
-
-
-#: Exponential tail of the statistic of the bank's candidates that no stationary point
-#: explains, on data without movers, above its 90 % quantile (``t0_db``, dB; ``scale_db``
-#: the mean excess; ``p0`` = 0.1): the populations pooled, real GOTCHA degrees and
-#: simulated point clutter with and without noise (``benchmarks/detector_null.py
-#: --detector defocus``, ``benchmarks/results/detector_null_defocus.md``).
-DEFOCUS_NULL_TAIL = {"t0_db": 15.76, "scale_db": 6.82, "p0": 0.10}
-
-
-def defocus_threshold_db(false_alarm_rate: float, n_candidates: int) -> float:
-    """Least statistic (dB) of a declared candidate over ``N`` tested in a scene.
-
-    ``t_0 + s ln(p_0 N / alpha)`` with :data:`DEFOCUS_NULL_TAIL` (the union bound).
-    """
-    t = DEFOCUS_NULL_TAIL
-    n = max(int(n_candidates), 1)
-    return float(t["t0_db"] + t["scale_db"] * np.log(t["p0"] * n / float(false_alarm_rate)))
-
-
-def defocus_false_alarm_probability(statistic_db: float, n_candidates: int) -> float:
-    """Per-scene probability that ``N`` null candidates reach ``statistic_db`` (union bound)."""
-    t = DEFOCUS_NULL_TAIL
-    p = t["p0"] * np.exp(-(float(statistic_db) - t["t0_db"]) / t["scale_db"])
-    return float(min(1.0, max(int(n_candidates), 1) * min(p, 1.0)))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -19,11 +19,12 @@ amplitude: :func:`search_data`), one at a time:
    (:func:`~sarmotion.motion.stationary_explanation`), or the stationary points near its
    range history, fitted jointly with it, leave it less than half its amplitude
    (:func:`joint_amplitude`: several stationary points whose Doppler tones lie along
-   a moving signature's sweep match it in part, and none of them alone does); a
-   candidate they do not explain is declared when its statistic (power over its
-   interference) reaches the threshold of the analysis's false-alarm rate over the
-   candidates tested so far, from the statistic's measured null tail
-   (:func:`~sarmotion.motion.defocus_threshold_db`, :data:`~sarmotion.motion.DEFOCUS_NULL_TAIL`);
+   a moving signature's sweep match it in part, and none of them alone does), or its
+   per-pulse sums keep less than half their power in their coherent sum (one point
+   target's echo keeps all of it; clutter matched in part turns in phase from pulse to
+   pulse). The false-alarm rate is the screen's (the interference model and the union
+   bound over the bank's cells); the tests only remove candidates, and their measured
+   effect on data without movers is ``benchmarks/results/detector_null_defocus.md``;
 3. an accepted fit's model is subtracted and the bank runs again, until a bank gives
    no candidate that passes, ``max_movers`` is reached, or its first ``MAX_REJECTED``
    echoes were rejected (the bank ranks by power, so those after are weaker still).
@@ -55,13 +56,10 @@ from ..motion import (
     point_model,
     stationary_explanation,
 )
-from ..motion.defocus import (
-    DefocusCandidate,
-    DefocusScan,
-    defocus_false_alarm_probability,
-    defocus_threshold_db,
-)
+from ..motion.acceleration import HOLD_COHERENCE, uniform_start_holds
+from ..motion.defocus import DefocusCandidate, DefocusScan
 from ..motion.detector import peak_statistics
+from ..motion.likelihood import noise_variance
 from ..motion.range_speed import range_speed_objective
 from ..motion.speed_resolution import range_speed_resolution
 from ..separation.combined import stationary_location
@@ -153,6 +151,10 @@ class CandidateTest:
         ``|a_joint| / |a|``: the fit's amplitude when fitted jointly (least squares) with
         the stationary points whose range histories pass near its own, over its
         amplitude alone (:func:`joint_amplitude`).
+    coherence : float
+        The coherent share of the fit's per-pulse power, noise removed
+        (:func:`~sarmotion.motion.acceleration.uniform_start_holds`): 1 for one point
+        target's echo, NaN without power above the noise.
     """
 
     candidate: DefocusCandidate
@@ -160,20 +162,29 @@ class CandidateTest:
     explanation: StationaryExplanation
     focused_stationary: bool
     joint_ratio: float
+    coherence: float
 
     def stationary(self, min_focus_gain_db: float) -> bool:
-        """Whether stationary points explain it (then it is not a mover).
+        """Whether the stationary scene explains it (then it is not a mover).
 
         The fit is focused as a stationary point, or the best stationary point with its
         range history focuses it within ``min_focus_gain_db``, or the stationary points
         near its range history, fitted with it, leave it less than half its amplitude
-        (``JOINT_RATIO``: the 6 dB of the bank's smear margin).
+        (``JOINT_RATIO``: the 6 dB of the bank's smear margin), or its echo is not one
+        point target's: its per-pulse sums keep less than ``HOLD_COHERENCE`` of their
+        power in their coherent sum (the clutter's tones along a moving signature turn
+        in phase from pulse to pulse; a point mover's do not). The share is at most 1
+        (Cauchy-Schwarz); an estimate further above 1 than the rule's margin below it
+        (``2 - HOLD_COHERENCE``) means the noise taken off exceeded what the candidate's
+        pulses hold beyond it: its power is at the noise level, the share is not
+        measured, and the candidate is not confirmed.
         """
         why = self.explanation
         return (
             self.focused_stationary
             or (why.within_extent and why.focus_gain_db < min_focus_gain_db)
             or self.joint_ratio < JOINT_RATIO
+            or not HOLD_COHERENCE <= self.coherence <= 2.0 - HOLD_COHERENCE
         )
 
 
@@ -246,12 +257,15 @@ def test_candidate(data: Traces, cand: DefocusCandidate, min_step_mps: float) ->
     why = stationary_explanation(data, fit.position_m, fit.velocity_mps, value)
     near = stationary_near(data, fit, why.cross_offset_m, phase_history=data.phase_history())
     joint = joint_amplitude(data, fit, near) if len(near) else fit.amplitude
+    track = fit.position_m[None, :] + data.slow_times_s[:, None] * np.r_[fit.velocity_mps, 0.0]
+    _, kappa = uniform_start_holds(data, track, noise_variance=noise_variance(data.data))
     return CandidateTest(
         candidate=cand,
         fit=fit,
         explanation=why,
         focused_stationary=abs(fit.cross_range_speed_mps) < min_step_mps,
         joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300),
+        coherence=float(kappa),
     )
 
 
@@ -339,7 +353,6 @@ def defocused_movers(
     sub = detection.sub
     data = search_data(detection, accepted)
     out: list[tuple[PointFit, MoverEvidence]] = []
-    tried = 0  # candidates tested: the N of the union bound
     taken: list[DefocusCandidate] = []
     cell_s = 1.0 / sub.radar.bandwidth_hz
     res_u = range_speed_resolution(sub)
@@ -354,37 +367,27 @@ def defocused_movers(
             if not any(_same_echo(e[0], a, cell_s, res_u) for a in taken)
         ]
         for echo in echoes[:MAX_REJECTED]:
-            tried += 1
             test = test_candidate(here, echo[0], step)
-            threshold = defocus_threshold_db(opts.false_alarm_rate, tried)
-            stationary = test.stationary(opts.min_focus_gain_db)
-            if not stationary and test.candidate.statistic_db >= threshold:
+            if not test.stationary(opts.min_focus_gain_db):
                 found = test
                 break
-            if not stationary:
-                log.info(
-                    "defocus candidate at u_p %.2f m/s: %.2f dB over its interference, under "
-                    "%.2f dB",
-                    test.fit.cross_range_speed_mps,
-                    test.candidate.statistic_db,
-                    threshold,
-                )
-                continue
             why = test.explanation
             log.info(
                 "defocus candidate at u_p %.2f m/s: stationary (focus gain %.2f dB over "
-                "(%.1f, %.1f) m, %.2f of its amplitude left by the stationary points near it)",
+                "(%.1f, %.1f) m, %.2f of its amplitude left by the stationary points near it, "
+                "coherence %.2f)",
                 test.fit.cross_range_speed_mps,
                 why.focus_gain_db,
                 *why.position_m[:2],
                 test.joint_ratio,
+                test.coherence,
             )
         if found is None:
             break
         fit = found.fit
         taken.append(found.candidate)  # what its model leaves there is not another mover
         data -= point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
-        out.append((fit, _evidence(sub.with_data(data), detection, found, tried)))
+        out.append((fit, _evidence(sub.with_data(data), detection, scan, found)))
         log.info(
             "defocus: mover at u_r %.2f m/s, u_p %.2f m/s (margin %.1f dB over the stationary "
             "smear, %.1f dB over noise, %.2f of its amplitude left by the stationary points)",
@@ -400,8 +403,8 @@ def defocused_movers(
 def _evidence(
     left: Traces,
     detection: DetectionResult,
+    scan: DefocusScan,
     test: CandidateTest,
-    tried: int,
 ) -> MoverEvidence:
     """The record of a mover found by its defocus: the bank's numbers and ``g``'s."""
     det = detection.candidates
@@ -421,8 +424,8 @@ def _evidence(
         stationary_within_extent=why.within_extent,
         defocus=DefocusEvidence(
             statistic_db=cand.statistic_db,
-            threshold_db=defocus_threshold_db(det.false_alarm_rate, tried),
-            p_value=defocus_false_alarm_probability(cand.statistic_db, tried),
+            threshold_db=scan.threshold_db,
+            p_value=scan.p_value(cand.statistic_db),
             smear_margin_db=cand.leak_db,
             bank_cross_range_speed_mps=cand.cross_range_speed_mps,
         ),

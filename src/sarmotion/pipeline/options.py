@@ -83,8 +83,8 @@ class AnalysisOptions:
         Whether movers are also sought in the stationary band ``g(u)`` leaves untested,
         by their focus over a bank of cross-range speeds (:mod:`sarmotion.pipeline.defocused`):
         a mover whose image lands inside the scene, which the separation takes for
-        stationary. Default ``False``: on real GOTCHA clutter its measured null reaches
-        the statistic a mover reaches among point clutter of its own brightness
+        stationary. Default ``False``: on data without movers the candidates its tests
+        leave still make a false mover in a few simulated scenes of point clutter
         (``benchmarks/results/detector_null_defocus.md``).
     joint_rounds : int
         Rounds of joint maximum-likelihood refinement of all movers, each with the
