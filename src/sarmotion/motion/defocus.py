@@ -50,8 +50,8 @@ crosses during the aperture (``band T``) and one more either side, by
 ``SMEAR_MARGIN_DB``: 6.02 dB, what two smears of equal size reach in phase (the model
 takes each stationary point alone). Candidates are ranked by power (a mover's own
 smears at other ``w`` have less). The screen does not decide: the mover stage fits
-each candidate by maximum likelihood and tests the fit's likelihood ratio and its focus
-over the stationary explanation (:mod:`sarmotion.pipeline.defocused`).
+each candidate by maximum likelihood and tests it against the stationary scene
+(:mod:`sarmotion.pipeline.defocused`).
 
 Times in s, speeds in m/s, phases in rad; geometry in float64.
 """
@@ -254,15 +254,14 @@ def defocus_scan(
     u_w = np.empty(speeds.size)
     maps = np.empty((speeds.size, rows.size, n_dop), dtype=np.float32)
     smears = np.empty((speeds.size, n_dop), dtype=np.float64)
+    still = hypothesis_delays_s(traces, 0.0)  # hypothesis 0: the stationary point
     for k, w in enumerate(speeds):
         delays = hypothesis_delays_s(traces, w)
         u_w[k] = 0.5 * C * float(np.polyfit(s, delays, 1)[0])
         aligned = to_fast_time(spectrum * delay_phase(delays, freqs))[:, rows]
         maps[k] = (np.abs(np.fft.fft(aligned, n=n_dop, axis=0)) ** 2).T
         # a stationary point's smear in hypothesis w: its phase relative to hypothesis 0
-        smear = np.exp(
-            2j * np.pi * traces.radar.carrier_hz * (delays - hypothesis_delays_s(traces, 0.0))
-        )
+        smear = np.exp(2j * np.pi * traces.radar.carrier_hz * (delays - still))
         smears[k] = np.abs(np.fft.fft(smear, n=n_dop)) / n_p
     # the Doppler of each cell in each hypothesis, as an apparent range speed
     speed_of = u_w[:, None] - 0.5 * lam * doppler[None, :]

@@ -390,7 +390,8 @@ def defocused_movers(
         out.append((fit, _evidence(sub.with_data(data), detection, scan, found)))
         log.info(
             "defocus: mover at u_r %.2f m/s, u_p %.2f m/s (margin %.1f dB over the stationary "
-            "smear, %.1f dB over noise, %.2f of its amplitude left by the stationary points)",
+            "smear, %.1f dB over its interference, %.2f of its amplitude left by the stationary "
+            "points)",
             fit.range_speed_mps,
             fit.cross_range_speed_mps,
             found.candidate.leak_db,

@@ -161,7 +161,7 @@ def estimate_movers(
             len(beyond),
             opts.max_movers,
         )
-    in_band: list[PointFit] = []
+    banded_fits: list[PointFit] = []
     if opts.defocus_search and len(found) < opts.max_movers:
         with timed(timings, "movers.defocus"):
             extra = defocused_movers(
@@ -171,8 +171,8 @@ def estimate_movers(
             )
         if extra:
             # S holds little of these movers: the moving traces become D - L'
-            in_band = [f for f, _ in extra]
-            full = at_full_amplitude(sub, [f for f, _ in found]) + in_band
+            banded_fits = [f for f, _ in extra]
+            full = at_full_amplitude(sub, [f for f, _ in found]) + banded_fits
             threshold = opts.separation.candidate_threshold_db
             moving_sub = data_without_stationary(sub, detection.image, full, threshold_db=threshold)
             found = list(found) + extra
@@ -209,7 +209,7 @@ def estimate_movers(
         )
     residual = np.array(detection.separation.moving, dtype=np.complex128)
     band_data = None  # D - L' on the whole aperture: where the movers in the band are
-    if in_band:
+    if banded_fits:
         band_data = data_without_stationary(
             detection.traces,
             detection.image,

@@ -90,11 +90,14 @@ class DefocusEvidence:
     Attributes
     ----------
     statistic_db : float
-        Its bank cell's power over the noise level (dB).
+        Its bank cell's power over its interference level (dB): the noise, or its range
+        bin's mean power beyond a main-lobe guard (:mod:`sarmotion.motion.defocus`).
     threshold_db : float
-        The level noise reaches with probability ``false_alarm_rate`` (dB).
+        The level the interference reaches in some cell with probability
+        ``false_alarm_rate`` (dB, union bound).
     p_value : float
-        Union-bound probability that noise alone reaches ``statistic_db`` in some cell.
+        Union-bound probability that the interference alone reaches ``statistic_db`` in
+        some cell.
     smear_margin_db : float
         Its amplitude over the brightest stationary smear at its cell (dB).
     bank_cross_range_speed_mps : float
