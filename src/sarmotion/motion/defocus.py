@@ -66,6 +66,7 @@ from scipy.ndimage import maximum_filter
 
 from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_frequency
 from ..core.constants import C
+from .aperture import ranges_m
 
 __all__ = [
     "DefocusCandidate",
@@ -165,13 +166,9 @@ def hypothesis_delays_s(traces: Traces, cross_range_speed_mps: float) -> NDArray
     ``2 (|x(s) - rho_ref - s v_w| - |x(s) - rho_ref|) / c`` with ``v_w`` the ground velocity
     of zero range speed and cross-range speed ``w`` (:func:`~sarmotion.core.ground_velocity`).
     """
-    v = np.r_[ground_velocity(0.0, float(cross_range_speed_mps), traces.geometry), 0.0]
     ref = traces.reference_point_m
-    s = traces.slow_times_s
-    x = traces.positions_m
-    moved = np.linalg.norm(x - (ref[None, :] + s[:, None] * v[None, :]), axis=1)
-    still = np.linalg.norm(x - ref[None, :], axis=1)
-    return 2.0 * (moved - still) / C
+    v = ground_velocity(0.0, float(cross_range_speed_mps), traces.geometry)
+    return 2.0 * (ranges_m(traces, ref, v) - ranges_m(traces, ref, np.zeros(2))) / C
 
 
 def edge_phase_rad(traces: Traces, cross_range_speed_mps: float) -> float:

@@ -57,6 +57,7 @@ from ..motion import (
     stationary_explanation,
 )
 from ..motion.acceleration import HOLD_COHERENCE, uniform_start_holds
+from ..motion.aperture import ranges_m
 from ..motion.defocus import DefocusCandidate, DefocusScan
 from ..motion.detector import peak_statistics
 from ..motion.likelihood import noise_variance
@@ -96,17 +97,10 @@ JOINT_RATIO = 0.5
 
 def _g_speed(traces: Traces, rate_mps: float) -> float:
     """The ``g(u)`` range speed whose aligned trace has range rate ``rate_mps`` (m/s)."""
-    s = traces.slow_times_s
     ref = traces.reference_point_m
-    x = traces.positions_m
-
-    def rate(u: float) -> float:
-        v = np.r_[range_direction_velocity(u, traces.geometry), 0.0]
-        r = np.linalg.norm(x - (ref[None, :] + s[:, None] * v[None, :]), axis=1)
-        r -= np.linalg.norm(x - ref[None, :], axis=1)
-        return float(np.polyfit(s, r, 1)[0])
-
-    return float(rate_mps) / rate(1.0)
+    along = range_direction_velocity(1.0, traces.geometry)
+    r = ranges_m(traces, ref, along) - ranges_m(traces, ref, np.zeros(2))
+    return float(rate_mps) / float(np.polyfit(traces.slow_times_s, r, 1)[0])
 
 
 def _g_evidence(traces: Traces, speed_mps: float) -> tuple[float, float]:
