@@ -287,7 +287,7 @@ def test_ffbp_simulated(benchmark, look_deg):
 
 
 # ------------------------------------------------------------------- FastSAR comparison
-def _fastsar_formers(fastsar, traces, grid: ImageGrid):
+def _fastsar_formers(fastsar, traces, grid: ImageGrid, backend: str = "cpu"):
     """FastSAR's exact (cubic) and factorised formers on ``grid``, ``window=False``.
 
     FastSAR's grid is ``x_i = (i - nx/2) spx`` (and ``y``) about ``center`` (``ExactFormer``)
@@ -302,7 +302,7 @@ def _fastsar_formers(fastsar, traces, grid: ImageGrid):
     f = traces.frequencies_hz
     common = dict(
         ant=traces.positions_m, fmin=float(f[0]), df=float(traces.radar.frequency_step_hz),
-        K=traces.n_samples, nx=nx, ny=ny, spx=dx, spy=dy, backend="cpu", window=False,
+        K=traces.n_samples, nx=nx, ny=ny, spx=dx, spy=dy, backend=backend, window=False,
         ref=np.linalg.norm(traces.positions_m - traces.reference_point_m, axis=1),
     )  # fmt: skip
     exact = fastsar.ExactFormer(**common, interp="cubic")

@@ -25,6 +25,14 @@ For each size, warm (the kernel compiled and the trace table on the device), med
 - at ``--cpu-size``, the CPU's :func:`~sarmotion.imaging.backproject` (numba, all
   threads) in the same run: time and SER on the same pixels.
 
+With ``--fastsar`` (FastSAR, ``pip install 'sarmotion[bench]'``, and CuPy), the same
+sizes over a 51.2 m square (FastSAR's exact former refuses a grid wider than the
+unambiguous range less a margin, ``bench_backprojection.FASTSAR_EXTENT_M``) in the same
+run: sarmotion's kernel (image on the device, and end to end) against FastSAR's CUDA
+exact (cubic) and factorised formers (the phase history on the device, the complex64
+image returned in host memory, as FastSAR's call does), ``window=False``, each warm,
+median of ``--repeats``, with their signal-to-error against the exact sum.
+
 Under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``) the same script checks itself
 at tiny sizes (``--sizes 16 --pulses 8 --reference-pixels 64 --cpu-size 16``).
 """
@@ -137,6 +145,7 @@ def main(argv: list[str] | None = None) -> dict:
         help="pixels per thread to time besides the default",
     )
     ap.add_argument("--block-rows", type=int, nargs="*", default=[4, 8])
+    ap.add_argument("--fastsar", action="store_true", help="compare with FastSAR's CUDA formers")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
 
@@ -227,7 +236,68 @@ def main(argv: list[str] | None = None) -> dict:
         result["sizes"].append(entry)
         if args.out is not None:
             args.out.write_text(json.dumps(result, indent=1))
+    if args.fastsar:
+        result["fastsar"] = [
+            _against_fastsar(cuda, tr, n, rng, args.reference_pixels, args.repeats)
+            for n in args.sizes
+        ]  # fmt: skip
+        if args.out is not None:
+            args.out.write_text(json.dumps(result, indent=1))
     return result
+
+
+def _against_fastsar(cuda, tr, n, rng, reference_pixels, repeats) -> dict:
+    """One size of the FastSAR comparison (module docstring), FastSAR's failures recorded."""
+    from bench_backprojection import FASTSAR_EXTENT_M, _fastsar_formers
+
+    grid = ImageGrid.square(size_m=FASTSAR_EXTENT_M, spacing_m=FASTSAR_EXTENT_M / n)
+    work = n * n * tr.n_pulses
+    k = min(reference_pixels, n * n)
+    iy, ix = np.unravel_index(rng.choice(n * n, size=k, replace=False), (n, n))
+    pts = np.stack([grid.x_m[ix], grid.y_m[iy], np.zeros(k)], axis=1)
+    exact = point_response(tr, pts)
+    med, _, img, p = _device_run(cuda, tr, grid, None, gpu.BLOCK_ROWS, repeats)
+    entry: dict = {"n": n, "spacing_m": FASTSAR_EXTENT_M / n, "formers": {}}
+    entry["formers"]["sarmotion (image on the device)"] = {
+        "pixel_pulses_per_second": _rate(work, med),
+        "ser_db": _ser_db(exact, img[iy, ix]),
+    }
+    gpu.backproject_cuda(tr, grid)
+    med, _ = _median_time(lambda: gpu.backproject_cuda(tr, grid), repeats)
+    entry["formers"]["sarmotion (complex128 image in host memory)"] = {
+        "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
+    try:
+        import cupy as cp
+        import fastsar
+
+        exact_former, factorised = _fastsar_formers(fastsar, tr, grid, backend="cuda")
+        formers = {"FastSAR exact (cubic)": exact_former, "FastSAR factorised": factorised}
+        history = cp.asarray(np.ascontiguousarray(tr.phase_history(), dtype=np.complex64))
+        scale = 1.0 / tr.n_samples
+    except Exception as exc:  # FastSAR or CuPy missing, or refusing the grid
+        entry["fastsar_error"] = f"{type(exc).__name__}: {exc}"
+        print(f"{n}^2: FastSAR not compared ({entry['fastsar_error']})", flush=True)
+        return entry
+    for name, former in formers.items():
+        try:
+
+            def run(former=former):
+                out = former(history)
+                cp.cuda.Device().synchronize()
+                return out
+
+            values = run()
+            values = cp.asnumpy(values) if hasattr(values, "get") else np.asarray(values)
+            med, _ = _median_time(run, repeats)
+            entry["formers"][name] = {
+                "pixel_pulses_per_second": _rate(work, med),
+                "ser_db": _ser_db(exact, values.T[iy, ix] * scale),
+            }  # fmt: skip
+        except Exception as exc:
+            entry["formers"][name] = {"error": f"{type(exc).__name__}: {exc}"}
+    for name, row in entry["formers"].items():
+        print(f"{n}^2 over {FASTSAR_EXTENT_M} m, {name}: {row}", flush=True)
+    return entry
 
 
 def _version(name: str) -> str | None:
