@@ -332,7 +332,11 @@ def fit_candidates(
     (:func:`~sarmotion.motion.stationary_explanation`); otherwise its fitted traces are
     subtracted and the detector runs again on the residual (a second mover within a
     resolution of the first, hidden under its peak, then stands out; a shoulder of the
-    subtracted peak falls to the floor). The threshold stays the first run's. A fit
+    subtracted peak falls to the floor). The threshold stays the first run's. A speed
+    is not tried again within half a resolution of a rejected candidate's; an accepted
+    candidate's speed stays open, since two movers with the same range speed share one
+    ``g`` peak (their echoes a few range cells apart) and the second stands out only once
+    the first is subtracted. A fit
     within a range cell and a ``g`` peak's width of an accepted mover is what the
     point model could not subtract of it (RPCA keeps a distorted 15-40 % of a mover's
     amplitude in ``S``: on a real degree with two strong injected movers such remnants
@@ -413,6 +417,7 @@ def fit_candidates(
         residual = residual - point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
         evidence = _evidence(detection, statistic, float(current.widths[k]), why, coherent)
         out.append((fit, evidence))
+        tried.pop()  # its speed is open again: a peak there after the redetection is another echo
         with timed(timings, "movers.redetection"):
             current = _redetect(Traces(data=residual, acquisition=sub), detection, options)
     if not_estimated is not None and len(out) >= options.max_movers:
