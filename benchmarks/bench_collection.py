@@ -12,6 +12,8 @@ in ``k`` processes one after the other, each a ``k``-th of the plan's patches (e
 stationary targets by cell, then the listing floor and the sidelobe rule): wall is
 the sum, RSS the largest. ``--ab-workers 0 2 --rounds 2`` times the patches alone on
 one size with each worker count in turn, alternated, with the load average.
+``--defocus-search`` also runs each size's patches with the defocus bank
+(``AnalysisOptions(defocus_search=True)``), reported as a row of its own.
 ``--pieces k --piece-ids i ...`` runs only those pieces: their time and memory, and the
 wall the whole run would take (``k`` over the pieces run times their wall), written to
 ``bench_collection_sampled.json``; a size too long to run whole is estimated so.
@@ -54,6 +56,12 @@ from pathlib import Path
 import numpy as np
 
 DENSITY_PER_M2 = 0.5e-3
+#: The table's name of each method a row may hold.
+METHOD_NAMES = {
+    "whole": "whole",
+    "patches": "patches",
+    "patches_defocus": "patches, --defocus-search",
+}
 GUARD = 1.3
 
 
@@ -179,19 +187,23 @@ def _cells(traces):
     return resolution(traces.select_pulses(central.start, central.stop))
 
 
-def run_patches(side_m: float, seed: int, workers: int | None, piece=(0, 1)) -> dict:
+def run_patches(
+    side_m: float, seed: int, workers: int | None, piece=(0, 1), defocus_search: bool = False
+) -> dict:
     """The collection on the scene; ``piece = (i, k)``: only every ``k``-th patch from ``i``."""
     import dataclasses
 
-    from sarmotion.collection import analyze_collection, plan_patches
+    from sarmotion.collection import CollectionOptions, analyze_collection, plan_patches
     from sarmotion.core.blocks import TracesBlocks
+    from sarmotion.pipeline import AnalysisOptions
 
     traces, stat, movers = make_scene(side_m, seed)
     t0 = time.perf_counter()
     plan = plan_patches(TracesBlocks(traces))
     i, k = piece
     part = dataclasses.replace(plan, patches=plan.patches[i::k]) if k > 1 else plan
-    result = analyze_collection(traces, plan=part, n_workers=workers)
+    options = CollectionOptions(analysis=AnalysisOptions(defocus_search=defocus_search))
+    result = analyze_collection(traces, options, plan=part, n_workers=workers)
     wall = time.perf_counter() - t0
     stage: dict[str, float] = {}
     for r in result.patches:
@@ -386,13 +398,13 @@ def _table(rows: list[dict]) -> str:
     )
     out = []
     for r in sorted(rows, key=lambda r: r["side_m"]):
-        for method in ("whole", "patches"):
+        for method in ("whole", "patches", "patches_defocus"):
             m = r.get(method)
             if m is None:
                 continue
             load = m.get("load_average", r.get("load_average"))
             load = max(load) if isinstance(load, list) else load
-            if method == "patches":
+            if method.startswith("patches"):
                 pp = m.get("pulses_per_patch", ["?", "?"])
                 ss = m.get("samples_per_patch", ["?", "?"])
                 pieces = f", {m['pieces']} pieces" if m.get("pieces", 1) > 1 else ""
@@ -402,7 +414,8 @@ def _table(rows: list[dict]) -> str:
                 how, listed = "1 (whole scene)", str(m["stationary_listed"])
             km2h = (r["side_m"] / 1000) ** 2 / m["wall_s"] * 3600
             out.append(
-                f"| {r['side_m']:g} m | {r['pulses']} x {r['samples']} | {method} | {how} | "
+                f"| {r['side_m']:g} m | {r['pulses']} x {r['samples']} | "
+                f"{METHOD_NAMES[method]} | {how} | "
                 f"{m['wall_s']:.1f} s | {m['rss_gb']:.2f} GB | {km2h:.2f} | {m['accurate']}/3 | "
                 f"{m['false']} | {m['stationary_found']}/{r['n_stationary']} | {listed} | "
                 f"{load:.1f} |"
@@ -447,6 +460,11 @@ def main() -> None:
     parser.add_argument("--threads-vs-processes", action="store_true")
     parser.add_argument("--ab-workers", type=int, nargs="+", default=None)
     parser.add_argument("--rounds", type=int, default=2)
+    parser.add_argument(
+        "--defocus-search",
+        action="store_true",
+        help="also run the patches with AnalysisOptions(defocus_search=True)",
+    )
     args = parser.parse_args()
     if args.threads_vs_processes:
         threads_vs_processes()
@@ -491,6 +509,13 @@ def main() -> None:
             row["patches"] = _score_patches(side, args.seed, parts)
             row["patches"]["workers"] = args.workers
             row["patches"]["km2_per_hour"] = (side / 1000.0) ** 2 / row["patches"]["wall_s"] * 3600
+        if args.defocus_search:
+            part = _in_process(run_patches, side, args.seed, args.workers, (0, 1), True)
+            row["patches_defocus"] = _score_patches(side, args.seed, [part])
+            row["patches_defocus"]["workers"] = args.workers
+            row["patches_defocus"]["km2_per_hour"] = (
+                (side / 1000.0) ** 2 / row["patches_defocus"]["wall_s"] * 3600
+            )
         rows.append(row)
         row["load_average"] = list(os.getloadavg())
         print(json.dumps(row), flush=True)

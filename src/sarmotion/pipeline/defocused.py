@@ -75,6 +75,7 @@ __all__ = [
     "defocused_movers",
     "distinct_echoes",
     "JOINT_RATIO",
+    "MAX_NEAR",
     "joint_amplitude",
     "scan_detection",
     "search_data",
@@ -89,6 +90,9 @@ MAX_REJECTED = 3
 #: explain it are sought (:func:`stationary_near`): a point's range side lobes there are
 #: within the compressed pulse's first three.
 NEAR_CELLS = 3
+
+#: Most stationary points sought near a candidate's range history (:func:`stationary_near`).
+MAX_NEAR = 16
 
 #: Least fraction of a candidate's amplitude left when fitted with the stationary points
 #: near its range history (:func:`joint_amplitude`): half, the bank's 6 dB smear margin.
@@ -203,16 +207,22 @@ def stationary_near(
 ) -> NDArray[np.float64]:
     """Stationary points that may explain a fit (m), shape ``(k, 3)``.
 
-    The local maxima of the stationary image ``|I_0|`` within ``NEAR_CELLS`` ground-range
-    cells of the fit's range (whose range side lobes reach it) over the cross ranges its
-    Doppler sweeps (the
-    zero-range-speed member's, ``cross_offset_m`` from the fit, plus or minus ``|u_p| T``
-    and two cross-range cells), sampled at a quarter of a cross-range cell, that are at
-    least half as bright as the fit's ``|I|`` (a defocused mover's own image breaks into
-    peaks of about ``1 / sqrt(TB)`` of its amplitude, ``TB`` its Doppler sweep over the
-    resolution: under half beyond the bank's first steps), each refined and
+    Searched within ``NEAR_CELLS`` ground-range cells of the fit's range (whose range side
+    lobes reach it) over the cross ranges its Doppler sweeps (the zero-range-speed
+    member's, ``cross_offset_m`` from the fit, plus or minus ``|u_p| T`` and two
+    cross-range cells), sampled at a quarter of a cross-range cell and half a range cell,
+    for points at least half as bright as the fit's ``|I|`` (a defocused mover's own image
+    breaks into peaks of about ``1 / sqrt(TB)`` of its amplitude, ``TB`` its Doppler sweep
+    over the resolution: under half beyond the bank's first steps), each refined and
     Doppler-tested as the combined separation takes its stationary points
-    (:func:`~sarmotion.separation.combined.stationary_location`).
+    (:func:`~sarmotion.separation.combined.stationary_location`): first the local maxima
+    of the stationary image; then, one at a time, the brightest point of the image of
+    what the points found leave of the data (least squares on their unit signatures,
+    :func:`~sarmotion.motion.point_model`; a point that fails the test is skipped with
+    the samples beside it). Two points closer than a resolution cell, which the image
+    shows as one broad peak, are so found as two: one point at the peak leaves the other
+    in the residual. At most ``MAX_NEAR`` points. ``phase_history`` is the data's, if
+    already computed.
     """
     cells = resolution(data)
     e_r = np.r_[cells.range_direction, 0.0]
@@ -227,14 +237,31 @@ def stationary_near(
         + xs[:, None, None] * e_r[None, None, :]
         + ys[None, :, None] * e_c[None, None, :]
     )
-    mag = np.abs(backproject_points(data, pts))  # (rows, ny)
     level = 0.5 * abs(fit.amplitude) * data.n_pulses
+    out: list[NDArray[np.float64]] = []
+
+    def add(traces: Traces, point: NDArray[np.float64], spectrum: NDArray | None) -> bool:
+        p = stationary_location(traces, point, phase_history=spectrum)
+        if p is None or any(np.hypot(*(p[:2] - q[:2])) <= 0.5 * step for q in out):
+            return False
+        out.append(p)
+        return True
+
+    mag = np.abs(backproject_points(data, pts))  # (rows, ny)
     peak = (mag == maximum_filter(mag, size=3, mode="constant")) & (mag >= level)
-    out = []
     for r, i in zip(*np.nonzero(peak), strict=True):
-        p = stationary_location(data, pts[r, i], phase_history=phase_history)
-        if p is not None and all(np.hypot(*(p[:2] - q[:2])) > 0.5 * step for q in out):
-            out.append(p)
+        add(data, pts[r, i], phase_history)
+    d = np.asarray(data.data, dtype=np.complex128).ravel()
+    skipped = np.zeros(pts.shape[:2], dtype=bool)
+    while out and len(out) < MAX_NEAR:
+        a = np.stack([point_model(data, p, np.zeros(2), 1.0).ravel() for p in out], axis=1)
+        left = data.with_data((d - a @ np.linalg.lstsq(a, d, rcond=None)[0]).reshape(data.shape))
+        mag = np.where(skipped, 0.0, np.abs(backproject_points(left, pts)))
+        r, i = np.unravel_index(int(np.argmax(mag)), mag.shape)
+        if mag[r, i] < level:
+            break
+        if not add(left, pts[r, i], None):
+            skipped[max(r - 1, 0) : r + 2, max(i - 1, 0) : i + 2] = True
     return np.array(out, dtype=np.float64).reshape(-1, 3)
 
 
