@@ -18,9 +18,11 @@ from sarmotion.motion import (
     coherent_false_alarm_probability,
     coherent_statistic_db,
     coherent_threshold_db,
+    effective_cells,
     matched_filter_variance,
     neighbourhood_noise,
     screen_threshold_db,
+    searching_threshold_db,
 )
 from sarmotion.pipeline import AnalysisOptions, detect, estimate_movers
 from sarmotion.separation import SeparationOptions
@@ -99,6 +101,38 @@ def test_thresholds_follow_the_stated_rules():
         coherent_threshold_db(1.5, 3)
     with pytest.raises(ValueError):
         AnalysisOptions(detector="incoherent")
+
+
+def test_searching_threshold_is_the_clairvoyant_one_for_one_cell_and_ln_n_over_alpha():
+    """``N = 1`` is the single test; large ``N``: ``ln(N / alpha)`` to first order in ``alpha``.
+
+    The largest of ``N`` exponentials passes its threshold with probability ``alpha``
+    exactly: ``1 - (1 - exp(-t))^N``.
+    """
+    assert searching_threshold_db(0.01, 1) == pytest.approx(clairvoyant_threshold_db(0.01))
+    for n in (10.0, 1e4, 1.7e9):
+        t = 10 ** (searching_threshold_db(0.01, n) / 10)
+        assert -np.expm1(n * np.log1p(-np.exp(-t))) == pytest.approx(0.01, rel=1e-9)
+        assert t == pytest.approx(np.log(n / 0.01), abs=0.01)
+    with pytest.raises(ValueError):
+        searching_threshold_db(0.01, 0.5)
+
+
+def test_effective_cells_recovers_the_number_of_independent_cells():
+    """Seeded maxima of ``N`` independent unit exponentials give back ``N``.
+
+    400 maxima of 1000 and of 2000 cells: the estimate's relative standard deviation is
+    ``1 / sqrt(400)`` = 5 %; four allowed. Correlated cells (each value repeated twice,
+    the maxima unchanged) count once: the estimate is of independent cells, not values.
+    """
+    rng = np.random.default_rng(7603)
+    cells = rng.exponential(size=(400, 1000))
+    maxima = cells.max(axis=1)
+    assert effective_cells(maxima) == pytest.approx(1000, rel=4 * 0.05)
+    twice = np.concatenate([cells, cells], axis=1).max(axis=1)
+    assert effective_cells(twice) == pytest.approx(1000, rel=4 * 0.05)
+    n = effective_cells(rng.exponential(size=(400, 2000)).max(axis=1))
+    assert n == pytest.approx(2000, rel=4 * 0.05)
 
 
 @pytest.mark.slow

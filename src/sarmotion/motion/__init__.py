@@ -66,9 +66,11 @@ from .coherent import (
     coherent_false_alarm_probability,
     coherent_statistic_db,
     coherent_threshold_db,
+    effective_cells,
     matched_filter_variance,
     neighbourhood_noise,
     screen_threshold_db,
+    searching_threshold_db,
 )
 from .cross_range import CrossRangeSpeed, cross_range_objective, estimate_cross_range_speed
 from .defocus import DefocusCandidate, DefocusScan, defocus_scan
@@ -150,9 +152,11 @@ __all__ = [
     "coherent_false_alarm_probability",
     "coherent_statistic_db",
     "coherent_threshold_db",
+    "effective_cells",
     "matched_filter_variance",
     "neighbourhood_noise",
     "screen_threshold_db",
+    "searching_threshold_db",
     "DefocusCandidate",
     "DefocusScan",
     "defocus_scan",

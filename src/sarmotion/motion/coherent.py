@@ -59,7 +59,11 @@ table is ``benchmarks/results/detector_null_coherent.md``.
 clutter is removed exactly is a single test of a known ``theta``: its null is the
 exponential above, and the per-scene rate ``alpha`` is met by ``Lambda >= 10 log10(ln(1 /
 alpha))`` (:func:`clairvoyant_threshold_db`, 6.6 dB for 1 %). No detector that searches
-can do better; ``benchmarks/coherent_detection.py`` compares the two detectors with it.
+can do better. One that knows the clutter but searches the mover's parameters tests the
+largest ``Lambda`` of ``N`` independent cells, whose null passes ``ln(N / alpha)``
+(:func:`searching_threshold_db`; ``N`` measured by :func:`effective_cells`): the
+look-elsewhere penalty between the two bounds. ``benchmarks/coherent_detection.py``
+compares the two detectors with both bounds (figures in ``docs/notes/detector.md``).
 
 Positions in m, speeds in m/s, statistics in dB.
 """
@@ -82,9 +86,11 @@ __all__ = [
     "coherent_false_alarm_probability",
     "coherent_statistic_db",
     "coherent_threshold_db",
+    "effective_cells",
     "matched_filter_variance",
     "neighbourhood_noise",
     "screen_threshold_db",
+    "searching_threshold_db",
 ]
 
 #: Per-candidate probability with which a ``g(u)`` null candidate passes the screen:
@@ -143,6 +149,36 @@ def clairvoyant_threshold_db(false_alarm_rate: float) -> float:
     if not 0.0 < false_alarm_rate < 1.0:
         raise ValueError(f"false_alarm_rate must be in (0, 1), got {false_alarm_rate!r}")
     return float(10.0 * np.log10(np.log(1.0 / false_alarm_rate)))
+
+
+def searching_threshold_db(false_alarm_rate: float, n_cells: float) -> float:
+    """``Lambda`` (dB) the largest of ``N`` independent cells passes with ``alpha`` under noise.
+
+    Each cell's ``|I|^2 / sigma_I^2`` is exponential with mean 1, so ``P(max <= t) = (1 -
+    exp(-t))^N`` and ``t = -ln(1 - (1 - alpha)^(1 / N))``, about ``ln(N / alpha)``;
+    ``N = 1`` is :func:`clairvoyant_threshold_db`. ``N`` need not be whole (cells of a
+    correlated search, :func:`effective_cells`).
+    """
+    if not 0.0 < false_alarm_rate < 1.0:
+        raise ValueError(f"false_alarm_rate must be in (0, 1), got {false_alarm_rate!r}")
+    if not n_cells >= 1.0:
+        raise ValueError(f"n_cells must be >= 1, got {n_cells!r}")
+    t = -np.log(-np.expm1(np.log1p(-false_alarm_rate) / float(n_cells)))
+    return float(10.0 * np.log10(t))
+
+
+def effective_cells(maxima: ArrayLike) -> float:
+    """Number ``N`` of independent unit-exponential cells whose largest value the samples are.
+
+    The maximum-likelihood ``N`` of ``P(max <= t) = (1 - exp(-t))^N`` from ``k`` sampled
+    maxima ``t_i`` (linear, not dB): the log-likelihood ``k ln N + (N - 1) sum ln(1 -
+    exp(-t_i)) + const`` peaks at ``N = -k / sum ln(1 - exp(-t_i))``. Its relative
+    standard deviation is ``1 / sqrt(k)`` (``-N ln(1 - exp(-t))`` is unit exponential).
+    """
+    t = np.asarray(maxima, dtype=np.float64).ravel()
+    if t.size == 0 or not np.all(t > 0):
+        raise ValueError("maxima must be a non-empty array of positive values")
+    return float(-t.size / np.sum(np.log(-np.expm1(-t))))
 
 
 def matched_filter_variance(acquisition: Acquisition | Traces, noise_variance: float) -> float:
