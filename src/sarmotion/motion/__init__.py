@@ -103,7 +103,13 @@ from .likelihood import (
 )
 from .location import MoverLocation, locate_mover
 from .phase_space import TrajectoryEstimate, estimate_trajectory, trajectory_error
-from .range_speed import RangeSpeeds, aligned_range, estimate_range_speeds, range_speed_objective
+from .range_speed import (
+    RangeSpeeds,
+    aligned_range,
+    aligned_trace,
+    estimate_range_speeds,
+    range_speed_objective,
+)
 from .speed_resolution import cross_range_speed_resolution, range_speed_resolution
 from .velocity import EstimationStep, MoverEstimate, estimate_velocity
 from .wigner import WignerRidge, wigner_ridge, wigner_slow_time
@@ -112,6 +118,7 @@ __all__ = [
     # the paper's objectives
     "RangeSpeeds",
     "aligned_range",
+    "aligned_trace",
     "range_speed_objective",
     "estimate_range_speeds",
     "cross_range_objective",

@@ -273,8 +273,17 @@ class _Profile:
         return out
 
 
-def _global_cross_search(d: Traces, range_speed_mps: float, grid: NDArray[np.float64]) -> _Profile:
+def _global_cross_search(
+    d: Traces,
+    range_speed_mps: float,
+    grid: NDArray[np.float64],
+    centre_s: float | None = None,
+) -> _Profile:
     """Profile of ``max |I|`` over range and residual range speed for each ``u_p`` of ``grid``.
+
+    The range window is centred on the aligned trace of the ``g(u)`` peak (the fast-time
+    sample where ``sum_s |T_+ d|`` peaks at ``u_r``), or on ``centre_s`` (s, a sample of
+    the aligned traces' fast time) where given.
 
     The profile is in the units of ``|I|`` (``a n_pulses`` for a mover of reflectivity
     ``a`` at the parameters): the aligned traces are scaled as :attr:`Traces.data`, whose
@@ -288,7 +297,10 @@ def _global_cross_search(d: Traces, range_speed_mps: float, grid: NDArray[np.flo
     x0 = al.spectra(range_direction_velocity(range_speed_mps, geom)[None])
     padded = np.zeros(x0.shape[:2] + (al.n_fft,), dtype=np.complex64)
     padded[..., al.slots] = x0
-    centre = int(np.argmax(np.abs(sfft.ifft(padded, axis=-1)).sum(axis=1)[0]))
+    if centre_s is None:
+        centre = int(np.argmax(np.abs(sfft.ifft(padded, axis=-1)).sum(axis=1)[0]))
+    else:
+        centre = int(np.argmin(np.abs(al.times_s - centre_s)))
     cols = (centre + np.arange(-12, 13)) % al.n_fft
     basis = al.column_basis(cols)
     n = d.n_pulses
@@ -428,6 +440,7 @@ def fit_point_mover(
     acquisition: Acquisition | None = None,
     cross_speed_range_mps: tuple[float, float] = (-30.0, 30.0),
     step_mps: float | None = None,
+    trace_delay_s: float | None = None,
 ) -> PointFit:
     """Maximum-likelihood ``(x, u_r, u_p)`` of one mover near a ``g(u)`` peak (module notes).
 
@@ -446,6 +459,11 @@ def fit_point_mover(
     step_mps : float, optional
         Grid step of the global search (m/s); default half of
         :func:`cross_range_speed_resolution` (0.37 m/s for a GOTCHA degree).
+    trace_delay_s : float, optional
+        Fast-time delay (s) of the aligned trace on which the global search centres its
+        range window; default the ``g(u)`` peak's own (the strongest trace at that
+        speed). Another trace of the same range speed: a second mover beside a stronger
+        echo there (:func:`sarmotion.motion.aligned_trace`).
 
     Returns
     -------
@@ -466,7 +484,7 @@ def fit_point_mover(
     res_c = cross_range_speed_resolution(tr)
     step = 0.5 * res_c if step_mps is None else float(step_mps)
     grid = lo + step * np.arange(int(np.floor((hi - lo) / step)) + 1)
-    search = _global_cross_search(tr, u0, grid)
+    search = _global_cross_search(tr, u0, grid, trace_delay_s)
     mf = MatchedFilter(tr)
     # Local maxima one Doppler resolution apart in range speed trade it against metres
     # per second of cross-range speed (one degree of aperture): from the profile's

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,13 @@ from .speed_resolution import range_speed_resolution
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RangeSpeeds", "aligned_range", "range_speed_objective", "estimate_range_speeds"]
+__all__ = [
+    "RangeSpeeds",
+    "aligned_range",
+    "aligned_trace",
+    "range_speed_objective",
+    "estimate_range_speeds",
+]
 
 
 # ==================================================================== g(u)
@@ -250,6 +257,36 @@ def _over_floor_db(values: NDArray[np.float64], floor: float) -> NDArray[np.floa
     return 20.0 * np.log10(v / floor) if floor > 0 else np.full(v.size, np.inf)
 
 
+def aligned_trace(
+    traces: Traces,
+    range_speed_mps: float,
+    *,
+    avoid_s: Sequence[float] = (),
+    guard_s: float = 0.0,
+) -> tuple[float, float]:
+    """Fast-time delay (s) and ``g`` value of the strongest aligned trace at range speed ``u``.
+
+    The traces aligned on the reference point at the ground velocity of range speed
+    ``u`` and zero cross-range speed; the delay ``t`` (relative to the reference point's,
+    on the twice-oversampled fast time of the alignment) where ``sum_s |T_+ d(s, t)|``
+    peaks: the trace ``g(u)`` takes, and that sum (``g(u)`` itself, in trace units, when
+    nothing is avoided). Samples within ``guard_s`` of a delay of ``avoid_s`` are passed
+    over (the trace of a mover already fitted at that speed); ``(nan, 0)`` when none is
+    left.
+    """
+    al = _Aligner(traces, traces.reference_point_m)
+    spectra = al.spectra(range_direction_velocity(float(range_speed_mps), traces.geometry)[None])
+    padded = np.zeros(spectra.shape[:2] + (al.n_fft,), dtype=np.complex64)
+    padded[..., al.slots] = spectra
+    profile = np.abs(np.fft.ifft(padded, axis=-1)).sum(axis=1)[0]
+    for t in avoid_s:
+        profile[np.abs(al.times_s - t) <= guard_s] = -np.inf
+    if not np.isfinite(profile.max()):
+        return float("nan"), 0.0
+    best = int(np.argmax(profile))
+    return float(al.times_s[best]), float(profile[best])
+
+
 def aligned_range(traces: Traces, range_speed_mps: float) -> float:
     """Ground-range coordinate of a ``g(u)`` peak's range history at ``s = 0`` (m), not fitted.
 
@@ -277,13 +314,8 @@ def aligned_range(traces: Traces, range_speed_mps: float) -> float:
     """
     from ..imaging import resolution  # imaging imports motion's neighbours: at call time
 
-    al = _Aligner(traces, traces.reference_point_m)
     geom = traces.geometry
-    spectra = al.spectra(range_direction_velocity(float(range_speed_mps), geom)[None])
-    padded = np.zeros(spectra.shape[:2] + (al.n_fft,), dtype=np.complex64)
-    padded[..., al.slots] = spectra
-    centre = int(np.argmax(np.abs(np.fft.ifft(padded, axis=-1)).sum(axis=1)[0]))
-    slant = geom.range_m + 0.5 * C * float(al.times_s[centre])
+    slant = geom.range_m + 0.5 * C * aligned_trace(traces, range_speed_mps)[0]
     e_r = resolution(traces).range_direction
     cos = float(geom.m_o[:2] @ e_r)
     length = geom.range_m

@@ -51,6 +51,7 @@ from ..motion import (
     RangeSpeedDetection,
     StationaryExplanation,
     aligned_range,
+    aligned_trace,
     coherent_false_alarm_probability,
     coherent_statistic_db,
     coherent_threshold_db,
@@ -88,6 +89,13 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+#: Half-width of the fast time around an accepted mover's aligned trace that a second
+#: candidate at its speed passes over (:func:`_candidate_trace`), in range resolutions
+#: ``1 / B``: the point model leaves a mover's remnant within about a resolution of its
+#: trace (a remnant of RPCA's distortion of it), and two resolutions keep a second
+#: trace off that remnant's main lobe.
+_TRACE_GUARD_RESOLUTIONS = 2.0
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -342,6 +350,14 @@ def fit_candidates(
     amplitude in ``S``: on a real degree with two strong injected movers such remnants
     made a third "mover" 0.3 m/s and 0.2 m from one of them), not a new mover.
 
+    A candidate is fitted on the ``g(u)`` peak's own trace. Within a ``g`` peak's width
+    of an accepted mover that trace is often the mover's remnant, rejected as such, which
+    closes the speed; a second mover of the same range speed on another trace (tens of
+    range cells away, its ``g`` below the remnant's) would never be fitted. There the
+    closed candidate is tried again on the strongest trace away from the accepted
+    movers' (:func:`_candidate_trace`), when that trace's own ``g`` statistic reaches
+    the threshold.
+
     Parameters
     ----------
     moving : (n_pulses, n_samples) ndarray
@@ -375,22 +391,35 @@ def fit_candidates(
     sub = acquisition
     residual = np.array(moving, dtype=np.complex128)
     current = detection
-    tried: list[float] = []
+    tried: list[tuple[float, float]] = []  # (speed, delay of the trace fitted)
+    fitted: list[tuple[float, float]] = []  # accepted movers: (speed, delay of their trace)
     out: list[tuple[PointFit, MoverEvidence]] = []
     res = detection.range_speeds.resolution_mps
+    guard = _TRACE_GUARD_RESOLUTIONS / sub.radar.bandwidth_hz
     while len(out) < options.max_movers:
         rs = current.range_speeds
-        untried = [
-            k for k, u in enumerate(rs.speeds_mps) if all(abs(u - t) > 0.5 * res for t in tried)
-        ]
+        left = Traces(data=residual, acquisition=sub)
+        untried = []
+        for k, u in enumerate(rs.speeds_mps):
+            # the g(u) peak's own trace first; once tried, another trace beside a mover
+            if _untried(float(u), None, tried, 0.5 * res, guard):
+                untried.append((k, None))
+                continue
+            delay = _candidate_trace(left, float(u), current, fitted, peak_width_mps, guard)
+            if delay is not None and _untried(float(u), delay, tried, 0.5 * res, guard):
+                untried.append((k, delay))
         report(progress, "movers", len(tried), len(tried) + len(untried))
         if not untried:
             break
-        k = untried[0]
+        k, delay = untried[0]
         u, statistic = float(rs.speeds_mps[k]), float(current.statistic_db[k])
-        tried.append(u)
+        tried.append((u, aligned_trace(left, u)[0] if delay is None else delay))
         fit = fit_point_mover(
-            residual, u, acquisition=sub, cross_speed_range_mps=options.speed_range_mps
+            residual,
+            u,
+            acquisition=sub,
+            cross_speed_range_mps=options.speed_range_mps,
+            trace_delay_s=delay,
         )
         if any(_same_trace(sub, fit, f, peak_width_mps) for f, _ in out):
             log.info("g(u) candidate at %.2f m/s: what a subtracted mover left", u)
@@ -399,7 +428,10 @@ def fit_candidates(
         coherent = _coherent_test(residual, fit, detection, options, acquisition=sub)
         if coherent is not None and coherent[0] < coherent[1]:
             log.info(
-                "g(u) candidate at %.2f m/s: likelihood ratio %.2f dB under %.2f dB", u, *coherent
+                "g(u) candidate at %.2f m/s: likelihood ratio %.2f dB under %.2f dB",
+                u,
+                coherent[0],
+                coherent[1],
             )
             continue
         why = stationary_explanation(
@@ -414,7 +446,9 @@ def fit_candidates(
                 why.focus_gain_db,
             )
             continue
-        residual = residual - point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
+        model = point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
+        residual = residual - model
+        fitted.append((u, aligned_trace(Traces(data=model, acquisition=sub), u)[0]))
         evidence = _evidence(detection, statistic, float(current.widths[k]), why, coherent)
         out.append((fit, evidence))
         tried.pop()  # its speed is open again: a peak there after the redetection is another echo
@@ -423,8 +457,67 @@ def fit_candidates(
     if not_estimated is not None and len(out) >= options.max_movers:
         left = Traces(data=residual, acquisition=sub)
         accepted = [f for f, _ in out]
-        not_estimated.extend(_beyond_cap(left, current, tried, accepted, peak_width_mps))
+        speeds = [v for v, _ in tried]
+        not_estimated.extend(_beyond_cap(left, current, speeds, accepted, peak_width_mps))
     return out
+
+
+def _candidate_trace(
+    residual: Traces,
+    u: float,
+    detection: RangeSpeedDetection,
+    fitted: Sequence[tuple[float, float]],
+    width_mps: float,
+    guard_s: float,
+) -> float | None:
+    """The trace a candidate at ``u`` is fitted on: ``None`` for the ``g(u)`` peak's own.
+
+    Within a ``g`` peak's width of an accepted mover's speed the strongest trace at
+    ``u`` is, as often as not, what the point model left of that mover; a second mover
+    of the same range speed at another range lies on another trace. The candidate's
+    trace is then the strongest one farther than ``guard_s`` from the accepted movers'
+    (:func:`~sarmotion.motion.aligned_trace`), and it must pass the detector on its
+    own: its sum over the local floor of ``g`` reaches the detection's threshold (the
+    statistic of :mod:`sarmotion.motion.detector` with that trace's value for the peak,
+    the largest at speeds within half a peak width of ``u``, in steps of half a
+    resolution). ``nan`` when it does not, or no trace is left.
+    """
+    avoid = [t for ua, t in fitted if abs(u - ua) < width_mps]
+    if not avoid:
+        return None
+    rs = detection.range_speeds
+    best, delay = -np.inf, float("nan")
+    # the other trace's own peak: its speed within half a peak width of the candidate's
+    half = 0.5 * width_mps
+    for v in u + np.arange(-half, half + 1e-9, 0.5 * rs.resolution_mps):
+        t, value = aligned_trace(residual, float(v), avoid_s=avoid, guard_s=guard_s)
+        floor = float(np.interp(v, rs.grid_mps, detection.floor_curve))
+        stat = 20.0 * np.log10(value / floor) if value > 0 and floor > 0 else -np.inf
+        if stat > best:
+            best, delay = stat, t
+    return delay if best >= detection.threshold_db else float("nan")
+
+
+def _untried(
+    u: float,
+    delay: float | None,
+    tried: Sequence[tuple[float, float]],
+    speed_tolerance_mps: float,
+    guard_s: float,
+) -> bool:
+    """Whether a candidate at ``u`` on the trace at ``delay`` was not tried yet.
+
+    A candidate on the ``g(u)`` peak's own trace (``delay`` ``None``) was tried when a
+    tried speed lies within ``speed_tolerance_mps``; one on another trace (beside an
+    accepted mover, :func:`_candidate_trace`) when, besides, the tried trace lies within
+    ``guard_s`` of its own.
+    """
+    if delay is not None and not np.isfinite(delay):
+        return False
+    near = [t for v, t in tried if abs(u - v) <= speed_tolerance_mps]
+    if delay is None:
+        return not near
+    return all(abs(delay - t) > guard_s for t in near)
 
 
 def _beyond_cap(
