@@ -340,23 +340,20 @@ def fit_candidates(
     (:func:`~sarmotion.motion.stationary_explanation`); otherwise its fitted traces are
     subtracted and the detector runs again on the residual (a second mover within a
     resolution of the first, hidden under its peak, then stands out; a shoulder of the
-    subtracted peak falls to the floor). The threshold stays the first run's. A speed
-    is not tried again within half a resolution of a rejected candidate's; an accepted
-    candidate's speed stays open, since two movers with the same range speed share one
-    ``g`` peak (their echoes a few range cells apart) and the second stands out only once
-    the first is subtracted. A fit
+    subtracted peak falls to the floor). The threshold stays the first run's. A fit
     within a range cell and a ``g`` peak's width of an accepted mover is what the
     point model could not subtract of it (RPCA keeps a distorted 15-40 % of a mover's
     amplitude in ``S``: on a real degree with two strong injected movers such remnants
     made a third "mover" 0.3 m/s and 0.2 m from one of them), not a new mover.
 
-    A candidate is fitted on the ``g(u)`` peak's own trace. Within a ``g`` peak's width
-    of an accepted mover that trace is often the mover's remnant, rejected as such, which
-    closes the speed; a second mover of the same range speed on another trace (tens of
-    range cells away, its ``g`` below the remnant's) would never be fitted. There the
-    closed candidate is tried again on the strongest trace away from the accepted
-    movers' (:func:`_candidate_trace`), when that trace's own ``g`` statistic reaches
-    the threshold.
+    A speed is tried once (half a resolution) on the ``g(u)`` peak's own trace. Two
+    movers with the same range speed share one ``g`` peak; once the first is subtracted
+    the strongest trace at that speed is as often as not its remnant, and the second
+    mover lies on another trace (reopening the accepted speed to its strongest trace
+    instead made three false movers on Scene 1 written as GOTCHA files). Within a ``g`` peak's width of an accepted mover
+    the candidate is therefore tried again on the strongest trace at least
+    ``_TRACE_GUARD_RESOLUTIONS`` from the accepted movers' (:func:`_candidate_trace`),
+    when that trace's own ``g`` statistic reaches the threshold.
 
     Parameters
     ----------
@@ -451,7 +448,6 @@ def fit_candidates(
         fitted.append((u, aligned_trace(Traces(data=model, acquisition=sub), u)[0]))
         evidence = _evidence(detection, statistic, float(current.widths[k]), why, coherent)
         out.append((fit, evidence))
-        tried.pop()  # its speed is open again: a peak there after the redetection is another echo
         with timed(timings, "movers.redetection"):
             current = _redetect(Traces(data=residual, acquisition=sub), detection, options)
     if not_estimated is not None and len(out) >= options.max_movers:
