@@ -259,8 +259,8 @@ def test_ffbp_strip_whose_root_does_not_split(four_degrees, monkeypatch):
     plan, strip_plans = ffbp._plan, ffbp._strip_plans
     first_v0 = []
 
-    def one_leaf_first(n_pulses, band, dv_top, v0_top, nv_top, alpha):
-        levels = plan(n_pulses, band, dv_top, v0_top, nv_top, alpha)
+    def one_leaf_first(n_pulses, band, dv_top, v0_top, nv_top, alpha, taps):
+        levels = plan(n_pulses, band, dv_top, v0_top, nv_top, alpha, taps)
         if not first_v0 or v0_top == first_v0[0]:
             first_v0.append(v0_top)
             levels[0][0].children = []
@@ -271,10 +271,11 @@ def test_ffbp_strip_whose_root_does_not_split(four_degrees, monkeypatch):
 
     def halves(pos, us, y, *args):  # each half of the rows planned on its own
         half = y.size // 2
-        _, b1, p1 = strip_plans(pos, us, y[:half], *args)
-        _, b2, p2 = strip_plans(pos, us, y[half:], *args)
+        choices = args[-1][:1]  # one oversampling for both halves (one set of margins)
+        _, b1, p1, choice = strip_plans(pos, us, y[:half], *args[:-1], choices)
+        _, b2, p2, _ = strip_plans(pos, us, y[half:], *args[:-1], choices)
         leaf_rows.append(int(b1[1]))
-        return 0.0, np.concatenate([b1[:-1], b2 + half]), p1 + p2
+        return 0.0, np.concatenate([b1[:-1], b2 + half]), p1 + p2, choice
 
     monkeypatch.setattr(ffbp, "_plan", one_leaf_first)
     monkeypatch.setattr(ffbp, "_strip_plans", halves)

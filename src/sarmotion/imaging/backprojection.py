@@ -139,7 +139,7 @@ def _run_numba(
 
 
 def _run_ffbp(
-    st: Setup, traces: Traces, grid: ImageGrid, alpha: float, progress: ProgressCallback | None
+    st: Setup, traces: Traces, grid: ImageGrid, alpha: float | None, progress: ProgressCallback | None
 ) -> tuple[NDArray[np.complex128], str, dict]:
     """Fast factorised backprojection (:mod:`.ffbp`).
 
@@ -202,7 +202,7 @@ def backproject(
     upsample: int = DEFAULT_UPSAMPLE,
     kernel: Kernel = "numba",
     method: Method = "exact",
-    ffbp_oversampling: float = 1.4,
+    ffbp_oversampling: float | None = None,
     progress: ProgressCallback | None = None,
     device: Device = "cpu",
 ) -> Image:
@@ -233,9 +233,10 @@ def backproject(
         backprojection (:mod:`sarmotion.imaging.ffbp`), for large images, several times
         faster and less accurate (its error budget is in the module). Needs
         ``kernel="numba"``.
-    ffbp_oversampling : float
-        ``method="ffbp"``: oversampling of each sub-image's cross-range band, > 1; higher
-        is more accurate and slower.
+    ffbp_oversampling : float, optional
+        ``method="ffbp"``: oversampling of each sub-image's cross-range band, > 1, with the
+        interpolation taps the error budget gives it; default: the cheapest of
+        :data:`sarmotion.imaging.ffbp.ALPHAS` by the factorisation's cost model.
     progress : callable, optional
         Called as ``progress("backprojection", n_done, n_total)`` after each step of the
         computation (a block of pulses, a band of image rows, or a level of the FFBP tree;
@@ -259,8 +260,8 @@ def backproject(
     _check_grid(grid)
     _check_kernel(kernel)
     _check_method(method, kernel)
-    alpha = float(ffbp_oversampling)
-    if not (math.isfinite(alpha) and alpha > 1.0):
+    alpha = None if ffbp_oversampling is None else float(ffbp_oversampling)
+    if alpha is not None and not (math.isfinite(alpha) and alpha > 1.0):
         raise ValueError(f"ffbp_oversampling must be a number > 1, got {ffbp_oversampling!r}")
     st = make_setup(traces, velocity_mps, upsample)
     extra: dict = {}

@@ -143,6 +143,13 @@ DEFAULT_ALPHA = 1.4
 #: (:func:`default_taps`). Each depth of a tree uses the fewest taps its own bands need
 #: (:func:`_filters`).
 TAPS = 14
+#: Oversamplings the axis-aligned path plans with when none is given, each with the taps
+#: :func:`default_taps` gives it (14 and 18), the cheapest plan by the cost model kept
+#: (:func:`_strip_plans`): a band floor that nearly fills a sub-image's grid at
+#: :data:`DEFAULT_ALPHA` stops the tree there, and 1.3 lets it split once more (small
+#: grids looking a few degrees off ``u``); where it does not, the wider margins of 18
+#: taps make 1.3 the dearer plan.
+ALPHAS = (DEFAULT_ALPHA, 1.3)
 #: Work (pixel-pulses) under which a parallel region runs on one thread
 #: (:func:`_threads_for`): about half a millisecond of one core.
 SERIAL_WORK = 2.0**19
@@ -228,6 +235,16 @@ def default_taps(alpha: float = DEFAULT_ALPHA, stages: int = MAX_STAGES) -> int:
     return taps
 
 
+def _oversamplings(alpha: float | None) -> list[tuple[float, int]]:
+    """``(alpha, taps)`` pairs to plan with: ``alpha``, or each of :data:`ALPHAS`.
+
+    The taps are :func:`default_taps` of each ``alpha``: the fewest that keep the
+    factorisation within its share of the budget however deep the tree, so every plan
+    meets :data:`TARGET_DB` by the same derivation.
+    """
+    return [(float(a), default_taps(float(a))) for a in (ALPHAS if alpha is None else (alpha,))]
+
+
 def budget_db(error_power: float) -> float:
     """Signal-to-error ratio (dB) of a relative error power."""
     return math.inf if error_power <= 0.0 else -10.0 * math.log10(error_power)
@@ -300,37 +317,72 @@ def _pulse_bands(pos, f_lo, f_hi, nu_o, centre, probes) -> tuple[NDArray, NDArra
     return g_lo.min(axis=1), g_hi.max(axis=1)
 
 
-def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha) -> list[list[_Node]]:
+def _halves(node: _Node, band, width: float) -> list[_Node] | None:
+    """The two children of ``node`` whose bands are each at most ``width`` (cycles/m), or None.
+
+    The pulses are split at their midpoint when both halves' bands fit; otherwise where
+    the two bands are most nearly equal (the widest of the two is then the narrowest any
+    split gives: the band of ``j0:m`` grows with ``m``, that of ``m:j1`` shrinks), when
+    both fit there. A sub-aperture's band is the pulses' spread in look angle plus a
+    floor that grows with the angle between the look direction and ``u`` (module
+    docstring): where the floor differs along the aperture, the balanced split lets the
+    half with the smaller floor take more pulses.
+    """
+    j0, j1 = node.j0, node.j1
+
+    def extent(a: int, b: int) -> float:
+        lo, hi = band(a, b)
+        return hi - lo
+
+    mid = (j0 + j1) // 2
+    if max(extent(j0, mid), extent(mid, j1)) > width:
+        a, b = j0 + _MIN_LEAF, j1 - _MIN_LEAF  # the first m with extent(j0, m) >= extent(m, j1)
+        while a < b:
+            m = (a + b) // 2
+            if extent(j0, m) < extent(m, j1):
+                a = m + 1
+            else:
+                b = m
+        mid = min((m for m in (a - 1, a) if j0 + _MIN_LEAF <= m <= j1 - _MIN_LEAF),
+                  key=lambda m: max(extent(j0, m), extent(m, j1)))  # fmt: skip
+        if max(extent(j0, mid), extent(mid, j1)) > width:
+            return None
+    kids = [_Node(j0, mid), _Node(mid, j1)]
+    for kid in kids:
+        lo, hi = band(kid.j0, kid.j1)
+        kid.centre, kid.half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    return kids
+
+
+def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha, taps=TAPS) -> list[list[_Node]]:
     """Levels of the tree, root first.
 
-    A node splits in two when both halves' bands fit twice its ``v`` spacing and two leaves
-    plus the merge cost less than the node as a leaf (rows times pulses, a merged row
-    :data:`_MERGE_COST` pulses); otherwise it is a leaf. The second rule also keeps the
-    tree shallow: every level of interpolation adds error (a tree split down to 2-pulse
-    leaves misses the 40 dB specification, ``docs/notes/ffbp.md``). Level ``d + 1`` lists the
+    A node splits in two (:func:`_halves`) when both children's bands fit twice its ``v``
+    spacing at oversampling ``alpha`` and two leaves plus the merge cost less than the
+    node as a leaf (rows times pulses, a merged row :data:`_MERGE_COST` pulses);
+    otherwise it is a leaf. The second rule also keeps the tree shallow: every level of
+    interpolation adds error (a tree split down to 2-pulse leaves misses the 40 dB
+    specification, ``docs/notes/ffbp.md``). Each child holds ``taps / 2`` rows beyond its
+    parent's on either side, the reach of a ``taps``-tap filter. Level ``d + 1`` lists the
     children of the split nodes of level ``d``, in order. All nodes of a level share one
     grid.
     """
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
     levels = [[root]]
-    k0 = TAPS // 2 - 1  # child rows before the parent's row 0 (the filter's reach)
+    k0 = taps // 2 - 1  # child rows before the parent's row 0 (the filter's reach)
     while True:
         level = levels[-1]
         dv = 2.0 * level[0].dv
+        nv = k0 + (level[0].nv - 2) // 2 + taps // 2 + 1
         nxt: list[_Node] = []
         for node in level:
             if node.j1 - node.j0 < 2 * _MIN_LEAF:
                 continue
-            mid = (node.j0 + node.j1) // 2
-            kids = [_Node(node.j0, mid), _Node(mid, node.j1)]
-            for kid in kids:
-                lo, hi = band(kid.j0, kid.j1)
-                kid.centre, kid.half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-            if any(dv * 2.0 * alpha * kid.half > 1.0 for kid in kids):
-                continue  # halving the aperture does not halve the band: a leaf
-            nv = k0 + (level[0].nv - 2) // 2 + TAPS // 2 + 1
             if (node.j1 - node.j0) * node.nv <= (node.j1 - node.j0) * nv + _MERGE_COST * node.nv:
                 continue  # two leaves and a merge would cost more than this leaf
+            kids = _halves(node, band, 1.0 / (alpha * dv))
+            if kids is None:
+                continue  # halving the aperture does not halve the band: a leaf
             for kid in kids:
                 kid.ratio = 2
                 kid.dv = dv
@@ -376,16 +428,18 @@ def _depths(plans, bounds, y) -> tuple[list[list[_Node]], list[_Node | None]]:
     return depths, substitutes
 
 
-def _filters(nodes: list[_Node], allowed: float) -> tuple[NDArray[np.float32], float]:
+def _filters(
+    nodes: list[_Node], allowed: float, most: int = TAPS
+) -> tuple[NDArray[np.float32], float]:
     """Complex half-sample filters of the nodes, by slot, and the depth's merge error.
 
-    The taps are the fewest even number (4 to :data:`TAPS`) for which every node's
-    :func:`merge_error` over its own band is at most ``allowed``. Returns the
+    The taps are the fewest even number (4 to ``most``, the plan's margins) for which
+    every node's :func:`merge_error` over its own band is at most ``allowed``. Returns the
     ``(len(nodes), 2, taps)`` filters and the largest merge error among the nodes.
     """
     bands = [node.half * node.dv for node in nodes if node.ratio == 2]
     taps = 4
-    while taps < TAPS and any(merge_error(b, taps) > allowed for b in bands):
+    while taps < most and any(merge_error(b, taps) > allowed for b in bands):
         taps += 2
     worst = max((merge_error(b, taps) for b in bands), default=0.0)
     offsets = np.arange(taps) - (taps - 1) / 2.0
@@ -459,10 +513,11 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
     """
     us = frame["us"]
     du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
-    k0 = TAPS // 2 - 1
+    most = frame["taps"]
+    k0 = most // 2 - 1
     cre = np.zeros((1, 1, us.size), np.float32)
     cim = cre
-    g = np.zeros((1, 2, TAPS), np.float32)
+    g = np.zeros((1, 2, most), np.float32)
     per_depth = 2.0 * frame["allowed"] / max(len(depths), 1)
     taps: list[int] = []
     error = 0.0
@@ -507,7 +562,7 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
         cre, cim = re, im
-        g, worst = _filters(nodes, per_depth)
+        g, worst = _filters(nodes, per_depth, most)
         taps.insert(0, int(g.shape[2]))
         error += 0.5 * worst
         report()
@@ -562,10 +617,11 @@ def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
     return np.flatnonzero(active)
 
 
-def _reach_v(plans) -> float:
+def _reach_v(plans, taps: int = TAPS) -> float:
     """How far along ``v`` (m) the last interpolation reads, over all strips.
 
-    An image row is read from the root's children within ``TAPS / 2`` of their spacing: a
+    An image row is read from the root's children within ``taps / 2`` of their spacing
+    (``taps`` the plan's most taps): a
     pulse whose contribution steps to 0 there (an end of its fast-time window) enters the
     row through taps of up to 0.63, so the row is computed exactly (:func:`ffbp_values`).
     Deeper stages are not counted: there a step sits in a sub-image of ``2^-d`` of the
@@ -575,7 +631,7 @@ def _reach_v(plans) -> float:
     :data:`TARGET_DB`); counting every stage's reach would compute several times as many
     pixels exactly.
     """
-    return max((TAPS / 2 * levels[1][0].dv if len(levels) > 1 else 0.0) for levels, _ in plans)
+    return max((taps / 2 * levels[1][0].dv if len(levels) > 1 else 0.0) for levels, _ in plans)
 
 
 def _max_v_slope(pos, us, y) -> float:
@@ -586,20 +642,24 @@ def _max_v_slope(pos, us, y) -> float:
     return float(np.max(np.abs(dv) / np.sqrt(du * du + dv * dv + pos[:, 2:3] ** 2)))
 
 
-def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
-    """The cheapest cut of the rows in 1, 2, 4, 8 or 16 strips, by the cost model.
+def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, choices):
+    """The cheapest cut of the rows in 1, 2, 4, 8 or 16 strips and oversampling, by the cost model.
 
     A narrower strip sees the look direction turn less, which lowers the band floor and
-    lets the leaves grow; each strip pays its own interpolation margins. Returns
-    ``(cost, bounds, [(levels, n_sub), ...])``; the cost is in pixel-pulses of the leaves
-    plus :data:`_MERGE_COST` per merged sample (two children read, half the rows
-    interpolated), the root's merge counted on the image rows only.
+    lets the leaves grow; each strip pays its own interpolation margins. ``choices`` lists
+    the ``(alpha, taps)`` pairs to plan with (:func:`_oversamplings`): a lower ``alpha``
+    lets a sub-aperture whose band floor nearly fills its grid split once more, at the
+    price of wider margins (more taps). Returns ``(cost, bounds, [(levels, n_sub), ...],
+    (alpha, taps))``; the cost is in pixel-pulses of the leaves plus :data:`_MERGE_COST`
+    per merged sample (two children read, half the rows interpolated), the root's merge
+    counted on the image rows only.
     """
     n_pulses, nv_ = pos.shape[0], y.size
     centre = pos.mean(axis=0)
     dy = (y[-1] - y[0]) / (nv_ - 1)
 
-    def plan(r0: int, r1: int) -> tuple[list[list[_Node]], int]:
+    def plan(r0: int, r1: int) -> list[tuple[list[list[_Node]], int]]:
+        """The strip's plan for each of ``choices``."""
         ys = y[r0:r1]
         probes = np.array(
             [[a, b] for a in (us[0], us.mean(), us[-1]) for b in (ys[0], ys.mean(), ys[-1])]
@@ -614,9 +674,13 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
                     max(hi_j[j0], hi_j[jm], hi_j[j1 - 1]))  # fmt: skip
 
         lo, hi = band(0, n_pulses)
-        n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
-        levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1, alpha)
-        return levels, n_sub
+        out = []
+        for alpha, taps in choices:
+            n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
+            levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1,
+                           alpha, taps)  # fmt: skip
+            out.append((levels, n_sub))
+        return out
 
     def cost(levels: list[list[_Node]], rows: int) -> float:
         c = 0.0
@@ -633,12 +697,17 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, alpha):
         if nv_ // n_strips < 16:
             break
         bounds = np.linspace(0, nv_, n_strips + 1).round().astype(int)
-        plans = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-        c = sum(cost(levels, b - a) for (levels, _), a, b in
-                zip(plans, bounds[:-1], bounds[1:], strict=True))  # fmt: skip
-        if best is not None and c >= best[0]:
+        by_strip = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        here = None
+        for k, choice in enumerate(choices):
+            plans = [p[k] for p in by_strip]
+            c = sum(cost(levels, b - a) for (levels, _), a, b in
+                    zip(plans, bounds[:-1], bounds[1:], strict=True))  # fmt: skip
+            if here is None or c < here[0]:
+                here = (c, bounds, plans, choice)
+        if best is not None and here[0] >= best[0]:
             break  # more strips cost more margins than they save
-        best = (c, bounds, plans)
+        best = here
     return best
 
 
@@ -701,7 +770,7 @@ def ffbp_values(
     y_m: NDArray[np.float64],
     *,
     tile_for,
-    alpha: float = DEFAULT_ALPHA,
+    alpha: float | None = None,
     progress: ProgressCallback | None = None,
     exact_for=None,
 ) -> tuple[NDArray[np.complex128] | None, dict]:
@@ -726,8 +795,10 @@ def ffbp_values(
     tile_for : callable
         ``tile_for(positions, u_m, v_m) -> (rows, cols)``, the tile of the exact kernel
         (the leaves use its float32 arithmetic, so its bounds).
-    alpha : float
-        Oversampling of each sub-image's band, > 1.
+    alpha : float, optional
+        Oversampling of each sub-image's band, > 1, with the taps :func:`default_taps`
+        gives it. Default: the axis-aligned path plans with each of :data:`ALPHAS` and
+        keeps the cheapest plan; the rotated path uses :data:`DEFAULT_ALPHA`.
     progress : callable, optional
         ``progress("backprojection", done, total)`` per tree level (and the resampling).
     exact_for : callable, optional
@@ -740,7 +811,7 @@ def ffbp_values(
     info : dict
         ``path`` (``"axis-aligned"``, ``"rotated"`` or ``"exact"``), ``levels``,
         ``leaves``, ``leaf_pixel_pulses``, ``columns`` used, ``strips``, ``stages``,
-        ``budget_db`` (the error budget, module docstring), ``exact_pixels`` (near the
+        ``alpha`` and ``most_taps`` (the plan's oversampling and margins), ``budget_db`` (the error budget, module docstring), ``exact_pixels`` (near the
         ends of the fast-time window), ``edge_margin_m``; the rotated path adds
         ``rotation_deg``, ``rotated_grid`` (rows, columns factorised) and
         ``resample_taps``; ``"exact"`` adds ``fallback``.
@@ -748,7 +819,7 @@ def ffbp_values(
     x = np.asarray(x_m, np.float64)
     y = np.asarray(y_m, np.float64)
     pos, ref_ranges = pulses.positions, pulses.ref_ranges
-    kw = dict(tile_for=tile_for, alpha=alpha, progress=progress)
+    kw = dict(tile_for=tile_for, progress=progress)
     n_pulses = pos.shape[0]
     budget = 0.7 * n_pulses  # pixel-pulses per pixel of exact on the same pixels
     edges: list = []
@@ -761,14 +832,15 @@ def ffbp_values(
                                        margin, block=EDGE_BLOCK_ROWS)  # fmt: skip
         return cost + _EDGE_COST * n_pulses * _n_pixels(edges) <= budget * n_used
 
-    values, info = _aligned_values(pulses, x, y, budget=budget, admit=admit, **kw)
+    values, info = _aligned_values(pulses, x, y, alpha=alpha, budget=budget, admit=admit, **kw)
     if values is not None:
         for rows, cols in edges:  # exact where the window's ends make J a step along v
             values[rows, cols] = exact_for(x[cols], y[rows])
         info["exact_pixels"] = _n_pixels(edges)
         return values, info
     if exact_for is not None and x.size > 1 and y.size > 1:
-        values, info = _rotated_values(pulses, x, y, budget=budget, exact_for=exact_for, **kw)
+        values, info = _rotated_values(pulses, x, y, alpha=DEFAULT_ALPHA if alpha is None else alpha,
+                                       budget=budget, exact_for=exact_for, **kw)  # fmt: skip
         if values is not None:
             return values, info
     return None, {"path": "exact", "fallback": "exact (the factorisation would not save work here)"}
@@ -779,7 +851,9 @@ def _aligned_values(
 ):
     """The factorisation on the grid's own columns (the ``"axis-aligned"`` path).
 
-    ``None`` as values when it would cost more than ``budget`` pixel-pulses per pixel of
+    ``alpha``: the oversampling, or ``None`` for the cheapest of :data:`ALPHAS`
+    (:func:`_oversamplings`). ``None`` as values when it would cost more than ``budget``
+    pixel-pulses per pixel of
     the used columns (or when ``admit(cost, margin_m, n_used)`` is false, when given: the
     factorisation's cost, how far in range (m) the last interpolation's reach along ``v``
     spans, :func:`_reach_v` times the largest ``|d|r_j - rho| / dv|``, and the pixels of the
@@ -810,9 +884,11 @@ def _aligned_values(
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
     us = np.ascontiguousarray(x[k_lo:k_hi])
     f_lo, f_hi = pulses.band_hz
-    c_best, bounds, plans = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz, alpha)
-    margin = _reach_v(plans) * _max_v_slope(pos, us, y)
-    info.update(cost_pixel_pulses=float(c_best), edge_margin_m=margin)
+    c_best, bounds, plans, (alpha, taps) = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz,
+                                                        _oversamplings(alpha))  # fmt: skip
+    margin = _reach_v(plans, taps) * _max_v_slope(pos, us, y)
+    info.update(cost_pixel_pulses=float(c_best), edge_margin_m=margin, alpha=alpha,
+                most_taps=taps)  # fmt: skip
     n_used = y.size * us.size
     if not (c_best <= budget * n_used if admit is None else admit(c_best, margin, n_used)):
         return None, info
@@ -831,6 +907,7 @@ def _aligned_values(
         "centre": (float(centre[0]), float(centre[1]), float(centre[2] ** 2),
                    float(np.linalg.norm(centre - rho_o))),
         "allowed": FACTORISATION_SHARE * error_allowed(),
+        "taps": taps,
     }  # fmt: skip
     depths, substitutes = _depths(plans, bounds, y)
     info.update(levels=len(depths) + 1, stages=len(depths), columns=int(us.size),
