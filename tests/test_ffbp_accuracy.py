@@ -140,14 +140,16 @@ def _points(grid: ImageGrid) -> np.ndarray:
     return np.stack([x, y], axis=-1)
 
 
-def _check(traces, monkeypatch, path: str) -> None:
+def _check(traces, monkeypatch, path: str, alpha: float | None = None) -> None:
     """FFBP on N x N pixels at 0.25 m: the path, and the accuracy against the exact sum."""
     if path == "rotated":
         monkeypatch.setattr(ffbp, "_ROTATED_BUDGET", 1e3)  # run it at this size
     grid = ImageGrid.square(size_m=N * 0.25, spacing_m=0.25)
-    fast = backproject(traces, grid, method="ffbp")
+    fast = backproject(traces, grid, method="ffbp", ffbp_oversampling=alpha)
     info = fast.metadata["ffbp"]
     assert info["path"] == path
+    if alpha is not None:
+        assert info["alpha"] == alpha and info["most_taps"] == ffbp.default_taps(alpha)
     ser = _ser_db(exact_sum(traces, _points(grid)), fast.values)
     assert ser >= ffbp.TARGET_DB
     assert ser >= info["budget_db"] - ffbp.BUDGET_MARGIN_DB, (ser, info["budget_db"])
@@ -172,12 +174,21 @@ def test_ffbp_of_simulated_points_reaches_its_accuracy(look_deg, path, monkeypat
     _check(_simulated(look_deg, seed=7700 + int(look_deg)), monkeypatch, path)
 
 
+@pytest.mark.parametrize("alpha", ffbp.ALPHAS)
+def test_ffbp_reaches_its_accuracy_at_every_planned_oversampling(alpha, monkeypatch):
+    # The planner keeps the cheapest of ffbp.ALPHAS, each with the taps its budget needs
+    # (ffbp.default_taps): every one of them reaches the target.
+    _check(_simulated(0.0, seed=7700), monkeypatch, "axis-aligned", alpha)
+
+
 @pytest.fixture(scope="module")
 def gotcha(gotcha_files):
     return read_gotcha(gotcha_files)
 
 
 @pytest.mark.gotcha
-@pytest.mark.parametrize(("deg", "path"), [(0.0, "axis-aligned"), (45.0, "rotated")])
-def test_ffbp_of_gotcha_reaches_its_accuracy(gotcha, deg, path, monkeypatch):
-    _check(turned(gotcha, deg) if deg else gotcha, monkeypatch, path)
+@pytest.mark.parametrize(("deg", "path", "alpha"), [(0.0, "axis-aligned", None),
+                                                    (0.0, "axis-aligned", ffbp.ALPHAS[-1]),
+                                                    (45.0, "rotated", None)])  # fmt: skip
+def test_ffbp_of_gotcha_reaches_its_accuracy(gotcha, deg, path, alpha, monkeypatch):
+    _check(turned(gotcha, deg) if deg else gotcha, monkeypatch, path, alpha)

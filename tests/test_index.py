@@ -109,6 +109,7 @@ INDEX: dict[str, tuple[str, ...]] = {
         "test_fast_imaging.py",
         "test_ffbp_oblique.py",
         "test_ffbp_accuracy.py",
+        "test_ffbp_plan.py",
     ),  # fmt: skip
     "imaging._simd": ("test_fast_imaging.py",),
     "imaging.autofocus": ("test_autofocus.py",),
@@ -120,7 +121,12 @@ INDEX: dict[str, tuple[str, ...]] = {
     ),
     "imaging.cuda": ("test_cuda_sim.py",),
     "imaging.exact_sum": ("test_backprojection_accuracy.py",),
-    "imaging.ffbp": ("test_fast_imaging.py", "test_ffbp_oblique.py", "test_ffbp_accuracy.py"),
+    "imaging.ffbp": (
+        "test_fast_imaging.py",
+        "test_ffbp_oblique.py",
+        "test_ffbp_accuracy.py",
+        "test_ffbp_plan.py",
+    ),
     "imaging.grid": ("test_imaging.py",),
     "imaging.peaks": ("test_imaging.py", "test_analysis.py"),
     "imaging.point_response": ("test_point_response.py",),

@@ -1,9 +1,11 @@
 """Compiled kernels of fast factorised backprojection (:mod:`.ffbp`).
 
 A tree level is one parallel region: its leaves (exact backprojection tiles, demodulated as
-they are written) and its merges (parents from the level below) are independent tasks of
-one ``prange``. Each region ends in a barrier, which on a busy machine waits for a
-descheduled thread, so the number of regions, not only the arithmetic, sets the time.
+they are written) and its merges (parents from the level below) are independent tasks,
+dealt by the caller into one list per thread of about equal work (numba's ``prange`` hands
+each thread a contiguous, equal share of the iterations, whatever their cost). Each region
+ends in a barrier, which on a busy machine waits for a descheduled thread, so the number
+of regions, not only the arithmetic, sets the time.
 
 Sub-images are ``(images, rows v, columns u)`` float32 planes ``re``, ``im``; image ``i``
 has its own row grid ``v0[i] + r dv[i]``, ``r < nv[i]``, and all share the columns ``us``.
@@ -140,11 +142,44 @@ def _leaf_tile(
             oim[r0 + r, c0 + k] = b * cs - a * sn
 
 
+@numba.njit(fastmath=_FASTMATH, cache=True)
+def _task(
+    task, n_leaf_tasks, n_ty, n_tx, n_rows, nx, re, im, tab, starts, stops, ant_x, ant_y,
+    ant_z2, ref, x0, dx, v0, dv, nv, idx_scale, idx_offset, hi, quarter_scale, tile_rows,
+    tile_cols, cu, cv, cz2, rref, kids, cre, cim, k0, ratio, g, lanes_v,
+):  # pragma: no cover - compiled  # fmt: skip
+    """Task ``task`` of :func:`level`: a leaf tile or a merged row (nothing past ``nv``)."""
+    if task < n_leaf_tasks:
+        i = task // (n_ty * n_tx)
+        tile = task % (n_ty * n_tx)
+        r0 = (tile // n_tx) * tile_rows
+        if r0 >= nv[i]:
+            return
+        c0 = (tile % n_tx) * tile_cols
+        nr = min(nv[i], r0 + tile_rows) - r0
+        nc = min(nx, c0 + tile_cols) - c0
+        _leaf_tile(
+            tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, v0[i], dv[i],
+            r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv, cz2, rref,
+            re[i], im[i], lanes_v,
+        )  # fmt: skip
+    else:
+        p = (task - n_leaf_tasks) // n_rows
+        m = (task - n_leaf_tasks) % n_rows
+        q = starts.size + p
+        if m >= nv[q]:
+            return
+        dre = re[q, m]
+        dim = im[q, m]
+        _merge_row(dre, dim, m, cre[kids[p, 0]], cim[kids[p, 0]], cre[kids[p, 1]],
+                   cim[kids[p, 1]], k0, ratio, g[kids[p, 0]], g[kids[p, 1]])  # fmt: skip
+
+
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
 def level(
     re, im, tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale,
     idx_offset, n_up, quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim,
-    k0, ratio, g, lanes_v,
+    k0, ratio, g, lanes_v, order, group_starts,
 ):  # pragma: no cover - compiled  # fmt: skip
     """One tree level: leaves ``0..L-1`` and parents ``L..L+P-1`` of ``re``, ``im``, in place.
 
@@ -155,6 +190,10 @@ def level(
     ``L + p`` (``p < P = kids.shape[0]``) is the sum of
     children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
     ``g[child]``) resampled to its rows (:func:`_add_child`); one task per row.
+
+    Task ``t``: leaf tile ``t`` (``t < L n_ty n_tx``, leaf-major, tiles row-major) or merged
+    row ``t - L n_ty n_tx`` (parent-major). Group ``k`` of the parallel loop runs the tasks
+    ``order[group_starts[k]:group_starts[k + 1]]`` in turn (:func:`~.ffbp._schedule`).
     """
     n_leaves = starts.size
     nx = re.shape[2]
@@ -163,31 +202,14 @@ def level(
     n_leaf_tasks = n_leaves * n_ty * n_tx
     n_rows = re.shape[1]
     hi = np.float32(n_up)
-    for task in numba.prange(n_leaf_tasks + kids.shape[0] * n_rows):
-        if task < n_leaf_tasks:
-            i = task // (n_ty * n_tx)
-            tile = task % (n_ty * n_tx)
-            r0 = (tile // n_tx) * tile_rows
-            if r0 >= nv[i]:
-                continue
-            c0 = (tile % n_tx) * tile_cols
-            nr = min(nv[i], r0 + tile_rows) - r0
-            nc = min(nx, c0 + tile_cols) - c0
-            _leaf_tile(
-                tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, v0[i], dv[i],
-                r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv, cz2, rref,
-                re[i], im[i], lanes_v,
+    for group in numba.prange(group_starts.size - 1):
+        for at in range(group_starts[group], group_starts[group + 1]):
+            _task(
+                order[at], n_leaf_tasks, n_ty, n_tx, n_rows, nx, re, im, tab, starts, stops,
+                ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale, idx_offset, hi,
+                quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim, k0,
+                ratio, g, lanes_v,
             )  # fmt: skip
-        else:
-            p = (task - n_leaf_tasks) // n_rows
-            m = (task - n_leaf_tasks) % n_rows
-            q = n_leaves + p
-            if m >= nv[q]:
-                continue
-            dre = re[q, m]
-            dim = im[q, m]
-            _merge_row(dre, dim, m, cre[kids[p, 0]], cim[kids[p, 0]], cre[kids[p, 1]],
-                       cim[kids[p, 1]], k0, ratio, g[kids[p, 0]], g[kids[p, 1]])  # fmt: skip
 
 
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)

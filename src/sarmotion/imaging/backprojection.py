@@ -139,7 +139,11 @@ def _run_numba(
 
 
 def _run_ffbp(
-    st: Setup, traces: Traces, grid: ImageGrid, alpha: float | None, progress: ProgressCallback | None
+    st: Setup,
+    traces: Traces,
+    grid: ImageGrid,
+    alpha: float | None,
+    progress: ProgressCallback | None,
 ) -> tuple[NDArray[np.complex128], str, dict]:
     """Fast factorised backprojection (:mod:`.ffbp`).
 

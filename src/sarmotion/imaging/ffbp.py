@@ -497,6 +497,43 @@ def _planes(slot: int, shape: tuple[int, int, int]) -> tuple[NDArray, NDArray]:
     return buf[0, :n].reshape(shape), buf[1, :n].reshape(shape)
 
 
+def _task_costs(pulses, leaf_rows, merged_rows, n_rows, n_cols, tile) -> NDArray[np.float64]:
+    """Cost (pixel-pulses) of each task of :func:`._ffbp_kernels.level`, in its task order.
+
+    Leaf tiles (leaf-major, tiles row-major): pulses times the tile's pixels on the leaf's
+    rows; merged rows (parent-major, ``n_rows`` per parent): :data:`_MERGE_COST` per
+    sample on the parent's rows. Tasks past a node's rows cost 0 (they do nothing).
+    """
+    tile_rows, tile_cols = tile
+    r0 = np.arange(-(-n_rows // tile_rows)) * tile_rows
+    c0 = np.arange(-(-n_cols // tile_cols)) * tile_cols
+    nr = np.clip(np.asarray(leaf_rows)[:, None] - r0[None, :], 0, tile_rows)
+    nc = np.minimum(n_cols - c0, tile_cols)
+    leaf = np.asarray(pulses, np.float64)[:, None, None] * nr[:, :, None] * nc[None, None, :]
+    rows = np.arange(n_rows)[None, :] < np.asarray(merged_rows)[:, None]
+    return np.concatenate([leaf.ravel(), np.where(rows, _MERGE_COST * n_cols, 0.0).ravel()])
+
+
+def _deal(costs: NDArray[np.float64], n_groups: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The tasks in ``n_groups`` lists of about equal cost: ``(order, group_starts)``.
+
+    numba's ``prange`` gives each thread a contiguous, equal count of iterations whatever
+    their cost (``parallel_chunksize`` does not change that here), so a level whose leaf
+    tiles come before its cheap merged rows would run on one thread. The tasks are dealt
+    by decreasing cost in a snake (groups ``0 .. G-1``, then ``G-1 .. 0``, ...): the groups'
+    totals differ by at most the dearest task. Group ``k`` is
+    ``order[group_starts[k]:group_starts[k + 1]]``; tasks of cost 0 are left out.
+    """
+    idx = np.flatnonzero(costs > 0.0)
+    idx = idx[np.argsort(-costs[idx], kind="stable")]
+    turn, pos = np.divmod(np.arange(idx.size), n_groups)
+    group = np.where(turn % 2 == 0, pos, n_groups - 1 - pos)
+    by_group = np.argsort(group, kind="stable")
+    counts = np.bincount(group, minlength=n_groups)
+    return (np.ascontiguousarray(idx[by_group], np.int64),
+            np.concatenate([[0], np.cumsum(counts)]).astype(np.int64))  # fmt: skip
+
+
 def _rows(grid: tuple[float, float, int]) -> NDArray[np.float64]:
     """The rows ``v`` (m) of a sub-image grid ``(v0, dv, nv)``."""
     v0, dv, nv = grid
@@ -549,15 +586,16 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         starts = np.array([n.j0 for n in leaves], np.int64)
         stops = np.array([n.j1 for n in leaves], np.int64)
         kids = np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2)
-        work = sum((n.j1 - n.j0) * n.nv for n in leaves) * us.size
-        work += _MERGE_COST * sum(n.nv for n in split) * us.size
-        with _threads_for(work), numba.parallel_chunksize(1):  # tiles, rows one at a time
+        nv = np.array([n.nv for n in nodes], np.int64)
+        costs = _task_costs(stops - starts, nv[: len(leaves)], nv[len(leaves) :], n_rows,
+                            us.size, tile)  # fmt: skip
+        with _threads_for(float(costs.sum())):
+            order, group_starts = _deal(costs, numba.get_num_threads())
             _kernels.level(
                 re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
-                np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]),
-                np.array([n.nv for n in nodes], np.int64), *frame["constants"][:2],
-                frame["n_up"], frame["constants"][2], tile[0], tile[1], *frame["centre"], kids,
-                cre, cim, k0, 2, g, lanes_v,
+                np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]), nv,
+                *frame["constants"][:2], frame["n_up"], frame["constants"][2], tile[0], tile[1],
+                *frame["centre"], kids, cre, cim, k0, 2, g, lanes_v, order, group_starts,
             )  # fmt: skip
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
@@ -811,8 +849,9 @@ def ffbp_values(
     info : dict
         ``path`` (``"axis-aligned"``, ``"rotated"`` or ``"exact"``), ``levels``,
         ``leaves``, ``leaf_pixel_pulses``, ``columns`` used, ``strips``, ``stages``,
-        ``alpha`` and ``most_taps`` (the plan's oversampling and margins), ``budget_db`` (the error budget, module docstring), ``exact_pixels`` (near the
-        ends of the fast-time window), ``edge_margin_m``; the rotated path adds
+        ``alpha`` and ``most_taps`` (the plan's oversampling and margins), ``budget_db``
+        (the error budget, module docstring), ``exact_pixels`` (near the ends of the
+        fast-time window), ``edge_margin_m``; the rotated path adds
         ``rotation_deg``, ``rotated_grid`` (rows, columns factorised) and
         ``resample_taps``; ``"exact"`` adds ``fallback``.
     """
@@ -839,8 +878,9 @@ def ffbp_values(
         info["exact_pixels"] = _n_pixels(edges)
         return values, info
     if exact_for is not None and x.size > 1 and y.size > 1:
-        values, info = _rotated_values(pulses, x, y, alpha=DEFAULT_ALPHA if alpha is None else alpha,
-                                       budget=budget, exact_for=exact_for, **kw)  # fmt: skip
+        turned = DEFAULT_ALPHA if alpha is None else alpha
+        values, info = _rotated_values(pulses, x, y, alpha=turned, budget=budget,
+                                       exact_for=exact_for, **kw)  # fmt: skip
         if values is not None:
             return values, info
     return None, {"path": "exact", "fallback": "exact (the factorisation would not save work here)"}

@@ -1,0 +1,140 @@
+"""The shape of the FFBP tree and how its work is shared among threads.
+
+:mod:`sarmotion.imaging.ffbp` splits a sub-aperture at its midpoint when both halves'
+bands fit the children's grid, else where the two bands are most nearly equal
+(:func:`~sarmotion.imaging.ffbp._halves`); it plans with each oversampling of
+:data:`~sarmotion.imaging.ffbp.ALPHAS` (each with the taps its error budget needs) and
+keeps the cheapest plan by its cost model; each tree level's tasks are dealt into one list
+per thread of about equal cost (:func:`~sarmotion.imaging.ffbp._deal`). Here:
+
+- the split rule on a band model whose floor grows along the aperture: the balanced split
+  is the narrowest widest child, and it lets a node split that the midpoint cannot;
+- the planner keeps the cheapest of the oversamplings, and an image planned with each
+  oversampling of :data:`~sarmotion.imaging.ffbp.ALPHAS` reaches
+  :data:`~sarmotion.imaging.ffbp.TARGET_DB` against exact backprojection;
+- the deal: every task once, group totals within the dearest task of each other, and a
+  level run in several groups equal (bit for bit) to the same level in one group.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sarmotion.core import Trajectory
+from sarmotion.imaging import ImageGrid, backproject, ffbp
+from sarmotion.simulation import PointTarget, Scene, simulate
+
+
+def _band_model(n: int, slope: float, floor0: float, floor1: float):
+    """Pulse ``j``'s band: centre ``slope j``, width rising from ``floor0`` to ``floor1``.
+
+    The sub-aperture ``j0:j1`` spans the union of its pulses' bands (as
+    :func:`~sarmotion.imaging.ffbp._strip_plans` reads it: first, middle and last pulse).
+    """
+    j = np.arange(n)
+    width = floor0 + (floor1 - floor0) * j / (n - 1)
+    lo, hi = slope * j - width / 2, slope * j + width / 2
+
+    def band(j0: int, j1: int) -> tuple[float, float]:
+        jm = (j0 + j1 - 1) // 2
+        return min(lo[j0], lo[jm], lo[j1 - 1]), max(hi[j0], hi[jm], hi[j1 - 1])
+
+    return band
+
+
+def _extent(band, j0: int, j1: int) -> float:
+    lo, hi = band(j0, j1)
+    return hi - lo
+
+
+def test_halves_split_at_the_midpoint_when_both_halves_fit():
+    band = _band_model(400, 0.01, 0.05, 0.05)  # no floor change: the halves are alike
+    kids = ffbp._halves(ffbp._Node(0, 400), band, width=2.5)
+    assert [(k.j0, k.j1) for k in kids] == [(0, 200), (200, 400)]
+    for k in kids:  # each child carries its own band's centre and half-width
+        lo, hi = band(k.j0, k.j1)
+        assert (k.centre, k.half) == pytest.approx((0.5 * (lo + hi), 0.5 * (hi - lo)))
+
+
+def test_halves_balance_the_bands_when_the_midpoint_does_not_fit():
+    # The floor grows tenfold along the aperture (a look turning away from u): the second
+    # half's band is the wider, and a width between the balanced split's and the
+    # midpoint's widest child admits only the balanced split.
+    n = 400
+    band = _band_model(n, 0.01, 0.02, 0.4)
+    mid = n // 2
+    at_mid = max(_extent(band, 0, mid), _extent(band, mid, n))
+    widest = {m: max(_extent(band, 0, m), _extent(band, m, n)) for m in range(2, n - 1)}
+    best = min(widest.values())
+    assert best < at_mid
+    width = 0.5 * (best + at_mid)
+    kids = ffbp._halves(ffbp._Node(0, n), band, width)
+    m = kids[0].j1
+    assert kids[0].j0 == 0 and kids[1].j0 == m and kids[1].j1 == n
+    assert m > mid  # the first half, of the smaller floor, takes more pulses
+    assert widest[m] == pytest.approx(best)  # the narrowest widest child of any split
+    assert max(_extent(band, k.j0, k.j1) for k in kids) <= width
+    # Narrower than any split can give: a leaf.
+    assert ffbp._halves(ffbp._Node(0, n), band, 0.99 * best) is None
+
+
+def _look_off_u(n_pixels: int = 256, spacing_m: float = 0.2):
+    """Points seen over 4 degrees from 0 to 4 degrees off ``x``, and an ``n`` x ``n`` grid.
+
+    The look direction turns away from the grid's ``u = x`` axis along the aperture, so the
+    band floor grows along it (the module docstring's floor): the case the balanced split
+    and the lower oversampling serve.
+    """
+    targets = [PointTarget(position_m=(3.1, -7.7)),
+               PointTarget(position_m=(-12.0, 9.4), reflectivity=0.6j)]  # fmt: skip
+    trajectory = Trajectory.circular(aperture_deg=4.0, centre_azimuth_deg=2.0)
+    tr = simulate(Scene(name="plan", targets=targets), trajectory=trajectory).traces
+    return tr, ImageGrid.square(size_m=n_pixels * spacing_m, spacing_m=spacing_m)
+
+
+def _ser_db(ref: np.ndarray, x: np.ndarray) -> float:
+    return 20.0 * math.log10(np.linalg.norm(ref) / np.linalg.norm(x - ref))
+
+
+def test_the_planner_keeps_the_cheapest_oversampling():
+    tr, grid = _look_off_u()
+    chosen = backproject(tr, grid, method="ffbp").metadata["ffbp"]
+    costs = {}
+    exact = backproject(tr, grid).values
+    for alpha in ffbp.ALPHAS:
+        img = backproject(tr, grid, method="ffbp", ffbp_oversampling=alpha)
+        info = img.metadata["ffbp"]
+        assert info["path"] == "axis-aligned"
+        assert info["most_taps"] == ffbp.default_taps(alpha)  # the taps its budget needs
+        costs[alpha] = info["cost_pixel_pulses"]
+        # Every candidate meets the target (each with its own derived taps).
+        assert _ser_db(exact, img.values) >= ffbp.TARGET_DB
+    assert chosen["cost_pixel_pulses"] == min(costs.values())
+    assert chosen["alpha"] == min(costs, key=costs.get)
+
+
+def test_deal_gives_every_task_once_in_groups_of_about_equal_cost():
+    rng = np.random.default_rng(9090)
+    costs = np.concatenate([rng.uniform(50.0, 200.0, 24), np.full(150, 4.0), np.zeros(10)])
+    rng.shuffle(costs)
+    for n_groups in (1, 2, 3, 8):
+        order, starts = ffbp._deal(costs, n_groups)
+        assert starts[0] == 0 and starts[-1] == order.size and np.all(np.diff(starts) >= 0)
+        np.testing.assert_array_equal(np.sort(order), np.flatnonzero(costs > 0))
+        totals = [costs[order[a:b]].sum() for a, b in zip(starts[:-1], starts[1:], strict=True)]
+        assert max(totals) - min(totals) <= costs.max()
+
+
+def test_a_level_in_several_groups_equals_it_in_one(monkeypatch):
+    # Each task writes its own tile or row: the groups change who computes, not what.
+    tr, grid = _look_off_u(96, 0.25)
+    deal = ffbp._deal
+    images = []
+    for n_groups in (1, 3):
+        monkeypatch.setattr(ffbp, "_deal", lambda costs, _, n=n_groups: deal(costs, n))
+        images.append(backproject(tr, grid, method="ffbp", ffbp_oversampling=1.3))
+    assert images[0].metadata["ffbp"]["levels"] >= 3
+    np.testing.assert_array_equal(images[0].values, images[1].values)
