@@ -4,16 +4,17 @@
 bands fit the children's grid, else where the two bands are most nearly equal
 (:func:`~sarmotion.imaging.ffbp._halves`); it plans with each oversampling of
 :data:`~sarmotion.imaging.ffbp.ALPHAS` (each with the taps its error budget needs) and
-keeps the cheapest plan by its cost model; each tree level's tasks are dealt into one list
-per thread of about equal cost (:func:`~sarmotion.imaging.ffbp._deal`). Here:
+keeps the cheapest plan by its cost model; each tree level's tasks are
+taken by the threads one at a time, dearest first
+(:func:`~sarmotion.imaging.ffbp._task_order`). Here:
 
 - the split rule on a band model whose floor grows along the aperture: the balanced split
   is the narrowest widest child, and it lets a node split that the midpoint cannot;
 - the planner keeps the cheapest of the oversamplings, and an image planned with each
   oversampling of :data:`~sarmotion.imaging.ffbp.ALPHAS` reaches
   :data:`~sarmotion.imaging.ffbp.TARGET_DB` against exact backprojection;
-- the deal: every task once, group totals within the dearest task of each other, and a
-  level run in several groups equal (bit for bit) to the same level in one group.
+- the tasks of a level: their costs follow the cost model, the threads take each once,
+  dearest first, and a level is the same (bit for bit) on one worker loop or several.
 """
 
 from __future__ import annotations
@@ -116,25 +117,42 @@ def test_the_planner_keeps_the_cheapest_oversampling():
     assert chosen["alpha"] == min(costs, key=costs.get)
 
 
-def test_deal_gives_every_task_once_in_groups_of_about_equal_cost():
+def test_tasks_are_taken_dearest_first_each_once():
     rng = np.random.default_rng(9090)
     costs = np.concatenate([rng.uniform(50.0, 200.0, 24), np.full(150, 4.0), np.zeros(10)])
     rng.shuffle(costs)
-    for n_groups in (1, 2, 3, 8):
-        order, starts = ffbp._deal(costs, n_groups)
-        assert starts[0] == 0 and starts[-1] == order.size and np.all(np.diff(starts) >= 0)
-        np.testing.assert_array_equal(np.sort(order), np.flatnonzero(costs > 0))
-        totals = [costs[order[a:b]].sum() for a, b in zip(starts[:-1], starts[1:], strict=True)]
-        assert max(totals) - min(totals) <= costs.max()
+    order = ffbp._task_order(costs)
+    np.testing.assert_array_equal(np.sort(order), np.flatnonzero(costs > 0))
+    assert np.all(np.diff(costs[order]) <= 0)
 
 
-def test_a_level_in_several_groups_equals_it_in_one(monkeypatch):
-    # Each task writes its own tile or row: the groups change who computes, not what.
+def test_task_costs_follow_the_cost_model():
+    # Two leaves (3 and 5 pulses) on 10 and 7 of 12 rows, tiles of 8 x 4 over 6 columns;
+    # one parent merged on 9 rows.
+    costs = ffbp._task_costs(np.array([3, 5]), np.array([10, 7]), np.array([9]), 12, 6, (8, 4))
+    leaf = costs[: 2 * 2 * 2].reshape(2, 2, 2)  # (leaf, tile row, tile column)
+    np.testing.assert_array_equal(leaf[0], 3 * np.outer([8, 2], [4, 2]))
+    np.testing.assert_array_equal(leaf[1], 5 * np.outer([7, 0], [4, 2]))
+    np.testing.assert_array_equal(costs[8:], np.r_[np.full(9, ffbp._MERGE_COST * 6), [0, 0, 0]])
+
+
+def test_a_level_is_the_same_whichever_thread_takes_each_task(monkeypatch):
+    # Each task writes its own tile or row: the workers change who computes, not what.
     tr, grid = _look_off_u(96, 0.25)
-    deal = ffbp._deal
-    images = []
-    for n_groups in (1, 3):
-        monkeypatch.setattr(ffbp, "_deal", lambda costs, _, n=n_groups: deal(costs, n))
-        images.append(backproject(tr, grid, method="ffbp", ffbp_oversampling=1.3))
-    assert images[0].metadata["ffbp"]["levels"] >= 3
-    np.testing.assert_array_equal(images[0].values, images[1].values)
+    level = ffbp._kernels.level
+    runs = []
+
+    def twice(*args):
+        *head, order, counter, _ = args
+        for workers in (1, 3):  # three loops on however many threads there are
+            re, im = head[0].copy(), head[1].copy()
+            level(re, im, *head[2:], order, np.zeros(1, np.int64), workers)
+            runs.append((re, im))
+        level(*args)
+
+    monkeypatch.setattr(ffbp._kernels, "level", twice)
+    img = backproject(tr, grid, method="ffbp", ffbp_oversampling=1.3)
+    assert img.metadata["ffbp"]["levels"] >= 3 and len(runs) >= 4
+    for (re1, im1), (re3, im3) in zip(runs[::2], runs[1::2], strict=True):
+        np.testing.assert_array_equal(re1, re3)
+        np.testing.assert_array_equal(im1, im3)

@@ -2,10 +2,13 @@
 
 A tree level is one parallel region: its leaves (exact backprojection tiles, demodulated as
 they are written) and its merges (parents from the level below) are independent tasks,
-dealt by the caller into one list per thread of about equal work (numba's ``prange`` hands
-each thread a contiguous, equal share of the iterations, whatever their cost). Each region
-ends in a barrier, which on a busy machine waits for a descheduled thread, so the number
-of regions, not only the arithmetic, sets the time.
+taken one at a time by each thread from a shared counter (:func:`_take`), dearest first.
+numba's ``prange`` would hand each thread a contiguous, equal count of iterations whatever
+their cost (``parallel_chunksize`` does not change that here): the leaf tiles, listed
+first, would all fall to one thread. Taking tasks from a counter also keeps a descheduled
+thread from holding up the others by more than its current task. Each region ends in a
+barrier, which on a busy machine waits for a descheduled thread, so the number of
+regions, not only the arithmetic, sets the time.
 
 Sub-images are ``(images, rows v, columns u)`` float32 planes ``re``, ``im``; image ``i``
 has its own row grid ``v0[i] + r dv[i]``, ``r < nv[i]``, and all share the columns ``us``.
@@ -19,6 +22,8 @@ import math
 
 import numba
 import numpy as np
+from numba.core import cgutils, types
+from numba.extending import intrinsic
 
 from ..core.spectral import quarter_turns
 from ._simd import LANES, tile_pulses
@@ -29,6 +34,27 @@ from ._simd import LANES, tile_pulses
 SIMD_VERSION = "hermite-float32-planes-window-5"
 
 _FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
+
+
+@intrinsic
+def _take(typingctx, counter):
+    """``counter[0] += 1`` as one atomic step; returns the value before it (int64).
+
+    ``counter`` is a 1-d int64 array shared by the threads of a parallel region: each call
+    hands out the next rank once, whichever thread asks.
+    """
+    if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
+        return None
+
+    def codegen(context, builder, signature, args):
+        aryty = signature.args[0]
+        ary = context.make_array(aryty)(context, builder, args[0])
+        zero = context.get_constant(types.intp, 0)
+        ptr = cgutils.get_item_pointer(context, builder, aryty, ary, [zero])
+        one = context.get_constant(types.int64, 1)
+        return builder.atomic_rmw("add", ptr, one, "monotonic")
+
+    return types.int64(counter), codegen
 
 
 @numba.njit(fastmath=_FASTMATH, inline="always")
@@ -179,7 +205,7 @@ def _task(
 def level(
     re, im, tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale,
     idx_offset, n_up, quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim,
-    k0, ratio, g, lanes_v, order, group_starts,
+    k0, ratio, g, lanes_v, order, counter, workers,
 ):  # pragma: no cover - compiled  # fmt: skip
     """One tree level: leaves ``0..L-1`` and parents ``L..L+P-1`` of ``re``, ``im``, in place.
 
@@ -192,8 +218,10 @@ def level(
     ``g[child]``) resampled to its rows (:func:`_add_child`); one task per row.
 
     Task ``t``: leaf tile ``t`` (``t < L n_ty n_tx``, leaf-major, tiles row-major) or merged
-    row ``t - L n_ty n_tx`` (parent-major). Group ``k`` of the parallel loop runs the tasks
-    ``order[group_starts[k]:group_starts[k + 1]]`` in turn (:func:`~.ffbp._schedule`).
+    row ``t - L n_ty n_tx`` (parent-major). ``workers`` loops (one per thread) take the
+    tasks ``order[counter[0]]``, ``counter[0]`` advanced atomically (:func:`_take`; start it
+    at 0), until ``order`` is done: a task's place in ``order`` is when it starts
+    (:func:`~.ffbp._task_order`: dearest first).
     """
     n_leaves = starts.size
     nx = re.shape[2]
@@ -202,8 +230,11 @@ def level(
     n_leaf_tasks = n_leaves * n_ty * n_tx
     n_rows = re.shape[1]
     hi = np.float32(n_up)
-    for group in numba.prange(group_starts.size - 1):
-        for at in range(group_starts[group], group_starts[group + 1]):
+    for _ in numba.prange(workers):
+        while True:
+            at = _take(counter)
+            if at >= order.size:
+                break
             _task(
                 order[at], n_leaf_tasks, n_ty, n_tx, n_rows, nx, re, im, tab, starts, stops,
                 ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale, idx_offset, hi,

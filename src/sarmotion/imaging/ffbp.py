@@ -28,8 +28,11 @@ evaluated bottom-up:
   its rows on the image rows are formed (its children's rows added, or interpolated when
   ``n`` is 1), then remodulated pixel by pixel.
 
-Leaves stop where halving the aperture no longer halves the band (the floor dominates).
-The rows are cut in strips (1 to 16, the cheapest by a cost model): a narrower strip sees
+A node is split at its pulses' midpoint when both halves' bands fit the children's grid,
+else where the two halves' bands are most nearly equal (the floor grows along an aperture
+that turns away from ``u``: the half nearer ``u`` then takes more pulses), and is a leaf
+where no split fits (the floor dominates) or where two leaves and a merge would cost
+more. The rows are cut in strips (1 to 16, the cheapest by a cost model): a narrower strip sees
 the look direction turn less, so its floor is lower. The floor also grows with the angle
 between the look direction and the ``u`` axis (the range band leaks into ``v``): on the
 image's own columns the factorisation pays off within a few degrees of a grid axis (GOTCHA's
@@ -55,10 +58,12 @@ window ends within the last interpolation's reach along ``v`` (:func:`_reach_v`)
 rotated path, also within the resampling's reach along ``u`` (:func:`_window_edge_blocks`).
 
 Evaluation: the nodes of all strips at one depth of the tree are one parallel region
-(:mod:`._ffbp_kernels`): leaf tiles and merged rows are tasks of the same loop, and the
-image rows of every strip one last region. Every region ends in a barrier, which on a busy
-machine waits for a descheduled thread, so the number of regions (about the depth, 7 at
-2048 x 2048) is kept to one per level.
+(:mod:`._ffbp_kernels`): leaf tiles and merged rows are tasks of the same loop, which the
+threads take one at a time from a shared counter, dearest first (:func:`_task_order`;
+numba's ``prange`` would give each thread an equal, contiguous count of iterations
+whatever their cost), and the image rows of every strip one last region. Every region
+ends in a barrier, which on a busy machine waits for a descheduled thread, so the number
+of regions (about the depth, 7 at 2048 x 2048) is kept to one per level.
 
 Error budget. The defaults are chosen so that the image is at least :data:`TARGET_DB`
 (55 dB) from the exact sum (:func:`~sarmotion.imaging.exact_sum.exact_sum`, no
@@ -85,11 +90,15 @@ The allowed error is ``E = 10^(-(TARGET_DB + BUDGET_MARGIN_DB) / 10)``: the fact
 gets :data:`FACTORISATION_SHARE` of it, an equal share ``2 * 0.8 E / S`` per depth, and each
 depth the fewest even taps (4 to :data:`TAPS`) that keep all its nodes' ``e_T(b)`` within
 that share (:func:`_filters`; bands far below ``1 / (2 alpha)`` near the root take 4 to 8
-taps, the leaves' parents 12 to 14); the resampling gets the rest, with the fewest taps
-:data:`RESAMPLE_TAPS` = 10 x 6 that do so at the widest bands. :data:`TAPS` = 14 is the cap
-that meets the factorisation's share when every one of :data:`MAX_STAGES` depths sits at
-the widest band (:func:`default_taps`). ``alpha`` stays 1.4: raising it costs every leaf
-and merge in proportion, more taps cost the merges only. ``info["budget_db"]`` is the
+taps, the leaves' parents 12 to 18); the resampling gets the rest, with the fewest taps
+:data:`RESAMPLE_TAPS` = 10 x 6 that do so at the widest bands. The cap, which also sets
+every sub-image's margins, is :func:`default_taps` of ``alpha``: the fewest taps that meet
+the factorisation's share when every one of :data:`MAX_STAGES` depths sits at the widest
+band ``1 / (2 alpha)`` (:data:`TAPS` = 14 at ``alpha`` = 1.4, 18 at 1.3). The axis-aligned
+path plans with each ``alpha`` of :data:`ALPHAS` (1.4 and 1.3) and keeps the cheaper plan
+by its cost model: raising ``alpha`` costs every leaf and merge in proportion; lowering it
+costs wider margins and longer filters, and pays where a band floor that nearly fills a
+sub-image's grid would stop the tree. ``info["budget_db"]`` is the
 image's own ``-10 log10 (E_f + e'_u + e'_v)``, ``info["taps"]`` the taps by depth. Real
 sub-images do not fill their planned band evenly (it is the union over the sub-aperture's
 pulses and the whole region, the band edges reached only at its corners), so images lie
@@ -514,24 +523,15 @@ def _task_costs(pulses, leaf_rows, merged_rows, n_rows, n_cols, tile) -> NDArray
     return np.concatenate([leaf.ravel(), np.where(rows, _MERGE_COST * n_cols, 0.0).ravel()])
 
 
-def _deal(costs: NDArray[np.float64], n_groups: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """The tasks in ``n_groups`` lists of about equal cost: ``(order, group_starts)``.
+def _task_order(costs: NDArray[np.float64]) -> NDArray[np.int64]:
+    """The tasks of cost > 0, dearest first: the order the threads take them in.
 
-    numba's ``prange`` gives each thread a contiguous, equal count of iterations whatever
-    their cost (``parallel_chunksize`` does not change that here), so a level whose leaf
-    tiles come before its cheap merged rows would run on one thread. The tasks are dealt
-    by decreasing cost in a snake (groups ``0 .. G-1``, then ``G-1 .. 0``, ...): the groups'
-    totals differ by at most the dearest task. Group ``k`` is
-    ``order[group_starts[k]:group_starts[k + 1]]``; tasks of cost 0 are left out.
+    Each thread takes the next task when it is free (:func:`._ffbp_kernels.level`): taken
+    dearest first, the threads finish within about the cheapest tasks' cost of each other
+    (longest-processing-time-first scheduling), the merged rows filling in at the end.
     """
     idx = np.flatnonzero(costs > 0.0)
-    idx = idx[np.argsort(-costs[idx], kind="stable")]
-    turn, pos = np.divmod(np.arange(idx.size), n_groups)
-    group = np.where(turn % 2 == 0, pos, n_groups - 1 - pos)
-    by_group = np.argsort(group, kind="stable")
-    counts = np.bincount(group, minlength=n_groups)
-    return (np.ascontiguousarray(idx[by_group], np.int64),
-            np.concatenate([[0], np.cumsum(counts)]).astype(np.int64))  # fmt: skip
+    return np.ascontiguousarray(idx[np.argsort(-costs[idx], kind="stable")], np.int64)
 
 
 def _rows(grid: tuple[float, float, int]) -> NDArray[np.float64]:
@@ -590,12 +590,12 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         costs = _task_costs(stops - starts, nv[: len(leaves)], nv[len(leaves) :], n_rows,
                             us.size, tile)  # fmt: skip
         with _threads_for(float(costs.sum())):
-            order, group_starts = _deal(costs, numba.get_num_threads())
             _kernels.level(
                 re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
                 np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]), nv,
                 *frame["constants"][:2], frame["n_up"], frame["constants"][2], tile[0], tile[1],
-                *frame["centre"], kids, cre, cim, k0, 2, g, lanes_v, order, group_starts,
+                *frame["centre"], kids, cre, cim, k0, 2, g, lanes_v, _task_order(costs),
+                np.zeros(1, np.int64), numba.get_num_threads(),
             )  # fmt: skip
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
