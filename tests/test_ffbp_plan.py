@@ -128,12 +128,12 @@ def test_tasks_are_taken_dearest_first_each_once():
 
 def test_task_costs_follow_the_cost_model():
     # Two leaves (3 and 5 pulses) on 10 and 7 of 12 rows, tiles of 8 x 4 over 6 columns;
-    # one parent merged on 9 rows.
-    costs = ffbp._task_costs(np.array([3, 5]), np.array([10, 7]), np.array([9]), 12, 6, (8, 4))
+    # one parent merged on 9 rows, in blocks of 4 rows.
+    costs = ffbp._task_costs(np.array([3, 5]), np.array([10, 7]), np.array([9]), 12, 6, (8, 4), 4)
     leaf = costs[: 2 * 2 * 2].reshape(2, 2, 2)  # (leaf, tile row, tile column)
     np.testing.assert_array_equal(leaf[0], 3 * np.outer([8, 2], [4, 2]))
     np.testing.assert_array_equal(leaf[1], 5 * np.outer([7, 0], [4, 2]))
-    np.testing.assert_array_equal(costs[8:], np.r_[np.full(9, ffbp._MERGE_COST * 6), [0, 0, 0]])
+    np.testing.assert_array_equal(costs[8:], ffbp._MERGE_COST * 6 * np.array([4, 4, 1]))
 
 
 def test_a_level_is_the_same_whichever_thread_takes_each_task(monkeypatch):
@@ -143,10 +143,10 @@ def test_a_level_is_the_same_whichever_thread_takes_each_task(monkeypatch):
     runs = []
 
     def twice(*args):
-        *head, order, counter, _ = args
+        *head, order, counter, _, block = args
         for workers in (1, 3):  # three loops on however many threads there are
             re, im = head[0].copy(), head[1].copy()
-            level(re, im, *head[2:], order, np.zeros(1, np.int64), workers)
+            level(re, im, *head[2:], order, np.zeros(1, np.int64), workers, block)
             runs.append((re, im))
         level(*args)
 

@@ -168,44 +168,11 @@ def _leaf_tile(
             oim[r0 + r, c0 + k] = b * cs - a * sn
 
 
-@numba.njit(fastmath=_FASTMATH, cache=True)
-def _task(
-    task, n_leaf_tasks, n_ty, n_tx, n_rows, nx, re, im, tab, starts, stops, ant_x, ant_y,
-    ant_z2, ref, x0, dx, v0, dv, nv, idx_scale, idx_offset, hi, quarter_scale, tile_rows,
-    tile_cols, cu, cv, cz2, rref, kids, cre, cim, k0, ratio, g, lanes_v,
-):  # pragma: no cover - compiled  # fmt: skip
-    """Task ``task`` of :func:`level`: a leaf tile or a merged row (nothing past ``nv``)."""
-    if task < n_leaf_tasks:
-        i = task // (n_ty * n_tx)
-        tile = task % (n_ty * n_tx)
-        r0 = (tile // n_tx) * tile_rows
-        if r0 >= nv[i]:
-            return
-        c0 = (tile % n_tx) * tile_cols
-        nr = min(nv[i], r0 + tile_rows) - r0
-        nc = min(nx, c0 + tile_cols) - c0
-        _leaf_tile(
-            tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, v0[i], dv[i],
-            r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv, cz2, rref,
-            re[i], im[i], lanes_v,
-        )  # fmt: skip
-    else:
-        p = (task - n_leaf_tasks) // n_rows
-        m = (task - n_leaf_tasks) % n_rows
-        q = starts.size + p
-        if m >= nv[q]:
-            return
-        dre = re[q, m]
-        dim = im[q, m]
-        _merge_row(dre, dim, m, cre[kids[p, 0]], cim[kids[p, 0]], cre[kids[p, 1]],
-                   cim[kids[p, 1]], k0, ratio, g[kids[p, 0]], g[kids[p, 1]])  # fmt: skip
-
-
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
 def level(
     re, im, tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale,
     idx_offset, n_up, quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim,
-    k0, ratio, g, lanes_v, order, counter, workers,
+    k0, ratio, g, lanes_v, order, counter, workers, block,
 ):  # pragma: no cover - compiled  # fmt: skip
     """One tree level: leaves ``0..L-1`` and parents ``L..L+P-1`` of ``re``, ``im``, in place.
 
@@ -215,10 +182,10 @@ def level(
     ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v``. Parent
     ``L + p`` (``p < P = kids.shape[0]``) is the sum of
     children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
-    ``g[child]``) resampled to its rows (:func:`_add_child`); one task per row.
+    ``g[child]``) resampled to its rows (:func:`_add_child`); one task per ``block`` rows.
 
-    Task ``t``: leaf tile ``t`` (``t < L n_ty n_tx``, leaf-major, tiles row-major) or merged
-    row ``t - L n_ty n_tx`` (parent-major). ``workers`` loops (one per thread) take the
+    Task ``t``: leaf tile ``t`` (``t < L n_ty n_tx``, leaf-major, tiles row-major) or block
+    of merged rows ``t - L n_ty n_tx`` (parent-major). ``workers`` loops (one per thread) take the
     tasks ``order[counter[0]]``, ``counter[0]`` advanced atomically (:func:`_take`; start it
     at 0), until ``order`` is done: a task's place in ``order`` is when it starts
     (:func:`~.ffbp._task_order`: dearest first).
@@ -228,19 +195,36 @@ def level(
     n_tx = (nx + tile_cols - 1) // tile_cols
     n_ty = (re.shape[1] + tile_rows - 1) // tile_rows
     n_leaf_tasks = n_leaves * n_ty * n_tx
-    n_rows = re.shape[1]
+    n_blocks = (re.shape[1] + block - 1) // block
     hi = np.float32(n_up)
     for _ in numba.prange(workers):
         while True:
             at = _take(counter)
             if at >= order.size:
                 break
-            _task(
-                order[at], n_leaf_tasks, n_ty, n_tx, n_rows, nx, re, im, tab, starts, stops,
-                ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale, idx_offset, hi,
-                quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim, k0,
-                ratio, g, lanes_v,
-            )  # fmt: skip
+            task = order[at]
+            if task < n_leaf_tasks:
+                i = task // (n_ty * n_tx)
+                tile = task % (n_ty * n_tx)
+                r0 = (tile // n_tx) * tile_rows
+                if r0 >= nv[i]:
+                    continue
+                c0 = (tile % n_tx) * tile_cols
+                nr = min(nv[i], r0 + tile_rows) - r0
+                nc = min(nx, c0 + tile_cols) - c0
+                _leaf_tile(
+                    tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, v0[i],
+                    dv[i], r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv,
+                    cz2, rref, re[i], im[i], lanes_v,
+                )  # fmt: skip
+                continue
+            p = (task - n_leaf_tasks) // n_blocks
+            q = n_leaves + p
+            a, b = kids[p, 0], kids[p, 1]
+            m0 = (task - n_leaf_tasks) % n_blocks * block
+            for m in range(m0, min(m0 + block, nv[q])):
+                _merge_row(re[q, m], im[q, m], m, cre[a], cim[a], cre[b], cim[b], k0, ratio,
+                           g[a], g[b])  # fmt: skip
 
 
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)

@@ -162,6 +162,10 @@ ALPHAS = (DEFAULT_ALPHA, 1.3)
 #: Work (pixel-pulses) under which a parallel region runs on one thread
 #: (:func:`_threads_for`): about half a millisecond of one core.
 SERIAL_WORK = 2.0**19
+#: Merged rows per task of a tree level (:func:`._ffbp_kernels.level`): a few, so that
+#: taking a task (one atomic step) costs little beside it, and the rows still spread over
+#: the threads.
+MERGE_BLOCK = 8
 #: Bytes of sub-image planes a thread keeps between calls (:func:`_planes`).
 SCRATCH_BYTES = 256 * 2**20
 #: Smallest leaf (pulses).
@@ -506,12 +510,13 @@ def _planes(slot: int, shape: tuple[int, int, int]) -> tuple[NDArray, NDArray]:
     return buf[0, :n].reshape(shape), buf[1, :n].reshape(shape)
 
 
-def _task_costs(pulses, leaf_rows, merged_rows, n_rows, n_cols, tile) -> NDArray[np.float64]:
+def _task_costs(pulses, leaf_rows, merged_rows, n_rows, n_cols, tile, block) -> NDArray[np.float64]:
     """Cost (pixel-pulses) of each task of :func:`._ffbp_kernels.level`, in its task order.
 
     Leaf tiles (leaf-major, tiles row-major): pulses times the tile's pixels on the leaf's
-    rows; merged rows (parent-major, ``n_rows`` per parent): :data:`_MERGE_COST` per
-    sample on the parent's rows. Tasks past a node's rows cost 0 (they do nothing).
+    rows; blocks of ``block`` merged rows (parent-major, ``ceil(n_rows / block)`` per
+    parent): :data:`_MERGE_COST` per sample on the parent's rows. Tasks past a node's rows
+    cost 0 (they do nothing).
     """
     tile_rows, tile_cols = tile
     r0 = np.arange(-(-n_rows // tile_rows)) * tile_rows
@@ -519,8 +524,9 @@ def _task_costs(pulses, leaf_rows, merged_rows, n_rows, n_cols, tile) -> NDArray
     nr = np.clip(np.asarray(leaf_rows)[:, None] - r0[None, :], 0, tile_rows)
     nc = np.minimum(n_cols - c0, tile_cols)
     leaf = np.asarray(pulses, np.float64)[:, None, None] * nr[:, :, None] * nc[None, None, :]
-    rows = np.arange(n_rows)[None, :] < np.asarray(merged_rows)[:, None]
-    return np.concatenate([leaf.ravel(), np.where(rows, _MERGE_COST * n_cols, 0.0).ravel()])
+    m0 = np.arange(-(-n_rows // block)) * block
+    rows = np.clip(np.asarray(merged_rows)[:, None] - m0[None, :], 0, block)
+    return np.concatenate([leaf.ravel(), (_MERGE_COST * n_cols * rows).ravel()])
 
 
 def _task_order(costs: NDArray[np.float64]) -> NDArray[np.int64]:
@@ -588,14 +594,14 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         kids = np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2)
         nv = np.array([n.nv for n in nodes], np.int64)
         costs = _task_costs(stops - starts, nv[: len(leaves)], nv[len(leaves) :], n_rows,
-                            us.size, tile)  # fmt: skip
+                            us.size, tile, MERGE_BLOCK)  # fmt: skip
         with _threads_for(float(costs.sum())):
             _kernels.level(
                 re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
                 np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]), nv,
                 *frame["constants"][:2], frame["n_up"], frame["constants"][2], tile[0], tile[1],
                 *frame["centre"], kids, cre, cim, k0, 2, g, lanes_v, _task_order(costs),
-                np.zeros(1, np.int64), numba.get_num_threads(),
+                np.zeros(1, np.int64), numba.get_num_threads(), MERGE_BLOCK,
             )  # fmt: skip
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
