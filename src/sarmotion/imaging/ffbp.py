@@ -32,8 +32,8 @@ A node is split at its pulses' midpoint when both halves' bands fit the children
 else where the two halves' bands are most nearly equal (the floor grows along an aperture
 that turns away from ``u``: the half nearer ``u`` then takes more pulses), and is a leaf
 where no split fits (the floor dominates) or where two leaves and a merge would cost
-more. The rows are cut in strips (1 to 16, the cheapest by a cost model): a narrower strip sees
-the look direction turn less, so its floor is lower. The floor also grows with the angle
+more. The rows are cut in strips (1 to 16, the cheapest by a cost model): a narrower
+strip sees the look direction turn less, so its floor is lower. The floor also grows with the angle
 between the look direction and the ``u`` axis (the range band leaks into ``v``): on the
 image's own columns the factorisation pays off within a few degrees of a grid axis (GOTCHA's
 first degrees, looking along ``x``).
@@ -88,8 +88,8 @@ interpolations':
 
 The allowed error is ``E = 10^(-(TARGET_DB + BUDGET_MARGIN_DB) / 10)``: the factorisation
 gets :data:`FACTORISATION_SHARE` of it, an equal share ``2 * 0.8 E / S`` per depth, and each
-depth the fewest even taps (4 to :data:`TAPS`) that keep all its nodes' ``e_T(b)`` within
-that share (:func:`_filters`; bands far below ``1 / (2 alpha)`` near the root take 4 to 8
+depth the fewest even taps (4 to the plan's cap, below) that keep all its nodes'
+``e_T(b)`` within that share (:func:`_filters`; bands far below ``1 / (2 alpha)`` near the root take 4 to 8
 taps, the leaves' parents 12 to 18); the resampling gets the rest, with the fewest taps
 :data:`RESAMPLE_TAPS` = 10 x 6 that do so at the widest bands. The cap, which also sets
 every sub-image's margins, is :func:`default_taps` of ``alpha``: the fewest taps that meet
