@@ -89,8 +89,9 @@ interpolations':
 The allowed error is ``E = 10^(-(TARGET_DB + BUDGET_MARGIN_DB) / 10)``: the factorisation
 gets :data:`FACTORISATION_SHARE` of it, an equal share ``2 * 0.8 E / S`` per depth, and each
 depth the fewest even taps (4 to the plan's cap, below) that keep all its nodes'
-``e_T(b)`` within that share (:func:`_filters`; bands far below ``1 / (2 alpha)`` near the root take 4 to 8
-taps, the leaves' parents 12 to 18); the resampling gets the rest, with the fewest taps
+``e_T(b)`` within that share (:func:`_filters`; bands far below ``1 / (2 alpha)`` near
+the root take 4 to 8 taps, the leaves' parents 12 to 18); the resampling gets the rest,
+with the fewest taps
 :data:`RESAMPLE_TAPS` = 10 x 6 that do so at the widest bands. The cap, which also sets
 every sub-image's margins, is :func:`default_taps` of ``alpha``: the fewest taps that meet
 the factorisation's share when every one of :data:`MAX_STAGES` depths sits at the widest
