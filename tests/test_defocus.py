@@ -148,7 +148,8 @@ def test_unresolved_stationary_points_explain_a_moving_signature():
     assert 0.5 * cells.cross_range_m < abs(points[1, 1] - points[2, 1]) < cells.cross_range_m
     fit = fit_point_mover(sub, 0.0, cross_speed_range_mps=(-4.0, -1.0))
     assert abs(fit.amplitude) > 1.0  # the signature matches the three better than one point
-    why = stationary_explanation(sub, fit.position_m, fit.velocity_mps, fit.amplitude * sub.n_pulses)
+    value = fit.amplitude * sub.n_pulses
+    why = stationary_explanation(sub, fit.position_m, fit.velocity_mps, value)
     near = stationary_near(sub, fit, why.cross_offset_m)
     for p in points:
         assert np.min(np.hypot(*(near[:, :2] - p).T)) < 0.25 * cells.cross_range_m

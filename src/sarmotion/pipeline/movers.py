@@ -350,10 +350,11 @@ def fit_candidates(
     movers with the same range speed share one ``g`` peak; once the first is subtracted
     the strongest trace at that speed is as often as not its remnant, and the second
     mover lies on another trace (reopening the accepted speed to its strongest trace
-    instead made three false movers on Scene 1 written as GOTCHA files). Within a ``g`` peak's width of an accepted mover
-    the candidate is therefore tried again on the strongest trace at least
-    ``_TRACE_GUARD_RESOLUTIONS`` from the accepted movers' (:func:`_candidate_trace`),
-    when that trace's own ``g`` statistic reaches the threshold.
+    instead made three false movers on Scene 1 written as GOTCHA files). Within a ``g``
+    peak's width of an accepted mover the candidate is therefore tried again on the
+    strongest trace at least ``_TRACE_GUARD_RESOLUTIONS`` from the accepted movers'
+    (:func:`_candidate_trace`), when that trace's own ``g`` statistic reaches the
+    threshold.
 
     Parameters
     ----------
