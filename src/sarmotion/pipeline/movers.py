@@ -411,7 +411,6 @@ def fit_candidates(
             break
         k, delay = untried[0]
         u, statistic = float(rs.speeds_mps[k]), float(current.statistic_db[k])
-        tried.append((u, aligned_trace(left, u)[0] if delay is None else delay))
         fit = fit_point_mover(
             residual,
             u,
@@ -419,6 +418,10 @@ def fit_candidates(
             cross_speed_range_mps=options.speed_range_mps,
             trace_delay_s=delay,
         )
+        model = point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
+        # the trace tried is the one the fit took: the global search may leave the
+        # strongest trace at u for another of the same speed
+        tried.append((u, aligned_trace(Traces(data=model, acquisition=sub), u)[0]))
         if any(_same_trace(sub, fit, f, peak_width_mps) for f, _ in out):
             log.info("g(u) candidate at %.2f m/s: what a subtracted mover left", u)
             continue
@@ -444,7 +447,6 @@ def fit_candidates(
                 why.focus_gain_db,
             )
             continue
-        model = point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
         residual = residual - model
         fitted.append((u, aligned_trace(Traces(data=model, acquisition=sub), u)[0]))
         evidence = _evidence(detection, statistic, float(current.widths[k]), why, coherent)
