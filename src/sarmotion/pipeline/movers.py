@@ -419,8 +419,10 @@ def fit_candidates(
             trace_delay_s=delay,
         )
         model = point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
-        # the trace tried is the one the fit took: the global search may leave the
-        # strongest trace at u for another of the same speed
+        # tried: the trace asked for, and the one the fit took (the global search may
+        # leave the strongest trace at u for another of the same speed)
+        if delay is not None:
+            tried.append((u, delay))
         tried.append((u, aligned_trace(Traces(data=model, acquisition=sub), u)[0]))
         if any(_same_trace(sub, fit, f, peak_width_mps) for f, _ in out):
             log.info("g(u) candidate at %.2f m/s: what a subtracted mover left", u)
