@@ -99,15 +99,10 @@ def _gotcha_files() -> list[Path]:
     return []
 
 
-@pytest.fixture(scope="module")
-def gotcha_movers_traces():
+def gotcha_two_movers(base):
+    """The GOTCHA traces with two movers injected, 8 and 12 dB under the median per-pulse peak."""
     from sarmotion.core import ground_velocity
-    from sarmotion.io import read_gotcha
 
-    files = _gotcha_files()
-    if not files:
-        pytest.skip("GOTCHA data not found")
-    base = read_gotcha(files)
     geom = base.geometry
     ref = float(np.median(np.abs(base.data).max(axis=1)))
     movers = [
@@ -122,7 +117,17 @@ def gotcha_movers_traces():
             reflectivity=ref * 10 ** (-12 / 20) * np.exp(2.1j),
         ),
     ]
-    traces = inject(base, movers)
+    return inject(base, movers)
+
+
+@pytest.fixture(scope="module")
+def gotcha_movers_traces():
+    from sarmotion.io import read_gotcha
+
+    files = _gotcha_files()
+    if not files:
+        pytest.skip("GOTCHA data not found")
+    traces = gotcha_two_movers(read_gotcha(files))
     analyze(traces, AnalysisOptions(max_movers=1, trajectory=False))  # compile once
     return traces
 

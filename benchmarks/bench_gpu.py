@@ -92,6 +92,18 @@ def load_traces(path: Path) -> Traces:
     )
 
 
+def read_traces(path: Path | None, gotcha: str | None) -> Traces:
+    """The traces saved at ``path`` (:func:`save_traces`), else the four GOTCHA degrees."""
+    if path is not None:
+        return load_traces(path)
+    from sarmotion.io import read_gotcha
+
+    files = _gotcha_files(gotcha)
+    if not files:
+        sys.exit("no GOTCHA files (--gotcha DIR or $SARMOTION_GOTCHA_DIR) and no --traces")
+    return read_gotcha(files)
+
+
 def _ser_db(ref: np.ndarray, x: np.ndarray) -> float:
     err = float(np.linalg.norm(x - ref))
     return math.inf if err == 0 else 20.0 * math.log10(float(np.linalg.norm(ref)) / err)
@@ -149,15 +161,7 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
 
-    if args.traces is not None:
-        tr = load_traces(args.traces)
-    else:
-        from sarmotion.io import read_gotcha
-
-        files = _gotcha_files(args.gotcha)
-        if not files:
-            sys.exit("no GOTCHA files (--gotcha DIR or $SARMOTION_GOTCHA_DIR) and no --traces")
-        tr = read_gotcha(files)
+    tr = read_traces(args.traces, args.gotcha)
     if args.save_traces is not None:
         save_traces(tr, args.save_traces)
         print(f"saved {args.save_traces}")

@@ -36,30 +36,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_gpu import _gotcha_files, _ser_db, _version, load_traces  # noqa: E402
+from bench_analyze import gotcha_two_movers  # noqa: E402
+from bench_gpu import _ser_db, _version, read_traces  # noqa: E402
 
-from sarmotion.core import Traces, ground_velocity  # noqa: E402
+from sarmotion.core import Traces  # noqa: E402
 from sarmotion.pipeline import AnalysisOptions, analyze  # noqa: E402
-from sarmotion.simulation import PointTarget, inject  # noqa: E402
-
-
-def gotcha_two_movers(base: Traces) -> Traces:
-    """The GOTCHA traces with ``bench_analyze.py``'s two movers injected."""
-    geom = base.geometry
-    ref = float(np.median(np.abs(base.data).max(axis=1)))
-    movers = [
-        PointTarget(
-            position_m=(8.0, -12.0),
-            velocity_mps=ground_velocity(4.5, 3.0, geom),
-            reflectivity=ref * 10 ** (-8 / 20) * np.exp(0.7j),
-        ),
-        PointTarget(
-            position_m=(-15.0, 6.0),
-            velocity_mps=ground_velocity(-7.0, -2.0, geom),
-            reflectivity=ref * 10 ** (-12 / 20) * np.exp(2.1j),
-        ),
-    ]
-    return inject(base, movers)
 
 
 def _movers(result) -> list[dict]:
@@ -110,15 +91,7 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
 
-    if args.traces is not None:
-        base = load_traces(args.traces)
-    else:
-        from sarmotion.io import read_gotcha
-
-        files = _gotcha_files(args.gotcha)
-        if not files:
-            sys.exit("no GOTCHA files (--gotcha DIR or $SARMOTION_GOTCHA_DIR) and no --traces")
-        base = read_gotcha(files)
+    base = read_traces(args.traces, args.gotcha)
     if args.pulses:
         base = base.select_pulses(0, args.pulses)
     traces = gotcha_two_movers(base)

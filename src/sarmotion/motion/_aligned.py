@@ -134,6 +134,17 @@ class _Aligner:
         _modulate(delays, self.freq, self.spectrum, np.arange(self.freq.size), out)
         return out
 
+    def trace_profile(self, velocity_mps: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``sum_s |T_+ d(s, t)|`` over the fast time ``t`` (:attr:`times_s`) at one velocity.
+
+        The traces aligned at ``velocity_mps`` ((3,), m/s), transformed back to fast
+        time; its maximum is the aligned trace ``g`` takes, shape ``(n_fft,)``.
+        """
+        spectra = self.spectra(np.asarray(velocity_mps, dtype=np.float64)[None])
+        padded = np.zeros(spectra.shape[:2] + (self.n_fft,), dtype=np.complex64)
+        padded[..., self.slots] = spectra
+        return np.abs(np.fft.ifft(padded, axis=-1)).sum(axis=1)[0]
+
     def g_values(self, velocities: NDArray[np.float64]) -> NDArray[np.float64]:
         """``g = max_t sum_j |T_+ d(s_j, t)|`` for ground velocities (n_vel, 2), shape (n_vel,).
 

@@ -294,11 +294,8 @@ def _global_cross_search(
     al = _Aligner(d, d.reference_point_m)
     geom = d.geometry
     # fast-time window: the aligned trace of the g(u) peak, +- 12 samples (1.4 m at GOTCHA)
-    x0 = al.spectra(range_direction_velocity(range_speed_mps, geom)[None])
-    padded = np.zeros(x0.shape[:2] + (al.n_fft,), dtype=np.complex64)
-    padded[..., al.slots] = x0
     if centre_s is None:
-        centre = int(np.argmax(np.abs(sfft.ifft(padded, axis=-1)).sum(axis=1)[0]))
+        centre = int(np.argmax(al.trace_profile(range_direction_velocity(range_speed_mps, geom))))
     else:
         centre = int(np.argmin(np.abs(al.times_s - centre_s)))
     cols = (centre + np.arange(-12, 13)) % al.n_fft

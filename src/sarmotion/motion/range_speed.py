@@ -275,10 +275,7 @@ def aligned_trace(
     left.
     """
     al = _Aligner(traces, traces.reference_point_m)
-    spectra = al.spectra(range_direction_velocity(float(range_speed_mps), traces.geometry)[None])
-    padded = np.zeros(spectra.shape[:2] + (al.n_fft,), dtype=np.complex64)
-    padded[..., al.slots] = spectra
-    profile = np.abs(np.fft.ifft(padded, axis=-1)).sum(axis=1)[0]
+    profile = al.trace_profile(range_direction_velocity(float(range_speed_mps), traces.geometry))
     for t in avoid_s:
         profile[np.abs(al.times_s - t) <= guard_s] = -np.inf
     if not np.isfinite(profile.max()):

@@ -253,8 +253,10 @@ def stationary_near(
         add(data, pts[r, i], phase_history)
     d = np.asarray(data.data, dtype=np.complex128).ravel()
     skipped = np.zeros(pts.shape[:2], dtype=bool)
+    columns = [point_model(data, p, np.zeros(2), 1.0).ravel() for p in out]
     while out and len(out) < MAX_NEAR:
-        a = np.stack([point_model(data, p, np.zeros(2), 1.0).ravel() for p in out], axis=1)
+        columns += [point_model(data, p, np.zeros(2), 1.0).ravel() for p in out[len(columns) :]]
+        a = np.stack(columns, axis=1)
         left = data.with_data((d - a @ np.linalg.lstsq(a, d, rcond=None)[0]).reshape(data.shape))
         mag = np.where(skipped, 0.0, np.abs(backproject_points(left, pts)))
         r, i = np.unravel_index(int(np.argmax(mag)), mag.shape)

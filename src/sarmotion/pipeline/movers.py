@@ -421,9 +421,10 @@ def fit_candidates(
         model = point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
         # tried: the trace asked for, and the one the fit took (the global search may
         # leave the strongest trace at u for another of the same speed)
+        own = aligned_trace(Traces(data=model, acquisition=sub), u)[0]
         if delay is not None:
             tried.append((u, delay))
-        tried.append((u, aligned_trace(Traces(data=model, acquisition=sub), u)[0]))
+        tried.append((u, own))
         if any(_same_trace(sub, fit, f, peak_width_mps) for f, _ in out):
             log.info("g(u) candidate at %.2f m/s: what a subtracted mover left", u)
             continue
@@ -450,7 +451,7 @@ def fit_candidates(
             )
             continue
         residual = residual - model
-        fitted.append((u, aligned_trace(Traces(data=model, acquisition=sub), u)[0]))
+        fitted.append((u, own))
         evidence = _evidence(detection, statistic, float(current.widths[k]), why, coherent)
         out.append((fit, evidence))
         with timed(timings, "movers.redetection"):
