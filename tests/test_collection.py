@@ -11,6 +11,7 @@ from sarmotion.collection import (
     RegionError,
     StationaryRecord,
     extract_patches,
+    inscribed_box,
     merge_movers,
     merge_stationary,
     plan_patches,
@@ -176,6 +177,76 @@ def _core_doppler(patch, pos, s, radar):
         rel = travel_time(pos, (x, y, 0.0)) - travel_time(pos, patch.centre_m)
         out = max(out, abs(radar.carrier_hz * np.gradient(rel, s)[j0]))
     return out
+
+
+@pytest.mark.parametrize("aperture_deg, azimuth_deg", [(4.0, 30.0), (1.0, -50.0)])
+def test_unambiguous_scene_holds_at_every_pulse(aperture_deg, azimuth_deg):
+    """Every corner stays in the fast-time window and within half the pulse rate at
+    every pulse, by the exact delays (the rule is first order: 1 % of slack); and the
+    default region, the box along x and y inside it, lies in the rectangle."""
+    radar = radar_with_range_window(150.0, radar=Radar())
+    traj = Trajectory.circular(
+        pulses_per_deg=117.0, aperture_deg=aperture_deg, centre_azimuth_deg=azimuth_deg
+    )
+    src = TracesBlocks(_traces([], radar, traj))
+    amb = unambiguous_scene(src)
+    pos, s = traj.positions_m, traj.slow_times_s
+    ref = travel_time(pos, REF)
+    for x, y in amb:
+        rel = travel_time(pos, (x, y, 0.0)) - ref
+        assert np.max(np.abs(rel)) <= 1.01 * 0.5 / radar.frequency_step_hz
+        doppler = radar.carrier_hz * np.gradient(rel, s)
+        assert np.max(np.abs(doppler)) <= 1.01 * 0.5 / traj.pulse_interval_s
+    # the rectangle drawn at the aperture centre alone (each side from that pulse's
+    # delay and Doppler rates) wraps in Doppler at a corner, at the aperture's ends
+    j0 = int(np.argmin(np.abs(s)))
+    e_r = (amb[1] - amb[0]) / np.linalg.norm(amb[1] - amb[0])
+    e_c = (amb[3] - amb[0]) / np.linalg.norm(amb[3] - amb[0])
+
+    def rel(point):
+        return travel_time(pos, (*point, 0.0)) - ref
+
+    half_r = 0.5 / radar.frequency_step_hz / abs(rel(e_r)[j0])
+    half_c = 0.5 / traj.pulse_interval_s / abs(radar.carrier_hz * np.gradient(rel(e_c), s)[j0])
+    wraps = [
+        np.max(np.abs(radar.carrier_hz * np.gradient(rel(i * half_r * e_r + j * half_c * e_c), s)))
+        > 0.5 / traj.pulse_interval_s
+        for i, j in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+    ]
+    assert any(wraps)
+    plan = plan_patches(src)
+    x0, y0, x1, y1 = plan.region_m
+    e1 = (amb[1] - amb[0]) / np.linalg.norm(amb[1] - amb[0])
+    e2 = (amb[3] - amb[0]) / np.linalg.norm(amb[3] - amb[0])
+    half = 0.5 * np.array([np.linalg.norm(amb[1] - amb[0]), np.linalg.norm(amb[3] - amb[0])])
+    for corner in ((x0, y0), (x1, y0), (x1, y1), (x0, y1)):
+        d = np.asarray(corner) - amb.mean(axis=0)
+        assert abs(d @ e1) <= half[0] * (1 + 1e-9) and abs(d @ e2) <= half[1] * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("beta_deg", [0.0, 3.0, 20.0, 44.0, 60.0, 90.0])
+def test_inscribed_box_touches_the_rectangle(beta_deg):
+    """The box lies inside the rectangle; unturned, it is the rectangle; turned a little,
+    its corners touch both pairs of sides (nothing larger of its shape fits)."""
+    beta = np.deg2rad(beta_deg)
+    e1, e2 = np.array([np.cos(beta), np.sin(beta)]), np.array([-np.sin(beta), np.cos(beta)])
+    centre, a, b = np.array([5.0, -3.0]), 70.0, 40.0
+    rect = np.array(
+        [centre + i * a * e1 + j * b * e2 for i, j in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    )
+    x0, y0, x1, y1 = inscribed_box(rect)
+    corners = np.array([(x0, y0), (x1, y0), (x1, y1), (x0, y1)]) - centre
+    p1, p2 = np.abs(corners @ e1), np.abs(corners @ e2)
+    assert np.all(p1 <= a * (1 + 1e-9)) and np.all(p2 <= b * (1 + 1e-9))
+    assert np.allclose([(x0 + x1) / 2, (y0 + y1) / 2], centre)
+    if beta_deg == 0.0:
+        assert np.allclose(
+            [x0, y0, x1, y1], [centre[0] - a, centre[1] - b, centre[0] + a, centre[1] + b]
+        )
+    if beta_deg == 3.0:
+        assert np.isclose(p1.max(), a) and np.isclose(p2.max(), b)
+    if beta_deg == 90.0:  # turned a quarter: the rectangle again, sides swapped
+        assert np.isclose(x1 - x0, 2 * b) and np.isclose(y1 - y0, 2 * a)
 
 
 def test_bad_region_and_patch_size():

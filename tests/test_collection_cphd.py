@@ -84,20 +84,24 @@ def cphd(scene, tmp_path_factory) -> Path:
 def test_acquisition_is_sampled_for_the_scene(side, pulses, samples):
     """Unambiguous extent 1.3 x the side in range and cross range, or the counts asked for.
 
-    Pulses and samples are rounded up, so each extent lies within one sample of the
-    rule; 1e-4 of relative slack for the first-order geometry of the rule (the
-    elevation and the Doppler rate at the reference point).
+    The acquisition samples 1.3 x the side at the aperture centre; the unambiguous scene
+    holds at every pulse, so the look's turn at the aperture's ends, half a degree,
+    couples the other side in: each extent is at most ``tan(0.5 deg)`` of the other
+    side (a square here) under the rule. Pulses and samples are rounded up, so each
+    extent lies within one sample above it; 1e-4 of relative slack for the first-order
+    geometry of the rule (the elevation and the Doppler rate at the reference point).
     """
     from sarmotion.collection import unambiguous_scene
 
     acq = collection_acquisition(side, n_pulses=pulses, n_samples=samples)
     amb = unambiguous_scene(CollectionScene(acquisition=acq, stationary=(), movers=()))
     extent = np.ptp(amb[:, 0]), np.ptp(amb[:, 1])  # range (x), cross range (y)
+    turn = np.tan(np.deg2rad(0.5))
     for width, count, least in zip(extent, acq.shape[::-1], (samples, pulses), strict=True):
         if least is None:
-            assert 1.3 * side * (1 - 1e-4) <= width <= 1.3 * side * (1 + 2 / count)
+            assert 1.3 * side * (1 - turn - 1e-4) <= width <= 1.3 * side * (1 + 2 / count)
         else:
-            assert count >= least and width >= 1.3 * side * (1 - 1e-4)
+            assert count >= least and width >= 1.3 * side * (1 - turn - 1e-4)
     # one degree of azimuth: n pulses 1/n degree apart
     azimuth = np.degrees(np.arctan2(acq.positions_m[:, 1], acq.positions_m[:, 0]))
     assert np.isclose(np.ptp(azimuth), (acq.n_pulses - 1) / acq.n_pulses, rtol=1e-9)

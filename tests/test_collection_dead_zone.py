@@ -22,8 +22,9 @@ from sarmotion.motion import family_member, range_speed_resolution
 from sarmotion.pipeline import AnalysisOptions
 from sarmotion.simulation import PointTarget, simulate_phase_history
 
-#: Two patches in range by three in cross range: the whole unambiguous cross range.
-REGION = (-60.0, -75.0, 60.0, 75.0)
+#: Two patches in range by three in cross range: nearly the whole unambiguous cross
+#: range (+-74.4 m over a GOTCHA-like degree); the cores meet at y = +-24 m.
+REGION = (-60.0, -72.0, 60.0, 72.0)
 OPTIONS = CollectionOptions(
     analysis=AnalysisOptions(trajectory=False), patch_size_m=60.0, max_speed_mps=15.0
 )
@@ -38,7 +39,8 @@ def _mover(seed: int, traj: Trajectory, radar: Radar) -> PointTarget:
     centres is then that of a stationary point of their cores or just beyond.
     """
     rng = np.random.default_rng(seed)
-    corner = np.array([0.0, rng.choice([-25.0, 25.0])])
+    meet = REGION[3] / 3.0  # cores meet at x = 0, y = +-meet
+    corner = np.array([0.0, rng.choice([-meet, meet])])
     position = corner + rng.uniform(-2.0, 2.0, 2)
     probe = Traces(
         data=np.zeros((traj.positions_m.shape[0], radar.n_samples), np.complex64),

@@ -190,7 +190,9 @@ def _write_sicd_images(result, stage: Path) -> None:
     nargs=4,
     default=None,
     metavar="X0 Y0 X1 Y1",
-    help="Analyse this part of the scene (m); default the data's whole unambiguous scene. "
+    help="Analyse this part of the scene (m); default the data's whole unambiguous scene "
+    "(echoes in the fast-time window and within the pulse rate at every pulse), or the "
+    "largest box along x and y inside it. "
     "A scene larger than one patch is cut into overlapping patches. A mover is found "
     "where its Doppler places its image: its range speed shifts it in cross range "
     "(about R/V metres per m/s), so a mover inside the region whose image lands outside "

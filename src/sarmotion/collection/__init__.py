@@ -20,7 +20,15 @@ from .merge import (
     merge_stationary,
     same_mover,
 )
-from .plan import CollectionOptions, Patch, PatchPlan, RegionError, plan_patches, unambiguous_scene
+from .plan import (
+    CollectionOptions,
+    Patch,
+    PatchPlan,
+    RegionError,
+    inscribed_box,
+    plan_patches,
+    unambiguous_scene,
+)
 from .run import CollectionResult, PatchResult, analyze_collection, analyze_patch
 
 __all__ = [
@@ -44,5 +52,6 @@ __all__ = [
     "extract_patches",
     "patch_radar",
     "plan_patches",
+    "inscribed_box",
     "unambiguous_scene",
 ]

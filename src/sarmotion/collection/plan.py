@@ -37,9 +37,12 @@ exceed the largest displacement in range and the largest Doppler spread of a mov
 the speed range: every mover lies wholly inside at least one patch. The cores tile the
 region without overlap.
 
-The default region is the data's unambiguous scene: the fast-time window ``1 / df`` in
-range and the pulse rate in cross range, mapped to the ground at the reference point.
-A region whose extent today's single analysis covers (0.6 of it, the rule of
+The default region is the data's unambiguous scene (:func:`unambiguous_scene`: the
+fast-time window ``1 / df`` in range and the pulse rate in cross range, mapped to the
+ground at every pulse, so that the look's turn over the aperture does not wrap the
+scene's corners), or rather the largest box along the scene axes inside it
+(:func:`inscribed_box`): patches are squares along ``x`` and ``y``. A region whose
+extent today's single analysis covers (0.6 of it, the rule of
 :func:`~sarmotion.imaging.default_scene_size_m`, within ``P``) is one patch.
 """
 
@@ -279,27 +282,68 @@ def _square_points(core: tuple[float, float, float, float], z: float) -> NDArray
 def unambiguous_scene(source: PulseBlocks) -> NDArray[np.float64]:
     """Ground corners of the data's unambiguous scene, shape (4, 2) (m).
 
-    Range: the fast-time window ``1 / df`` (s) over the ground-range delay rate at the
-    reference point; cross range: the pulse rate over the Doppler rate per metre of
-    cross-range offset (carrier frequency, aperture centre).
+    A rectangle about the reference point, sides along the aperture centre's ground
+    range ``e_r`` and cross range ``e_c``, every point of which stays unambiguous at
+    *every* pulse ``j``: its delay offset from the reference within half the fast-time
+    window ``1 / (2 df)`` (s), and its Doppler offset within half the pulse rate. With
+    the offsets linear in the ground offset ``d = a e_r + b e_c`` (delay gradient
+    ``k_j``, Doppler gradient ``f_c dk_j/ds``), the corners ``|a| = A``, ``|b| = B``
+    bound both: ``A |k_j . e_r| + B |k_j . e_c| <= 1 / (2 df)`` and the same for the
+    Doppler with ``prf / 2``. ``A_0``, ``B_0`` are each side's bound alone (the look
+    turned from ``e_r`` at other pulses couples them); ``A`` and ``B`` are then what
+    each bound leaves after the other side at ``B_0``, ``A_0``, so both hold. Over a
+    turning aperture the look direction moves, and a rectangle drawn at the aperture
+    centre alone reaches, at its far corners, points whose echoes wrap in Doppler at
+    the aperture's ends: ghosts of the scene's far side, which fit movers.
     """
     e_r, e_c, z = _frame(source)
     rho = source.reference_point_m
     pos = source.trajectory.positions_m
     s = source.trajectory.slow_times_s
-    j0 = int(np.argmin(np.abs(s)))
     step = 1.0
     pts = _lift(np.stack([rho[:2], rho[:2] + step * e_r, rho[:2] + step * e_c]), z)
     tau = _delays(pos, pts)
-    k_r = abs(tau[1, j0] - tau[0, j0]) / step  # s of delay per metre of ground range
-    dop = np.gradient(tau[2] - tau[0], s)[j0] * source.radar.carrier_hz / step  # Hz per m
-    prf = 1.0 / source.trajectory.pulse_interval_s
-    half_r = 0.5 / source.radar.frequency_step_hz / k_r
-    half_c = 0.5 * prf / abs(dop)
+    k = np.abs(np.stack([tau[1] - tau[0], tau[2] - tau[0]])) / step  # s per m, (2, n)
+    if s.size > 1:
+        f = np.abs(np.gradient(tau[1:] - tau[0], s, axis=1)) * source.radar.carrier_hz / step
+    else:
+        raise RegionError("one pulse has no Doppler: no unambiguous cross range")
+    half_t = 0.5 / source.radar.frequency_step_hz  # s
+    half_f = 0.5 / source.trajectory.pulse_interval_s  # Hz
+    a0 = float(np.min(half_t / np.maximum(k[0], 1e-300)))
+    b0 = float(np.min(half_f / np.maximum(f[1], 1e-300)))
+    half_r = float(np.min((half_t - b0 * k[1]) / np.maximum(k[0], 1e-300)))
+    half_c = float(np.min((half_f - a0 * f[0]) / np.maximum(f[1], 1e-300)))
+    if not (half_r > 0.0 and half_c > 0.0):
+        raise RegionError("the look turns too far over the aperture: no unambiguous scene")
     c = rho[:2]
     return np.array(
         [c + a * half_r * e_r + b * half_c * e_c for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
     )
+
+
+def inscribed_box(corners_m: ArrayLike) -> tuple[float, float, float, float]:
+    """The largest box along the scene axes inside a rectangle, ``(x0, y0, x1, y1)`` (m).
+
+    ``corners_m`` (4, 2) is a rectangle (:func:`unambiguous_scene`): half sides ``A``,
+    ``B`` along unit vectors ``e_1``, ``e_2`` turned by ``beta`` from ``x``. A box of
+    half sides ``X``, ``Y`` about its centre lies inside when its corners' projections
+    do: ``X |cos beta| + Y |sin beta| <= A`` and ``X |sin beta| + Y |cos beta| <= B``.
+    Both held with equality give the box touching all four sides; when that has no
+    positive solution (a long rectangle turned far), the square
+    ``X = Y = min(A, B) / (|cos beta| + |sin beta|)``.
+    """
+    q = np.asarray(corners_m, dtype=np.float64)
+    centre = q.mean(axis=0)
+    u, v = q[1] - q[0], q[3] - q[0]
+    a, b = 0.5 * float(np.hypot(*u)), 0.5 * float(np.hypot(*v))
+    co, si = abs(u[0]) / (2.0 * a), abs(u[1]) / (2.0 * a)
+    det = co * co - si * si
+    x = (a * co - b * si) / det if abs(det) > 1e-12 else -1.0
+    y = (b * co - a * si) / det if abs(det) > 1e-12 else -1.0
+    if not (x > 0.0 and y > 0.0):
+        x = y = min(a, b) / (co + si)
+    return (centre[0] - x, centre[1] - y, centre[0] + x, centre[1] + y)
 
 
 def _migration_per_m(source: PulseBlocks, e_c: NDArray, z: float, pulses: slice) -> float:
@@ -344,7 +388,8 @@ def plan_patches(
         Core side, movers' speed, filter attenuation.
     region_m : (4,) array_like, optional
         ``(x0, y0, x1, y1)`` in scene metres, ``x0 < x1``, ``y0 < y1``; it must lie in
-        the data's unambiguous scene.
+        the data's unambiguous scene. Default: the largest such box
+        (:func:`inscribed_box` of :func:`unambiguous_scene`).
 
     Returns
     -------
@@ -382,8 +427,7 @@ def plan_patches(
 
     default_region = region_m is None
     if default_region:
-        x0, y0 = amb.min(axis=0)
-        x1, y1 = amb.max(axis=0)
+        x0, y0, x1, y1 = inscribed_box(amb)
     else:
         r = np.asarray(region_m, dtype=np.float64).reshape(-1)
         if r.shape != (4,) or not np.all(np.isfinite(r)):
@@ -396,8 +440,9 @@ def plan_patches(
         if np.any(rc < lo_rc - tol) or np.any(rc > hi_rc + tol):
             raise RegionError(
                 f"region ({x0:g}, {y0:g}, {x1:g}, {y1:g}) m leaves the data's unambiguous "
-                f"scene, x {amb[:, 0].min():.1f} to {amb[:, 0].max():.1f} m, "
-                f"y {amb[:, 1].min():.1f} to {amb[:, 1].max():.1f} m"
+                f"scene, a rectangle turned to the look direction with corners "
+                + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb)
+                + " m"
             )
     width, height = x1 - x0, y1 - y0
     single = default_region and TRUSTED_SHARE * max(width, height) <= size
