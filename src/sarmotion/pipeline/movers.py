@@ -397,19 +397,12 @@ def fit_candidates(
     while len(out) < options.max_movers:
         rs = current.range_speeds
         left = Traces(data=residual, acquisition=sub)
-        untried = []
-        for k, u in enumerate(rs.speeds_mps):
-            # the g(u) peak's own trace first; once tried, another trace beside a mover
-            if _untried(float(u), None, tried, 0.5 * res, guard):
-                untried.append((k, None))
-                continue
-            delay = _candidate_trace(left, float(u), current, fitted, peak_width_mps, guard)
-            if delay is not None and _untried(float(u), delay, tried, 0.5 * res, guard):
-                untried.append((k, delay))
-        report(progress, "movers", len(tried), len(tried) + len(untried))
-        if not untried:
+        following = _next_untried(left, current, tried, fitted, (0.5 * res, peak_width_mps), guard)
+        if following is None:
             break
-        k, delay = untried[0]
+        k, delay = following
+        # the candidates from the k-th on may all still be fitted
+        report(progress, "movers", len(tried), len(tried) + rs.n_movers - k)
         u, statistic = float(rs.speeds_mps[k]), float(current.statistic_db[k])
         fit = fit_point_mover(
             residual,
@@ -462,6 +455,33 @@ def fit_candidates(
         speeds = [v for v, _ in tried]
         not_estimated.extend(_beyond_cap(left, current, speeds, accepted, peak_width_mps))
     return out
+
+
+def _next_untried(
+    residual: Traces,
+    detection: RangeSpeedDetection,
+    tried: Sequence[tuple[float, float]],
+    fitted: Sequence[tuple[float, float]],
+    tolerances_mps: tuple[float, float],
+    guard_s: float,
+) -> tuple[int, float | None] | None:
+    """The strongest candidate not tried yet, and the trace it is fitted on.
+
+    ``tolerances_mps`` is (the speed within which a candidate was tried, a ``g``
+    peak's width). A candidate is fitted on the ``g(u)`` peak's own trace (``None``)
+    when no tried speed lies within the first; once tried, on another trace beside an
+    accepted mover (:func:`_candidate_trace`) when that trace was not tried. ``None``
+    when every candidate was tried. The candidates are taken strongest first and the
+    search stops at the first untried one (each other trace costs a ``g`` profile).
+    """
+    tolerance, width_mps = tolerances_mps
+    for k, u in enumerate(detection.range_speeds.speeds_mps):
+        if _untried(float(u), None, tried, tolerance, guard_s):
+            return k, None
+        delay = _candidate_trace(residual, float(u), detection, fitted, width_mps, guard_s)
+        if delay is not None and _untried(float(u), delay, tried, tolerance, guard_s):
+            return k, delay
+    return None
 
 
 def _candidate_trace(
