@@ -279,6 +279,7 @@ def test_ffbp_strip_whose_root_does_not_split(four_degrees, monkeypatch):
 
     monkeypatch.setattr(ffbp, "_plan", one_leaf_first)
     monkeypatch.setattr(ffbp, "_strip_plans", halves)
+    monkeypatch.setattr(ffbp, "PLANS", ffbp.PlanCache(1))  # planned here, not reused
     grid = ImageGrid.square(size_m=64.0, spacing_m=0.25)
     fast = backproject(four_degrees, grid, method="ffbp")
     assert fast.metadata["kernel_variant"] == "ffbp"

@@ -156,3 +156,31 @@ def test_a_level_is_the_same_whichever_thread_takes_each_task(monkeypatch):
     for (re1, im1), (re3, im3) in zip(runs[::2], runs[1::2], strict=True):
         np.testing.assert_array_equal(re1, re3)
         np.testing.assert_array_equal(im1, im3)
+
+
+def test_a_plan_is_reused_on_the_same_geometry_only(monkeypatch):
+    # The plan depends on the geometry and the grid, not on the data: other data on the
+    # same acquisition and grid reuse it, and give the image a fresh plan gives; another
+    # geometry (motion compensation moves the antennas) plans afresh.
+    tr, grid = _look_off_u(96, 0.25)
+    planned = []
+    plan_aligned = ffbp._plan_aligned
+
+    def counting(*args, **kwargs):
+        planned.append(1)
+        return plan_aligned(*args, **kwargs)
+
+    monkeypatch.setattr(ffbp, "_plan_aligned", counting)
+    monkeypatch.setattr(ffbp, "PLANS", ffbp.PlanCache(4))
+    rng = np.random.default_rng(4141)
+    other = tr.with_data(tr.data * np.exp(2j * np.pi * rng.uniform(size=tr.data.shape)))
+    first = backproject(tr, grid, method="ffbp")
+    assert first.metadata["ffbp"]["path"] == "axis-aligned" and len(planned) == 1
+    reused = backproject(other, grid, method="ffbp")
+    assert len(planned) == 1 and reused.metadata["ffbp"] == first.metadata["ffbp"]
+    backproject(tr, grid, method="ffbp", velocity_mps=(3.0, 1.0))
+    assert len(planned) == 2
+    ffbp.PLANS.clear()
+    fresh = backproject(other, grid, method="ffbp")
+    assert len(planned) == 3
+    np.testing.assert_array_equal(reused.values, fresh.values)

@@ -63,7 +63,10 @@ threads take one at a time from a shared counter, dearest first (:func:`_task_or
 numba's ``prange`` would give each thread an equal, contiguous count of iterations
 whatever their cost), and the image rows of every strip one last region. Every region
 ends in a barrier, which on a busy machine waits for a descheduled thread, so the number
-of regions (about the depth, 7 at 2048 x 2048) is kept to one per level.
+of regions (about the depth, 7 at 2048 x 2048) is kept to one per level. Everything the
+geometry decides (the tree, the kernel calls' arrays and task orders, the filters, the
+pixels computed exactly) is planned once per geometry and grid and kept (:class:`PlanCache`):
+an image of other data on the same acquisition and grid only runs the kernels.
 
 Error budget. The defaults are chosen so that the image is at least :data:`TARGET_DB`
 (55 dB) from the exact sum (:func:`~sarmotion.imaging.exact_sum.exact_sum`, no
@@ -119,6 +122,7 @@ from __future__ import annotations
 
 import math
 import threading
+from collections import OrderedDict
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 
@@ -547,31 +551,50 @@ def _rows(grid: tuple[float, float, int]) -> NDArray[np.float64]:
     return v0 + np.arange(nv) * dv
 
 
-def _evaluate(depths, frame: dict, tile_for, info: dict, report):
-    """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes.
+@dataclass(frozen=True, eq=False)
+class _Level:
+    """One depth of the tree as :func:`._ffbp_kernels.level` reads it, all but the planes.
+
+    ``g`` holds the filters of the depth below (the children this depth's parents read);
+    ``work`` is the level's cost in pixel-pulses (:func:`_task_costs`).
+    """
+
+    shape: tuple[int, int, int]
+    starts: NDArray[np.int64]
+    stops: NDArray[np.int64]
+    v0: NDArray[np.float64]
+    dv: NDArray[np.float64]
+    nv: NDArray[np.int64]
+    kids: NDArray[np.int64]
+    tile: tuple[int, int]
+    lanes_v: bool
+    order: NDArray[np.int64]
+    work: float
+    g: NDArray[np.float32]
+
+
+def _schedule(depths, frame: dict, tile_for, info: dict) -> tuple[list[_Level], NDArray]:
+    """The depths' kernel calls, deepest first, and the filters the root reads (depth 1's).
 
     Each depth's filters take the fewest taps that keep its merge error within an equal
     share of ``frame["allowed"]`` (half of the rows interpolated: ``2 allowed / S`` per
     depth, ``S`` depths); ``info["taps"]`` (by depth, 1 first) and
-    ``info["factorisation_error"]`` record them.
+    ``info["factorisation_error"]`` record them, ``info["leaves"]`` and
+    ``info["leaf_pixel_pulses"]`` the leaves.
     """
     us = frame["us"]
-    du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
     most = frame["taps"]
-    k0 = most // 2 - 1
-    cre = np.zeros((1, 1, us.size), np.float32)
-    cim = cre
     g = np.zeros((1, 2, most), np.float32)
     per_depth = 2.0 * frame["allowed"] / max(len(depths), 1)
     taps: list[int] = []
     error = 0.0
+    out: list[_Level] = []
+    mirrored = np.ascontiguousarray(frame["pos"][:, [1, 0, 2]])
     for d in range(len(depths) - 1, -1, -1):
         nodes = depths[d]
         leaves = [n for n in nodes if not n.children]
         split = nodes[len(leaves) :]
         n_rows = max(n.nv for n in nodes)
-        # Every row a parent reads is written (leaf tiles and merged rows below nv).
-        re, im = _planes(d % 2, (len(nodes), n_rows, us.size))
         tile = (n_rows, 64)
         grids = sorted({(n.v0, n.dv, n.nv) for n in leaves})
         # SIMD lanes along v where along u they would span more than a window of the
@@ -582,7 +605,6 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
             span_u, span_v = lane_spans(frame["pos"], us, _rows(grids[0]),
                                         frame["constants"][0])  # fmt: skip
             lanes_v = span_u >= LANES and span_v < span_u
-        mirrored = np.ascontiguousarray(frame["pos"][:, [1, 0, 2]])
         for grid in grids:
             # the smallest tile any leaf grid needs (in bounds for all)
             if lanes_v:  # the tile of the mirrored frame, its axes swapped back
@@ -596,32 +618,50 @@ def _evaluate(depths, frame: dict, tile_for, info: dict, report):
         nv = np.array([n.nv for n in nodes], np.int64)
         costs = _task_costs(stops - starts, nv[: len(leaves)], nv[len(leaves) :], n_rows,
                             us.size, tile, MERGE_BLOCK)  # fmt: skip
-        with _threads_for(float(costs.sum())):
-            _kernels.level(
-                re, im, frame["table"], starts, stops, *frame["antennas"], float(us[0]), du,
-                np.array([n.v0 for n in nodes]), np.array([n.dv for n in nodes]), nv,
-                *frame["constants"][:2], frame["n_up"], frame["constants"][2], tile[0], tile[1],
-                *frame["centre"], kids, cre, cim, k0, 2, g, lanes_v, _task_order(costs),
-                np.zeros(1, np.int64), numba.get_num_threads(), MERGE_BLOCK,
-            )  # fmt: skip
+        out.append(_Level(
+            shape=(len(nodes), n_rows, us.size), starts=starts, stops=stops,
+            v0=np.array([n.v0 for n in nodes]), dv=np.array([n.dv for n in nodes]), nv=nv,
+            kids=kids, tile=tile, lanes_v=lanes_v, order=_task_order(costs),
+            work=float(costs.sum()), g=g,
+        ))  # fmt: skip
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
-        cre, cim = re, im
         g, worst = _filters(nodes, per_depth, most)
         taps.insert(0, int(g.shape[2]))
         error += 0.5 * worst
-        report()
     info.update(taps=taps, factorisation_error=error)
-    return cre, cim, g
+    return out, g
 
 
-def _image_rows(
-    out, k_lo, plans, bounds, substitutes, cre, cim, g, frame: dict, remodulate: bool = True
-) -> None:
-    """Write the image rows into ``out``: row ``r`` of strip ``s`` is root row ``r n_sub[s]``.
+def _run_levels(levels: list[_Level], frame: dict, table, report):
+    """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes."""
+    us = frame["us"]
+    du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
+    k0 = frame["taps"] // 2 - 1
+    cre = np.zeros((1, 1, us.size), np.float32)
+    cim = cre
+    for i, lv in enumerate(levels):
+        # Every row a parent reads is written (leaf tiles and merged rows below nv).
+        re, im = _planes(i % 2, lv.shape)
+        with _threads_for(lv.work):
+            _kernels.level(
+                re, im, table, lv.starts, lv.stops, *frame["antennas"], float(us[0]), du,
+                lv.v0, lv.dv, lv.nv, *frame["constants"][:2], frame["n_up"],
+                frame["constants"][2], lv.tile[0], lv.tile[1], *frame["centre"], lv.kids,
+                cre, cim, k0, 2, lv.g, lv.lanes_v, lv.order, np.zeros(1, np.int64),
+                numba.get_num_threads(), MERGE_BLOCK,
+            )  # fmt: skip
+        cre, cim = re, im
+        report()
+    return cre, cim
 
-    The root rows are the roots' children (planes ``cre``, ``cim`` of depth 1, filters
-    ``g``) added, or a strip's substitute leaf read as is, then remodulated.
+
+def _root_rows(plans, bounds, substitutes, ny: int) -> tuple[NDArray[np.int64], ...]:
+    """The arrays :func:`._ffbp_kernels.root_rows` reads the image rows by.
+
+    Row ``r`` of strip ``s`` is root row ``r n_sub[s]``: the roots' children (slots
+    ``kids[s]``, ``k0[s]``, ``ratio[s]``) added, or a strip's substitute leaf read as is.
+    Returns ``(row_strip, row_local, kids, n_sub, k0, ratio)``.
     """
     n_strips = len(plans)
     kids = np.full((n_strips, 2), -1, np.int64)
@@ -635,13 +675,21 @@ def _image_rows(
             root = levels[0][0]
             kids[s] = [k.slot for k in root.children]
             n_sub[s], k0[s], ratio[s] = ns, root.children[0].k0, root.children[0].ratio
-    ny = out.shape[0]
     row_strip = np.repeat(np.arange(n_strips), np.diff(bounds)).astype(np.int64)
     row_local = (np.arange(ny) - bounds[row_strip]).astype(np.int64)
-    with _threads_for(_MERGE_COST * ny * frame["us"].size):
+    return row_strip, row_local, kids, n_sub, k0, ratio
+
+
+def _image_rows(out, k_lo, rows, cre, cim, g, frame: dict, remodulate: bool = True) -> None:
+    """Write the image rows (:func:`_root_rows`) into ``out``, from column ``k_lo`` on.
+
+    The root rows are the roots' children (planes ``cre``, ``cim`` of depth 1, filters
+    ``g``) added, then remodulated (unless ``remodulate`` is false).
+    """
+    with _threads_for(_MERGE_COST * out.shape[0] * frame["us"].size):
         _kernels.root_rows(
-            out, k_lo, row_strip, row_local, kids, n_sub, k0, ratio, cre, cim, g, frame["us"],
-            frame["y"], *frame["centre"], frame["constants"][2], remodulate,
+            out, k_lo, *rows, cre, cim, g, frame["us"], frame["y"], *frame["centre"],
+            frame["constants"][2], remodulate,
         )  # fmt: skip
 
 
@@ -808,6 +856,78 @@ class FfbpPulses:
         """The same pulses with the antennas and ``rho_o`` given in another frame."""
         return replace(self, positions=positions, reference_point_m=reference_point_m)
 
+    def geometry_key(self) -> tuple:
+        """Everything but the table that an axis-aligned plan depends on, as bytes and numbers."""
+        return (np.ascontiguousarray(self.positions).tobytes(),
+                np.ascontiguousarray(self.ref_ranges, np.float64).tobytes(),
+                self.reference_point_m.tobytes(), tuple(float(c) for c in self.constants),
+                int(self.n_up), float(self.carrier_hz), float(self.bandwidth_hz),
+                self.table_values.shape)  # fmt: skip
+
+
+@dataclass(eq=False)
+class _AlignedPlan:
+    """Everything of the axis-aligned path that the geometry decides (:func:`_plan_aligned`).
+
+    ``admitted`` is false when the path would not save work (then only ``info`` is set).
+    ``frame`` holds the geometry the kernels read; ``levels`` the tree's kernel calls,
+    deepest first; ``g`` the filters of depth 1; ``rows`` the image rows'
+    (:func:`_root_rows`); ``k_lo`` the first used column; ``transpose`` whether ``u = y``.
+    """
+
+    info: dict
+    admitted: bool = False
+    transpose: bool = False
+    shape: tuple[int, int] = (0, 0)
+    k_lo: int = 0
+    frame: dict = field(default_factory=dict)
+    levels: list[_Level] = field(default_factory=list)
+    g: NDArray[np.float32] | None = None
+    rows: tuple = ()
+    edges: list = field(default_factory=list)
+
+
+class PlanCache:
+    """Axis-aligned plans by geometry (:meth:`FfbpPulses.geometry_key`, grid, options).
+
+    A plan is a pure function of its key: the pulses' positions, reference ranges,
+    reference point, table constants and band, the grid's axes, the oversampling asked
+    for and whether exact backprojection is at hand for the window ends. Images of other
+    data on the same acquisition and grid (the stationary and moving parts of one
+    collection, other frames of a track) reuse it. At most :data:`PLAN_CACHE_ENTRIES`
+    plans are kept (least recently used dropped first); every access holds one lock, so
+    threads may image concurrently (a plan is read, never changed, by its evaluation).
+    """
+
+    def __init__(self, entries: int) -> None:
+        self._lock = threading.Lock()
+        self._entries: OrderedDict[tuple, _AlignedPlan] = OrderedDict()
+        self.entries = int(entries)
+
+    def get(self, key: tuple) -> _AlignedPlan | None:
+        with self._lock:
+            plan = self._entries.get(key)
+            if plan is not None:
+                self._entries.move_to_end(key)
+            return plan
+
+    def put(self, key: tuple, plan: _AlignedPlan) -> None:
+        with self._lock:
+            self._entries[key] = plan
+            self._entries.move_to_end(key)
+            while len(self._entries) > self.entries:
+                self._entries.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._entries.clear()
+
+
+#: Axis-aligned plans kept by :data:`PLANS`.
+PLAN_CACHE_ENTRIES = 8
+#: The plan cache of :func:`ffbp_values`.
+PLANS = PlanCache(PLAN_CACHE_ENTRIES)
+
 
 def ffbp_values(
     pulses: FfbpPulses,
@@ -829,7 +949,9 @@ def ffbp_values(
       resampled onto the requested pixels (:func:`_rotated_values`), at any look direction.
 
     ``values`` is ``None`` when neither would save work (small images): the caller runs
-    exact backprojection.
+    exact backprojection. The axis-aligned path's plan (tree, schedule, filters, the
+    pixels computed exactly) is kept in :data:`PLANS` for the next image on the same
+    geometry and grid.
 
     Parameters
     ----------
@@ -839,7 +961,8 @@ def ffbp_values(
         Grid axes (m), uniform.
     tile_for : callable
         ``tile_for(positions, u_m, v_m) -> (rows, cols)``, the tile of the exact kernel
-        (the leaves use its float32 arithmetic, so its bounds).
+        (the leaves use its float32 arithmetic, so its bounds); a function of its
+        arguments and of ``pulses.constants`` alone (plans that used it are reused).
     alpha : float, optional
         Oversampling of each sub-image's band, > 1, with the taps :func:`default_taps`
         gives it. Default: the axis-aligned path plans with each of :data:`ALPHAS` and
@@ -865,54 +988,59 @@ def ffbp_values(
     x = np.asarray(x_m, np.float64)
     y = np.asarray(y_m, np.float64)
     pos, ref_ranges = pulses.positions, pulses.ref_ranges
-    kw = dict(tile_for=tile_for, progress=progress)
     n_pulses = pos.shape[0]
     budget = 0.7 * n_pulses  # pixel-pulses per pixel of exact on the same pixels
-    edges: list = []
+    key = (pulses.geometry_key(), x.tobytes(), y.tobytes(), alpha, exact_for is None)
+    plan = PLANS.get(key)
+    if plan is None:
+        edges: list = []
 
-    def admit(cost: float, margin: float, n_used: int) -> bool:
-        """The factorisation and the exact pixels near the window ends within the budget."""
-        if exact_for is None:
-            return cost <= budget * n_used
-        edges[:] = _window_edge_blocks(pos, ref_ranges, x, y, pulses.constants, pulses.n_up,
-                                       margin, block=EDGE_BLOCK_ROWS)  # fmt: skip
-        return cost + _EDGE_COST * n_pulses * _n_pixels(edges) <= budget * n_used
+        def admit(cost: float, margin: float, n_used: int) -> bool:
+            """The factorisation and the exact pixels near the window ends within the budget."""
+            if exact_for is None:
+                return cost <= budget * n_used
+            edges[:] = _window_edge_blocks(pos, ref_ranges, x, y, pulses.constants, pulses.n_up,
+                                           margin, block=EDGE_BLOCK_ROWS)  # fmt: skip
+            return cost + _EDGE_COST * n_pulses * _n_pixels(edges) <= budget * n_used
 
-    values, info = _aligned_values(pulses, x, y, alpha=alpha, budget=budget, admit=admit, **kw)
-    if values is not None:
-        for rows, cols in edges:  # exact where the window's ends make J a step along v
+        plan = _plan_aligned(pulses, x, y, tile_for=tile_for, alpha=alpha, budget=budget,
+                             admit=admit)  # fmt: skip
+        plan.edges = list(edges)
+        PLANS.put(key, plan)
+    if plan.admitted:
+        values, info = _run_aligned(plan, pulses.table_values, progress)
+        for rows, cols in plan.edges:  # exact where the window's ends make J a step along v
             values[rows, cols] = exact_for(x[cols], y[rows])
-        info["exact_pixels"] = _n_pixels(edges)
+        info["exact_pixels"] = _n_pixels(plan.edges)
         return values, info
     if exact_for is not None and x.size > 1 and y.size > 1:
         turned = DEFAULT_ALPHA if alpha is None else alpha
         values, info = _rotated_values(pulses, x, y, alpha=turned, budget=budget,
-                                       exact_for=exact_for, **kw)  # fmt: skip
+                                       exact_for=exact_for, tile_for=tile_for,
+                                       progress=progress)  # fmt: skip
         if values is not None:
             return values, info
     return None, {"path": "exact", "fallback": "exact (the factorisation would not save work here)"}
 
 
-def _aligned_values(
-    pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progress, demodulated=False, admit=None
-):
-    """The factorisation on the grid's own columns (the ``"axis-aligned"`` path).
+def _plan_aligned(
+    pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, demodulated=False, admit=None
+) -> _AlignedPlan:
+    """The plan of the factorisation on the grid's own columns (the ``"axis-aligned"`` path).
 
     ``alpha``: the oversampling, or ``None`` for the cheapest of :data:`ALPHAS`
-    (:func:`_oversamplings`). ``None`` as values when it would cost more than ``budget``
-    pixel-pulses per pixel of
-    the used columns (or when ``admit(cost, margin_m, n_used)`` is false, when given: the
-    factorisation's cost, how far in range (m) the last interpolation's reach along ``v``
-    spans, :func:`_reach_v` times the largest ``|d|r_j - rho| / dv|``, and the pixels of the
-    used columns). With ``demodulated``, the
-    values are ``J`` (complex64, not remodulated) on the used columns only,
-    ``info["first_column"]`` the first one's index.
+    (:func:`_oversamplings`). Not admitted when it would cost more than ``budget``
+    pixel-pulses per pixel of the used columns (or when ``admit(cost, margin_m, n_used)``
+    is false, when given: the factorisation's cost, how far in range (m) the last
+    interpolation's reach along ``v`` spans, :func:`_reach_v` times the largest
+    ``|d|r_j - rho| / dv|``, and the pixels of the used columns). ``demodulated``: the
+    plan of ``J`` on the used columns (a frame looking along ``x``).
     """
-    table_values, pos, ref_ranges = pulses.table_values, pulses.positions, pulses.ref_ranges
+    pos, ref_ranges = pulses.positions, pulses.ref_ranges
     rho_o, constants, n_up = pulses.reference_point_m, pulses.constants, pulses.n_up
-    carrier_hz = pulses.carrier_hz
     look = np.array([x.mean(), y.mean()]) - pos.mean(axis=0)[:2]
     transpose = abs(look[1]) > abs(look[0])
+    shape = (y.size, x.size)
     if transpose:  # u = y, v = x: swap the coordinates of everything
         if demodulated:
             raise ValueError("a demodulated image is formed in a frame looking along x")
@@ -921,27 +1049,26 @@ def _aligned_values(
         x, y = y, x
     info: dict = {"path": "axis-aligned", "levels": 0, "leaves": 0, "leaf_pixel_pulses": 0,
                   "columns": 0}  # fmt: skip
+    plan = _AlignedPlan(info=info, transpose=transpose, shape=shape)
     cols = _active_columns(pos, ref_ranges, x, y, constants, n_up)
     if cols.size == 0:
-        if demodulated:
-            info["first_column"] = 0
-            return np.zeros((y.size, 0), np.complex64), info
-        out = np.zeros((y.size, x.size), np.complex128)
-        return (out.T if transpose else out), info
+        plan.admitted = True  # nothing to form: zeros
+        plan.k_lo = 0
+        return plan
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
     us = np.ascontiguousarray(x[k_lo:k_hi])
     f_lo, f_hi = pulses.band_hz
-    c_best, bounds, plans, (alpha, taps) = _strip_plans(pos, us, y, f_lo, f_hi, carrier_hz,
+    c_best, bounds, plans, (alpha, taps) = _strip_plans(pos, us, y, f_lo, f_hi,
+                                                        pulses.carrier_hz,
                                                         _oversamplings(alpha))  # fmt: skip
     margin = _reach_v(plans, taps) * _max_v_slope(pos, us, y)
     info.update(cost_pixel_pulses=float(c_best), edge_margin_m=margin, alpha=alpha,
                 most_taps=taps)  # fmt: skip
     n_used = y.size * us.size
     if not (c_best <= budget * n_used if admit is None else admit(c_best, margin, n_used)):
-        return None, info
+        return plan
     centre = pos.mean(axis=0)
     frame = {
-        "table": table_values,
         "antennas": (np.ascontiguousarray(pos[:, 0]), np.ascontiguousarray(pos[:, 1]),
                      np.ascontiguousarray(pos[:, 2] ** 2),
                      np.ascontiguousarray(ref_ranges, dtype=np.float64)),
@@ -959,26 +1086,47 @@ def _aligned_values(
     depths, substitutes = _depths(plans, bounds, y)
     info.update(levels=len(depths) + 1, stages=len(depths), columns=int(us.size),
                 strips=len(plans))  # fmt: skip
+    plan.levels, plan.g = _schedule(depths, frame, tile_for, info)
+    info["budget_db"] = budget_db(info["factorisation_error"])
+    plan.rows = _root_rows(plans, bounds, substitutes, y.size)
+    plan.frame, plan.k_lo, plan.admitted = frame, k_lo, True
+    return plan
+
+
+def _run_aligned(plan: _AlignedPlan, table, progress, demodulated: bool = False):
+    """Evaluate an admitted plan (:func:`_plan_aligned`); returns ``(values, info)``.
+
+    With ``demodulated``, the values are ``J`` (complex64, not remodulated) on the used
+    columns only, ``info["first_column"]`` the first one's index.
+    """
+    info = dict(plan.info)
+    ny, nx = plan.shape
+    if not plan.frame:  # no column in the fast-time window
+        if demodulated:
+            info["first_column"] = 0
+            return np.zeros((ny, 0), np.complex64), info
+        return np.zeros((ny, nx), np.complex128), info
+    n_steps = len(plan.levels) + 1
     done = 0
 
     def report() -> None:
         nonlocal done
         done += 1
         if progress is not None:
-            progress("backprojection", done, len(depths) + 1)
+            progress("backprojection", done, n_steps)
 
-    cre, cim, g = _evaluate(depths, frame, tile_for, info, report)
-    info["budget_db"] = budget_db(info["factorisation_error"])
+    frame = plan.frame
+    cre, cim = _run_levels(plan.levels, frame, table, report)
     if demodulated:
-        out = np.zeros((y.size, us.size), np.complex64)
-        _image_rows(out, 0, plans, bounds, substitutes, cre, cim, g, frame, remodulate=False)
-        info["first_column"] = k_lo
+        out = np.zeros((frame["y"].size, frame["us"].size), np.complex64)
+        _image_rows(out, 0, plan.rows, cre, cim, plan.g, frame, remodulate=False)
+        info["first_column"] = plan.k_lo
         report()
         return out, info
-    out = np.zeros((y.size, x.size), np.complex128)
-    _image_rows(out, k_lo, plans, bounds, substitutes, cre, cim, g, frame)
+    out = np.zeros((frame["y"].size, nx if not plan.transpose else ny), np.complex128)
+    _image_rows(out, plan.k_lo, plan.rows, cre, cim, plan.g, frame)
     report()
-    return (out.T if transpose else out), info
+    return (out.T if plan.transpose else out), info
 
 
 # ==================================================================== rotated path
@@ -1158,12 +1306,13 @@ def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progre
         if progress is not None:
             progress(stage, done, n + 1)
 
-    j, info = _aligned_values(
+    plan = _plan_aligned(
         pulses.in_frame(pos_r, rho_r), us, vs, tile_for=tile_for, alpha=alpha, budget=budget,
-        progress=inner_progress, demodulated=True, admit=admit,
+        demodulated=True, admit=admit,
     )  # fmt: skip
-    if j is None:
-        return None, info
+    if not plan.admitted:
+        return None, plan.info
+    j, info = _run_aligned(plan, pulses.table_values, inner_progress, demodulated=True)
     info.update(
         path="rotated", rotation_deg=math.degrees(theta), resample_taps=RESAMPLE_TAPS,
         rotated_grid=(int(vs.size), int(j.shape[1])), spacing_m=(float(du), float(dv)),
