@@ -171,7 +171,7 @@ def test_trace_table_cache(four_degrees):
     assert _bp_table.TABLES.get(four_degrees, 8) is table  # reused
     assert _bp_table.TABLES.get(four_degrees, 4) is not table  # other upsampling
     # A traces object with other data gets its own table; a change of the data in place is
-    # noticed (CRC-32) and the table rebuilt.
+    # noticed (the data is compared with a copy) and the table rebuilt.
     other = four_degrees.with_data(four_degrees.data * 2.0)
     np.testing.assert_allclose(backproject(other, grid).values, 2.0 * a, rtol=1e-6, atol=1e-9)
     copy = four_degrees.with_data(four_degrees.data.copy())

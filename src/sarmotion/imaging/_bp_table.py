@@ -17,15 +17,14 @@ and ``N + 1`` are zero (read for delays outside the fast-time window, with ``w =
 
 The float32 kernel's tables are packed in eight float32 planes (:class:`TraceTable`) and
 kept in a small cache
-(:data:`TABLES`) keyed by the traces object; the cache is locked, so threads (Dask
-workers) may image concurrently.
+(:data:`TABLES`) keyed by the traces object, with a copy of the data each table was built
+from; the cache is locked, so threads (Dask workers) may image concurrently.
 """
 
 from __future__ import annotations
 
 import threading
 import weakref
-import zlib
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -34,7 +33,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core import Traces, to_fast_time, to_frequency
 
-#: Bytes of complex64 trace tables kept by the cache (least recently used dropped first).
+#: Bytes of trace tables, and of the data they were built from, kept by the cache (least
+#: recently used dropped first).
 CACHE_BYTES = 512 * 2**20
 
 
@@ -155,9 +155,11 @@ class TableCache:
     """Trace tables by traces object, safe to share between threads.
 
     Imaging the same traces again (other grids, other velocities) reuses the upsampling.
-    An entry is dropped after its traces object is collected, when ``traces.data`` no
-    longer has the CRC-32 it was built from, or when the cache holds more than
-    :data:`CACHE_BYTES`. Every read and change of the entries holds one lock. The
+    An entry is dropped after its traces object is collected, when ``traces.data`` is no
+    longer, bit for bit, the data it was built from (a change in place; the entry keeps a
+    copy: comparing 64-bit words reads the data once, several times faster than a
+    checksum of it), or when the cache holds more than :data:`CACHE_BYTES`. Every read
+    and change of the entries holds one lock. The
     weak-reference callback, which the garbage collector may run in any thread and in the
     middle of a locked section, only queues the key (a list append is atomic); queued keys
     are removed under the lock by the next call. Tables are built outside the lock, so
@@ -167,7 +169,7 @@ class TableCache:
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._dead: list[tuple[int, int]] = []
-        self._entries: OrderedDict[tuple[int, int], tuple[weakref.ref, int, TraceTable]] = (
+        self._entries: OrderedDict[tuple[int, int], tuple[weakref.ref, NDArray, TraceTable]] = (
             OrderedDict()
         )
 
@@ -181,25 +183,25 @@ class TableCache:
 
     def get(self, traces: Traces, upsample: int) -> TraceTable:
         data = np.ascontiguousarray(traces.data)
-        crc = zlib.crc32(memoryview(data).cast("B"))
         key = (id(traces), upsample)
         with self._lock:
             self._purge()
             entry = self._entries.get(key)
-            if entry is not None and entry[0]() is traces and entry[1] == crc:
+            if entry is not None and entry[0]() is traces and _same_bits(entry[1], data):
                 self._entries.move_to_end(key)
                 return entry[2]
-        table = make_table(data, upsample)
+        built_from = data.copy()
+        table = make_table(built_from, upsample)
         ref = weakref.ref(traces, lambda _, k=key, dead=self._dead: dead.append(k))
         with self._lock:
             self._purge()
             entries = self._entries
-            entries[key] = (ref, crc, table)
+            entries[key] = (ref, built_from, table)
             entries.move_to_end(key)
-            total = sum(e[2].values.nbytes for e in list(entries.values()))
+            total = sum(e[1].nbytes + e[2].values.nbytes for e in list(entries.values()))
             while total > CACHE_BYTES and len(entries) > 1:
-                _, (_, _, old) = entries.popitem(last=False)
-                total -= old.values.nbytes
+                _, (_, old_data, old) = entries.popitem(last=False)
+                total -= old_data.nbytes + old.values.nbytes
         return table
 
     def clear(self) -> None:
@@ -209,3 +211,11 @@ class TableCache:
 
 
 TABLES = TableCache()
+
+
+def _same_bits(a: NDArray, b: NDArray) -> bool:
+    """Whether two C-contiguous arrays hold the same dtype, shape and bytes."""
+    if a.dtype != b.dtype or a.shape != b.shape:
+        return False
+    word = np.uint64 if a.nbytes % 8 == 0 else np.uint8
+    return bool(np.array_equal(a.reshape(-1).view(word), b.reshape(-1).view(word)))
