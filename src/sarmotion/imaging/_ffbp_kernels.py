@@ -179,7 +179,7 @@ def level(
     Leaf ``i < L = starts.size`` is the backprojection of pulses ``starts[i]:stops[i]``
     (table ``tab``, antennas ``ant_*``, reference ranges ``ref``) on rows
     ``v0[i] + r dv[i]``, ``r < nv[i]``, and columns ``x0 + k dx``, demodulated; one task per
-    ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v``. Parent
+    ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v[i]``. Parent
     ``L + p`` (``p < P = kids.shape[0]``) is the sum of
     children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
     ``g[child]``) resampled to its rows (:func:`_add_child`); one task per ``block`` rows.
@@ -215,7 +215,7 @@ def level(
                 _leaf_tile(
                     tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, v0[i],
                     dv[i], r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv,
-                    cz2, rref, re[i], im[i], lanes_v,
+                    cz2, rref, re[i], im[i], lanes_v[i],
                 )  # fmt: skip
                 continue
             p = (task - n_leaf_tasks) // n_blocks

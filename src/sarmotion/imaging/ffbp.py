@@ -567,7 +567,7 @@ class _Level:
     nv: NDArray[np.int64]
     kids: NDArray[np.int64]
     tile: tuple[int, int]
-    lanes_v: bool
+    lanes_v: NDArray[np.bool_]
     order: NDArray[np.int64]
     work: float
     g: NDArray[np.float32]
@@ -596,18 +596,18 @@ def _schedule(depths, frame: dict, tile_for, info: dict) -> tuple[list[_Level], 
         split = nodes[len(leaves) :]
         n_rows = max(n.nv for n in nodes)
         tile = (n_rows, 64)
-        grids = sorted({(n.v0, n.dv, n.nv) for n in leaves})
-        # SIMD lanes along v where along u they would span more than a window of the
-        # table and along v less (:mod:`._simd` reads a window without gathers); else along
-        # u, where the tile's demodulation vectorises.
-        lanes_v = False
-        if grids:
-            span_u, span_v = lane_spans(frame["pos"], us, _rows(grids[0]),
+        # SIMD lanes along v where, for the leaf's own pulses, along u they would span more
+        # than a window of the table and along v less (:mod:`._simd` reads a window
+        # without gathers); else along u, where the tile's demodulation vectorises.
+        lanes_v = np.zeros(len(leaves), np.bool_)
+        for i, n in enumerate(leaves):
+            span_u, span_v = lane_spans(frame["pos"][n.j0 : n.j1], us, _rows((n.v0, n.dv, n.nv)),
                                         frame["constants"][0])  # fmt: skip
-            lanes_v = span_u >= LANES and span_v < span_u
-        for grid in grids:
-            # the smallest tile any leaf grid needs (in bounds for all)
-            if lanes_v:  # the tile of the mirrored frame, its axes swapped back
+            lanes_v[i] = span_u >= LANES and span_v < span_u
+        for grid, along_v in sorted({((n.v0, n.dv, n.nv), bool(v)) for n, v in
+                                     zip(leaves, lanes_v, strict=True)}):  # fmt: skip
+            # the smallest tile any leaf needs (in bounds for all)
+            if along_v:  # the tile of the mirrored frame, its axes swapped back
                 cols, rows = tile_for(mirrored, _rows(grid), us)
             else:
                 rows, cols = tile_for(frame["pos"], us, _rows(grid))
