@@ -182,7 +182,8 @@ def level(
     ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v[i]``. Parent
     ``L + p`` (``p < P = kids.shape[0]``) is the sum of
     children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
-    ``g[child]``) resampled to its rows (:func:`_add_child`); one task per ``block`` rows.
+    ``g[child]``, ``k0[child]`` its rows before the parent's row 0, the same for both)
+    resampled to its rows (:func:`_add_child`); one task per ``block`` rows.
 
     Task ``t``: leaf tile ``t`` (``t < L n_ty n_tx``, leaf-major, tiles row-major) or block
     of merged rows ``t - L n_ty n_tx`` (parent-major). ``workers`` loops (one per thread) take the
@@ -223,8 +224,8 @@ def level(
             a, b = kids[p, 0], kids[p, 1]
             m0 = (task - n_leaf_tasks) % n_blocks * block
             for m in range(m0, min(m0 + block, nv[q])):
-                _merge_row(re[q, m], im[q, m], m, cre[a], cim[a], cre[b], cim[b], k0, ratio,
-                           g[a], g[b])  # fmt: skip
+                _merge_row(re[q, m], im[q, m], m, cre[a], cim[a], cre[b], cim[b], k0[a],
+                           ratio, g[a], g[b])  # fmt: skip
 
 
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)

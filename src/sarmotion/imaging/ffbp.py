@@ -380,18 +380,21 @@ def _plan(n_pulses, band, dv_top, v0_top, nv_top, alpha, taps=TAPS) -> list[list
     node as a leaf (rows times pulses, a merged row :data:`_MERGE_COST` pulses);
     otherwise it is a leaf. The second rule also keeps the tree shallow: every level of
     interpolation adds error (a tree split down to 2-pulse leaves misses the 40 dB
-    specification, ``docs/notes/ffbp.md``). Each child holds ``taps / 2`` rows beyond its
-    parent's on either side, the reach of a ``taps``-tap filter. Level ``d + 1`` lists the
-    children of the split nodes of level ``d``, in order. All nodes of a level share one
-    grid.
+    specification, ``docs/notes/ffbp.md``). Each child at depth ``d`` holds ``T_d / 2``
+    rows beyond its parent's on either side, the reach of a ``T_d``-tap filter: ``taps``
+    is one ``T`` for every depth or one per depth (depth 1 first; deeper depths take the
+    last). Level ``d + 1`` lists the children of the split nodes of level ``d``, in order.
+    All nodes of a level share one grid.
     """
+    per_depth = (int(taps),) if np.ndim(taps) == 0 else tuple(int(t) for t in taps)
     root = _Node(0, n_pulses, dv=dv_top, v0=v0_top, nv=nv_top)
     levels = [[root]]
-    k0 = taps // 2 - 1  # child rows before the parent's row 0 (the filter's reach)
     while True:
         level = levels[-1]
+        t = per_depth[min(len(levels), len(per_depth)) - 1]  # the children's depth's taps
+        k0 = t // 2 - 1  # child rows before the parent's row 0 (the filter's reach)
         dv = 2.0 * level[0].dv
-        nv = k0 + (level[0].nv - 2) // 2 + taps // 2 + 1
+        nv = k0 + (level[0].nv - 2) // 2 + t // 2 + 1
         nxt: list[_Node] = []
         for node in level:
             if node.j1 - node.j0 < 2 * _MIN_LEAF:
@@ -456,9 +459,7 @@ def _filters(
     ``(len(nodes), 2, taps)`` filters and the largest merge error among the nodes.
     """
     bands = [node.half * node.dv for node in nodes if node.ratio == 2]
-    taps = 4
-    while taps < most and any(merge_error(b, taps) > allowed for b in bands):
-        taps += 2
+    taps = _fewest_taps(bands, allowed, most)
     worst = max((merge_error(b, taps) for b in bands), default=0.0)
     offsets = np.arange(taps) - (taps - 1) / 2.0
     g = np.zeros((max(len(nodes), 1), 2, taps), np.float32)
@@ -468,6 +469,31 @@ def _filters(
             gc = gc * np.exp(-2j * np.pi * node.centre * node.dv * offsets)
             g[node.slot, 0], g[node.slot, 1] = gc.real, gc.imag
     return g, worst
+
+
+def _fewest_taps(bands, allowed: float, most: int) -> int:
+    """Fewest even taps (4 to ``most``) with :func:`merge_error` within ``allowed`` on each band."""
+    taps = 4
+    while taps < most and any(merge_error(b, taps) > allowed for b in bands):
+        taps += 2
+    return taps
+
+
+def _depth_taps(plans, allowed: float, most: int) -> tuple[int, ...]:
+    """The taps each depth's filters need (depth 1 first), over every strip's tree.
+
+    The rule of :func:`_schedule`: an equal share ``2 allowed / S`` of the factorisation's
+    error per depth (``S`` depths, the deepest strip's), the fewest taps up to ``most``
+    (:func:`_fewest_taps`) that keep every node of the depth within it.
+    """
+    by_depth: list[list[float]] = []
+    for levels, _ in plans:
+        for d, level in enumerate(levels[1:]):
+            if d == len(by_depth):
+                by_depth.append([])
+            by_depth[d].extend(node.half * node.dv for node in level)
+    per_depth = 2.0 * allowed / max(len(by_depth), 1)
+    return tuple(_fewest_taps(bands, per_depth, most) for bands in by_depth)
 
 
 _SCRATCH = threading.local()
@@ -555,8 +581,9 @@ def _rows(grid: tuple[float, float, int]) -> NDArray[np.float64]:
 class _Level:
     """One depth of the tree as :func:`._ffbp_kernels.level` reads it, all but the planes.
 
-    ``g`` holds the filters of the depth below (the children this depth's parents read);
-    ``work`` is the level's cost in pixel-pulses (:func:`_task_costs`).
+    ``g`` holds the filters of the depth below (the children this depth's parents read),
+    ``k0`` their rows before their parent's row 0 (:class:`_Node`), by slot; ``work`` is
+    the level's cost in pixel-pulses (:func:`_task_costs`).
     """
 
     shape: tuple[int, int, int]
@@ -566,6 +593,7 @@ class _Level:
     dv: NDArray[np.float64]
     nv: NDArray[np.int64]
     kids: NDArray[np.int64]
+    k0: NDArray[np.int64]
     tile: tuple[int, int]
     lanes_v: NDArray[np.bool_]
     order: NDArray[np.int64]
@@ -583,8 +611,8 @@ def _schedule(depths, frame: dict, tile_for, info: dict) -> tuple[list[_Level], 
     ``info["leaf_pixel_pulses"]`` the leaves.
     """
     us = frame["us"]
-    most = frame["taps"]
-    g = np.zeros((1, 2, most), np.float32)
+    g = np.zeros((1, 2, 4), np.float32)
+    k0 = np.zeros(1, np.int64)
     per_depth = 2.0 * frame["allowed"] / max(len(depths), 1)
     taps: list[int] = []
     error = 0.0
@@ -621,11 +649,15 @@ def _schedule(depths, frame: dict, tile_for, info: dict) -> tuple[list[_Level], 
         out.append(_Level(
             shape=(len(nodes), n_rows, us.size), starts=starts, stops=stops,
             v0=np.array([n.v0 for n in nodes]), dv=np.array([n.dv for n in nodes]), nv=nv,
-            kids=kids, tile=tile, lanes_v=lanes_v, order=_task_order(costs),
+            kids=kids, k0=k0, tile=tile, lanes_v=lanes_v, order=_task_order(costs),
             work=float(costs.sum()), g=g,
         ))  # fmt: skip
         info["leaves"] += len(leaves)
         info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
+        k0 = np.array([n.k0 for n in nodes], np.int64)
+        # The depth's filters take at most the taps of its narrowest margins, 2 (k0 + 1)
+        # (one for every depth of a plan, :func:`_strip_plans`).
+        most = 2 * (min((n.k0 for n in nodes if n.ratio == 2), default=1) + 1)
         g, worst = _filters(nodes, per_depth, most)
         taps.insert(0, int(g.shape[2]))
         error += 0.5 * worst
@@ -637,7 +669,6 @@ def _run_levels(levels: list[_Level], frame: dict, table, report):
     """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes."""
     us = frame["us"]
     du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
-    k0 = frame["taps"] // 2 - 1
     cre = np.zeros((1, 1, us.size), np.float32)
     cim = cre
     for i, lv in enumerate(levels):
@@ -648,7 +679,7 @@ def _run_levels(levels: list[_Level], frame: dict, table, report):
                 re, im, table, lv.starts, lv.stops, *frame["antennas"], float(us[0]), du,
                 lv.v0, lv.dv, lv.nv, *frame["constants"][:2], frame["n_up"],
                 frame["constants"][2], lv.tile[0], lv.tile[1], *frame["centre"], lv.kids,
-                cre, cim, k0, 2, lv.g, lv.lanes_v, lv.order, np.zeros(1, np.int64),
+                cre, cim, lv.k0, 2, lv.g, lv.lanes_v, lv.order, np.zeros(1, np.int64),
                 numba.get_num_threads(), MERGE_BLOCK,
             )  # fmt: skip
         cre, cim = re, im
@@ -710,11 +741,11 @@ def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
     return np.flatnonzero(active)
 
 
-def _reach_v(plans, taps: int = TAPS) -> float:
+def _reach_v(plans) -> float:
     """How far along ``v`` (m) the last interpolation reads, over all strips.
 
-    An image row is read from the root's children within ``taps / 2`` of their spacing
-    (``taps`` the plan's most taps): a
+    An image row is read from the root's children within ``T / 2`` of their spacing
+    (``T`` the taps of their margins, ``2 (k0 + 1)``): a
     pulse whose contribution steps to 0 there (an end of its fast-time window) enters the
     row through taps of up to 0.63, so the row is computed exactly (:func:`ffbp_values`).
     Deeper stages are not counted: there a step sits in a sub-image of ``2^-d`` of the
@@ -724,7 +755,8 @@ def _reach_v(plans, taps: int = TAPS) -> float:
     :data:`TARGET_DB`); counting every stage's reach would compute several times as many
     pixels exactly.
     """
-    return max((taps / 2 * levels[1][0].dv if len(levels) > 1 else 0.0) for levels, _ in plans)
+    return max(((levels[1][0].k0 + 1) * levels[1][0].dv if len(levels) > 1 else 0.0)
+               for levels, _ in plans)  # fmt: skip
 
 
 def _max_v_slope(pos, us, y) -> float:
@@ -742,17 +774,21 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, choices):
     lets the leaves grow; each strip pays its own interpolation margins. ``choices`` lists
     the ``(alpha, taps)`` pairs to plan with (:func:`_oversamplings`): a lower ``alpha``
     lets a sub-aperture whose band floor nearly fills its grid split once more, at the
-    price of wider margins (more taps). Returns ``(cost, bounds, [(levels, n_sub), ...],
-    (alpha, taps))``; the cost is in pixel-pulses of the leaves plus :data:`_MERGE_COST`
-    per merged sample (two children read, half the rows interpolated), the root's merge
-    counted on the image rows only.
+    price of wider margins (more taps). Each depth's margins are the taps its filters need
+    (:func:`_depth_taps`, at most ``taps``): the strips are planned with ``taps`` at every
+    depth, then again with the taps that tree's depths need, until every depth's filters
+    fit its margins (the margins only grow, so this ends). Returns ``(cost, bounds,
+    [(levels, n_sub), ...], (alpha, taps))``; the cost is in pixel-pulses of the leaves
+    plus :data:`_MERGE_COST` per merged sample (two children read, half the rows
+    interpolated), the root's merge counted on the image rows only.
     """
     n_pulses, nv_ = pos.shape[0], y.size
     centre = pos.mean(axis=0)
     dy = (y[-1] - y[0]) / (nv_ - 1)
+    allowed = FACTORISATION_SHARE * error_allowed()
 
-    def plan(r0: int, r1: int) -> list[tuple[list[list[_Node]], int]]:
-        """The strip's plan for each of ``choices``."""
+    def strip(r0: int, r1: int):
+        """The strip's band of a sub-aperture, ``band(j0, j1) -> (lo, hi)``, and its rows."""
         ys = y[r0:r1]
         probes = np.array(
             [[a, b] for a in (us[0], us.mean(), us[-1]) for b in (ys[0], ys.mean(), ys[-1])]
@@ -766,14 +802,30 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, choices):
             return (min(lo_j[j0], lo_j[jm], lo_j[j1 - 1]),
                     max(hi_j[j0], hi_j[jm], hi_j[j1 - 1]))  # fmt: skip
 
-        lo, hi = band(0, n_pulses)
-        out = []
-        for alpha, taps in choices:
-            n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
-            levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]), (ys.size - 1) * n_sub + 1,
-                           alpha, taps)  # fmt: skip
-            out.append((levels, n_sub))
-        return out
+        return band, ys
+
+    def plan(strips, alpha: float, taps: int) -> list[tuple[list[list[_Node]], int]]:
+        """Every strip's tree at ``alpha``, each depth's margins the taps it needs."""
+
+        def trees(margins: tuple[int, ...]) -> list[tuple[list[list[_Node]], int]]:
+            out = []
+            for band, ys in strips:
+                lo, hi = band(0, n_pulses)
+                n_sub = max(1, math.ceil(alpha * (hi - lo) * dy))  # root rows per image row
+                levels = _plan(n_pulses, band, dy / n_sub, float(ys[0]),
+                               (ys.size - 1) * n_sub + 1, alpha, margins + (taps,))  # fmt: skip
+                out.append((levels, n_sub))
+            return out
+
+        margins = _depth_taps(trees(()), allowed, taps)
+        for _ in range(taps):  # each pass grows a depth's margins by 2 taps or ends
+            plans = trees(margins)
+            need = _depth_taps(plans, allowed, taps)
+            used = margins + (taps,) * max(0, len(need) - len(margins))
+            if all(n <= m for n, m in zip(need, used, strict=False)):
+                return plans
+            margins = tuple(max(n, m) for n, m in zip(need, used, strict=False))
+        return trees(())  # the margins of ``taps`` taps at every depth hold any filter
 
     def cost(levels: list[list[_Node]], rows: int) -> float:
         c = 0.0
@@ -790,10 +842,10 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, choices):
         if nv_ // n_strips < 16:
             break
         bounds = np.linspace(0, nv_, n_strips + 1).round().astype(int)
-        by_strip = [plan(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        strips = [strip(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         here = None
-        for k, choice in enumerate(choices):
-            plans = [p[k] for p in by_strip]
+        for choice in choices:
+            plans = plan(strips, *choice)
             c = sum(cost(levels, b - a) for (levels, _), a, b in
                     zip(plans, bounds[:-1], bounds[1:], strict=True))  # fmt: skip
             if here is None or c < here[0]:
@@ -1061,7 +1113,7 @@ def _plan_aligned(
     c_best, bounds, plans, (alpha, taps) = _strip_plans(pos, us, y, f_lo, f_hi,
                                                         pulses.carrier_hz,
                                                         _oversamplings(alpha))  # fmt: skip
-    margin = _reach_v(plans, taps) * _max_v_slope(pos, us, y)
+    margin = _reach_v(plans) * _max_v_slope(pos, us, y)
     info.update(cost_pixel_pulses=float(c_best), edge_margin_m=margin, alpha=alpha,
                 most_taps=taps)  # fmt: skip
     n_used = y.size * us.size
