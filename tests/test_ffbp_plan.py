@@ -13,8 +13,9 @@ taken by the threads one at a time, dearest first
 - the planner keeps the cheapest of the oversamplings, and an image planned with each
   oversampling of :data:`~sarmotion.imaging.ffbp.ALPHAS` reaches
   :data:`~sarmotion.imaging.ffbp.TARGET_DB` against exact backprojection;
-- the tasks of a level: their costs follow the cost model, the threads take each once,
-  dearest first, and a level is the same (bit for bit) on one worker loop or several.
+- the tasks of a region: their costs follow the cost model, the threads take each once,
+  dearest first, and a region is the same (bit for bit) on one worker loop or several;
+- a plan is reused for other data on the same geometry and grid, and only there.
 """
 
 from __future__ import annotations
@@ -126,14 +127,19 @@ def test_tasks_are_taken_dearest_first_each_once():
     assert np.all(np.diff(costs[order]) <= 0)
 
 
-def test_task_costs_follow_the_cost_model():
-    # Two leaves (3 and 5 pulses) on 10 and 7 of 12 rows, tiles of 8 x 4 over 6 columns;
-    # one parent merged on 9 rows, in blocks of 4 rows.
-    costs = ffbp._task_costs(np.array([3, 5]), np.array([10, 7]), np.array([9]), 12, 6, (8, 4), 4)
-    leaf = costs[: 2 * 2 * 2].reshape(2, 2, 2)  # (leaf, tile row, tile column)
-    np.testing.assert_array_equal(leaf[0], 3 * np.outer([8, 2], [4, 2]))
-    np.testing.assert_array_equal(leaf[1], 5 * np.outer([7, 0], [4, 2]))
-    np.testing.assert_array_equal(costs[8:], ffbp._MERGE_COST * 6 * np.array([4, 4, 1]))
+def test_tasks_follow_the_cost_model():
+    # Two leaves (3 and 5 pulses) on 10 and 7 rows, tiles of 8 x 4 and 4 x 4 over 6
+    # columns; one parent merged on 9 rows, in blocks of 4 rows.
+    tasks, costs, total = ffbp._tasks(np.array([3, 5]), [10, 7], np.array([[8, 4], [4, 4]]),
+                                      [9], 6, 4)  # fmt: skip
+    expected = {(0, 0, 0): 3 * 8 * 4, (0, 0, 4): 3 * 8 * 2, (0, 8, 0): 3 * 2 * 4,
+                (0, 8, 4): 3 * 2 * 2, (1, 0, 0): 5 * 4 * 4, (1, 0, 4): 5 * 4 * 2,
+                (1, 4, 0): 5 * 3 * 4, (1, 4, 4): 5 * 3 * 2}  # fmt: skip
+    expected.update({(-1, m0, 0): ffbp._MERGE_COST * 6 * r for m0, r in ((0, 4), (4, 4), (8, 1))})
+    got = {tuple(int(v) for v in t): c for t, c in zip(tasks, costs, strict=True)}
+    assert got == pytest.approx(expected)
+    assert total == pytest.approx(sum(expected.values()))
+    assert np.all(np.diff(costs) <= 0)  # dearest first
 
 
 def test_a_level_is_the_same_whichever_thread_takes_each_task(monkeypatch):
@@ -184,3 +190,29 @@ def test_a_plan_is_reused_on_the_same_geometry_only(monkeypatch):
     fresh = backproject(other, grid, method="ffbp")
     assert len(planned) == 3
     np.testing.assert_array_equal(reused.values, fresh.values)
+
+
+def test_both_layouts_of_the_regions_form_the_same_image(monkeypatch):
+    # Leaves at several depths: all nodes in one set of planes (one region forms every
+    # leaf, then the merges), or, where they would not fit the scratch, one region per
+    # depth. Each task computes the same tile or rows either way: the same image.
+    tr, grid = _look_off_u(96, 0.25)
+    layouts = []
+    schedule = ffbp._schedule
+
+    def recording(*args):
+        regions, g = schedule(*args)
+        layouts.append([(r.starts.size, r.kids.shape[0]) for r in regions])
+        return regions, g
+
+    monkeypatch.setattr(ffbp, "_schedule", recording)
+    monkeypatch.setattr(ffbp, "PLANS", ffbp.PlanCache(1))
+    fused = backproject(tr, grid, method="ffbp").values
+    monkeypatch.setattr(ffbp, "SCRATCH_BYTES", 0)
+    monkeypatch.setattr(ffbp, "PLANS", ffbp.PlanCache(1))
+    by_depth = backproject(tr, grid, method="ffbp").values
+    # fused: the leaves of every depth in the first region, only merges after it
+    assert layouts[0][0][0] > 0 and all(leaves == 0 for leaves, _ in layouts[0][1:])
+    # by depth: one region per depth, leaves in more than one
+    assert len(layouts[1]) == len(layouts[0]) and sum(1 for n, _ in layouts[1] if n) > 1
+    np.testing.assert_array_equal(fused, by_depth)

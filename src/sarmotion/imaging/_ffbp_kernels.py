@@ -171,58 +171,52 @@ def _leaf_tile(
 @numba.njit(nogil=True, fastmath=_FASTMATH, parallel=True, cache=True)
 def level(
     re, im, tab, starts, stops, ant_x, ant_y, ant_z2, ref, x0, dx, v0, dv, nv, idx_scale,
-    idx_offset, n_up, quarter_scale, tile_rows, tile_cols, cu, cv, cz2, rref, kids, cre, cim,
-    k0, ratio, g, lanes_v, order, counter, workers, block,
+    idx_offset, n_up, quarter_scale, tiles, cu, cv, cz2, rref, p0, kids, cre, cim, k0, ratio,
+    g, lanes_v, tasks, counter, workers, block,
 ):  # pragma: no cover - compiled  # fmt: skip
-    """One tree level: leaves ``0..L-1`` and parents ``L..L+P-1`` of ``re``, ``im``, in place.
+    """One parallel region of the tree: leaf tiles and merged rows of ``re``, ``im``, in place.
 
-    Leaf ``i < L = starts.size`` is the backprojection of pulses ``starts[i]:stops[i]``
-    (table ``tab``, antennas ``ant_*``, reference ranges ``ref``) on rows
-    ``v0[i] + r dv[i]``, ``r < nv[i]``, and columns ``x0 + k dx``, demodulated; one task per
-    ``tile_rows x tile_cols`` tile, its SIMD lanes along the rows when ``lanes_v[i]``. Parent
-    ``L + p`` (``p < P = kids.shape[0]``) is the sum of
-    children ``kids[p, 0]``, ``kids[p, 1]`` of the level below (``cre``, ``cim``, filters
+    Leaf ``i < starts.size`` (plane ``i``) is the backprojection of pulses
+    ``starts[i]:stops[i]`` (table ``tab``, antennas ``ant_*``, reference ranges ``ref``) on
+    rows ``v0[i] + r dv[i]``, ``r < nv[i]``, and columns ``x0 + k dx``, demodulated, in
+    tiles of ``tiles[i]`` (rows, columns), its SIMD lanes along the rows when
+    ``lanes_v[i]``. Parent ``p < kids.shape[0]`` (plane ``q = p0 + p``) is the sum of
+    children ``kids[p, 0]``, ``kids[p, 1]`` (planes of ``cre``, ``cim``; filters
     ``g[child]``, ``k0[child]`` its rows before the parent's row 0, the same for both)
-    resampled to its rows (:func:`_add_child`); one task per ``block`` rows.
+    resampled to its rows (:func:`_add_child`). ``cre``, ``cim`` may be ``re``, ``im``
+    themselves (other planes).
 
-    Task ``t``: leaf tile ``t`` (``t < L n_ty n_tx``, leaf-major, tiles row-major) or block
-    of merged rows ``t - L n_ty n_tx`` (parent-major). ``workers`` loops (one per thread) take the
-    tasks ``order[counter[0]]``, ``counter[0]`` advanced atomically (:func:`_take`; start it
-    at 0), until ``order`` is done: a task's place in ``order`` is when it starts
-    (:func:`~.ffbp._task_order`: dearest first).
+    Task ``tasks[t] = (i, r0, c0)``: the tile of leaf ``i >= 0`` from row ``r0``, column
+    ``c0``; ``(-1 - p, m0, 0)``: parent ``p``'s rows ``m0 .. m0 + block - 1`` (below
+    ``nv``). ``workers`` loops (one per thread) take the tasks ``tasks[counter[0]]``,
+    ``counter[0]`` advanced atomically (:func:`_take`; start it at 0), until all are done:
+    a task's place in ``tasks`` is when it starts (:func:`~.ffbp._task_order`: dearest
+    first).
     """
-    n_leaves = starts.size
     nx = re.shape[2]
-    n_tx = (nx + tile_cols - 1) // tile_cols
-    n_ty = (re.shape[1] + tile_rows - 1) // tile_rows
-    n_leaf_tasks = n_leaves * n_ty * n_tx
-    n_blocks = (re.shape[1] + block - 1) // block
     hi = np.float32(n_up)
+    n_tasks = tasks.shape[0]
     for _ in numba.prange(workers):
         while True:
             at = _take(counter)
-            if at >= order.size:
+            if at >= n_tasks:
                 break
-            task = order[at]
-            if task < n_leaf_tasks:
-                i = task // (n_ty * n_tx)
-                tile = task % (n_ty * n_tx)
-                r0 = (tile // n_tx) * tile_rows
-                if r0 >= nv[i]:
-                    continue
-                c0 = (tile % n_tx) * tile_cols
-                nr = min(nv[i], r0 + tile_rows) - r0
-                nc = min(nx, c0 + tile_cols) - c0
+            i = tasks[at, 0]
+            if i >= 0:
+                r0 = tasks[at, 1]
+                c0 = tasks[at, 2]
+                nr = min(nv[i], r0 + tiles[i, 0]) - r0
+                nc = min(nx, c0 + tiles[i, 1]) - c0
                 _leaf_tile(
                     tab, starts[i], stops[i], ant_x, ant_y, ant_z2, ref, x0, dx, v0[i],
                     dv[i], r0, c0, nr, nc, idx_scale, idx_offset, hi, quarter_scale, cu, cv,
                     cz2, rref, re[i], im[i], lanes_v[i],
                 )  # fmt: skip
                 continue
-            p = (task - n_leaf_tasks) // n_blocks
-            q = n_leaves + p
+            p = -1 - i
+            q = p0 + p
             a, b = kids[p, 0], kids[p, 1]
-            m0 = (task - n_leaf_tasks) % n_blocks * block
+            m0 = tasks[at, 1]
             for m in range(m0, min(m0 + block, nv[q])):
                 _merge_row(re[q, m], im[q, m], m, cre[a], cim[a], cre[b], cim[b], k0[a],
                            ratio, g[a], g[b])  # fmt: skip

@@ -61,7 +61,11 @@ Evaluation: the nodes of all strips at one depth of the tree are one parallel re
 (:mod:`._ffbp_kernels`): leaf tiles and merged rows are tasks of the same loop, which the
 threads take one at a time from a shared counter, dearest first (:func:`_task_order`;
 numba's ``prange`` would give each thread an equal, contiguous count of iterations
-whatever their cost), and the image rows of every strip one last region. Every region
+whatever their cost), and the image rows of every strip one last region. Where leaves
+lie at several depths (small grids, a floor that stops part of the aperture early) and
+every depth's planes fit the scratch together, the leaves of all depths are one region
+and each depth's merges one after it (:func:`_schedule`): the deep levels' few leaves
+then share the threads with the others instead of running alone. Every region
 ends in a barrier, which on a busy machine waits for a descheduled thread, so the number
 of regions (about the depth, 7 at 2048 x 2048) is kept to one per level. Everything the
 geometry decides (the tree, the kernel calls' arrays and task orders, the filters, the
@@ -450,19 +454,20 @@ def _depths(plans, bounds, y) -> tuple[list[list[_Node]], list[_Node | None]]:
 
 
 def _filters(
-    nodes: list[_Node], allowed: float, most: int = TAPS
+    nodes: list[_Node], allowed: float, most: int = TAPS, n_slots: int | None = None
 ) -> tuple[NDArray[np.float32], float]:
     """Complex half-sample filters of the nodes, by slot, and the depth's merge error.
 
     The taps are the fewest even number (4 to ``most``, the plan's margins) for which
     every node's :func:`merge_error` over its own band is at most ``allowed``. Returns the
-    ``(len(nodes), 2, taps)`` filters and the largest merge error among the nodes.
+    ``(n_slots, 2, taps)`` filters (default ``n_slots``: ``len(nodes)``) and the largest
+    merge error among the nodes.
     """
     bands = [node.half * node.dv for node in nodes if node.ratio == 2]
     taps = _fewest_taps(bands, allowed, most)
     worst = max((merge_error(b, taps) for b in bands), default=0.0)
     offsets = np.arange(taps) - (taps - 1) / 2.0
-    g = np.zeros((max(len(nodes), 1), 2, taps), np.float32)
+    g = np.zeros((max(len(nodes) if n_slots is None else n_slots, 1), 2, taps), np.float32)
     for node in nodes:
         if node.ratio == 2:
             gc = half_sample_filter(node.half * node.dv, taps)
@@ -541,23 +546,30 @@ def _planes(slot: int, shape: tuple[int, int, int]) -> tuple[NDArray, NDArray]:
     return buf[0, :n].reshape(shape), buf[1, :n].reshape(shape)
 
 
-def _task_costs(pulses, leaf_rows, merged_rows, n_rows, n_cols, tile, block) -> NDArray[np.float64]:
-    """Cost (pixel-pulses) of each task of :func:`._ffbp_kernels.level`, in its task order.
+def _tasks(pulses, leaf_rows, tiles, merged_rows, n_cols, block):
+    """The tasks of one call of :func:`._ffbp_kernels.level`, dearest first, and their cost.
 
-    Leaf tiles (leaf-major, tiles row-major): pulses times the tile's pixels on the leaf's
-    rows; blocks of ``block`` merged rows (parent-major, ``ceil(n_rows / block)`` per
-    parent): :data:`_MERGE_COST` per sample on the parent's rows. Tasks past a node's rows
-    cost 0 (they do nothing).
+    Leaf ``i`` (``pulses[i]`` pulses on ``leaf_rows[i]`` rows) in tiles of ``tiles[i]``
+    (rows, columns): a task ``(i, r0, c0)`` per tile, costing its pulses times its pixels;
+    parent ``p`` (``merged_rows[p]`` rows) in blocks of ``block`` rows: ``(-1 - p, m0, 0)``,
+    :data:`_MERGE_COST` per sample. Returns the ``(n, 3)`` int64 tasks in the order
+    :func:`_task_order` gives, their costs (pixel-pulses) in that order, and the total.
     """
-    tile_rows, tile_cols = tile
-    r0 = np.arange(-(-n_rows // tile_rows)) * tile_rows
-    c0 = np.arange(-(-n_cols // tile_cols)) * tile_cols
-    nr = np.clip(np.asarray(leaf_rows)[:, None] - r0[None, :], 0, tile_rows)
-    nc = np.minimum(n_cols - c0, tile_cols)
-    leaf = np.asarray(pulses, np.float64)[:, None, None] * nr[:, :, None] * nc[None, None, :]
-    m0 = np.arange(-(-n_rows // block)) * block
-    rows = np.clip(np.asarray(merged_rows)[:, None] - m0[None, :], 0, block)
-    return np.concatenate([leaf.ravel(), (_MERGE_COST * n_cols * rows).ravel()])
+    rows: list[tuple[int, int, int]] = []
+    costs: list[float] = []
+    for i, (p, nv, (tr, tc)) in enumerate(zip(pulses, leaf_rows, tiles, strict=True)):
+        for r0 in range(0, int(nv), int(tr)):
+            for c0 in range(0, n_cols, int(tc)):
+                rows.append((i, r0, c0))
+                costs.append(float(p) * min(tr, nv - r0) * min(tc, n_cols - c0))
+    for p, nv in enumerate(merged_rows):
+        for m0 in range(0, int(nv), block):
+            rows.append((-1 - p, m0, 0))
+            costs.append(_MERGE_COST * n_cols * min(block, nv - m0))
+    cost = np.array(costs, np.float64)
+    order = _task_order(cost)
+    tasks = np.array(rows, np.int64).reshape(-1, 3)[order]
+    return np.ascontiguousarray(tasks), cost[order], float(cost.sum())
 
 
 def _task_order(costs: NDArray[np.float64]) -> NDArray[np.int64]:
@@ -579,30 +591,71 @@ def _rows(grid: tuple[float, float, int]) -> NDArray[np.float64]:
 
 @dataclass(frozen=True, eq=False)
 class _Level:
-    """One depth of the tree as :func:`._ffbp_kernels.level` reads it, all but the planes.
+    """One parallel region of the tree as :func:`._ffbp_kernels.level` reads it.
 
-    ``g`` holds the filters of the depth below (the children this depth's parents read),
-    ``k0`` their rows before their parent's row 0 (:class:`_Node`), by slot; ``work`` is
-    the level's cost in pixel-pulses (:func:`_task_costs`).
+    The planes: ``shape`` (images, rows, columns), kept in scratch buffer ``slot``; the
+    previous region's planes are the children. Leaves (planes ``0 .. L - 1``): pulses
+    ``starts:stops``, ``tiles``, ``lanes_v``; parents: planes ``p0 + p`` from children
+    ``kids[p]``, with the children's filters ``g`` and rows ``k0`` before their parent's
+    row 0 (:class:`_Node`), by child plane; every plane's rows ``v0``, ``dv``, ``nv``;
+    ``tasks`` dearest first (:func:`_tasks`), ``work`` their cost in pixel-pulses.
     """
 
     shape: tuple[int, int, int]
+    slot: int
     starts: NDArray[np.int64]
     stops: NDArray[np.int64]
+    tiles: NDArray[np.int64]
+    lanes_v: NDArray[np.bool_]
     v0: NDArray[np.float64]
     dv: NDArray[np.float64]
     nv: NDArray[np.int64]
+    p0: int
     kids: NDArray[np.int64]
     k0: NDArray[np.int64]
-    tile: tuple[int, int]
-    lanes_v: NDArray[np.bool_]
-    order: NDArray[np.int64]
-    work: float
     g: NDArray[np.float32]
+    tasks: NDArray[np.int64]
+    work: float
+
+
+def _leaf_layout(leaves: list[_Node], frame: dict, tile_for) -> tuple[NDArray, NDArray]:
+    """Per leaf, its SIMD lanes' axis and its tile: ``(lanes_v (L,), tiles (L, 2))``.
+
+    The lanes run along ``v`` where, for the leaf's own pulses, along ``u`` they would
+    span more than a window of the table and along ``v`` less (:mod:`._simd` reads a
+    window without gathers); else along ``u``, where the tile's demodulation vectorises.
+    The tile is the exact kernel's for the leaf's grid in that orientation (``tile_for``,
+    the mirrored frame's with its axes swapped back), at most the leaf's rows by 64.
+    """
+    us = frame["us"]
+    mirrored = np.ascontiguousarray(frame["pos"][:, [1, 0, 2]])
+    lanes_v = np.zeros(len(leaves), np.bool_)
+    tiles = np.zeros((len(leaves), 2), np.int64)
+    found: dict = {}
+    for i, n in enumerate(leaves):
+        v = _rows((n.v0, n.dv, n.nv))
+        span_u, span_v = lane_spans(frame["pos"][n.j0 : n.j1], us, v, frame["constants"][0])
+        lanes_v[i] = along_v = span_u >= LANES and span_v < span_u
+        key = (n.v0, n.dv, n.nv, along_v)
+        if key not in found:
+            if along_v:
+                cols, rows = tile_for(mirrored, v, us)
+            else:
+                rows, cols = tile_for(frame["pos"], us, v)
+            found[key] = (min(n.nv, rows), min(64, cols))
+        tiles[i] = found[key]
+    return lanes_v, tiles
 
 
 def _schedule(depths, frame: dict, tile_for, info: dict) -> tuple[list[_Level], NDArray]:
-    """The depths' kernel calls, deepest first, and the filters the root reads (depth 1's).
+    """The tree's parallel regions, in order, and the filters the root reads (depth 1's).
+
+    Two layouts. Where leaves lie at more than one depth and the planes of every depth
+    fit :data:`SCRATCH_BYTES` together, all nodes share one set of planes (leaves first):
+    one region forms every leaf, then one region per depth merges its parents, deepest
+    first (the leaves of all depths share the threads, and the deep levels' few leaves
+    do not run alone). Otherwise one region per depth, deepest first, forms its leaves
+    and merges its parents from the depth below (two sets of planes, alternating).
 
     Each depth's filters take the fewest taps that keep its merge error within an equal
     share of ``frame["allowed"]`` (half of the rows interpolated: ``2 allowed / S`` per
@@ -610,76 +663,90 @@ def _schedule(depths, frame: dict, tile_for, info: dict) -> tuple[list[_Level], 
     ``info["factorisation_error"]`` record them, ``info["leaves"]`` and
     ``info["leaf_pixel_pulses"]`` the leaves.
     """
-    us = frame["us"]
-    g = np.zeros((1, 2, 4), np.float32)
-    k0 = np.zeros(1, np.int64)
+    nu = frame["us"].size
+    leaves_at = [[n for n in nodes if not n.children] for nodes in depths]
+    split_at = [[n for n in nodes if n.children] for nodes in depths]
+    n_all = sum(len(nodes) for nodes in depths)
+    rows_all = max(n.nv for nodes in depths for n in nodes)
+    fused = (sum(1 for lv in leaves_at if lv) > 1
+             and 8 * n_all * rows_all * nu <= SCRATCH_BYTES)  # fmt: skip
+    if fused:  # every node its own plane: the leaves, then the parents, deepest first
+        order = [n for lv in leaves_at[::-1] for n in lv] + [n for sp in split_at[::-1] for n in sp]
+        for slot, node in enumerate(order):
+            node.slot = slot
     per_depth = 2.0 * frame["allowed"] / max(len(depths), 1)
     taps: list[int] = []
     error = 0.0
-    out: list[_Level] = []
-    mirrored = np.ascontiguousarray(frame["pos"][:, [1, 0, 2]])
-    for d in range(len(depths) - 1, -1, -1):
-        nodes = depths[d]
-        leaves = [n for n in nodes if not n.children]
-        split = nodes[len(leaves) :]
-        n_rows = max(n.nv for n in nodes)
-        tile = (n_rows, 64)
-        # SIMD lanes along v where, for the leaf's own pulses, along u they would span more
-        # than a window of the table and along v less (:mod:`._simd` reads a window
-        # without gathers); else along u, where the tile's demodulation vectorises.
-        lanes_v = np.zeros(len(leaves), np.bool_)
-        for i, n in enumerate(leaves):
-            span_u, span_v = lane_spans(frame["pos"][n.j0 : n.j1], us, _rows((n.v0, n.dv, n.nv)),
-                                        frame["constants"][0])  # fmt: skip
-            lanes_v[i] = span_u >= LANES and span_v < span_u
-        for grid, along_v in sorted({((n.v0, n.dv, n.nv), bool(v)) for n, v in
-                                     zip(leaves, lanes_v, strict=True)}):  # fmt: skip
-            # the smallest tile any leaf needs (in bounds for all)
-            if along_v:  # the tile of the mirrored frame, its axes swapped back
-                cols, rows = tile_for(mirrored, _rows(grid), us)
-            else:
-                rows, cols = tile_for(frame["pos"], us, _rows(grid))
-            tile = (min(tile[0], rows), min(tile[1], cols))
-        starts = np.array([n.j0 for n in leaves], np.int64)
-        stops = np.array([n.j1 for n in leaves], np.int64)
-        kids = np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2)
-        nv = np.array([n.nv for n in nodes], np.int64)
-        costs = _task_costs(stops - starts, nv[: len(leaves)], nv[len(leaves) :], n_rows,
-                            us.size, tile, MERGE_BLOCK)  # fmt: skip
-        out.append(_Level(
-            shape=(len(nodes), n_rows, us.size), starts=starts, stops=stops,
-            v0=np.array([n.v0 for n in nodes]), dv=np.array([n.dv for n in nodes]), nv=nv,
-            kids=kids, k0=k0, tile=tile, lanes_v=lanes_v, order=_task_order(costs),
-            work=float(costs.sum()), g=g,
-        ))  # fmt: skip
-        info["leaves"] += len(leaves)
-        info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in leaves)) * us.size
-        k0 = np.array([n.k0 for n in nodes], np.int64)
+    filters: list[tuple[NDArray, NDArray]] = []  # by depth: (g, k0) by plane
+    for nodes in depths:
+        n_slots = n_all if fused else len(nodes)
+        k0 = np.zeros(n_slots, np.int64)
+        for n in nodes:
+            k0[n.slot] = n.k0
         # The depth's filters take at most the taps of its narrowest margins, 2 (k0 + 1)
         # (one for every depth of a plan, :func:`_strip_plans`).
         most = 2 * (min((n.k0 for n in nodes if n.ratio == 2), default=1) + 1)
-        g, worst = _filters(nodes, per_depth, most)
-        taps.insert(0, int(g.shape[2]))
+        g, worst = _filters(nodes, per_depth, most, n_slots)
+        filters.append((g, k0))
+        taps.append(int(g.shape[2]))
         error += 0.5 * worst
+        info["leaves"] += sum(1 for n in nodes if not n.children)
+        info["leaf_pixel_pulses"] += int(sum((n.j1 - n.j0) * n.nv for n in nodes
+                                             if not n.children)) * nu  # fmt: skip
     info.update(taps=taps, factorisation_error=error)
-    return out, g
+    none = np.zeros(0, np.int64)
+
+    def region(nodes, leaves, split, shape, slot, below) -> _Level:
+        lanes_v, tiles = _leaf_layout(leaves, frame, tile_for)
+        g, k0 = below if below is not None else (np.zeros((1, 2, 4), np.float32), none)
+        starts = np.array([n.j0 for n in leaves], np.int64)
+        stops = np.array([n.j1 for n in leaves], np.int64)
+        nv = np.zeros(shape[0], np.int64)
+        v0 = np.zeros(shape[0])
+        dv = np.ones(shape[0])
+        for n in nodes:
+            nv[n.slot], v0[n.slot], dv[n.slot] = n.nv, n.v0, n.dv
+        tasks, _, work = _tasks(stops - starts, [n.nv for n in leaves], tiles,
+                                [n.nv for n in split], nu, MERGE_BLOCK)  # fmt: skip
+        return _Level(
+            shape=shape, slot=slot, starts=starts, stops=stops, tiles=tiles, lanes_v=lanes_v,
+            v0=v0, dv=dv, nv=nv, p0=split[0].slot if split else 0,
+            kids=np.array([[k.slot for k in n.children] for n in split], np.int64).reshape(-1, 2),
+            k0=k0, g=g, tasks=tasks, work=work,
+        )  # fmt: skip
+
+    out: list[_Level] = []
+    if fused:
+        every = [n for nodes in depths for n in nodes]
+        shape = (n_all, rows_all, nu)
+        leaves = [n for lv in leaves_at[::-1] for n in lv]
+        out.append(region(every, leaves, [], shape, 0, None))
+        for d in range(len(depths) - 2, -1, -1):
+            if split_at[d]:
+                out.append(region(every, [], split_at[d], shape, 0, filters[d + 1]))
+    else:
+        for d in range(len(depths) - 1, -1, -1):
+            shape = (len(depths[d]), max(n.nv for n in depths[d]), nu)
+            below = filters[d + 1] if d + 1 < len(depths) else None
+            out.append(region(depths[d], leaves_at[d], split_at[d], shape, d % 2, below))
+    return out, filters[0][0]
 
 
 def _run_levels(levels: list[_Level], frame: dict, table, report):
-    """Evaluate the depths bottom-up, one parallel region each; returns depth 1's planes."""
+    """Run the regions in order; returns the last one's planes (depth 1's)."""
     us = frame["us"]
     du = (us[-1] - us[0]) / (us.size - 1) if us.size > 1 else 1.0
     cre = np.zeros((1, 1, us.size), np.float32)
     cim = cre
-    for i, lv in enumerate(levels):
+    for lv in levels:
         # Every row a parent reads is written (leaf tiles and merged rows below nv).
-        re, im = _planes(i % 2, lv.shape)
+        re, im = _planes(lv.slot, lv.shape)
         with _threads_for(lv.work):
             _kernels.level(
                 re, im, table, lv.starts, lv.stops, *frame["antennas"], float(us[0]), du,
                 lv.v0, lv.dv, lv.nv, *frame["constants"][:2], frame["n_up"],
-                frame["constants"][2], lv.tile[0], lv.tile[1], *frame["centre"], lv.kids,
-                cre, cim, lv.k0, 2, lv.g, lv.lanes_v, lv.order, np.zeros(1, np.int64),
+                frame["constants"][2], lv.tiles, *frame["centre"], lv.p0, lv.kids, cre, cim,
+                lv.k0, 2, lv.g, lv.lanes_v, lv.tasks, np.zeros(1, np.int64),
                 numba.get_num_threads(), MERGE_BLOCK,
             )  # fmt: skip
         cre, cim = re, im
