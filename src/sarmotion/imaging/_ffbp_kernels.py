@@ -1,8 +1,9 @@
 """Compiled kernels of fast factorised backprojection (:mod:`.ffbp`).
 
-A tree level is one parallel region: its leaves (exact backprojection tiles, demodulated as
-they are written) and its merges (parents from the level below) are independent tasks,
-taken one at a time by each thread from a shared counter (:func:`_take`), dearest first.
+A parallel region (:func:`level`) runs independent tasks: leaf tiles (exact backprojection,
+demodulated as they are written) and merged rows (parents from their children's planes),
+of one tree level, or the leaves of every level (:func:`~.ffbp._schedule`), taken one at a
+time by each thread from a shared counter (:func:`_take`), dearest first.
 numba's ``prange`` would hand each thread a contiguous, equal count of iterations whatever
 their cost (``parallel_chunksize`` does not change that here): the leaf tiles, listed
 first, would all fall to one thread. Taking tasks from a counter also keeps a descheduled

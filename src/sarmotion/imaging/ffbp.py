@@ -99,8 +99,9 @@ depth the fewest even taps (4 to the plan's cap, below) that keep all its nodes'
 ``e_T(b)`` within that share (:func:`_filters`; bands far below ``1 / (2 alpha)`` near
 the root take 4 to 8 taps, the leaves' parents 12 to 18); the resampling gets the rest,
 with the fewest taps
-:data:`RESAMPLE_TAPS` = 10 x 6 that do so at the widest bands. The cap, which also sets
-every sub-image's margins, is :func:`default_taps` of ``alpha``: the fewest taps that meet
+:data:`RESAMPLE_TAPS` = 10 x 6 that do so at the widest bands. Each depth's sub-images
+hold the rows its own filters reach (its margins, :func:`_strip_plans`). The cap is
+:func:`default_taps` of ``alpha``: the fewest taps that meet
 the factorisation's share when every one of :data:`MAX_STAGES` depths sits at the widest
 band ``1 / (2 alpha)`` (:data:`TAPS` = 14 at ``alpha`` = 1.4, 18 at 1.3). The axis-aligned
 path plans with each ``alpha`` of :data:`ALPHAS` (1.4 and 1.3) and keeps the cheaper plan
@@ -155,18 +156,18 @@ FACTORISATION_SHARE = 0.8
 MAX_STAGES = 8
 #: Oversampling of every sub-image's band along ``v``.
 DEFAULT_ALPHA = 1.4
-#: Most taps of the half-sample interpolation filter (even), the planning margins: the
-#: fewest for which a tree of :data:`MAX_STAGES` stages, every one at the widest band
+#: Most taps of the half-sample interpolation filter (even), the margins a plan starts
+#: from: the fewest for which a tree of :data:`MAX_STAGES` stages, every one at the widest band
 #: ``1 / (2 alpha)`` of :data:`DEFAULT_ALPHA`, stays within its share of the budget
-#: (:func:`default_taps`). Each depth of a tree uses the fewest taps its own bands need
-#: (:func:`_filters`).
+#: (:func:`default_taps`). Each depth of a tree uses, and holds margins for, the fewest
+#: taps its own bands need (:func:`_filters`, :func:`_strip_plans`).
 TAPS = 14
 #: Oversamplings the axis-aligned path plans with when none is given, each with the taps
 #: :func:`default_taps` gives it (14 and 18), the cheapest plan by the cost model kept
 #: (:func:`_strip_plans`): a band floor that nearly fills a sub-image's grid at
 #: :data:`DEFAULT_ALPHA` stops the tree there, and 1.3 lets it split once more (small
-#: grids looking a few degrees off ``u``); where it does not, the wider margins of 18
-#: taps make 1.3 the dearer plan.
+#: grids looking a few degrees off ``u``); where it does not, the longer filters (up to
+#: 18 taps) and their wider margins make 1.3 the dearer plan.
 ALPHAS = (DEFAULT_ALPHA, 1.3)
 #: Work (pixel-pulses) under which a parallel region runs on one thread
 #: (:func:`_threads_for`): about half a millisecond of one core.
