@@ -1201,7 +1201,6 @@ def _plan_aligned(
         "centre": (float(centre[0]), float(centre[1]), float(centre[2] ** 2),
                    float(np.linalg.norm(centre - rho_o))),
         "allowed": FACTORISATION_SHARE * error_allowed(),
-        "taps": taps,
     }  # fmt: skip
     depths, substitutes = _depths(plans, bounds, y)
     info.update(levels=len(depths) + 1, stages=len(depths), columns=int(us.size),
