@@ -28,7 +28,9 @@ import weakref
 from collections import OrderedDict
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+import scipy.fft as sp_fft
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import Traces, to_fast_time, to_frequency
@@ -68,30 +70,49 @@ def upsample_fast_time(data: ArrayLike, factor: int) -> NDArray[np.complex128]:
     return to_fast_time(spec) * factor
 
 
+def _polyphase(data: ArrayLike, factor: int) -> NDArray[np.complex128]:
+    """``D_m`` and ``h D'_m`` by phase: shape ``(2, factor, n_pulses, n)`` complex128.
+
+    ``out[0, r, :, q]`` is ``D`` at upsampled sample ``m = q factor + r`` (time
+    ``t_m = (m - N//2) h``), ``out[1, r, :, q]`` is ``h D'`` there. With the ``n`` bins
+    ``F_kappa`` of the trace (signed offsets ``kappa``), ``D(t_m) = (1/n) sum_kappa F_kappa
+    exp(2i pi kappa (m - N//2) / N)``, and ``m = q factor + r`` splits the phase into
+    ``kappa q / n`` and ``kappa (r - N//2) / N``: each phase ``r`` is an ``n``-point
+    inverse transform of ``F`` turned by the second (the derivative multiplies bin
+    ``kappa`` by ``2i pi kappa / N``). The same values as the zero-padded ``N``-point
+    transform, at the cost of ``2 factor`` transforms of the trace's own length (``N``
+    often has the trace length's large prime factors, ``n`` no more), on every core
+    (``scipy.fft``).
+    """
+    d = np.asarray(data, np.complex128)
+    m, n = d.shape
+    big = factor * n
+    f = sp_fft.fft(np.fft.ifftshift(d, axes=-1), axis=-1, workers=-1)
+    kappa = np.round(np.fft.fftfreq(n) * n)  # signed offsets, the bins' order
+    r = np.arange(factor)[:, None]
+    turn = np.exp(2j * np.pi * kappa[None, :] * (r - big // 2) / big)  # (factor, n)
+    spec = np.empty((2, factor, m, n), np.complex128)
+    np.multiply(f[None, :, :], turn[:, None, :], out=spec[0])
+    np.multiply(spec[0], ((2j * np.pi / big) * kappa)[None, None, :], out=spec[1])
+    return sp_fft.ifft(spec, axis=-1, workers=-1, overwrite_x=True)
+
+
+def _interleave(phases: NDArray) -> NDArray:
+    """``(factor, n_pulses, n)`` phases of :func:`_polyphase` as ``(n_pulses, factor n)``."""
+    factor, m, n = phases.shape
+    return np.ascontiguousarray(phases.transpose(1, 2, 0)).reshape(m, factor * n)
+
+
 def hermite_coefficients(
     data: ArrayLike, factor: int, dtype: type = np.complex128
 ) -> NDArray[np.complexfloating]:
     """The table of cubic pieces (module docstring), shape ``(n_pulses, N + 2, 4)``.
 
-    Computed in complex128 (FFTs in FFT order, rolled once to ``t_m``), then cast to
-    ``dtype``.
+    Computed in complex128 (:func:`_polyphase`), then cast to ``dtype``.
     """
-    d = np.asarray(data, np.complex128)
-    m, n = d.shape
-    big = factor * n
-    lo = n - n // 2  # non-negative frequency offsets 0 .. lo-1 of the n bins
-    spec = np.zeros((m, big), np.complex128)
-    f = np.fft.fft(np.fft.ifftshift(d, axes=-1), axis=-1)
-    spec[:, :lo] = f[:, :lo]
-    spec[:, big - n // 2 :] = f[:, lo:]
-    k = np.zeros(big)
-    k[:lo] = np.arange(lo)
-    k[big - n // 2 :] = np.arange(-(n // 2), 0)
-    y = np.roll(np.fft.ifft(spec, axis=-1), big // 2, axis=-1)
-    spec *= (2j * np.pi / big) * k
-    hd = np.roll(np.fft.ifft(spec, axis=-1), big // 2, axis=-1)
-    y *= factor
-    hd *= factor
+    both = _polyphase(data, factor)
+    y, hd = _interleave(both[0]), _interleave(both[1])
+    m, big = y.shape
     y1 = np.roll(y, -1, axis=-1)
     hd1 = np.roll(hd, -1, axis=-1)
     out = np.zeros((m, big + 2, 4), dtype)
@@ -100,6 +121,42 @@ def hermite_coefficients(
     out[:, 1:-1, 2] = 3.0 * (y1 - y) - 2.0 * hd - hd1
     out[:, 1:-1, 3] = 2.0 * (y - y1) + hd + hd1
     return out
+
+
+@numba.njit(nogil=True, parallel=True, cache=True)
+def _pack(both, values, length):  # pragma: no cover - compiled
+    """Write the cubic pieces of :func:`_polyphase`'s ``both`` into ``values``' planes.
+
+    Entry ``p = j + 1`` of each of the eight float32 planes is the piece starting at
+    upsampled sample ``j`` (its next sample circular, as :func:`hermite_coefficients`);
+    entries 0 and ``N + 1`` and the padding stay as given (zero).
+    """
+    factor, m, n = both.shape[1], both.shape[2], both.shape[3]
+    big = factor * n
+    for i in numba.prange(m):
+        row = values[i]
+        a1 = both[0, 0, i, 0]  # sample 0 follows the last (circular)
+        b1 = both[1, 0, i, 0]
+        q, r = n - 1, factor - 1  # sample j = q factor + r, backwards from the last
+        for j in range(big - 1, -1, -1):
+            a = both[0, r, i, q]
+            b = both[1, r, i, q]
+            c2 = 3.0 * (a1 - a) - 2.0 * b - b1
+            c3 = 2.0 * (a - a1) + b + b1
+            p = j + 1
+            row[p] = a.real
+            row[length + p] = a.imag
+            row[2 * length + p] = b.real
+            row[3 * length + p] = b.imag
+            row[4 * length + p] = c2.real
+            row[5 * length + p] = c2.imag
+            row[6 * length + p] = c3.real
+            row[7 * length + p] = c3.imag
+            a1, b1 = a, b
+            if r > 0:
+                r -= 1
+            else:
+                r, q = factor - 1, q - 1
 
 
 #: Entries after each plane of a :class:`TraceTable` row: a window of 32 entries read from
@@ -132,14 +189,10 @@ class TraceTable:
 def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
     """:func:`hermite_coefficients` packed for the float32 kernel (:class:`TraceTable`)."""
     m, n = data.shape
-    coef = hermite_coefficients(data, factor)
     big = factor * n
     length = plane_length(big)
     values = np.zeros((m, 8 * length), np.float32)
-    planes = values.reshape(m, 8, length)
-    for k in range(4):
-        planes[:, 2 * k, : big + 2] = coef[..., k].real
-        planes[:, 2 * k + 1, : big + 2] = coef[..., k].imag
+    _pack(_polyphase(data, factor), values, length)
     return TraceTable(values=values, upsample=factor, n_up=big)
 
 
