@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import multiprocessing as mp
 import os
 import resource
@@ -193,10 +194,13 @@ def run_patches(
     """The collection on the scene; ``piece = (i, k)``: only every ``k``-th patch from ``i``."""
     import dataclasses
 
+    import distributed  # noqa: F401  (its logging set up first, then quietened)
+
     from sarmotion.collection import CollectionOptions, analyze_collection, plan_patches
     from sarmotion.core.blocks import TracesBlocks
     from sarmotion.pipeline import AnalysisOptions
 
+    logging.getLogger("distributed").setLevel(logging.WARNING)  # the local cluster's
     traces, stat, movers = make_scene(side_m, seed)
     t0 = time.perf_counter()
     plan = plan_patches(TracesBlocks(traces))
