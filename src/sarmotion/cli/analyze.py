@@ -156,12 +156,12 @@ def _write_sicd_images(result, stage: Path) -> None:
 )
 @click.option(
     "--defocus-search/--no-defocus-search",
-    default=False,
-    show_default=True,
+    default=None,
     help="Also seek movers whose range rate is that of a stationary point of the scene "
     "(their image lands inside it, where the separation takes them for stationary), by "
-    "their focus over a bank of cross-range speeds. Off by default: its false-alarm rate "
-    "on point clutter is not yet held to --false-alarm-rate.",
+    "their focus over a bank of cross-range speeds. Default: on when the scene is cut "
+    "into patches (most movers of a collection image inside it), off for one analysis "
+    "(its false-alarm rate on point clutter is not yet held to --false-alarm-rate).",
 )
 @click.option(
     "--trajectory/--no-trajectory",
@@ -244,7 +244,7 @@ def analyze(
     speed_mps: float,
     size_m: float | None,
     trajectory: bool,
-    defocus_search: bool,
+    defocus_search: bool | None,
     sub_aperture_deg: float,
     snr_db: float | None,
     seed: int,
@@ -280,7 +280,7 @@ def analyze(
         sub_aperture_deg,
         false_alarm_rate,
         device,
-        defocus_search,
+        bool(defocus_search),
     )
     # --out is claimed before the inputs are read, whether one analysis or patches will
     # write it: a concurrent run into the same directory is refused at once.
@@ -312,6 +312,7 @@ def analyze(
         scheduler=scheduler,
         n_workers=n_workers,
         single=single,
+        defocus_default=defocus_search is None,
         reading=ReadOptions(
             speed_mps=speed_mps,
             snr_db=snr_db,

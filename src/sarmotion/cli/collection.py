@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Sequence
 from pathlib import Path
@@ -72,6 +73,7 @@ def run_collection(
     scheduler: str | None,
     n_workers: int | None,
     single: Any,
+    defocus_default: bool = False,
     reading: ReadOptions | None = None,
     progress: bool = False,
     force: bool = False,
@@ -81,6 +83,9 @@ def run_collection(
     ``single`` is today's analysis of the inputs already read (``read = (traces,
     simulation, autofocus result)``); it writes its own outputs. ``reading``: how the
     inputs are read, as for :func:`~sarmotion.cli.analyze.run_analyze`.
+    ``defocus_default``: ``--defocus-search`` was not given, so the patches of a
+    collection search their stationary band (most movers of a collection image inside
+    the scene, where ``g(u)`` leaves them untested); one analysis keeps ``options``.
     """
     reading = ReadOptions() if reading is None else reading
     if n_workers is not None and n_workers < 0:
@@ -106,6 +111,10 @@ def run_collection(
     if plan.single and region is None:
         single(read_first if read_first is not None else read())
         return
+    if defocus_default:
+        copts = dataclasses.replace(
+            copts, analysis=dataclasses.replace(copts.analysis, defocus_search=True)
+        )
     focus = read_first[2] if read_first is not None else None
     if claimed(out) is None:  # the analyze command claims it before reading
         check_out(out, force=force, names=COLLECTION_OUTPUTS)
