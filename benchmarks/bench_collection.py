@@ -5,8 +5,9 @@ RSS is that size's)::
 
     python benchmarks/bench_collection.py --sizes 100 200 400 --out benchmarks/results
 
-Rows are added to (or replace, by size) ``bench_collection.json`` in ``--out``, and the
-table ``bench_collection.md`` is written from it. ``--pieces k`` runs a size's patches
+Rows are added to (or replace, by size) ``bench_collection.json`` in ``--out`` (the
+methods not run keep their earlier results for that size and seed), and the table
+``bench_collection.md`` is written from it. ``--pieces k`` runs a size's patches
 in ``k`` processes one after the other, each a ``k``-th of the plan's patches (every
 ``k``-th), and merges their answers as one run would (movers by range history,
 stationary targets by cell, then the listing floor and the sidelobe rule): wall is
@@ -527,17 +528,23 @@ def main() -> None:
             args.out.mkdir(parents=True, exist_ok=True)
             path = args.out / "bench_collection.json"
             old = json.loads(path.read_text()) if path.exists() else {}
-            kept = [
-                r
-                for r in (old.get("sizes", []) if isinstance(old, dict) else old)
-                if r["side_m"] != side
-            ]
+            sizes = old.get("sizes", []) if isinstance(old, dict) else old
+            kept = [r for r in sizes if r["side_m"] != side]
+            for prev in (r for r in sizes if r["side_m"] == side):
+                # methods not run this time keep their earlier rows (same scene and seed)
+                for key in ("whole", "patches", "patches_defocus"):
+                    if key not in row and key in prev and prev.get("seed") == row["seed"]:
+                        row[key] = prev[key]
             doc = {
                 "note": __doc__.split("\n")[0],
                 "sizes": sorted(kept + [row], key=lambda r: r["side_m"]),
             }
             path.write_text(json.dumps(doc, indent=2) + "\n")
-            (args.out / "bench_collection.md").write_text(_table(doc["sizes"]))
+            md = args.out / "bench_collection.md"
+            # the notes above the table (how and when it was run) are kept
+            text = md.read_text() if md.exists() else ""
+            notes = text[: text.find("| side |")] if "| side |" in text else ""
+            md.write_text(notes + _table(doc["sizes"]))
 
 
 if __name__ == "__main__":

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import click
 
+from ..collection import CollectionOptions
 from ..io import DataError
 from ..io.sicd import write_sicd
 from ..io.staging import claimed
@@ -302,17 +304,23 @@ def analyze(
             read=read,
         )
 
+    # the patches of a collection search their stationary band unless told not to (most
+    # movers of a collection image inside the scene, where g(u) leaves them untested)
+    patch_options = options
+    if defocus_search is None:
+        patch_options = dataclasses.replace(options, defocus_search=True)
+    with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
+        copts = CollectionOptions(
+            analysis=patch_options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
+        )
     run_collection(
         inputs,
         out,
-        options,
+        copts,
         region=region,
-        patch_size_m=patch_size_m,
-        max_speed_mps=max_speed_mps,
         scheduler=scheduler,
         n_workers=n_workers,
         single=single,
-        defocus_default=defocus_search is None,
         reading=ReadOptions(
             speed_mps=speed_mps,
             snr_db=snr_db,

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Sequence
 from pathlib import Path
@@ -22,10 +21,9 @@ from ..core.text import fixed
 from ..documents.results import results_document
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
 from ..io.staging import claimed
-from ..pipeline import AnalysisOptions
 from ..report.collection import write_collection_report
 from .autofocus import ReadOptions
-from .common import InputError, Progress, as_flags, check_out
+from .common import InputError, Progress, check_out
 from .describe import mover_lines
 from .main import elapsed_s
 
@@ -65,15 +63,12 @@ def _block_source(inputs: Sequence[str], lenient: bool) -> Any:
 def run_collection(
     inputs: Sequence[str],
     out: Path,
-    options: AnalysisOptions,
+    copts: CollectionOptions,
     *,
     region: tuple[float, float, float, float] | None,
-    patch_size_m: float | None,
-    max_speed_mps: float,
     scheduler: str | None,
     n_workers: int | None,
     single: Any,
-    defocus_default: bool = False,
     reading: ReadOptions | None = None,
     progress: bool = False,
     force: bool = False,
@@ -81,19 +76,13 @@ def run_collection(
     """Plan the patches of ``inputs``; one patch: ``single(read)``; else the collection.
 
     ``single`` is today's analysis of the inputs already read (``read = (traces,
-    simulation, autofocus result)``); it writes its own outputs. ``reading``: how the
-    inputs are read, as for :func:`~sarmotion.cli.analyze.run_analyze`.
-    ``defocus_default``: ``--defocus-search`` was not given, so the patches of a
-    collection search their stationary band (most movers of a collection image inside
-    the scene, where ``g(u)`` leaves them untested); one analysis keeps ``options``.
+    simulation, autofocus result)``); it writes its own outputs, with options of its own
+    (the patches' are ``copts.analysis``). ``reading``: how the inputs are read, as for
+    :func:`~sarmotion.cli.analyze.run_analyze`.
     """
     reading = ReadOptions() if reading is None else reading
     if n_workers is not None and n_workers < 0:
         raise InputError(f"--workers must be >= 0, got {n_workers}")
-    with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
-        copts = CollectionOptions(
-            analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
-        )
 
     def read() -> tuple[Any, Any, Any]:
         return reading.read(inputs)
@@ -111,10 +100,6 @@ def run_collection(
     if plan.single and region is None:
         single(read_first if read_first is not None else read())
         return
-    if defocus_default:
-        copts = dataclasses.replace(
-            copts, analysis=dataclasses.replace(copts.analysis, defocus_search=True)
-        )
     focus = read_first[2] if read_first is not None else None
     if claimed(out) is None:  # the analyze command claims it before reading
         check_out(out, force=force, names=COLLECTION_OUTPUTS)
