@@ -74,7 +74,7 @@ def geometry(request):
     return traces, collection, result, results_document(result)
 
 
-#: Region of the collections: Scene 1's targets (all within 24.1 m of the centre), inside
+#: Region of the collections: Scene 1's targets (every coordinate within 24.0 m), inside
 #: the squinted flight's unambiguous scene (the box along x and y in it is +-28.3 m).
 _REGION = (-26.0, -26.0, 26.0, 26.0)
 

@@ -300,14 +300,13 @@ def unambiguous_scene(source: PulseBlocks) -> NDArray[np.float64]:
     rho = source.reference_point_m
     pos = source.trajectory.positions_m
     s = source.trajectory.slow_times_s
+    if s.size < 2:
+        raise RegionError("one pulse has no Doppler: no unambiguous cross range")
     step = 1.0
     pts = _lift(np.stack([rho[:2], rho[:2] + step * e_r, rho[:2] + step * e_c]), z)
     tau = _delays(pos, pts)
     k = np.abs(np.stack([tau[1] - tau[0], tau[2] - tau[0]])) / step  # s per m, (2, n)
-    if s.size > 1:
-        f = np.abs(np.gradient(tau[1:] - tau[0], s, axis=1)) * source.radar.carrier_hz / step
-    else:
-        raise RegionError("one pulse has no Doppler: no unambiguous cross range")
+    f = np.abs(np.gradient(tau[1:] - tau[0], s, axis=1)) * source.radar.carrier_hz / step
     half_t = 0.5 / source.radar.frequency_step_hz  # s
     half_f = 0.5 / source.trajectory.pulse_interval_s  # Hz
     a0 = float(np.min(half_t / np.maximum(k[0], 1e-300)))
