@@ -21,7 +21,9 @@ movers' positions and velocities at the aperture centre) goes to ``truth.json`` 
 the file.
 
 Analysis: ``sarmotion analyze FILE --region -L/2 -L/2 L/2 L/2 --workers W`` in a child
-process (the CPHD read block by block); its wall time and peak RSS (``wait4``'s
+process (the CPHD read block by block; the patches search their stationary band, the
+command's default, unless ``--no-defocus-search``: ``results/acceptance_collection.md``
+is that run, from before the search was the default, ``..._defocus.md`` the default); its wall time and peak RSS (``wait4``'s
 ``ru_maxrss`` of that child) are measured, and the load average sampled every 5 s while
 it runs. Generation is timed separately, in this process.
 
@@ -411,9 +413,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=2028)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument(
-        "--defocus-search",
-        action="store_true",
-        help="analyse with --defocus-search (movers in each patch's stationary band)",
+        "--no-defocus-search",
+        dest="defocus_search",
+        action="store_false",
+        help="analyse with --no-defocus-search (the patches' default searches their "
+        "stationary band)",
     )
     parser.add_argument("--block-pulses", type=int, default=128)
     parser.add_argument("--timeout", type=float, default=MAX_WALL_S + 60.0)
@@ -450,7 +454,7 @@ def main() -> None:
     if args.score_only:
         analysis = json.loads((args.work / "analysis.json").read_text())
     else:
-        extra = ("--defocus-search",) if args.defocus_search else ()
+        extra = () if args.defocus_search else ("--no-defocus-search",)
         analysis = analyse(path, args.work / "out", region, args.workers, args.timeout, extra)
         (args.work / "analysis.json").write_text(json.dumps(analysis))
     print(json.dumps({k: v for k, v in analysis.items() if "tail" not in k}), flush=True)

@@ -14,7 +14,9 @@ stationary targets by cell, then the listing floor and the sidelobe rule): wall 
 the sum, RSS the largest. ``--ab-workers 0 2 --rounds 2`` times the patches alone on
 one size with each worker count in turn, alternated, with the load average.
 ``--defocus-search`` also runs each size's patches with the defocus bank
-(``AnalysisOptions(defocus_search=True)``), reported as a row of its own.
+(``AnalysisOptions(defocus_search=True)``, what ``sarmotion analyze`` does in the patches
+of a collection by default), reported as a row of its own; the plain ``patches`` row is
+the command's ``--no-defocus-search``.
 ``--pieces k --piece-ids i ...`` runs only those pieces: their time and memory, and the
 wall the whole run would take (``k`` over the pieces run times their wall), written to
 ``bench_collection_sampled.json``; a size too long to run whole is estimated so.
@@ -61,8 +63,8 @@ DENSITY_PER_M2 = 0.5e-3
 #: The table's name of each method a row may hold.
 METHOD_NAMES = {
     "whole": "whole",
-    "patches": "patches",
-    "patches_defocus": "patches, --defocus-search",
+    "patches": "patches, --no-defocus-search",
+    "patches_defocus": "patches (defocus search: the default)",
 }
 GUARD = 1.3
 

@@ -176,9 +176,10 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
     The analysis's own stages: separation and ``g(u)``, then the bank
     (:mod:`sarmotion.pipeline.defocused`) on the central degree's data and, for the
     strongest cell of each of its first ``MAX_REJECTED`` echoes, the fit from the cell
-    and the tests against stationary points. Recorded: the bank statistic (power over
-    noise, dB) of the candidates the tests do not explain (each one a false mover) and
-    of those they do, with each one's joint-fit ratio.
+    and the tests against stationary points and of the fit's cancellation of its echo.
+    Recorded: the bank statistic (power over noise, dB) of the candidates the tests do
+    not explain (each one a false mover) and of those they do, with each one's joint-fit
+    ratio and residue.
     """
     from sarmotion.pipeline import AnalysisOptions, detect
     from sarmotion.pipeline.defocused import (
@@ -201,7 +202,7 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
     moving = scan.speeds_mps != 0.0
     step = float(np.min(np.abs(scan.speeds_mps[moving]))) if moving.any() else np.inf
     tests = [test_candidate(data, e[0], step) for e in distinct_echoes(scan, data)[:NULL_ECHOES]]
-    left = [t for t in tests if not t.stationary(opts.min_focus_gain_db)]
+    left = [t for t in tests if not t.stationary(opts.min_focus_gain_db) and t.cancels]
     # the screen's own level at the analysis's rate: what a candidate left must reach
     thr = float(10.0 * np.log10(np.log(scan.n_cells / opts.false_alarm_rate)))
     return {
@@ -213,10 +214,13 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
         "scene": index,
         "statistic_db": [t.candidate.statistic_db for t in left],
         "stationary_db": [
-            t.candidate.statistic_db for t in tests if t.stationary(opts.min_focus_gain_db)
+            t.candidate.statistic_db
+            for t in tests
+            if t.stationary(opts.min_focus_gain_db) or not t.cancels
         ],
         "joint_ratios": [t.joint_ratio for t in tests],
         "coherences": [t.coherence for t in tests],
+        "residues": [t.residue for t in tests],
         "focus_gains_db": [t.explanation.focus_gain_db for t in tests],
         "screen_db": scan.threshold_db,
         "n_candidates": len(tests),

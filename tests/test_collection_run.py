@@ -160,8 +160,8 @@ def test_command_line_collection_outputs(scene, tmp_path, capsys, suffix):
     doc = json.loads((out / "results.json").read_text())
     assert doc["schema"] == "sarmotion.collection/1"
     assert len(doc["plan"]["patches"]) == 2
-    # the defocus search is asked for, not the default
-    assert doc["options"]["analysis"]["defocus_search"] is False
+    # the patches of a collection search their stationary band unless told not to
+    assert doc["options"]["analysis"]["defocus_search"] is True
     assert len(doc["movers"]) == 1
     assert all("patch" in m and m["patch"] in m["patches"] for m in doc["movers"])
     assert doc["stationary_dropped"] == 0
@@ -216,11 +216,11 @@ def test_candidates_beyond_max_movers_are_kept_in_the_document_and_said(scene, t
     out = tmp_path / "out"
     args = ["analyze", str(src), "--out", str(out), "--region", *map(str, REGION)]
     args += ["--patch-size", "60", "--workers", "0", "--no-trajectory", "--max-movers", "0"]
-    code = run([*args, "--defocus-search"])
+    code = run([*args, "--no-defocus-search"])
     console = capsys.readouterr().out
     assert code == 0
     doc = json.loads((out / "results.json").read_text())
-    assert doc["options"]["analysis"]["defocus_search"] is True
+    assert doc["options"]["analysis"]["defocus_search"] is False
     assert doc["movers"] == []
     extra = doc["movers_not_estimated"]
     assert extra and {c["patch"] for c in extra} <= {0, 1}

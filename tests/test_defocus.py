@@ -15,8 +15,13 @@ import pytest
 
 from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
 from sarmotion.imaging import resolution
-from sarmotion.motion import central_sub_aperture, defocus_scan, family_member
-from sarmotion.motion.defocus import EDGE_PHASE_STEP_RAD, cross_speed_bank, edge_phase_rad
+from sarmotion.motion import central_sub_aperture, defocus_scan, family_member, point_model
+from sarmotion.motion.defocus import (
+    EDGE_PHASE_STEP_RAD,
+    cross_speed_bank,
+    echo_peak_power,
+    edge_phase_rad,
+)
 from sarmotion.pipeline import AnalysisOptions, analyze
 from sarmotion.simulation import PointTarget, add_noise, simulate_phase_history
 
@@ -84,6 +89,32 @@ def test_scan_places_the_mover_in_its_cell():
     assert abs(best.cross_range_speed_mps - 12.0) <= step
     assert abs(best.range_speed_mps - rate) <= doppler_mps
     assert abs(best.delay_s - 2.0 * r0 / 3e8) <= 1.0 / sub.radar.bandwidth_hz
+
+
+def test_echo_power_is_the_banks_cell_and_the_true_model_removes_it():
+    """The echo's peak is the coherent sum of its pulses; its own model leaves nothing."""
+    traj, radar = Trajectory.circular(), Radar()
+    mover = PointTarget(position_m=MOVER_AT, velocity_mps=(0.0, 12.0), reflectivity=0.5j)
+    ph = simulate_phase_history([mover], traj, radar, (0.0, 0.0, 0.0))
+    tr = Traces(data=to_fast_time(ph), trajectory=traj, radar=radar, reference_point_m=(0, 0, 0))
+    sub = _central(tr)
+    scan = defocus_scan(
+        sub, max_speed_mps=30.0, band_mps=1.0, half_span_s=2 * 75.0 / 3e8, false_alarm_rate=0.01
+    )
+    # the brightest candidate (the list is ranked by power over the local interference,
+    # which noise-free side lobes far from the echo also reach)
+    powers = [echo_peak_power(sub, c) for c in scan.candidates]
+    cand = scan.candidates[int(np.argmax(powers))]
+    peak = max(powers)
+    # |X|^2 of an aligned point echo of amplitude |a| = 0.5 (its compressed pulse's
+    # peak) over n pulses: at most (n |a|)^2 (Cauchy-Schwarz), less the bank's
+    # straddle losses (its delay sample, Doppler cell and cross-range-speed step),
+    # together under 6 dB
+    n = sub.n_pulses
+    assert peak <= (n * 0.5) ** 2 * (1 + 1e-9)
+    assert peak >= (n * 0.5) ** 2 / 4
+    model = point_model(sub, np.r_[MOVER_AT, 0.0], np.array([0.0, 12.0]), 0.5j)
+    assert echo_peak_power(sub, cand, np.asarray(sub.data) - model) <= 1e-12 * peak
 
 
 @pytest.mark.parametrize(("seed", "speed"), [(1, 12.0), (5, -25.0), (6, 2.5), (4, 20.0)])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -157,13 +158,12 @@ def _write_sicd_images(result, stage: Path) -> None:
 )
 @click.option(
     "--defocus-search/--no-defocus-search",
-    default=False,
-    show_default=True,
+    default=None,
     help="Also seek movers whose range rate is that of a stationary point of the scene "
     "(their image lands inside it, where the separation takes them for stationary), by "
-    "their focus over a bank of cross-range speeds; most movers of a large collection "
-    "image inside the scene. Off by default: its false-alarm rate on point clutter is not "
-    "yet held to --false-alarm-rate (5 false movers on a dense simulated 1.6 km scene).",
+    "their focus over a bank of cross-range speeds. Default: on when the scene is cut "
+    "into patches (most movers of a collection image inside it), off for one analysis "
+    "(its false-alarm rate on point clutter is not yet held to --false-alarm-rate).",
 )
 @click.option(
     "--trajectory/--no-trajectory",
@@ -246,7 +246,7 @@ def analyze(
     speed_mps: float,
     size_m: float | None,
     trajectory: bool,
-    defocus_search: bool,
+    defocus_search: bool | None,
     sub_aperture_deg: float,
     snr_db: float | None,
     seed: int,
@@ -282,7 +282,7 @@ def analyze(
         sub_aperture_deg,
         false_alarm_rate,
         device,
-        defocus_search,
+        bool(defocus_search),
     )
     # --out is claimed before the inputs are read, whether one analysis or patches will
     # write it: a concurrent run into the same directory is refused at once.
@@ -304,9 +304,14 @@ def analyze(
             read=read,
         )
 
+    # the patches of a collection search their stationary band unless told not to (most
+    # movers of a collection image inside the scene, where g(u) leaves them untested)
+    patch_options = options
+    if defocus_search is None:
+        patch_options = dataclasses.replace(options, defocus_search=True)
     with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
         copts = CollectionOptions(
-            analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
+            analysis=patch_options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
         )
     run_collection(
         inputs,

@@ -67,6 +67,7 @@ from scipy.ndimage import maximum_filter
 from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_frequency
 from ..core.constants import C
 from .aperture import ranges_m
+from .speed_resolution import range_speed_resolution
 
 __all__ = [
     "DefocusCandidate",
@@ -75,6 +76,7 @@ __all__ = [
     "SMEAR_MARGIN_DB",
     "cross_speed_bank",
     "defocus_scan",
+    "echo_peak_power",
     "edge_phase_rad",
     "hypothesis_delays_s",
 ]
@@ -323,3 +325,32 @@ def defocus_scan(
         n_cells=n_cells,
         speeds_mps=speeds,
     )
+
+
+def echo_peak_power(
+    traces: Traces, candidate: DefocusCandidate, data: NDArray | None = None
+) -> float:
+    """Largest ``|X|^2`` of ``candidate``'s echo in its own hypothesis (data units squared).
+
+    The bank's cells of hypothesis ``w = candidate.cross_range_speed_mps``
+    (:func:`defocus_scan`, same Doppler oversampling) within two range cells of its delay
+    and two range-speed resolutions of its range speed: the extent of one echo (the
+    mover stage's grouping, :func:`~sarmotion.pipeline.defocused.distinct_echoes`).
+    ``data`` (``traces``' shape) replaces ``traces.data`` when given, so that the same
+    echo is measured before and after a model is subtracted.
+    """
+    d = traces.data if data is None else data
+    s = traces.slow_times_s
+    delays = hypothesis_delays_s(traces, candidate.cross_range_speed_mps)
+    u_w = 0.5 * C * float(np.polyfit(s, delays, 1)[0])
+    rows = np.flatnonzero(
+        np.abs(traces.fast_times_s - candidate.delay_s) <= 2.0 / traces.radar.bandwidth_hz
+    )
+    aligned = to_fast_time(to_frequency(d) * delay_phase(delays, traces.frequencies_hz))[:, rows]
+    n_dop = int(2 ** np.ceil(np.log2(2 * traces.n_pulses)))
+    prf = 1.0 / float(np.median(np.diff(s)))
+    speed = u_w - 0.5 * traces.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
+    cols = np.abs(speed - candidate.range_speed_mps) <= 2.0 * range_speed_resolution(traces)
+    if rows.size == 0 or not cols.any():
+        return 0.0
+    return float(np.max(np.abs(np.fft.fft(aligned, n=n_dop, axis=0)[cols]) ** 2))

@@ -22,7 +22,13 @@ amplitude: :func:`search_data`), one at a time:
    a moving signature's sweep match it in part, and none of them alone does), or its
    per-pulse sums keep less than half their power in their coherent sum (one point
    target's echo keeps all of it; clutter matched in part turns in phase from pulse to
-   pulse). The false-alarm rate is the screen's (the interference model and the union
+   pulse). A fit that stationary points do not explain is still rejected when it does
+   not cancel its echo (:attr:`CandidateTest.residue`): one point target's model,
+   subtracted, leaves at its echo's cells only the interference there, which the
+   screen's smear margin holds under half the candidate's amplitude, so at most
+   ``MAX_ECHO_RESIDUE`` of its peak power; an echo the model does not describe (the
+   residue of a bright echo cut by a patch's fast-time window among clutter smears)
+   keeps its power or gains. The false-alarm rate is the screen's (the interference model and the union
    bound over the bank's cells); the tests only remove candidates, and their measured
    effect on data without movers is ``benchmarks/results/detector_null_defocus.md``;
 3. an accepted fit's model is subtracted and the bank runs again, until a bank gives
@@ -58,7 +64,7 @@ from ..motion import (
 )
 from ..motion.acceleration import HOLD_COHERENCE, uniform_start_holds
 from ..motion.aperture import ranges_m
-from ..motion.defocus import DefocusCandidate, DefocusScan
+from ..motion.defocus import DefocusCandidate, DefocusScan, echo_peak_power
 from ..motion.detector import peak_statistics
 from ..motion.likelihood import noise_variance
 from ..motion.range_speed import range_speed_objective
@@ -70,6 +76,7 @@ from .results import DefocusEvidence, MoverEvidence
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "MAX_ECHO_RESIDUE",
     "MAX_REJECTED",
     "CandidateTest",
     "defocused_movers",
@@ -97,6 +104,11 @@ MAX_NEAR = 16
 #: Least fraction of a candidate's amplitude left when fitted with the stationary points
 #: near its range history (:func:`joint_amplitude`): half, the bank's 6 dB smear margin.
 JOINT_RATIO = 0.5
+
+#: Most of a candidate's echo power (the peak of its cells, :func:`echo_peak_power`) that
+#: its fit may leave once subtracted: ``(1/2)^2``, the screen's smear margin (what is
+#: left of a point target's echo are the smears, under half its amplitude).
+MAX_ECHO_RESIDUE = 0.25
 
 
 def _g_speed(traces: Traces, rate_mps: float) -> float:
@@ -153,6 +165,10 @@ class CandidateTest:
         The coherent share of the fit's per-pulse power, noise removed
         (:func:`~sarmotion.motion.acceleration.uniform_start_holds`): 1 for one point
         target's echo, NaN without power above the noise.
+    residue : float
+        The peak power of the candidate's echo once the fit's model is subtracted, over
+        its peak power before (:func:`~sarmotion.motion.defocus.echo_peak_power`): near 0
+        for one point target's echo.
     """
 
     candidate: DefocusCandidate
@@ -161,6 +177,12 @@ class CandidateTest:
     focused_stationary: bool
     joint_ratio: float
     coherence: float
+    residue: float
+
+    @property
+    def cancels(self) -> bool:
+        """Whether the fit's model removes its echo: ``residue <= MAX_ECHO_RESIDUE``."""
+        return bool(self.residue <= MAX_ECHO_RESIDUE)
 
     def stationary(self, min_focus_gain_db: float) -> bool:
         """Whether the stationary scene explains it (then it is not a mover).
@@ -271,7 +293,8 @@ def test_candidate(data: Traces, cand: DefocusCandidate, min_step_mps: float) ->
     """Fit one bank candidate on ``data`` from its cell and test it against stationary points.
 
     The stationary points that may explain it (:func:`stationary_near`) are fitted with
-    it (:func:`joint_amplitude`).
+    it (:func:`joint_amplitude`), and its echo is measured with and without the fit's
+    model (:attr:`CandidateTest.residue`).
     """
     fit = fit_point_mover_at(
         data, cand.delay_s, _g_speed(data, cand.range_speed_mps), cand.cross_range_speed_mps
@@ -282,6 +305,9 @@ def test_candidate(data: Traces, cand: DefocusCandidate, min_step_mps: float) ->
     joint = joint_amplitude(data, fit, near) if len(near) else fit.amplitude
     track = fit.position_m[None, :] + data.slow_times_s[:, None] * np.r_[fit.velocity_mps, 0.0]
     _, kappa = uniform_start_holds(data, track, noise_variance=noise_variance(data.data))
+    before = echo_peak_power(data, cand)
+    model = point_model(data, fit.position_m, fit.velocity_mps, fit.amplitude)
+    after = echo_peak_power(data, cand, np.asarray(data.data) - model)
     return CandidateTest(
         candidate=cand,
         fit=fit,
@@ -289,6 +315,7 @@ def test_candidate(data: Traces, cand: DefocusCandidate, min_step_mps: float) ->
         focused_stationary=abs(fit.cross_range_speed_mps) < min_step_mps,
         joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300),
         coherence=float(kappa),
+        residue=after / before if before > 0.0 else float("inf"),
     )
 
 
@@ -391,9 +418,17 @@ def defocused_movers(
         ]
         for echo in echoes[:MAX_REJECTED]:
             test = test_candidate(here, echo[0], step)
-            if not test.stationary(opts.min_focus_gain_db):
+            if not test.stationary(opts.min_focus_gain_db) and test.cancels:
                 found = test
                 break
+            if not test.cancels:
+                log.info(
+                    "defocus candidate at u_p %.2f m/s: its fit leaves %.2f of its echo's "
+                    "peak power (not one point target's echo)",
+                    test.fit.cross_range_speed_mps,
+                    test.residue,
+                )
+                continue
             why = test.explanation
             log.info(
                 "defocus candidate at u_p %.2f m/s: stationary (focus gain %.2f dB over "
