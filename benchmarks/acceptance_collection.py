@@ -23,9 +23,9 @@ the file.
 Analysis: ``sarmotion analyze FILE --region -L/2 -L/2 L/2 L/2 --workers W`` in a child
 process (the CPHD read block by block; the patches search their stationary band, the
 command's default, unless ``--no-defocus-search``: ``results/acceptance_collection.md``
-is that run, from before the search was the default, ``..._defocus.md`` the default); its wall time and peak RSS (``wait4``'s
-``ru_maxrss`` of that child) are measured, and the load average sampled every 5 s while
-it runs. Generation is timed separately, in this process.
+is that run, from before the search was the default, ``..._defocus.md`` the default);
+its wall time and peak RSS (``wait4``'s ``ru_maxrss`` of that child) are measured, and
+the load average sampled every 5 s while it runs. Generation is timed separately, in this process.
 
 Score (the issue's acceptance criteria):
 

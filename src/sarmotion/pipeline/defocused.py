@@ -28,9 +28,10 @@ amplitude: :func:`search_data`), one at a time:
    screen's smear margin holds under half the candidate's amplitude, so at most
    ``MAX_ECHO_RESIDUE`` of its peak power; an echo the model does not describe (the
    residue of a bright echo cut by a patch's fast-time window among clutter smears)
-   keeps its power or gains. The false-alarm rate is the screen's (the interference model and the union
-   bound over the bank's cells); the tests only remove candidates, and their measured
-   effect on data without movers is ``benchmarks/results/detector_null_defocus.md``;
+   keeps its power or gains. The false-alarm rate is the screen's (the interference
+   model and the union bound over the bank's cells); the tests only remove candidates,
+   and their measured effect on data without movers is
+   ``benchmarks/results/detector_null_defocus.md``;
 3. an accepted fit's model is subtracted and the bank runs again, until a bank gives
    no candidate that passes, ``max_movers`` is reached, or its first ``MAX_REJECTED``
    echoes were rejected (the bank ranks by power, so those after are weaker still).
