@@ -310,7 +310,9 @@ def write_defocus(records: list[dict], out: Path, seconds: float) -> None:
             "against the stationary scene (focused as stationary; the best stationary point's "
             "focus gain under 1 dB; the stationary points near its range history, fitted "
             "jointly with it, leaving under half its amplitude; its per-pulse sums keeping "
-            "under half their power in their coherent sum). 'left': the candidates those "
+            "under half their power in their coherent sum), and whether its fit, "
+            "subtracted, removes its echo (at most 1/4 of the echo's peak power left). "
+            "'left': the candidates those "
             "tests do not explain; 'left over the 1 % screen': those whose statistic (dB over "
             "the interference) reaches the screen's level for a 1 % rate, each a false mover "
             "of the analysis.",

@@ -163,7 +163,7 @@ def _write_sicd_images(result, stage: Path) -> None:
     "(their image lands inside it, where the separation takes them for stationary), by "
     "their focus over a bank of cross-range speeds. Default: on when the scene is cut "
     "into patches (most movers of a collection image inside it), off for one analysis "
-    "(its false-alarm rate on point clutter is not yet held to --false-alarm-rate).",
+    "(the movers' benchmarks have not yet been run with it).",
 )
 @click.option(
     "--trajectory/--no-trajectory",
