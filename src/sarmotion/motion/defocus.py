@@ -201,6 +201,25 @@ def cross_speed_bank(traces: Traces, max_speed_mps: float) -> NDArray[np.float64
     return step * np.arange(-n, n + 1, dtype=np.float64)
 
 
+def _doppler_cells(n_pulses: int) -> int:
+    """Doppler cells of the bank: twice oversampled, a power of two."""
+    return int(2 ** np.ceil(np.log2(2 * n_pulses)))
+
+
+def _hypothesis_power(
+    traces: Traces, spectrum: NDArray, delays_s: NDArray, rows: NDArray, n_dop: int
+) -> tuple[float, NDArray[np.float64]]:
+    """One hypothesis of the bank: ``(u_w, |X|^2)``, the power of shape ``(n_dop, rows)``.
+
+    ``spectrum`` (the data over frequency) aligned by ``delays_s`` (carrier included),
+    back to fast time at ``rows``, transformed over slow time on ``n_dop`` cells;
+    ``u_w`` (m/s) the hypothesis' own range rate, the slope of ``c delays_s / 2``.
+    """
+    u_w = 0.5 * C * float(np.polyfit(traces.slow_times_s, delays_s, 1)[0])
+    aligned = to_fast_time(spectrum * delay_phase(delays_s, traces.frequencies_hz))[:, rows]
+    return u_w, np.abs(np.fft.fft(aligned, n=n_dop, axis=0)) ** 2
+
+
 def defocus_scan(
     traces: Traces,
     *,
@@ -241,14 +260,13 @@ def defocus_scan(
         raise ValueError(f"false_alarm_rate must be in (0, 1), got {false_alarm_rate!r}")
     speeds = cross_speed_bank(traces, max_speed_mps)
     n_p = traces.n_pulses
-    n_dop = int(2 ** np.ceil(np.log2(2 * n_p)))  # twice oversampled in Doppler
+    n_dop = _doppler_cells(n_p)
     prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
     lam = C / traces.radar.carrier_hz
     doppler = np.fft.fftfreq(n_dop, d=1.0 / prf)
     t = traces.fast_times_s
     rows = np.flatnonzero(np.abs(t) <= half_span_s)
     spectrum = to_frequency(traces.data)
-    freqs = traces.frequencies_hz
     s = traces.slow_times_s
     u_w = np.empty(speeds.size)
     maps = np.empty((speeds.size, rows.size, n_dop), dtype=np.float32)
@@ -256,9 +274,8 @@ def defocus_scan(
     still = hypothesis_delays_s(traces, 0.0)  # hypothesis 0: the stationary point
     for k, w in enumerate(speeds):
         delays = hypothesis_delays_s(traces, w)
-        u_w[k] = 0.5 * C * float(np.polyfit(s, delays, 1)[0])
-        aligned = to_fast_time(spectrum * delay_phase(delays, freqs))[:, rows]
-        maps[k] = (np.abs(np.fft.fft(aligned, n=n_dop, axis=0)) ** 2).T
+        u_w[k], power = _hypothesis_power(traces, spectrum, delays, rows, n_dop)
+        maps[k] = power.T
         # a stationary point's smear in hypothesis w: its phase relative to hypothesis 0
         smear = np.exp(2j * np.pi * traces.radar.carrier_hz * (delays - still))
         smears[k] = np.abs(np.fft.fft(smear, n=n_dop)) / n_p
@@ -340,17 +357,15 @@ def echo_peak_power(
     echo is measured before and after a model is subtracted.
     """
     d = traces.data if data is None else data
-    s = traces.slow_times_s
-    delays = hypothesis_delays_s(traces, candidate.cross_range_speed_mps)
-    u_w = 0.5 * C * float(np.polyfit(s, delays, 1)[0])
     rows = np.flatnonzero(
         np.abs(traces.fast_times_s - candidate.delay_s) <= 2.0 / traces.radar.bandwidth_hz
     )
-    aligned = to_fast_time(to_frequency(d) * delay_phase(delays, traces.frequencies_hz))[:, rows]
-    n_dop = int(2 ** np.ceil(np.log2(2 * traces.n_pulses)))
-    prf = 1.0 / float(np.median(np.diff(s)))
+    n_dop = _doppler_cells(traces.n_pulses)
+    delays = hypothesis_delays_s(traces, candidate.cross_range_speed_mps)
+    u_w, power = _hypothesis_power(traces, to_frequency(d), delays, rows, n_dop)
+    prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
     speed = u_w - 0.5 * traces.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
     cols = np.abs(speed - candidate.range_speed_mps) <= 2.0 * range_speed_resolution(traces)
     if rows.size == 0 or not cols.any():
         return 0.0
-    return float(np.max(np.abs(np.fft.fft(aligned, n=n_dop, axis=0)[cols]) ** 2))
+    return float(np.max(power[cols]))
