@@ -175,6 +175,16 @@ def _make_scene(spec: Spec):
 
 
 # =================================================================== methods
+#: Whether the analysis searches its stationary band for defocused movers
+#: (``--defocus-search``; set in each worker by :func:`_set_defocus_search`).
+DEFOCUS_SEARCH = False
+
+
+def _set_defocus_search(on: bool) -> None:
+    global DEFOCUS_SEARCH
+    DEFOCUS_SEARCH = bool(on)
+
+
 def run_analysis(traces, method: str):
     """Detection and estimation stages of the analysis (default options).
 
@@ -184,7 +194,11 @@ def run_analysis(traces, method: str):
     from sarmotion.pipeline import AnalysisOptions, detect, estimate_movers
     from sarmotion.separation import SeparationOptions
 
-    opts = AnalysisOptions(separation=SeparationOptions(method=method), trajectory=False)
+    opts = AnalysisOptions(
+        separation=SeparationOptions(method=method),
+        trajectory=False,
+        defocus_search=DEFOCUS_SEARCH,
+    )
     found = detect(traces, opts)
     movers = estimate_movers(found).movers
     out, first = [], []
@@ -688,6 +702,12 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument(
+        "--defocus-search",
+        action="store_true",
+        help="the analysis also searches its stationary band for defocused movers "
+        "(AnalysisOptions.defocus_search; a collection's patches do by default)",
+    )
+    ap.add_argument(
         "--from-records", type=Path, help="rewrite the table and figures from a saved JSON"
     )
     args = ap.parse_args()
@@ -698,7 +718,7 @@ def main() -> None:
     specs = scene_specs(args.seed, args.quick)
     start = time.perf_counter()
     records = []
-    with Pool(args.workers) as pool:
+    with Pool(args.workers, _set_defocus_search, (args.defocus_search,)) as pool:
         for k, rec in enumerate(pool.imap_unordered(run_one, specs)):
             records.append(rec)
             print(

@@ -18,6 +18,7 @@ from sarmotion.imaging import resolution
 from sarmotion.motion import central_sub_aperture, defocus_scan, family_member, point_model
 from sarmotion.motion.defocus import (
     EDGE_PHASE_STEP_RAD,
+    _local_peaks,
     cross_speed_bank,
     echo_peak_power,
     edge_phase_rad,
@@ -68,6 +69,24 @@ def test_bank_steps_are_a_quarter_turn_of_edge_phase():
     # the edge phase is linear in w over road speeds: one step is pi/2 of it
     assert edge_phase_rad(sub, step) == pytest.approx(EDGE_PHASE_STEP_RAD, rel=0.02)
     assert edge_phase_rad(sub, 10 * step) == pytest.approx(10 * EDGE_PHASE_STEP_RAD, rel=0.05)
+
+
+@pytest.mark.parametrize("shape", [(5, 7, 9), (1, 4, 6), (3, 1, 2), (2, 5, 1)])
+def test_local_peaks_are_the_maxima_of_the_filtered_bank(shape):
+    # The screen keeps a cell only where it is the largest of its 3 x 3 x 3 neighbourhood
+    # (edges repeated) over the searched columns: evaluated at the cells asked about, the
+    # same answer as filtering the whole bank; ties count as peaks.
+    from scipy.ndimage import maximum_filter
+
+    rng = np.random.default_rng(sum(shape))
+    maps = np.round(rng.random(shape) * 4.0).astype(np.float32)  # many ties
+    n_cols = shape[2]
+    cols = np.sort(rng.choice(n_cols, size=max(1, n_cols - 1), replace=False))
+    local = maximum_filter(maps[:, :, cols], size=3, mode="nearest")
+    for k in range(shape[0]):
+        rows, js = np.nonzero(np.ones((shape[1], cols.size), bool))
+        want = maps[k][:, cols][rows, js] >= local[k][rows, js]
+        np.testing.assert_array_equal(_local_peaks(maps, cols, k, rows, js), want)
 
 
 def test_scan_places_the_mover_in_its_cell():

@@ -62,7 +62,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import maximum_filter
 
 from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_frequency
 from ..core.constants import C
@@ -160,6 +159,29 @@ def _guarded_mean(power: NDArray, cols: NDArray[np.int64], guard: int) -> NDArra
         b = np.clip(hi + shift, 0, n)
         inside += c[:, b] - c[:, a]
     return (total - inside) / max(n - (2 * guard + 1), 1)
+
+
+def _local_peaks(
+    maps: NDArray, cols: NDArray[np.int64], k: int, rows: NDArray, js: NDArray
+) -> NDArray[np.bool_]:
+    """Whether cells ``(k, rows, cols[js])`` of ``maps`` are maxima of their neighbourhoods.
+
+    The neighbourhood is 3 x 3 x 3 cells over (hypothesis, range row, searched Doppler
+    column ``cols``), edges repeated (``scipy.ndimage.maximum_filter``'s ``"nearest"``):
+    the same answer as filtering the whole bank, evaluated only at the cells asked about
+    (those over the screen's level, a few of tens of millions).
+    """
+    n_w, n_r = maps.shape[0], maps.shape[1]
+    here = maps[k, rows, cols[js]]
+    best = np.full(here.shape, -np.inf, dtype=maps.dtype)
+    for dk in (-1, 0, 1):
+        kk = min(max(k + dk, 0), n_w - 1)
+        for dr in (-1, 0, 1):
+            rr = np.clip(rows + dr, 0, n_r - 1)
+            for dj in (-1, 0, 1):
+                jj = cols[np.clip(js + dj, 0, cols.size - 1)]
+                np.maximum(best, maps[kk, rr, jj], out=best)
+    return here >= best
 
 
 def hypothesis_delays_s(traces: Traces, cross_range_speed_mps: float) -> NDArray[np.float64]:
@@ -308,7 +330,6 @@ def defocus_scan(
     order = np.argsort(doppler, kind="stable")
     wanted = np.convolve(searched.any(axis=0)[order], np.ones(3), mode="same") > 0
     cols = order[wanted]
-    local = maximum_filter(maps[:, :, cols], size=(3, 3, 3), mode="nearest")
     for k in np.flatnonzero(moving):
         if not np.isfinite(noise[k]) or noise[k] <= 0:
             continue
@@ -316,8 +337,9 @@ def defocus_scan(
         # the interference of a cell: the noise, or the mean power of its range bin over
         # the Doppler cells beyond its guard if larger (cell-averaging, module notes)
         floor = np.maximum(noise[k], _guarded_mean(maps[k], cols, guard))
-        ok = (mk >= level * floor) & (mk >= local[k]) & searched[k][cols][None, :]
-        for r, j in zip(*np.nonzero(ok), strict=True):
+        over = np.nonzero((mk >= level * floor) & searched[k][cols][None, :])
+        peak = _local_peaks(maps, cols, int(k), over[0], over[1])
+        for r, j in zip(over[0][peak], over[1][peak], strict=True):
             f = int(cols[j])
             amp = float(np.sqrt(maps[k, r, f]))
             lo, hi = max(0, r - reach), min(rows.size, r + reach + 1)
