@@ -35,7 +35,9 @@ wall time, peak RSS of the process (``ru_maxrss``; the whole-scene run goes firs
 separate process), throughput (km^2 per hour), movers accurate on their cross-range family
 (``sarmotion.pipeline.family_errors``' rule: the truth slid along its own family,
 ``motion.family_member``, to the fit's cross range; accurate when the range position is
-within 3 ground-range cells and the range speed within 0.5 m/s), false movers (a fit
+within 3 ground-range cells and the range speed within 0.5 m/s; each missed mover with
+the largest phase between its range history and a stationary point's, ``score``), false
+movers (a fit
 matching no true mover), mover reports (a mover fitted in several patches is reported by
 each before the merge), stationary targets found (a listed target within one resolution
 cell of a true one), listed, and dropped as sidelobes.
@@ -122,7 +124,15 @@ def make_scene(side_m: float, seed: int):
 
 
 def score(traces, fits, movers, stationary_found, stationary_true):
-    """(accurate movers, false movers, stationary found) (module notes)."""
+    """(accurate movers, false movers, stationary found, missed movers) (module notes).
+
+    Each missed mover is ``{"label", "stationary_phase_rad"}``: the largest phase between
+    its range history and that of the stationary point with its range and range rate at
+    the aperture's centre (``acceptance_collection.stationary_phase_rad``; under pi/2 the
+    mover is that point to any single-antenna method).
+    """
+    from acceptance_collection import stationary_phase_rad
+
     from sarmotion.core import range_speed
     from sarmotion.imaging import resolution
     from sarmotion.motion import central_sub_aperture, family_member
@@ -133,6 +143,7 @@ def score(traces, fits, movers, stationary_found, stationary_true):
     cells = resolution(sub)
     used = set()
     accurate = 0
+    missed = []
     for m in movers:
         best = None
         for j, (p, v) in enumerate(fits):
@@ -149,6 +160,10 @@ def score(traces, fits, movers, stationary_found, stationary_true):
         if best is not None:
             used.add(best[1])
             accurate += 1
+        else:
+            missed.append(
+                {"label": m.label, "stationary_phase_rad": stationary_phase_rad(traces, m)}
+            )
     false = len(fits) - len(used)
     cell = max(cells.ground_range_m, cells.cross_range_m)
     found = 0
@@ -157,7 +172,7 @@ def score(traces, fits, movers, stationary_found, stationary_true):
         for p in stationary_true:
             if np.min(np.hypot(*(sf - p).T)) <= cell:
                 found += 1
-    return accurate, false, found
+    return accurate, false, found, missed
 
 
 def _rss_gb() -> float:
@@ -172,11 +187,14 @@ def run_whole(side_m: float, seed: int) -> dict:
     result = analyze(traces)
     wall = time.perf_counter() - t0
     fits = [(m.position_m, m.velocity_mps) for m in result.movers]
-    acc, false, found = score(traces, fits, movers, [s.position_m for s in result.stationary], stat)
+    acc, false, found, missed = score(
+        traces, fits, movers, [s.position_m for s in result.stationary], stat
+    )
     return {
         "wall_s": wall,
         "rss_gb": _rss_gb(),
         "accurate": acc,
+        "missed": missed,
         "false": false,
         "stationary_found": found,
         "stationary_listed": len(result.stationary),
@@ -308,7 +326,7 @@ def _score_patches(side_m: float, seed: int, parts: list[dict]) -> dict:
             pixel_m=AnalysisOptions().spacing_m,
         )
         sidelobes += more
-    acc, false, found = score(traces, fits, movers, [t.position_m for t in targets], stat)
+    acc, false, found, missed = score(traces, fits, movers, [t.position_m for t in targets], stat)
     first = parts[0]
     return {
         "wall_s": sum(p["wall_s"] for p in parts),
@@ -319,6 +337,7 @@ def _score_patches(side_m: float, seed: int, parts: list[dict]) -> dict:
         "pulses_per_patch": first["pulses_per_patch"],
         "samples_per_patch": first["samples_per_patch"],
         "accurate": acc,
+        "missed": missed,
         "false": false,
         "mover_reports": sum(p["mover_reports"] for p in parts),
         "stationary_found": found,
@@ -420,10 +439,13 @@ def _table(rows: list[dict]) -> str:
             else:
                 how, listed = "1 (whole scene)", str(m["stationary_listed"])
             km2h = (r["side_m"] / 1000) ** 2 / m["wall_s"] * 3600
+            phases = ", ".join(f"{x['stationary_phase_rad']:.2f}" for x in m.get("missed", []))
+            missed = f" (missed: {phases} rad)" if phases else ""
             out.append(
                 f"| {r['side_m']:g} m | {r['pulses']} x {r['samples']} | "
                 f"{METHOD_NAMES[method]} | {how} | "
-                f"{m['wall_s']:.1f} s | {m['rss_gb']:.2f} GB | {km2h:.2f} | {m['accurate']}/3 | "
+                f"{m['wall_s']:.1f} s | {m['rss_gb']:.2f} GB | {km2h:.2f} | "
+                f"{m['accurate']}/3{missed} | "
                 f"{m['false']} | {m['stationary_found']}/{r['n_stationary']} | {listed} | "
                 f"{load:.1f} |"
             )

@@ -1,10 +1,12 @@
 """Accuracy of mover detection and estimation: seeded Monte Carlo, the analysis and a baseline.
 
-Regenerate the table and figures (about 25 min on 2 cores)::
+Regenerate the table and figures (a few minutes on 2 cores)::
 
     python benchmarks/movers_accuracy.py --out benchmarks/results
 
-``--quick`` runs one scene in six (a smoke test). Every scene is one degree of aperture
+``--quick`` runs one scene in six (a smoke test). ``--defocus-search`` has the analysis
+also search its stationary band (``AnalysisOptions.defocus_search``, the default of a
+collection's patches; ``results/movers_accuracy_defocus.md``). Every scene is one degree of aperture
 (117 pulses), seeded from ``--seed`` (default 2026; the detector's null tail was measured
 on other seeds, see ``sarmotion.motion.detector``). Scenes:
 

@@ -9,9 +9,10 @@ amplitude: :func:`search_data`), one at a time:
 
 1. the cross-range-speed bank (:func:`~sarmotion.motion.defocus_scan`) over the
    stationary band and the scene's range span, at the analysis's false-alarm rate;
-2. the strongest cell of each of its first ``MAX_REJECTED`` echoes (an echo: cells
-   within two range cells and two range-speed resolutions, one target seen at several
-   ``w``), most powerful first, is fitted by maximum likelihood from its cell
+2. the strongest cell (largest statistic, the power over its interference) of each of
+   its first ``MAX_REJECTED`` echoes (an echo: cells within two range cells and two
+   range-speed resolutions, one target seen at several ``w``), strongest echo first, is
+   fitted by maximum likelihood from its cell
    (:func:`~sarmotion.motion.fit_point_mover_at`) and rejected when stationary points
    explain it (:meth:`CandidateTest.stationary`): the fit is focused as a stationary
    point (its cross-range speed under the bank's first step), or the best stationary
@@ -34,7 +35,8 @@ amplitude: :func:`search_data`), one at a time:
    ``benchmarks/results/detector_null_defocus.md``;
 3. an accepted fit's model is subtracted and the bank runs again, until a bank gives
    no candidate that passes, ``max_movers`` is reached, or its first ``MAX_REJECTED``
-   echoes were rejected (the bank ranks by power, so those after are weaker still).
+   echoes were rejected (the bank ranks them by statistic, so those after are weaker
+   still).
 
 The mover stage then takes the data without the stationary targets near these movers
 (``D - L'``, :func:`~sarmotion.pipeline.refit.data_without_stationary`) as their moving
@@ -361,7 +363,7 @@ def distinct_echoes(scan: DefocusScan, data: Traces) -> list[list[DefocusCandida
     """The scan's candidates grouped by echo, the groups in the order of their strongest.
 
     One echo: cells within two range cells and two range-speed resolutions of the
-    group's strongest; each group by decreasing power.
+    group's strongest; each group by decreasing statistic (the scan's order).
     """
     cell_s = 1.0 / data.radar.bandwidth_hz
     res_u = range_speed_resolution(data)
