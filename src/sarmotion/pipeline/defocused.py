@@ -45,6 +45,7 @@ traces, since ``S`` holds little of them.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -163,7 +164,8 @@ class CandidateTest:
     joint_ratio : float
         ``|a_joint| / |a|``: the fit's amplitude when fitted jointly (least squares) with
         the stationary points whose range histories pass near its own, over its
-        amplitude alone (:func:`joint_amplitude`).
+        amplitude alone (:func:`joint_amplitude`); NaN when not computed
+        (:func:`test_candidate`).
     coherence : float
         The coherent share of the fit's per-pulse power, noise removed
         (:func:`~sarmotion.motion.acceleration.uniform_start_holds`): 1 for one point
@@ -292,34 +294,47 @@ def stationary_near(
     return np.array(out, dtype=np.float64).reshape(-1, 3)
 
 
-def test_candidate(data: Traces, cand: DefocusCandidate, min_step_mps: float) -> CandidateTest:
+def test_candidate(
+    data: Traces,
+    cand: DefocusCandidate,
+    min_step_mps: float,
+    min_focus_gain_db: float | None = None,
+) -> CandidateTest:
     """Fit one bank candidate on ``data`` from its cell and test it against stationary points.
 
     The stationary points that may explain it (:func:`stationary_near`) are fitted with
     it (:func:`joint_amplitude`), and its echo is measured with and without the fit's
-    model (:attr:`CandidateTest.residue`).
+    model (:attr:`CandidateTest.residue`). With ``min_focus_gain_db`` (the analysis's
+    rule, dB) that joint fit, the costliest test, runs only when the others have not
+    already refused the candidate (its echo not cancelled, focused as stationary, a
+    stationary point within the focus gain, or incoherent): the verdict of
+    :meth:`CandidateTest.stationary` and :attr:`CandidateTest.cancels` together is the
+    same, and ``joint_ratio`` is NaN when skipped. Without it every test runs.
     """
     fit = fit_point_mover_at(
         data, cand.delay_s, _g_speed(data, cand.range_speed_mps), cand.cross_range_speed_mps
     )
     value = fit.amplitude * data.n_pulses
     why = stationary_explanation(data, fit.position_m, fit.velocity_mps, value)
-    near = stationary_near(data, fit, why.cross_offset_m, phase_history=data.phase_history())
-    joint = joint_amplitude(data, fit, near) if len(near) else fit.amplitude
     track = fit.position_m[None, :] + data.slow_times_s[:, None] * np.r_[fit.velocity_mps, 0.0]
     _, kappa = uniform_start_holds(data, track, noise_variance=noise_variance(data.data))
     before = echo_peak_power(data, cand)
     model = point_model(data, fit.position_m, fit.velocity_mps, fit.amplitude)
     after = echo_peak_power(data, cand, np.asarray(data.data) - model)
-    return CandidateTest(
+    test = CandidateTest(
         candidate=cand,
         fit=fit,
         explanation=why,
         focused_stationary=abs(fit.cross_range_speed_mps) < min_step_mps,
-        joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300),
+        joint_ratio=float("nan"),
         coherence=float(kappa),
         residue=after / before if before > 0.0 else float("inf"),
     )
+    if min_focus_gain_db is not None and (not test.cancels or test.stationary(min_focus_gain_db)):
+        return test  # refused whatever the joint fit gives
+    near = stationary_near(data, fit, why.cross_offset_m, phase_history=data.phase_history())
+    joint = joint_amplitude(data, fit, near) if len(near) else fit.amplitude
+    return dataclasses.replace(test, joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300))
 
 
 def search_data(detection: DetectionResult, accepted: Sequence[PointFit] = ()) -> NDArray:
@@ -420,7 +435,7 @@ def defocused_movers(
             if not any(_same_echo(e[0], a, cell_s, res_u) for a in taken)
         ]
         for echo in echoes[:MAX_REJECTED]:
-            test = test_candidate(here, echo[0], step)
+            test = test_candidate(here, echo[0], step, opts.min_focus_gain_db)
             if not test.stationary(opts.min_focus_gain_db) and test.cancels:
                 found = test
                 break
