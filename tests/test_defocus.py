@@ -204,3 +204,42 @@ def test_unresolved_stationary_points_explain_a_moving_signature():
     for p in points:
         assert np.min(np.hypot(*(near[:, :2] - p).T)) < 0.25 * cells.cross_range_m
     assert abs(joint_amplitude(sub, fit, near)) < JOINT_RATIO * abs(fit.amplitude)
+
+
+def test_skipping_the_joint_fit_keeps_every_verdict():
+    # The analysis runs the joint fit with the nearby stationary points only when the
+    # other tests have not refused a candidate: on the echoes of a lowered screen (clutter
+    # candidates, and the mover of the first scene) every verdict is the one of the full
+    # evaluation, and a skipped joint fit is always a refusal.
+    from sarmotion.pipeline import detect
+    from sarmotion.pipeline.defocused import (
+        distinct_echoes,
+        scan_detection,
+        search_data,
+        test_candidate,
+    )
+
+    gain = OPTIONS.min_focus_gain_db
+    tested = skipped = accepted_any = 0
+    for seed, speed in [(1, 12.0), (2, None), (3, None)]:
+        tr, _, _ = _scene(seed, speed)
+        det = detect(tr, OPTIONS)
+        data = det.sub.with_data(search_data(det))
+        scan = scan_detection(det, data, threshold_db=6.0)
+        step = float(np.min(np.abs(scan.speeds_mps[scan.speeds_mps != 0.0])))
+        for echo in distinct_echoes(scan, data)[:6]:
+            full = test_candidate(data, echo[0], step)
+            lazy = test_candidate(data, echo[0], step, gain)
+            accepted = not full.stationary(gain) and full.cancels
+            assert (not lazy.stationary(gain) and lazy.cancels) == accepted
+            np.testing.assert_array_equal(  # NaN: a coherence not measured, in both
+                [lazy.residue, lazy.coherence], [full.residue, full.coherence]
+            )
+            tested += 1
+            accepted_any += accepted
+            if np.isnan(lazy.joint_ratio):
+                skipped += 1
+                assert not accepted
+            else:
+                assert lazy.joint_ratio == full.joint_ratio
+    assert tested >= 4 and skipped >= 1 and accepted_any >= 1
