@@ -45,10 +45,9 @@ traces, since ``S`` holds little of them.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -334,7 +333,7 @@ def test_candidate(
         return test  # refused whatever the joint fit gives
     near = stationary_near(data, fit, why.cross_offset_m, phase_history=data.phase_history())
     joint = joint_amplitude(data, fit, near) if len(near) else fit.amplitude
-    return dataclasses.replace(test, joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300))
+    return replace(test, joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300))
 
 
 def search_data(detection: DetectionResult, accepted: Sequence[PointFit] = ()) -> NDArray:
