@@ -147,7 +147,7 @@ def score(traces, fits, movers, stationary_found, stationary_true):
     geom = sub.geometry
     cells = resolution(sub)
     cell = max(cells.ground_range_m, cells.cross_range_m)
-    sf = np.asarray(stationary_found, dtype=float).reshape(-1, 2)
+    sf = np.array([np.asarray(p, dtype=float)[:2] for p in stationary_found]).reshape(-1, 2)
     used = set()
     accurate = 0
     missed = []

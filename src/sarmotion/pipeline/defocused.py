@@ -201,7 +201,8 @@ class CandidateTest:
         (Cauchy-Schwarz); an estimate further above 1 than the rule's margin below it
         (``2 - HOLD_COHERENCE``) means the noise taken off exceeded what the candidate's
         pulses hold beyond it: its power is at the noise level, the share is not
-        measured, and the candidate is not confirmed.
+        measured, and the candidate is not confirmed. A joint ratio not computed (NaN,
+        :func:`test_candidate`) refuses nothing: the other tests decide.
         """
         why = self.explanation
         return (
