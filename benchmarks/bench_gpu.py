@@ -23,10 +23,16 @@ For each size, warm (the kernel compiled and the trace table on the device), med
   (:func:`~sarmotion.imaging.point_response`, float64, no interpolation) on
   ``--reference-pixels`` pixels drawn at random (seeded), the same for every method;
 - at ``--cpu-size``, the CPU's :func:`~sarmotion.imaging.backproject` (numba, all
-  threads) in the same run: time and SER on the same pixels.
+  threads) in the same run: time and SER on the same pixels;
+- ``ffbp``: fast factorised backprojection on the GPU (``method="ffbp"``,
+  :mod:`~sarmotion.imaging.cuda_ffbp`), end to end, its path and SER on the same pixels;
+- ``new_data``: exact and FFBP end to end on a new traces object at every call (the
+  trace table built again, on the host, and copied to the device; FFBP's plan kept for
+  the geometry), as a former that takes the phase history at every call works.
 
 With ``--fastsar`` (FastSAR, ``pip install 'sarmotion[bench]'``, and CuPy), the same
-sizes over a 51.2 m square (FastSAR's exact former refuses a grid wider than the
+sizes over a 51.2 m square, sarmotion's exact and FFBP also on new data at every call
+(FastSAR's exact former refuses a grid wider than the
 unambiguous range less a margin, ``bench_backprojection.FASTSAR_EXTENT_M``) in the same
 run: sarmotion's kernel (image on the device, and end to end) against FastSAR's CUDA
 exact (cubic) and factorised formers (the phase history on the device, the complex64
@@ -228,6 +234,13 @@ def main(argv: list[str] | None = None) -> dict:
                             "pixel_pulses_per_second": _rate(work, med),
                             "ser_db": _ser_db(exact, cpu[iy, ix]),
                             "threads": _threads()}  # fmt: skip
+        entry["ffbp"] = _ffbp_row(tr, grid, work, exact, iy, ix, args.repeats)
+        entry["new_data"] = _new_data_rows(tr, grid, work, args.repeats)
+        f, nd = entry["ffbp"], entry["new_data"]
+        print(f"  {n}^2 FFBP ({f['path']}): {f['pixel_pulses_per_second']:.3g} pixel-pulses/s "
+              f"end to end, {f['ser_db']:.1f} dB; new data: exact "
+              f"{nd['exact']['pixel_pulses_per_second']:.3g}, FFBP "
+              f"{nd['ffbp']['pixel_pulses_per_second']:.3g}", flush=True)  # fmt: skip
         d, e = entry["device"], entry["end_to_end"]
         line = (f"{n}^2 ({SIDE_M / n:.4g} m): device {d['pixel_pulses_per_second']:.3g} "
                 f"pixel-pulses/s (P={d['pixels_per_thread']}), end-to-end "
@@ -250,6 +263,33 @@ def main(argv: list[str] | None = None) -> dict:
     return result
 
 
+def _ffbp_row(tr, grid, work, exact, iy, ix, repeats) -> dict:
+    """FFBP on the GPU, warm, end to end (complex128 image in host memory)."""
+    img = gpu.backproject_cuda(tr, grid, method="ffbp")
+    med, times = _median_time(lambda: gpu.backproject_cuda(tr, grid, method="ffbp"), repeats)
+    info = img.metadata.get("ffbp", {})
+    return {"seconds_median": med, "seconds": times, "pixel_pulses_per_second": _rate(work, med),
+            "ser_db": _ser_db(exact, img.values[iy, ix]), "path": info.get("path", "exact"),
+            "budget_db": info.get("budget_db"), "levels": info.get("levels"),
+            "exact_pixels": info.get("exact_pixels")}  # fmt: skip
+
+
+def _new_data_rows(tr, grid, work, repeats) -> dict:
+    """Exact and FFBP on a new traces object at every call (the table built each time)."""
+    rows = {}
+    for method in ("exact", "ffbp"):
+        fresh = [tr.with_data(tr.data.copy()) for _ in range(repeats + 1)]
+        gpu.backproject_cuda(fresh.pop(), grid, method=method)  # warm: compiled, planned
+
+        def call(m=method, fresh=fresh):
+            gpu.backproject_cuda(fresh.pop(), grid, method=m)
+
+        med, times = _median_time(call, repeats)
+        rows[method] = {"seconds_median": med, "seconds": times,
+                        "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
+    return rows
+
+
 def _against_fastsar(cuda, tr, n, rng, reference_pixels, repeats) -> dict:
     """One size of the FastSAR comparison (module docstring), FastSAR's failures recorded."""
     from bench_backprojection import FASTSAR_EXTENT_M, _fastsar_formers
@@ -270,6 +310,13 @@ def _against_fastsar(cuda, tr, n, rng, reference_pixels, repeats) -> dict:
     med, _ = _median_time(lambda: gpu.backproject_cuda(tr, grid), repeats)
     entry["formers"]["sarmotion (complex128 image in host memory)"] = {
         "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
+    f = _ffbp_row(tr, grid, work, exact, iy, ix, repeats)
+    entry["formers"]["sarmotion FFBP (complex128 image in host memory)"] = {
+        "pixel_pulses_per_second": f["pixel_pulses_per_second"], "ser_db": f["ser_db"],
+        "path": f["path"]}  # fmt: skip
+    for method, row in _new_data_rows(tr, grid, work, repeats).items():
+        entry["formers"][f"sarmotion {method}, new data (host memory)"] = {
+            "pixel_pulses_per_second": row["pixel_pulses_per_second"]}  # fmt: skip
     try:
         import cupy as cp
         import fastsar

@@ -11,7 +11,12 @@ no interpolation) and with the CPU's :func:`~sarmotion.imaging.backproject`:
 - a signal-to-error ratio of at least 80 dB (the accuracy the GPU path promises), on
   simulated scenes seen at 0, 30 and 45 degrees, with and without motion compensation,
   and on the first GOTCHA pulses;
-- zero, like the CPU's image, where every delay falls outside the fast-time window.
+- zero, like the CPU's image, where every delay falls outside the fast-time window;
+- fast factorised backprojection (``method="ffbp"``, :mod:`~sarmotion.imaging.cuda_ffbp`)
+  takes the CPU's path (axis-aligned, looking along ``x`` or ``y``, or rotated, with the
+  pixels near a window end computed exactly) and reaches the accuracy of
+  :mod:`~sarmotion.imaging.ffbp` against the exact sum: :data:`~sarmotion.imaging.ffbp.
+  TARGET_DB` and its own budget less its margin, with and without motion compensation.
 
 In this process (no simulator): the trace table against the trigonometric interpolant,
 the pixels-per-thread rule, and the one-line error when no GPU can run.
@@ -45,6 +50,19 @@ SIM_CASES = [
     ("look45_p2", 45.0, 0.1, 2, None),
     ("look45", 45.0, 0.1, None, None),
     ("look30_moving", 30.0, 0.25, None, (6.0, 2.0)),
+]
+
+
+# FFBP cases under the simulator: (name, look azimuth (deg), pulses, grid centre (m),
+# side (m), spacing (m), velocity (m/s) or None, the path the CPU takes). Small grids of few
+# pulses, where the time model would run exact backprojection for the rotated path (its
+# budget is raised in the subprocess: accuracy does not depend on that choice).
+FFBP_CASES = [
+    ("ffbp_look0", 0.0, 64, (0.0, 0.0), 24.0, 0.5, None, "axis-aligned"),
+    ("ffbp_look90", 90.0, 64, (0.0, 0.0), 24.0, 0.5, None, "axis-aligned"),
+    ("ffbp_look0_moving", 0.0, 64, (0.0, 0.0), 24.0, 0.5, (6.0, 2.0), "axis-aligned"),
+    ("ffbp_look30", 30.0, 64, (0.0, 0.0), 16.0, 0.5, None, "rotated"),
+    ("ffbp_window_end", 30.0, 64, (57.2, 33.0), 12.0, 0.5, None, "rotated"),
 ]
 
 
@@ -88,6 +106,53 @@ def _simulated(look_deg, seed, extent_m):
     scene = random_scene(n_stationary=6, extent_m=extent_m, movers=mover, rng=seed)
     trajectory = Trajectory.circular(centre_azimuth_deg=look_deg, n_pulses=8)
     return simulate(scene, trajectory=trajectory, snr_db=20.0, rng=seed).traces
+
+
+def _ffbp_traces(look_deg, n_pulses, seed, centre=(0.0, 0.0), spread_m=15.0):
+    """Six points within ``spread_m`` of ``centre`` and a mover there, 4 degrees, 20 dB SNR."""
+    from sarmotion.core import Trajectory
+    from sarmotion.simulation import PointTarget, Scene, add_noise, simulate
+
+    rng = np.random.default_rng(seed)
+    targets = [
+        PointTarget(position_m=tuple(np.add(centre, rng.uniform(-spread_m, spread_m, 2))),
+                    reflectivity=complex(*rng.normal(size=2)))
+        for _ in range(6)
+    ] + [PointTarget(position_m=tuple(centre), velocity_mps=(10.0, 5.0))]  # fmt: skip
+    trajectory = Trajectory.circular(aperture_deg=4.0, centre_azimuth_deg=look_deg,
+                                     n_pulses=n_pulses)  # fmt: skip
+    tr = simulate(Scene(name="ffbp", targets=targets), trajectory=trajectory).traces
+    return tr.with_data(add_noise(tr.data, snr_db=20.0, rng=seed))
+
+
+def _ffbp_cases() -> list[dict]:
+    """Every FFBP case on the GPU (and its path on the CPU), against the exact sum."""
+    from sarmotion.imaging import ImageGrid, backproject, ffbp
+    from sarmotion.imaging.cuda import backproject_cuda
+    from sarmotion.imaging.exact_sum import exact_sum
+
+    ffbp._ROTATED_BUDGET = 1e3  # the rotated path at these sizes
+    results = []
+    for k, (name, look, n_pulses, centre, side, spacing, velocity, _) in enumerate(FFBP_CASES):
+        traces = _ffbp_traces(look, n_pulses, seed=6100 + k, centre=centre, spread_m=side / 2)
+        grid = ImageGrid.square(centre_m=centre, size_m=side, spacing_m=spacing)
+        cpu = backproject(traces, grid, method="ffbp", velocity_mps=velocity)
+        gpu = backproject_cuda(traces, grid, method="ffbp", velocity_mps=velocity)
+        again = backproject_cuda(traces, grid, method="ffbp", velocity_mps=velocity)
+        gx, gy = np.meshgrid(grid.x_m, grid.y_m)
+        exact = exact_sum(traces, np.stack([gx, gy], axis=-1), velocity_mps=velocity)
+        info = gpu.metadata["ffbp"]
+        results.append({
+            "name": name,
+            "cpu_path": cpu.metadata.get("ffbp", {}).get("path"),
+            "path": info["path"],
+            "variant": gpu.metadata["kernel_variant"],
+            "exact_pixels": info.get("exact_pixels", 0),
+            "budget_db": info.get("budget_db"),
+            "ser_db": _ser_db(exact, gpu.values),
+            "repeatable": bool(np.array_equal(gpu.values, again.values)),
+        })  # fmt: skip
+    return results
 
 
 def run_simulator(out: Path, gotcha_dir: str | None) -> None:
@@ -139,7 +204,8 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
         results.append(_case(traces, grid, None, None, "gotcha"))
         results.append(_case(traces, grid, 1, None, "gotcha_p1"))  # the float64 path alone
     results.append(changed)
-    out.write_text(json.dumps({"cases": results, "outside": outside, "cli": cli}))
+    out.write_text(json.dumps({"cases": results, "outside": outside, "cli": cli,
+                               "ffbp": _ffbp_cases()}))  # fmt: skip
 
 
 # ================================================================== the tests (pytest)
@@ -196,6 +262,24 @@ def test_zero_outside_the_fast_time_window_like_the_cpu(simulated):
     out = simulated["outside"]
     assert out["gpu_max"] == 0.0
     assert out["cpu_max"] == 0.0
+
+
+@pytest.mark.parametrize("case", FFBP_CASES, ids=[c[0] for c in FFBP_CASES])
+def test_ffbp_on_the_gpu_reaches_its_accuracy(simulated, case):
+    from sarmotion.imaging.ffbp import BUDGET_MARGIN_DB, TARGET_DB
+
+    got = {c["name"]: c for c in simulated["ffbp"]}[case[0]]
+    assert got["path"] == got["cpu_path"] == case[-1], got
+    assert got["variant"] == "cuda-ffbp"
+    assert got["ser_db"] >= TARGET_DB, got
+    assert got["ser_db"] >= got["budget_db"] - BUDGET_MARGIN_DB, got
+    assert got["repeatable"]  # the second image reuses the plan and its device arrays
+
+
+def test_ffbp_cases_cover_the_window_ends(simulated):
+    exact = {c["name"]: c["exact_pixels"] for c in simulated["ffbp"]}
+    assert exact["ffbp_window_end"] > 0
+    assert exact["ffbp_look0"] == 0
 
 
 # ------------------------------------------------------------------ without the simulator

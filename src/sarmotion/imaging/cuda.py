@@ -285,6 +285,43 @@ class _DeviceTables:
 _TABLES = _DeviceTables()
 
 
+def _antennas(traces: Traces, u: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(n_pulses, 4)`` float64: effective antenna ``x``, ``y``, ``z**2`` and ``|r - rho_o|``."""
+    pos = traces.positions_m - traces.slow_times_s[:, None] * u[None, :]
+    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m[None, :], axis=1)
+    return np.ascontiguousarray(np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, ref], axis=1))
+
+
+def _launch_exact(
+    cuda: Any,
+    table: Any,
+    n_table: int,
+    ant: Any,
+    x: NDArray[np.float64],
+    y: NDArray[np.float64],
+    idx_scale: float,
+    cycles_per_m: float,
+    p: int,
+    block_rows: int = BLOCK_ROWS,
+) -> Any:
+    """Launch the exact kernel on the pixels ``x`` x ``y`` (m); returns its launcher and args.
+
+    ``ant`` the device copy of :func:`_antennas`, ``idx_scale`` table steps per metre of
+    range offset, ``cycles_per_m = 2 nu_o / c``, ``p`` pixels per thread. The image is the
+    last argument, a ``(ny, nx, 2)`` float64 device array; call ``kernel(table, *args)``.
+    """
+    from . import _cuda_kernels as kern
+
+    ny, nx = y.size, x.size
+    blocks = (-(-nx // kern.BLOCK_X), -(-ny // (block_rows * p)))
+    out = cuda.device_array((ny, nx, 2), dtype=np.float64)
+    kernel = kern.backprojection_kernel(p, block_rows)[blocks, (kern.BLOCK_X, block_rows)]
+    args = (n_table, ant, cuda.to_device(np.ascontiguousarray(x)),
+            cuda.to_device(np.ascontiguousarray(y)), idx_scale, float(n_table // 2),
+            cycles_per_m, out)  # fmt: skip
+    return kernel, args
+
+
 def _image_on_device(
     cuda: Any,
     traces: Traces,
@@ -295,12 +332,7 @@ def _image_on_device(
     block_rows: int = BLOCK_ROWS,
 ) -> tuple[Any, int]:
     """Launch the kernel; returns the image as a (ny, nx, 2) float64 device array and P."""
-    from . import _cuda_kernels as kern
-
     carrier = float(traces.radar.carrier_hz)
-    pos = traces.positions_m - traces.slow_times_s[:, None] * u[None, :]
-    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m[None, :], axis=1)
-    ant = np.ascontiguousarray(np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, ref], axis=1))
     data = np.ascontiguousarray(traces.data)
     table = _TABLES.cached(traces, upsample)
     verify = table is not None
@@ -312,15 +344,25 @@ def _image_on_device(
     x, y = np.ascontiguousarray(grid.x_m), np.ascontiguousarray(grid.y_m)
     dy = (float(y[-1]) - float(y[0])) / (ny - 1)
     p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
-    blocks = (-(-nx // kern.BLOCK_X), -(-ny // (block_rows * p)))
-    out = cuda.device_array((ny, nx, 2), dtype=np.float64)
-    kernel = kern.backprojection_kernel(p, block_rows)[blocks, (kern.BLOCK_X, block_rows)]
-    args = (n_table, cuda.to_device(ant), cuda.to_device(x), cuda.to_device(y), 2.0 / (C * h),
-            float(n_table // 2), 2.0 * carrier / C, out)  # fmt: skip
+    kernel, args = _launch_exact(cuda, table, n_table, cuda.to_device(_antennas(traces, u)), x, y,
+                                 2.0 / (C * h), 2.0 * carrier / C, p, block_rows)  # fmt: skip
     kernel(table, *args)  # asynchronous: the check below runs while the GPU works
     if verify and not _TABLES.verify(data):  # data changed in place: new table, again
         kernel(_TABLES.build(cuda, traces, data, upsample), *args)
-    return out, p
+    return args[-1], p
+
+
+def device_table(cuda: Any, traces: Traces, upsample: int) -> Any:
+    """The device table of ``traces`` (:func:`hermite_table`, flat uint64), built if needed.
+
+    The cached table of the same traces object is checked against the data first (CRC-32):
+    data changed in place get a new table.
+    """
+    data = np.ascontiguousarray(traces.data)
+    table = _TABLES.cached(traces, upsample)
+    if table is None or not _TABLES.verify(data):
+        table = _TABLES.build(cuda, traces, data, upsample)
+    return table
 
 
 def backproject_cuda(
@@ -331,7 +373,7 @@ def backproject_cuda(
     upsample: int = 8,
     kernel: str = "numba",
     method: str = "exact",
-    ffbp_oversampling: float = 1.4,
+    ffbp_oversampling: float | None = None,
     progress: ProgressCallback | None = None,
     pixels_per_thread: int | None = None,
 ) -> Image:
@@ -353,10 +395,11 @@ def backproject_cuda(
         ``upsample**-4``.
     kernel : {"numba"}
         Accepted for the CPU signature: the GPU kernel is numba.cuda.
-    method : {"exact"}
-        Only the exact sum has a GPU kernel.
-    ffbp_oversampling : float
-        Accepted for the CPU signature; unused.
+    method : {"exact", "ffbp"}
+        ``"ffbp"``: fast factorised backprojection on the GPU (:mod:`.cuda_ffbp`, the CPU's
+        plan and error budget), exact backprojection where it would not save work.
+    ffbp_oversampling : float, optional
+        ``method="ffbp"``: oversampling of each sub-image's band (as on the CPU).
     progress : callable, optional
         Called once, ``progress("backprojection", 1, 1)``, when the image is done.
     pixels_per_thread : {1, 2, 4, 8}, optional
@@ -367,7 +410,8 @@ def backproject_cuda(
     -------
     Image
         Complex128 image, shape ``grid.shape``; ``metadata["kernel_variant"]`` is
-        ``"cuda-hermite"``.
+        ``"cuda-hermite"`` (exact) or ``"cuda-ffbp"``; with ``method="ffbp"``,
+        ``metadata["ffbp"]`` is the plan's information (:func:`.ffbp.ffbp_values`).
 
     Raises
     ------
@@ -386,8 +430,11 @@ def backproject_cuda(
         raise ValueError(
             f"device='cuda' runs the numba.cuda kernel: kernel must be 'numba', got {kernel!r}"
         )
-    if method != "exact":
-        raise ValueError(f"device='cuda' has the exact method only, got method={method!r}")
+    if method not in ("exact", "ffbp"):
+        raise ValueError(f"method must be 'exact' or 'ffbp', got {method!r}")
+    alpha = None if ffbp_oversampling is None else float(ffbp_oversampling)
+    if alpha is not None and not (math.isfinite(alpha) and alpha > 1.0):
+        raise ValueError(f"ffbp_oversampling must be a number > 1, got {ffbp_oversampling!r}")
     if pixels_per_thread is not None and pixels_per_thread not in (1, 2, 4, 8):
         raise ValueError(f"pixels_per_thread must be 1, 2, 4 or 8, got {pixels_per_thread!r}")
     u = np.zeros(3) if velocity_mps is None else _as_velocity(velocity_mps, name="velocity_mps")
@@ -396,17 +443,26 @@ def backproject_cuda(
     cuda = _cuda()
     if not cuda.is_available():
         raise RuntimeError(f"{NEEDS} (no CUDA device found)")
-    out, p = _image_on_device(cuda, traces, grid, u, int(upsample), pixels_per_thread)
-    values = out.copy_to_host().view(np.complex128)[..., 0]
-    if progress is not None:
-        progress("backprojection", 1, 1)
+    values = None
+    extra: dict = {}
+    if method == "ffbp":
+        from .cuda_ffbp import ffbp_cuda
+
+        values, extra = ffbp_cuda(cuda, traces, grid.x_m, grid.y_m, u, int(upsample),
+                                  alpha=alpha, progress=progress)  # fmt: skip
+    p = 0
+    if values is None:
+        out, p = _image_on_device(cuda, traces, grid, u, int(upsample), pixels_per_thread)
+        values = out.copy_to_host().view(np.complex128)[..., 0]
+        if progress is not None:
+            progress("backprojection", 1, 1)
     carrier = float(traces.radar.carrier_hz)
     meta = {
         "algorithm": "backprojection",
         "equation": "eq:image" if velocity_mps is None else "eq:imagecompu",
         "kernel": "numba",
-        "kernel_variant": "cuda-hermite",
-        "method": "exact",
+        "kernel_variant": "cuda-hermite" if extra.get("path", "exact") == "exact" else "cuda-ffbp",
+        "method": method,
         "device": "cuda",
         "pixels_per_thread": p,
         "upsample": int(upsample),
@@ -414,4 +470,6 @@ def backproject_cuda(
         "reference_point_m": traces.reference_point_m.tolist(),
         "carrier_hz": carrier,
     }
+    if extra:
+        meta["ffbp"] = extra
     return Image(values=values, grid=grid, velocity_mps=u[:2], metadata=meta)

@@ -792,6 +792,31 @@ def _image_rows(out, k_lo, rows, cre, cim, g, frame: dict, remodulate: bool = Tr
         )  # fmt: skip
 
 
+class CpuKernels:
+    """The compiled CPU kernels that evaluate a plan (:mod:`._ffbp_kernels`): the default.
+
+    A plan (the tree, its filters, the image rows' layout) is the same on every device;
+    an object with these three methods evaluates it (the GPU's is
+    :class:`sarmotion.imaging.cuda_ffbp.CudaKernels`).
+    """
+
+    def run_levels(self, levels: list[_Level], frame: dict, table, report):
+        """The tree's regions in order (:func:`_run_levels`); returns depth 1's planes."""
+        return _run_levels(levels, frame, table, report)
+
+    def image_rows(self, out, k_lo, rows, cre, cim, g, frame: dict, remodulate: bool = True):
+        """The image rows into the host array ``out`` (:func:`_image_rows`)."""
+        _image_rows(out, k_lo, rows, cre, cim, g, frame, remodulate)
+
+    def resample(self, out, j, *args) -> None:
+        """The rotated path's resampling into ``out`` (:func:`._ffbp_kernels.resample`)."""
+        _kernels.resample(out, j, *args)
+
+
+#: The kernels :func:`ffbp_values` runs by default.
+CPU_KERNELS = CpuKernels()
+
+
 def _active_columns(pos, ref_ranges, x, y, constants, n_up) -> NDArray[np.intp]:
     """Columns ``x`` that some pulse's fast-time window reaches (1 m margin), ascending."""
     idx_scale, idx_offset, _ = constants
@@ -1058,6 +1083,7 @@ def ffbp_values(
     alpha: float | None = None,
     progress: ProgressCallback | None = None,
     exact_for=None,
+    kernels: CpuKernels = CPU_KERNELS,
 ) -> tuple[NDArray[np.complex128] | None, dict]:
     """FFBP image on the axis-aligned grid ``x_m`` x ``y_m``; returns ``(values, info)``.
 
@@ -1092,6 +1118,9 @@ def ffbp_values(
     exact_for : callable, optional
         ``exact_for(x_m, y_m) -> (len(y_m), len(x_m))`` complex exact backprojection on a
         sub-grid; the rotated path needs it (without it only the axis-aligned path runs).
+    kernels : CpuKernels, optional
+        What evaluates the plan: the CPU's compiled kernels by default, or an object with
+        the same methods for another device (the table in ``pulses`` is the one it reads).
 
     Returns
     -------
@@ -1128,7 +1157,7 @@ def ffbp_values(
         plan.edges = list(edges)
         PLANS.put(key, plan)
     if plan.admitted:
-        values, info = _run_aligned(plan, pulses.table_values, progress)
+        values, info = _run_aligned(plan, pulses.table_values, progress, kernels=kernels)
         for rows, cols in plan.edges:  # exact where the window's ends make J a step along v
             values[rows, cols] = exact_for(x[cols], y[rows])
         info["exact_pixels"] = _n_pixels(plan.edges)
@@ -1137,7 +1166,7 @@ def ffbp_values(
         turned = DEFAULT_ALPHA if alpha is None else alpha
         values, info = _rotated_values(pulses, x, y, alpha=turned, budget=budget,
                                        exact_for=exact_for, tile_for=tile_for,
-                                       progress=progress)  # fmt: skip
+                                       progress=progress, kernels=kernels)  # fmt: skip
         if values is not None:
             return values, info
     return None, {"path": "exact", "fallback": "exact (the factorisation would not save work here)"}
@@ -1212,7 +1241,9 @@ def _plan_aligned(
     return plan
 
 
-def _run_aligned(plan: _AlignedPlan, table, progress, demodulated: bool = False):
+def _run_aligned(
+    plan: _AlignedPlan, table, progress, demodulated: bool = False, kernels=CPU_KERNELS
+):
     """Evaluate an admitted plan (:func:`_plan_aligned`); returns ``(values, info)``.
 
     With ``demodulated``, the values are ``J`` (complex64, not remodulated) on the used
@@ -1235,15 +1266,15 @@ def _run_aligned(plan: _AlignedPlan, table, progress, demodulated: bool = False)
             progress("backprojection", done, n_steps)
 
     frame = plan.frame
-    cre, cim = _run_levels(plan.levels, frame, table, report)
+    cre, cim = kernels.run_levels(plan.levels, frame, table, report)
     if demodulated:
         out = np.zeros((frame["y"].size, frame["us"].size), np.complex64)
-        _image_rows(out, 0, plan.rows, cre, cim, plan.g, frame, remodulate=False)
+        kernels.image_rows(out, 0, plan.rows, cre, cim, plan.g, frame, remodulate=False)
         info["first_column"] = plan.k_lo
         report()
         return out, info
     out = np.zeros((frame["y"].size, nx if not plan.transpose else ny), np.complex128)
-    _image_rows(out, plan.k_lo, plan.rows, cre, cim, plan.g, frame)
+    kernels.image_rows(out, plan.k_lo, plan.rows, cre, cim, plan.g, frame)
     report()
     return (out.T if plan.transpose else out), info
 
@@ -1356,7 +1387,10 @@ def resample_error(band: float, taps: int) -> float:
     return e
 
 
-def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progress, exact_for):
+def _rotated_values(
+    pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progress, exact_for,
+    kernels=CPU_KERNELS,
+):  # fmt: skip
     """The ``"rotated"`` path: factorise on a grid turned to the look direction, resample.
 
     Frame: ``u`` along the look direction from the aperture centre ``c`` to the grid
@@ -1431,7 +1465,8 @@ def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progre
     )  # fmt: skip
     if not plan.admitted:
         return None, plan.info
-    j, info = _run_aligned(plan, pulses.table_values, inner_progress, demodulated=True)
+    j, info = _run_aligned(plan, pulses.table_values, inner_progress, demodulated=True,
+                           kernels=kernels)  # fmt: skip
     info.update(
         path="rotated", rotation_deg=math.degrees(theta), resample_taps=RESAMPLE_TAPS,
         rotated_grid=(int(vs.size), int(j.shape[1])), spacing_m=(float(du), float(dv)),
@@ -1446,7 +1481,7 @@ def _rotated_values(pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progre
     out = np.zeros((y.size, x.size), np.complex128)
     if j.shape[1] >= RESAMPLE_TAPS[0]:
         quarter_scale = float(constants[2])
-        _kernels.resample(
+        kernels.resample(
             out, j, float(us[k_lo]), du, float(vs[0]), dv, x, y, ox, oy, ct, st, wu, wv,
             float(centre[0]), float(centre[1]), float(centre[2] ** 2),
             float(np.linalg.norm(centre - rho_o)), quarter_scale,
