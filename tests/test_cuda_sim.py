@@ -82,7 +82,7 @@ def _case(traces, grid, pixels_per_thread, velocity, name):
     pts = np.stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)], axis=1)
     exact = point_response(traces, pts, velocity_mps=velocity).reshape(grid.shape)
     spectrum = traces.phase_history()
-    sup = float(np.sum(np.abs(spectrum))) / traces.n_samples  # sum_j max_t |D_j(t)|
+    sup = float(np.sum(np.abs(spectrum))) / traces.n_samples  # sum_j sum_k |P_jk| / n
     r_max = float(np.max(np.linalg.norm(traces.positions_m, axis=1))) + 1e3
     eps = error_bound(
         8, traces.radar.carrier_hz, grid.spacing_m[1], p, traces.n_pulses, range_m=r_max
@@ -155,6 +155,32 @@ def _ffbp_cases() -> list[dict]:
     return results
 
 
+def _device_tables() -> list[dict]:
+    """The table built on the device against the host's, per pulse (errors over S_j)."""
+    from sarmotion.imaging._cuda_table import build_table, entry_error
+    from sarmotion.imaging.cuda import _cuda
+
+    rng = np.random.default_rng(91)
+    rows = []
+    for n, upsample in ((24, 4), (25, 8), (9, 3)):
+        data = rng.standard_normal((3, n)) + 1j * rng.standard_normal((3, n))
+        data[1] *= 1e3  # pulses of very different levels: the bound is per pulse
+        host = hermite_table(data, upsample).astype(np.float64)
+        dev = build_table(_cuda(), data, upsample).copy_to_host()
+        dev = dev.view(np.float32).reshape(host.shape).astype(np.float64)
+        spectrum = np.fft.fftshift(np.fft.fft(np.fft.ifftshift(data, axes=-1), axis=-1), axes=-1)
+        s_j = np.sum(np.abs(spectrum), axis=1) / n  # S_j
+        err_v = np.max(np.abs(dev[..., :2] - host[..., :2]), axis=(1, 2)) / s_j
+        err_d = np.max(np.abs(dev[..., 2:] - host[..., 2:]), axis=(1, 2)) / s_j
+        # both tables are rounded to float32 once: 2^-24 of the largest entry each
+        rounding = 2.0 * 2.0**-24 * np.max(np.abs(host), axis=(1, 2)) / s_j
+        rows.append({"n": n, "upsample": upsample, "err_v": err_v.tolist(),
+                     "err_d": err_d.tolist(), "rounding": rounding.tolist(),
+                     "bound": entry_error(),
+                     "repeat_equal": bool(np.array_equal(dev[:, -1], dev[:, 0]))})  # fmt: skip
+    return rows
+
+
 def run_simulator(out: Path, gotcha_dir: str | None) -> None:
     """Run every case under the simulator; write the results as JSON to ``out``."""
     assert os.environ.get("NUMBA_ENABLE_CUDASIM") == "1"
@@ -205,7 +231,7 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
         results.append(_case(traces, grid, 1, None, "gotcha_p1"))  # the float64 path alone
     results.append(changed)
     out.write_text(json.dumps({"cases": results, "outside": outside, "cli": cli,
-                               "ffbp": _ffbp_cases()}))  # fmt: skip
+                               "ffbp": _ffbp_cases(), "tables": _device_tables()}))  # fmt: skip
 
 
 # ================================================================== the tests (pytest)
@@ -274,6 +300,16 @@ def test_ffbp_on_the_gpu_reaches_its_accuracy(simulated, case):
     assert got["ser_db"] >= TARGET_DB, got
     assert got["ser_db"] >= got["budget_db"] - BUDGET_MARGIN_DB, got
     assert got["repeatable"]  # the second image reuses the plan and its device arrays
+
+
+def test_table_built_on_the_device_within_its_bound(simulated):
+    # Each value within 2^-19 S_j of the exact table (the host's, float64 FFTs, within
+    # float32 rounding of it), h D' within 2^-19 (pi / U) S_j; position N repeats 0.
+    for row in simulated["tables"]:
+        for ev, ed, r in zip(row["err_v"], row["err_d"], row["rounding"], strict=True):
+            assert ev <= row["bound"] + r, row
+            assert ed <= row["bound"] * math.pi / row["upsample"] + r, row
+        assert row["repeat_equal"]
 
 
 def test_ffbp_cases_cover_the_window_ends(simulated):

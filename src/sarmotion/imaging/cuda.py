@@ -12,10 +12,13 @@ samples, ``D(t) = (1/n) sum_k P_k exp(2i pi (k - n//2) df t)``
 Method
 ------
 Per pulse, a table holds ``D`` and its derivative ``h D'`` on ``U n`` points of step
-``h = dt / U`` over one period of ``D`` (``U = upsample``; both exact, by zero-padding the
-spectrum, then rounded to float32). ``D`` at a delay is the cubic Hermite interpolant of
-the two table points around it. The table covers ``[-n/2, n/2) dt``, the fast-time
-window; a delay outside it contributes 0 (as on the CPU).
+``h = dt / U`` over one period of ``D`` (``U = upsample``), built on the GPU from each
+pulse's spectrum (:mod:`._cuda_table`: the trigonometric interpolant summed directly,
+within ``2^-19`` of ``sum_k |P_k| / n``, then rounded to float32; :func:`hermite_table` is
+the same table made on the host by zero-padded FFTs). ``D`` at a delay is the cubic
+Hermite interpolant of the two table points around it. The table covers
+``[-n/2, n/2) dt``, the fast-time window; a delay outside it contributes 0 (as on the
+CPU).
 
 Geometry: each GPU thread sums ``P`` pixels of one image column (``P`` in 1, 2, 4, 8: the
 most that keeps the phase bound below and half the GPU's resident threads busy,
@@ -28,8 +31,9 @@ the phasor (``sin``/``cos`` of a reduced angle) and the sum over pulses.
 
 Error bound
 -----------
-Each pixel's error is at most ``eps * sum_j max_t |D_j(t)|`` (:func:`error_bound`),
-``eps`` the sum of the per-term errors relative to ``max |D_j|``:
+Each pixel's error is at most ``eps * sum_j S_j`` (:func:`error_bound`),
+``S_j = sum_k |P_jk| / n >= max_t |D_j(t)|`` (``P_jk`` the spectrum of pulse ``j``),
+``eps`` the sum of the per-term errors relative to ``S_j``:
 
 - interpolation: ``D`` holds frequencies ``|f| <= 1 / (2 dt)``, so by Bernstein's
   inequality ``|D''''| <= (pi / dt)^4 max |D|``, and the cubic Hermite remainder is
@@ -45,6 +49,9 @@ Each pixel's error is at most ``eps * sum_j max_t |D_j(t)|`` (:func:`error_bound
   largest value with ``eps_phi <= 1e-4`` rad (-80 dB; 4 at 0.25 m spacing, 8 at 0.1 m,
   X band). The float64 anchor adds ``2 pi (2 nu_o / c) 4 eps_64 R`` rad (1e-9 at
   ``R = 10`` km);
+- the table: each value within ``2^-19 S_j`` (:func:`._cuda_table.entry_error`), each
+  ``h D'`` within ``2^-19 (pi / U) S_j``; the Hermite weights sum to at most
+  ``1 + 1/4`` of them: ``eps_T = 2^-19 (1 + pi / (4 U))`` (-113 dB);
 - ``sin``/``cos`` of a reduced angle in ``[-pi, pi]`` (PTX ``sin.approx``,
   ``cos.approx``): ``2^-20.5``; float32 table values and table position: ``~u`` each
   (within the next term);
@@ -199,12 +206,13 @@ def error_bound(
     n_pulses: int,
     range_m: float = 1e5,
 ) -> float:
-    """Worst-case error of one pixel over ``sum_j max_t |D_j(t)|`` (module docstring).
+    """Worst-case error of one pixel over ``sum_j sum_k |P_jk| / n`` (module docstring).
 
-    ``eps_H + eps_phi + eps_trig + J u``: cubic Hermite interpolation
-    ``sqrt(2) (pi / U)^4 / 384``; float32 range offsets and phase
-    ``2 pi (2 nu_o / c) (10 u (P - 1) dy / 2 + 4 eps_64 R)``; ``sin``/``cos``
-    ``2^-20.5`` (PTX ``sin.approx``/``cos.approx``); float32 accumulation ``J u``.
+    ``eps_H + eps_T + eps_phi + eps_trig + J u``: cubic Hermite interpolation
+    ``sqrt(2) (pi / U)^4 / 384``; the table built on the GPU ``2^-19 (1 + pi / (4 U))``;
+    float32 range offsets and phase ``2 pi (2 nu_o / c) (10 u (P - 1) dy / 2 + 4 eps_64
+    R)``; ``sin``/``cos`` ``2^-20.5`` (PTX ``sin.approx``/``cos.approx``); float32
+    accumulation ``J u``.
 
     Parameters
     ----------
@@ -224,13 +232,14 @@ def error_bound(
     Returns
     -------
     float
-        ``|I_gpu(rho) - I(rho)| / sum_j max_t |D_j(t)|`` at most.
+        ``|I_gpu(rho) - I(rho)| / sum_j sum_k |P_jk| / n`` at most.
     """
     hermite = math.sqrt(2.0) * (math.pi / upsample) ** 4 / 384.0
+    table = 2.0**-19 * (1.0 + math.pi / (4.0 * upsample))
     per_m = 2.0 * math.pi * (2.0 * carrier_hz / C)
     phase = per_m * (10.0 * _U32 * 0.5 * (rows_per_thread - 1) * spacing_y_m
                      + 4.0 * 2.0**-53 * range_m)  # fmt: skip
-    return hermite + phase + 2.0**-20.5 + n_pulses * _U32
+    return hermite + table + phase + 2.0**-20.5 + n_pulses * _U32
 
 
 def _min_threads(cuda: Any) -> int:
@@ -271,8 +280,12 @@ class _DeviceTables:
 
     def build(self, cuda: Any, traces: Traces, data: NDArray, upsample: int) -> Any:
         self.clear()  # free the old table first
-        table = hermite_table(data, upsample).view(np.uint64).reshape(-1)
-        self._table = cuda.to_device(table)
+        from ._cuda_table import build_table, builds_on_device
+
+        if builds_on_device():
+            self._table = build_table(cuda, data, upsample)
+        else:  # numba's simulator: the same table from the host's FFTs
+            self._table = cuda.to_device(hermite_table(data, upsample).view(np.uint64).reshape(-1))
         self._crc = zlib.crc32(memoryview(data).cast("B"))
         self._key = (id(traces), upsample)
         self._ref = weakref.ref(traces)

@@ -131,13 +131,21 @@ class CudaKernels(CpuKernels):
         dev = self._frame(frame)
         ny, nu = frame["y"].size, frame["us"].size
         cu, cv, cz2, rref = frame["centre"]
+        key = ("rows", id(rows), id(g))
+        kept = dev.get(key)
+        if kept is None or kept[0] is not rows or kept[1] is not g:
+            kept = dev[key] = (rows, g, [cuda.to_device(np.ascontiguousarray(a))
+                                         for a in (*rows, g)])  # fmt: skip
+        *row_args, g_dev = kept[2]
         res = cuda.device_array((ny, nu, 2), np.float64)
-        args = [cuda.to_device(np.ascontiguousarray(a)) for a in rows]
         kern.root_rows[kern.blocks(nu, ny), kern.BLOCK](
-            res, *args, cre, cim, cuda.to_device(np.ascontiguousarray(g)), dev["us"], dev["y"],
-            cu, cv, cz2, rref, frame["constants"][2] / 4.0, bool(remodulate),
+            res, *row_args, cre, cim, g_dev, dev["us"], dev["y"], cu, cv, cz2, rref,
+            frame["constants"][2] / 4.0, bool(remodulate),
         )  # fmt: skip
-        out[:, k_lo : k_lo + nu] = res.copy_to_host().view(np.complex128)[..., 0]
+        if out.dtype == np.complex128 and k_lo == 0 and nu == out.shape[1]:
+            res.copy_to_host(out.view(np.float64).reshape(ny, nu, 2))  # no host temporary
+        else:
+            out[:, k_lo : k_lo + nu] = res.copy_to_host().view(np.complex128)[..., 0]
 
     def resample(self, out, j, u0, du, v0, dv, xs, ys, ox, oy, cos_t, sin_t, wu, wv, cx, cy,
                  cz2, rref, quarter_scale) -> None:  # fmt: skip
