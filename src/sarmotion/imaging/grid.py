@@ -207,7 +207,8 @@ class Image:
     Parameters
     ----------
     values : (ny, nx) array_like
-        Complex image values (stored complex128).
+        Complex image values, stored complex128: a complex128 array is kept as given, not
+        copied (as :func:`numpy.asarray`).
     grid : ImageGrid
         The pixel positions; ``grid.shape`` must equal ``values.shape``.
     velocity_mps : (2,) array_like
@@ -230,8 +231,8 @@ class Image:
             raise ValueError(
                 f"values must have the grid shape (ny, nx) = {self.grid.shape}, got {v.shape}"
             )
-        v = v.astype(np.complex128)
-        if not np.all(np.isfinite(v)):
+        v = np.asarray(v, dtype=np.complex128)  # not copied when complex128 already
+        if not np.isfinite(v).all():
             raise ValueError("values contains NaN or infinite entries")
         u = np.asarray(self.velocity_mps, dtype=np.float64)
         if u.shape != (2,) or not np.all(np.isfinite(u)):
