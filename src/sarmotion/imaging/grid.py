@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -200,6 +201,21 @@ class ImageGrid:
 
 
 # ============================================================================== image
+@numba.njit(parallel=True, cache=True)
+def _all_finite(flat: NDArray[np.float64]) -> bool:  # pragma: no cover - compiled
+    """Whether every entry is finite (``x - x`` is 0 for finite ``x``, NaN otherwise).
+
+    One pass without temporaries, on the threads: an image's check costs a fraction of
+    ``numpy.isfinite(v).all()`` (which writes a boolean image first).
+    """
+    bad = 0
+    for i in numba.prange(flat.size):
+        x = flat[i]
+        if x - x != 0.0:
+            bad += 1
+    return bad == 0
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Image:
     """A complex image on an :class:`ImageGrid`.
@@ -232,7 +248,7 @@ class Image:
                 f"values must have the grid shape (ny, nx) = {self.grid.shape}, got {v.shape}"
             )
         v = np.asarray(v, dtype=np.complex128)  # not copied when complex128 already
-        if not np.isfinite(v).all():
+        if not _all_finite(np.ascontiguousarray(v).reshape(-1).view(np.float64)):
             raise ValueError("values contains NaN or infinite entries")
         u = np.asarray(self.velocity_mps, dtype=np.float64)
         if u.shape != (2,) or not np.all(np.isfinite(u)):
