@@ -87,12 +87,21 @@ __all__ = ["image"]
 @lenient_option
 @autofocus_options
 @click.option(
+    "--method",
+    type=click.Choice(["exact", "ffbp"]),
+    default="exact",
+    show_default=True,
+    help="'exact': every pulse summed at every pixel (about 88 dB from the exact sum on "
+    "the CPU, 96 dB on the GPU). 'ffbp': fast factorised backprojection, several times "
+    "faster on large images, at least 55 dB from the exact sum by its error budget; exact "
+    "where it would not save work.",
+)
+@click.option(
     "--device",
     type=click.Choice(["cpu", "cuda"]),
     default="cpu",
     show_default=True,
-    help="Where to backproject: 'cuda' runs the exact sum on an NVIDIA GPU (the "
-    "sarmotion[gpu] extra).",
+    help="Where to backproject: 'cuda' runs it on an NVIDIA GPU (the sarmotion[gpu] extra).",
 )
 @click.option(
     "--sicd",
@@ -135,6 +144,7 @@ def image(
     sicd_path: Path | None,
     origin_llh: tuple[float, float, float] | None,
     dynamic_range_db: float,
+    method: str,
     device: str,
     force: bool,
 ) -> None:
@@ -205,9 +215,10 @@ def image(
         if device == "cuda":
             from ..imaging.cuda import backproject_cuda
 
-            img = backproject_cuda(traces, grid, velocity_mps=velocity, progress=bar)
+            img = backproject_cuda(traces, grid, velocity_mps=velocity, method=method,
+                                   progress=bar)  # fmt: skip
         else:
-            img = backproject(traces, grid, velocity_mps=velocity, progress=bar)
+            img = backproject(traces, grid, velocity_mps=velocity, method=method, progress=bar)
     elapsed = time.perf_counter() - t0
     peaks = img.peaks(5, min_separation_m=3.0)
     quality = [_quality(traces, (x, y), velocity) for x, y, v in peaks if abs(v) > 0]
@@ -238,7 +249,11 @@ def image(
             x_m=grid.x_m,
             y_m=grid.y_m,
             velocity_mps=velocity,
-            metadata={"inputs": list(inputs), **traces.metadata},
+            metadata={
+                "inputs": list(inputs),
+                **traces.metadata,
+                "imaging": _imaging_record(img.metadata, device),
+            },
         )
         pixel_pulses = grid.shape[0] * grid.shape[1] * traces.n_pulses
         write_json(
@@ -304,3 +319,15 @@ def _quality(traces, point, velocity) -> dict:
         return point_quality(traces, point, velocity_mps=velocity).to_dict()
     except ValueError as exc:
         return {"error": str(exc)}
+
+
+def _imaging_record(meta: dict, device: str) -> dict:
+    """How the image was formed: method, kernel, device, and FFBP's path and error budget."""
+    record = {"method": meta.get("method"), "kernel_variant": meta.get("kernel_variant"),
+              "device": device}  # fmt: skip
+    ffbp = meta.get("ffbp")
+    if ffbp:
+        record["ffbp_path"] = str(ffbp.get("path"))
+        if ffbp.get("budget_db") is not None:
+            record["ffbp_budget_db"] = float(ffbp["budget_db"])
+    return record
