@@ -19,13 +19,24 @@ The float32 kernel's tables are packed in eight float32 planes (:class:`TraceTab
 kept in a small cache
 (:data:`TABLES`) keyed by the traces object, with a copy of the data each table was built
 from; the cache is locked, so threads (Dask workers) may image concurrently.
+
+A table is built by blocks of pulses (:func:`make_table`): each block's transforms
+(:func:`_polyphase`) and packing (:func:`_pack`) run in one thread while the block is in
+that core's cache, the blocks shared out between threads, and every coefficient is the
+float32 rounding of the complex128 one of :func:`hermite_coefficients`, bit for bit
+whatever the blocks and threads. The values of a collected table that nothing else
+refers to are kept for the next table of the same shape (:data:`_SPARES`).
 """
 
 from __future__ import annotations
 
+import os
+import sys
 import threading
 import weakref
 from collections import OrderedDict
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numba
@@ -70,37 +81,67 @@ def upsample_fast_time(data: ArrayLike, factor: int) -> NDArray[np.complex128]:
     return to_fast_time(spec) * factor
 
 
-def _polyphase(data: ArrayLike, factor: int) -> NDArray[np.complex128]:
-    """``D_m`` and ``h D'_m`` by phase: shape ``(2, factor, n_pulses, n)`` complex128.
+def _phase_turns(n: int, factor: int) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+    """The factors :func:`_polyphase` multiplies a trace's spectrum by, flat.
 
-    ``out[0, r, :, q]`` is ``D`` at upsampled sample ``m = q factor + r`` (time
-    ``t_m = (m - N//2) h``), ``out[1, r, :, q]`` is ``h D'`` there. With the ``n`` bins
+    Returns
+    -------
+    turn : (n factor,) ndarray
+        At ``kappa_i factor + r``: ``exp(2i pi kappa (r - N//2) / N)`` for bin ``kappa``
+        (signed offsets, the bins' order, ``i`` its index) and phase ``r``, complex128.
+    slope : (n factor,) ndarray
+        At ``kappa_i factor + r``: ``2i pi kappa / N``, the derivative's factor (``h D'``),
+        complex128.
+    """
+    big = factor * n
+    kappa = np.round(np.fft.fftfreq(n) * n)  # signed offsets, the bins' order
+    r = np.arange(factor)[None, :]
+    turn = np.exp(2j * np.pi * kappa[:, None] * (r - big // 2) / big)
+    return turn.reshape(big), np.repeat((2j * np.pi / big) * kappa, factor)
+
+
+def _polyphase(
+    d: NDArray[np.complex128],
+    turn: NDArray[np.complex128],
+    slope: NDArray[np.complex128],
+    work: NDArray[np.complex128],
+    workers: int = 1,
+) -> NDArray[np.complex128]:
+    """``D_m`` and ``h D'_m`` of every upsampled sample, in order: ``(2, n_pulses, N)``.
+
+    ``out[0, i, m]`` is ``D`` of pulse ``i`` at upsampled sample ``m`` (time
+    ``t_m = (m - N//2) h``), ``out[1, i, m]`` is ``h D'`` there. With the ``n`` bins
     ``F_kappa`` of the trace (signed offsets ``kappa``), ``D(t_m) = (1/n) sum_kappa F_kappa
     exp(2i pi kappa (m - N//2) / N)``, and ``m = q factor + r`` splits the phase into
     ``kappa q / n`` and ``kappa (r - N//2) / N``: each phase ``r`` is an ``n``-point
-    inverse transform of ``F`` turned by the second (the derivative multiplies bin
-    ``kappa`` by ``2i pi kappa / N``). The same values as the zero-padded ``N``-point
-    transform, at the cost of ``2 factor`` transforms of the trace's own length (``N``
-    often has the trace length's large prime factors, ``n`` no more), on every core
-    (``scipy.fft``).
+    inverse transform of ``F`` turned by the second (``turn``; the derivative multiplies
+    bin ``kappa`` by ``2i pi kappa / N``, ``slope``). The same values as the zero-padded
+    ``N``-point transform, at the cost of ``2 factor`` transforms of the trace's own length
+    (``N`` often has the trace length's large prime factors, ``n`` no more). The spectra
+    are laid out ``(2, n_pulses, n, factor)`` in ``work`` and transformed along the bins
+    in place, so the samples come out in order (``m = q factor + r``).
+
+    Parameters
+    ----------
+    d : (n_pulses, n) ndarray
+        complex128 traces, ``t = 0`` at index ``n // 2``.
+    turn, slope : (n factor,) ndarray
+        :func:`_phase_turns`.
+    work : (2 n_pulses n factor,) ndarray
+        complex128 scratch, or longer (its start is used); overwritten, and the result is
+        normally a view of it.
+    workers : int
+        Threads of each ``scipy.fft`` call (-1: every core).
     """
-    d = np.asarray(data, np.complex128)
     m, n = d.shape
-    big = factor * n
-    f = sp_fft.fft(np.fft.ifftshift(d, axes=-1), axis=-1, workers=-1)
-    kappa = np.round(np.fft.fftfreq(n) * n)  # signed offsets, the bins' order
-    r = np.arange(factor)[:, None]
-    turn = np.exp(2j * np.pi * kappa[None, :] * (r - big // 2) / big)  # (factor, n)
-    spec = np.empty((2, factor, m, n), np.complex128)
-    np.multiply(f[None, :, :], turn[:, None, :], out=spec[0])
-    np.multiply(spec[0], ((2j * np.pi / big) * kappa)[None, None, :], out=spec[1])
-    return sp_fft.ifft(spec, axis=-1, workers=-1, overwrite_x=True)
-
-
-def _interleave(phases: NDArray) -> NDArray:
-    """``(factor, n_pulses, n)`` phases of :func:`_polyphase` as ``(n_pulses, factor n)``."""
-    factor, m, n = phases.shape
-    return np.ascontiguousarray(phases.transpose(1, 2, 0)).reshape(m, factor * n)
+    big = turn.shape[0]
+    spec = work[: 2 * m * big].reshape(2, m, big)
+    f = sp_fft.fft(np.fft.ifftshift(d, axes=-1), axis=-1, workers=workers)
+    # each bin repeated for its phases: both products run over contiguous rows of N
+    np.multiply(np.repeat(f, big // n, axis=1), turn, out=spec[0])
+    np.multiply(spec[0], slope, out=spec[1])
+    out = sp_fft.ifft(spec.reshape(2, m, n, big // n), axis=2, workers=workers, overwrite_x=True)
+    return out.reshape(2, m, big)
 
 
 def hermite_coefficients(
@@ -108,11 +149,15 @@ def hermite_coefficients(
 ) -> NDArray[np.complexfloating]:
     """The table of cubic pieces (module docstring), shape ``(n_pulses, N + 2, 4)``.
 
-    Computed in complex128 (:func:`_polyphase`), then cast to ``dtype``.
+    Computed in complex128 (:func:`_polyphase`, every pulse at once), then cast to
+    ``dtype``.
     """
-    both = _polyphase(data, factor)
-    y, hd = _interleave(both[0]), _interleave(both[1])
-    m, big = y.shape
+    d = np.asarray(data, np.complex128)
+    m, n = d.shape
+    turn, slope = _phase_turns(n, factor)
+    work = np.empty(2 * m * n * factor, np.complex128)
+    y, hd = _polyphase(d, turn, slope, work, workers=-1)
+    big = y.shape[1]
     y1 = np.roll(y, -1, axis=-1)
     hd1 = np.roll(hd, -1, axis=-1)
     out = np.zeros((m, big + 2, 4), dtype)
@@ -123,40 +168,58 @@ def hermite_coefficients(
     return out
 
 
-@numba.njit(nogil=True, parallel=True, cache=True)
-def _pack(both, values, length):  # pragma: no cover - compiled
-    """Write the cubic pieces of :func:`_polyphase`'s ``both`` into ``values``' planes.
+@numba.njit(nogil=True, inline="always", cache=True)
+def _put_piece(row, length, p, ar, ai, br, bi, a1r, a1i, b1r, b1i):  # pragma: no cover
+    """Entry ``p`` of the eight planes: one cubic piece, from float64 real and imaginary parts.
 
-    Entry ``p = j + 1`` of each of the eight float32 planes is the piece starting at
-    upsampled sample ``j`` (its next sample circular, as :func:`hermite_coefficients`);
-    entries 0 and ``N + 1`` and the padding stay as given (zero).
+    The piece runs from ``a = D_m``, ``b = h D'_m`` to ``a1 = D_{m+1}``, ``b1 = h D'_{m+1}``.
+    ``c2 = 3 (a1 - a) - 2 b - b1`` and ``c3 = 2 (a - a1) + b + b1`` are evaluated in the
+    order of the complex128 expressions of :func:`hermite_coefficients`, a real ``s`` times
+    a complex ``x`` as the complex product ``(s + 0i) x`` (real part ``s x_re - 0 x_im``,
+    imaginary part ``s x_im + 0 x_re``; the zero products change at most the sign of a
+    zero), so each float32 stored is the rounding of the same float64.
     """
-    factor, m, n = both.shape[1], both.shape[2], both.shape[3]
-    big = factor * n
-    for i in numba.prange(m):
+    xr = a1r - ar
+    xi = a1i - ai
+    c2r = ((3.0 * xr - 0.0 * xi) - (2.0 * br - 0.0 * bi)) - b1r
+    c2i = ((3.0 * xi + 0.0 * xr) - (2.0 * bi + 0.0 * br)) - b1i
+    yr = ar - a1r
+    yi = ai - a1i
+    c3r = ((2.0 * yr - 0.0 * yi) + br) + b1r
+    c3i = ((2.0 * yi + 0.0 * yr) + bi) + b1i
+    row[p] = ar
+    row[length + p] = ai
+    row[2 * length + p] = br
+    row[3 * length + p] = bi
+    row[4 * length + p] = c2r
+    row[5 * length + p] = c2i
+    row[6 * length + p] = c3r
+    row[7 * length + p] = c3i
+
+
+@numba.njit(nogil=True, cache=True)
+def _pack(both, values, length):  # pragma: no cover - compiled
+    """Write the cubic pieces of :func:`_polyphase`'s samples into ``values``' planes.
+
+    ``both`` is the ``(2, n_pulses, 2 N)`` float64 view of the samples (real and imaginary
+    parts alternating). Entry ``p = j + 1`` of each of the eight float32 planes is the
+    piece starting at upsampled sample ``j`` (its next sample circular, as
+    :func:`hermite_coefficients`); entries 0 and ``N + 1`` and the padding stay as given
+    (zero). One thread (the caller's blocks run in threads, :func:`make_table`).
+    """
+    m, big = both.shape[1], both.shape[2] // 2
+    for i in range(m):
+        y = both[0, i]
+        d = both[1, i]
         row = values[i]
-        a1 = both[0, 0, i, 0]  # sample 0 follows the last (circular)
-        b1 = both[1, 0, i, 0]
-        q, r = n - 1, factor - 1  # sample j = q factor + r, backwards from the last
-        for j in range(big - 1, -1, -1):
-            a = both[0, r, i, q]
-            b = both[1, r, i, q]
-            c2 = 3.0 * (a1 - a) - 2.0 * b - b1
-            c3 = 2.0 * (a - a1) + b + b1
-            p = j + 1
-            row[p] = a.real
-            row[length + p] = a.imag
-            row[2 * length + p] = b.real
-            row[3 * length + p] = b.imag
-            row[4 * length + p] = c2.real
-            row[5 * length + p] = c2.imag
-            row[6 * length + p] = c3.real
-            row[7 * length + p] = c3.imag
-            a1, b1 = a, b
-            if r > 0:
-                r -= 1
-            else:
-                r, q = factor - 1, q - 1
+        for j in range(big - 1):
+            k = 2 * j
+            _put_piece(
+                row, length, j + 1, y[k], y[k + 1], d[k], d[k + 1],
+                y[k + 2], y[k + 3], d[k + 2], d[k + 3],
+            )  # fmt: skip
+        k = 2 * (big - 1)  # the last sample's next is sample 0
+        _put_piece(row, length, big, y[k], y[k + 1], d[k], d[k + 1], y[0], y[1], d[0], d[1])
 
 
 #: Entries after each plane of a :class:`TraceTable` row: a window of 32 entries read from
@@ -186,14 +249,130 @@ class TraceTable:
     n_up: int
 
 
+#: Pulses per block of :func:`make_table`: a block's spectra and samples,
+#: ``2 x 16 x N x 16`` bytes (1.3 MB at ``N = 2544``), stay in one core's cache between the
+#: transforms and the packing.
+BLOCK_PULSES = 16
+
+_POOL_LOCK = threading.Lock()
+#: The threads :func:`_run_in_threads` adds, by the process that started them (a forked
+#: child has none of its parent's threads, so it starts its own).
+_POOLS: dict[int, ThreadPoolExecutor] = {}
+
+
+def _run_in_threads(work: Callable[[], None], n_threads: int) -> None:
+    """Run ``work`` in ``n_threads`` threads, the caller's one of them, and wait for all.
+
+    The others come from one pool shared by every caller (created on first use, as many
+    threads as cores); an exception is raised after every thread has returned.
+    """
+    futures = []
+    if n_threads > 1:
+        with _POOL_LOCK:
+            pool = _POOLS.get(os.getpid())
+            if pool is None:
+                pool = _POOLS[os.getpid()] = ThreadPoolExecutor(
+                    os.cpu_count() or 1, "sarmotion-table"
+                )
+        futures = [pool.submit(work) for _ in range(n_threads - 1)]
+    try:
+        work()
+    finally:
+        errors = [f.exception() for f in futures]
+    for e in errors:
+        if e is not None:
+            raise e
+
+
+def _on_collect(values: NDArray, sink: Callable[[NDArray, int], None]) -> None:
+    """Finalizer of a table: pass its values, and how many references they have, to ``sink``."""
+    sink(values, sys.getrefcount(values))
+
+
+def _probe_references() -> int:
+    """The count :func:`_on_collect` sees for values nothing else refers to (measured)."""
+    seen: list[int] = []
+    owner = TraceTable(values=np.zeros(1, np.float32), upsample=1, n_up=0)
+    probe = weakref.finalize(owner, _on_collect, owner.values, lambda _, refs: seen.append(refs))
+    probe.atexit = False
+    del owner
+    return seen[0]
+
+
+#: What :func:`_on_collect` counts for a collected table's values that nothing else holds
+#: (no view, no other name): only then are they given to another table.
+_UNREFERENCED = _probe_references()
+
+#: Values of collected tables, at most one and of at most :data:`SPARE_BYTES`, for the next
+#: table of the same shape: a new array's pages are mapped and zeroed by the kernel when
+#: first written, and unmapped when it is freed; a spare's are not. Filled by the tables'
+#: finalizers (any thread, possibly inside the cache's locked section: list operations
+#: only, each atomic) and emptied by :func:`make_table`.
+_SPARES: list[NDArray[np.float32]] = []
+
+#: Bytes of the largest table values kept as a spare (held beyond :data:`CACHE_BYTES`).
+SPARE_BYTES = 128 * 2**20
+
+
+def _keep_spare(values: NDArray[np.float32], refs: int) -> None:
+    """Keep a collected table's values in :data:`_SPARES` if nothing else holds them."""
+    if refs == _UNREFERENCED and values.nbytes <= SPARE_BYTES and not _SPARES:
+        _SPARES.append(values)
+
+
+def _table_values(m: int, big: int) -> NDArray[np.float32]:
+    """``(m, 8 plane_length(big))`` float32 with every entry :func:`_pack` does not write zero.
+
+    A spare (:data:`_SPARES`) of that shape has its entries 0 and ``N + 1`` and the
+    padding set to zero; otherwise a new zero array.
+    """
+    length = plane_length(big)
+    try:
+        values = _SPARES.pop()
+    except IndexError:
+        values = None
+    if values is None or values.shape != (m, 8 * length):
+        return np.zeros((m, 8 * length), np.float32)
+    planes = values.reshape(m, 8, length)
+    planes[:, :, 0] = 0.0
+    planes[:, :, big + 1 :] = 0.0
+    return values
+
+
 def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
-    """:func:`hermite_coefficients` packed for the float32 kernel (:class:`TraceTable`)."""
-    m, n = data.shape
+    """:func:`hermite_coefficients` packed for the float32 kernel (:class:`TraceTable`).
+
+    Built by blocks of :data:`BLOCK_PULSES` pulses, each transformed (:func:`_polyphase`)
+    and packed (:func:`_pack`) by one thread while it is in that core's cache; the blocks
+    are shared out as the threads ask for them (``numba.get_num_threads()`` threads, the
+    caller's included). Every pulse's values do not depend on the blocks: each
+    coefficient is the float32 rounding of :func:`hermite_coefficients`' float64 one.
+    """
+    d = np.asarray(data, np.complex128)
+    m, n = d.shape
     big = factor * n
     length = plane_length(big)
-    values = np.zeros((m, 8 * length), np.float32)
-    _pack(_polyphase(data, factor), values, length)
-    return TraceTable(values=values, upsample=factor, n_up=big)
+    values = _table_values(m, big)
+    turn, slope = _phase_turns(n, factor)
+    starts = iter(range(0, m, BLOCK_PULSES))
+    lock = threading.Lock()
+
+    def work() -> None:
+        scratch = np.empty(2 * BLOCK_PULSES * big, np.complex128)
+        while True:
+            with lock:
+                i0 = next(starts, None)
+            if i0 is None:
+                return
+            i1 = min(i0 + BLOCK_PULSES, m)
+            both = _polyphase(d[i0:i1], turn, slope, scratch)
+            _pack(both.view(np.float64), values[i0:i1], length)
+
+    n_blocks = -(-m // BLOCK_PULSES)
+    _run_in_threads(work, min(numba.get_num_threads(), n_blocks))
+    table = TraceTable(values=values, upsample=factor, n_up=big)
+    weakref.finalize(table, _on_collect, values, _keep_spare).atexit = False
+    return table
 
 
 def unpack_table(table: TraceTable) -> NDArray[np.complex128]:
