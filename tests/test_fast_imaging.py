@@ -187,7 +187,7 @@ def test_trace_table_cache(four_degrees):
 
 
 @pytest.mark.parametrize(("shape", "factor"), [((37, 101), 6), ((16, 64), 8), ((5, 7), 1)])
-def test_trace_table_blocks_threads_and_spare(shape, factor, monkeypatch):
+def test_trace_table_blocks_and_threads(shape, factor, monkeypatch):
     # Built by blocks in threads: the same bits whatever the threads, each coefficient the
     # float32 rounding of the float64 one (a pulse count that is not a multiple of the
     # block, zero pulses, an exact zero step).
@@ -196,7 +196,6 @@ def test_trace_table_blocks_threads_and_spare(shape, factor, monkeypatch):
     data[1] = 0.0
     data[2, :3] = 1.0
     monkeypatch.setattr(_bp_table, "BLOCK_PULSES", 4)
-    _bp_table._SPARES.clear()
     table = _bp_table.make_table(data, factor)
     full = _bp_table.hermite_coefficients(data, factor)
     np.testing.assert_array_equal(_bp_table.unpack_table(table), full.astype(np.complex64))
@@ -204,20 +203,6 @@ def test_trace_table_blocks_threads_and_spare(shape, factor, monkeypatch):
         m.setattr(_bp_table.numba, "get_num_threads", lambda: 1)
         alone = _bp_table.make_table(data, factor)
     np.testing.assert_array_equal(alone.values.view(np.uint32), table.values.view(np.uint32))
-    # A collected table's values serve the next table of that shape, whatever they hold,
-    # but not while anything else refers to them.
-    del alone
-    assert len(_bp_table._SPARES) == 1
-    spare = _bp_table._SPARES[0]
-    spare[:] = np.nan
-    again = _bp_table.make_table(data, factor)
-    assert again.values is spare and not _bp_table._SPARES
-    np.testing.assert_array_equal(again.values.view(np.uint32), table.values.view(np.uint32))
-    kept = again.values[3:]
-    del again, spare
-    assert not _bp_table._SPARES
-    del kept
-    _bp_table._SPARES.clear()
 
 
 # -------------------------------------------------------------------------- FFBP

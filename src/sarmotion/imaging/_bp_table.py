@@ -24,14 +24,12 @@ A table is built by blocks of pulses (:func:`make_table`): each block's transfor
 (:func:`_polyphase`) and packing (:func:`_pack`) run in one thread while the block is in
 that core's cache, the blocks shared out between threads, and every coefficient is the
 float32 rounding of the complex128 one of :func:`hermite_coefficients`, bit for bit
-whatever the blocks and threads. The values of a collected table that nothing else
-refers to are kept for the next table of the same shape (:data:`_SPARES`).
+whatever the blocks and threads.
 """
 
 from __future__ import annotations
 
 import os
-import sys
 import threading
 import weakref
 from collections import OrderedDict
@@ -284,61 +282,6 @@ def _run_in_threads(work: Callable[[], None], n_threads: int) -> None:
             raise e
 
 
-def _on_collect(values: NDArray, sink: Callable[[NDArray, int], None]) -> None:
-    """Finalizer of a table: pass its values, and how many references they have, to ``sink``."""
-    sink(values, sys.getrefcount(values))
-
-
-def _probe_references() -> int:
-    """The count :func:`_on_collect` sees for values nothing else refers to (measured)."""
-    seen: list[int] = []
-    owner = TraceTable(values=np.zeros(1, np.float32), upsample=1, n_up=0)
-    probe = weakref.finalize(owner, _on_collect, owner.values, lambda _, refs: seen.append(refs))
-    probe.atexit = False
-    del owner
-    return seen[0]
-
-
-#: What :func:`_on_collect` counts for a collected table's values that nothing else holds
-#: (no view, no other name): only then are they given to another table.
-_UNREFERENCED = _probe_references()
-
-#: Values of collected tables, at most one and of at most :data:`SPARE_BYTES`, for the next
-#: table of the same shape: a new array's pages are mapped and zeroed by the kernel when
-#: first written, and unmapped when it is freed; a spare's are not. Filled by the tables'
-#: finalizers (any thread, possibly inside the cache's locked section: list operations
-#: only, each atomic) and emptied by :func:`make_table`.
-_SPARES: list[NDArray[np.float32]] = []
-
-#: Bytes of the largest table values kept as a spare (held beyond :data:`CACHE_BYTES`).
-SPARE_BYTES = 128 * 2**20
-
-
-def _keep_spare(values: NDArray[np.float32], refs: int) -> None:
-    """Keep a collected table's values in :data:`_SPARES` if nothing else holds them."""
-    if refs == _UNREFERENCED and values.nbytes <= SPARE_BYTES and not _SPARES:
-        _SPARES.append(values)
-
-
-def _table_values(m: int, big: int) -> NDArray[np.float32]:
-    """``(m, 8 plane_length(big))`` float32 with every entry :func:`_pack` does not write zero.
-
-    A spare (:data:`_SPARES`) of that shape has its entries 0 and ``N + 1`` and the
-    padding set to zero; otherwise a new zero array.
-    """
-    length = plane_length(big)
-    try:
-        values = _SPARES.pop()
-    except IndexError:
-        values = None
-    if values is None or values.shape != (m, 8 * length):
-        return np.zeros((m, 8 * length), np.float32)
-    planes = values.reshape(m, 8, length)
-    planes[:, :, 0] = 0.0
-    planes[:, :, big + 1 :] = 0.0
-    return values
-
-
 def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
     """:func:`hermite_coefficients` packed for the float32 kernel (:class:`TraceTable`).
 
@@ -352,7 +295,7 @@ def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
     m, n = d.shape
     big = factor * n
     length = plane_length(big)
-    values = _table_values(m, big)
+    values = np.zeros((m, 8 * length), np.float32)
     turn, slope = _phase_turns(n, factor)
     starts = iter(range(0, m, BLOCK_PULSES))
     lock = threading.Lock()
@@ -370,9 +313,7 @@ def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
 
     n_blocks = -(-m // BLOCK_PULSES)
     _run_in_threads(work, min(numba.get_num_threads(), n_blocks))
-    table = TraceTable(values=values, upsample=factor, n_up=big)
-    weakref.finalize(table, _on_collect, values, _keep_spare).atexit = False
-    return table
+    return TraceTable(values=values, upsample=factor, n_up=big)
 
 
 def unpack_table(table: TraceTable) -> NDArray[np.complex128]:
