@@ -105,6 +105,8 @@ INDEX: dict[str, tuple[str, ...]] = {
     "imaging._bp_reference": ("test_imaging.py", "test_backprojection_accuracy.py"),
     "imaging._bp_table": ("test_fast_imaging.py", "test_imaging_threads.py"),
     "imaging._cuda_kernels": ("test_cuda_sim.py",),
+    "imaging._cuda_ffbp_kernels": ("test_cuda_sim.py",),
+    "imaging._cuda_table": ("test_cuda_sim.py",),
     "imaging._ffbp_kernels": (
         "test_fast_imaging.py",
         "test_ffbp_oblique.py",
@@ -120,6 +122,7 @@ INDEX: dict[str, tuple[str, ...]] = {
         "test_imaging_threads.py",
     ),
     "imaging.cuda": ("test_cuda_sim.py",),
+    "imaging.cuda_ffbp": ("test_cuda_sim.py",),
     "imaging.exact_sum": ("test_backprojection_accuracy.py",),
     "imaging.ffbp": (
         "test_fast_imaging.py",

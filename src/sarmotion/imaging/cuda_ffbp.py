@@ -147,10 +147,15 @@ class CudaKernels(CpuKernels):
         else:
             out[:, k_lo : k_lo + nu] = res.copy_to_host().view(np.complex128)[..., 0]
 
-    def resample(self, out, j, u0, du, v0, dv, xs, ys, ox, oy, cos_t, sin_t, wu, wv, cx, cy,
-                 cz2, rref, quarter_scale) -> None:  # fmt: skip
-        """The rotated path's resampling (:func:`._cuda_ffbp_kernels.resample`) into ``out``."""
+    def resample(self, out, j, *args) -> None:
+        """The rotated path's resampling (:func:`._cuda_ffbp_kernels.resample`) into ``out``.
+
+        ``args`` those of :func:`._ffbp_kernels.resample` after ``out`` and ``j``.
+        """
         from . import _cuda_ffbp_kernels as kern
+
+        (u0, du, v0, dv, xs, ys, ox, oy, cos_t, sin_t, wu, wv, cx, cy, cz2, rref,
+         quarter_scale) = args  # fmt: skip
 
         cuda = self.cuda
         to = cuda.to_device
