@@ -221,6 +221,12 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
     traces, _ = read_inputs(["hyperbola"])
     exact = point_response(traces, np.stack([gx.ravel(), gy.ravel(), 0 * gx.ravel()], axis=1))
     cli = {"code": code, "ser_db": _ser_db(exact.reshape(gx.shape), image["values"])}
+    # --method ffbp on a grid too small to factorise: exact on the GPU, recorded as such.
+    code = run(["image", "hyperbola", "--out", str(cli_out), "--device", "cuda", "--size",
+                "2.4", "--spacing", "0.2", "--method", "ffbp", "--force"])  # fmt: skip
+    image = load_image(cli_out / "image.h5")
+    cli["ffbp"] = {"code": code, "imaging": image["metadata"]["imaging"],
+                   "ser_db": _ser_db(exact.reshape(gx.shape), image["values"])}  # fmt: skip
     if gotcha_dir is not None:
         from sarmotion.io import read_gotcha
 
@@ -282,6 +288,10 @@ def test_command_line_device_cuda(simulated):
     cli = simulated["cli"]
     assert cli["code"] == 0
     assert cli["ser_db"] >= MIN_SER_DB
+    ffbp = cli["ffbp"]
+    assert ffbp["code"] == 0 and ffbp["ser_db"] >= MIN_SER_DB
+    assert ffbp["imaging"] == {"method": "ffbp", "kernel_variant": "cuda-hermite",
+                               "device": "cuda", "ffbp_path": "exact"}  # fmt: skip
 
 
 def test_zero_outside_the_fast_time_window_like_the_cpu(simulated):

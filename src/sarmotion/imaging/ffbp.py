@@ -873,7 +873,8 @@ def _strip_plans(pos, us, y, f_lo, f_hi, nu_o, choices):
     fit its margins (the margins only grow, so this ends). Returns ``(cost, bounds,
     [(levels, n_sub), ...], (alpha, taps))``; the cost is in pixel-pulses of the leaves
     plus :data:`_MERGE_COST` per merged sample (two children read, half the rows
-    interpolated), the root's merge counted on the image rows only.
+    interpolated), the root's merge counted on the image rows only; ``None`` when the grid
+    has fewer than 16 rows along ``v`` (nothing to factorise).
     """
     n_pulses, nv_ = pos.shape[0], y.size
     centre = pos.mean(axis=0)
@@ -1207,9 +1208,10 @@ def _plan_aligned(
     k_lo, k_hi = int(cols[0]), int(cols[-1]) + 1
     us = np.ascontiguousarray(x[k_lo:k_hi])
     f_lo, f_hi = pulses.band_hz
-    c_best, bounds, plans, (alpha, taps) = _strip_plans(pos, us, y, f_lo, f_hi,
-                                                        pulses.carrier_hz,
-                                                        _oversamplings(alpha))  # fmt: skip
+    found = _strip_plans(pos, us, y, f_lo, f_hi, pulses.carrier_hz, _oversamplings(alpha))
+    if found is None:  # too few rows along v to factorise: not admitted
+        return plan
+    c_best, bounds, plans, (alpha, taps) = found
     margin = _reach_v(plans) * _max_v_slope(pos, us, y)
     info.update(cost_pixel_pulses=float(c_best), edge_margin_m=margin, alpha=alpha,
                 most_taps=taps)  # fmt: skip
