@@ -27,17 +27,13 @@ import math
 import numpy as np
 from numba import float32, float64, int32, uint64
 
-from ._cuda_kernels import _split, cuda  # numba.cuda, after its numpy alias
+from ._cuda_kernels import cuda, hermite_at  # numba.cuda, after its numpy alias
 
 __all__ = ["BLOCK", "blocks", "leaves", "merges", "resample", "root_rows"]
 
 #: Threads per block: 32 columns (a warp reads neighbouring samples of a row) by 8 rows.
 BLOCK = (32, 8, 1)
 
-_TWO = np.float32(2.0)
-_THREE = np.float32(3.0)
-_ONE = np.float32(1.0)
-_HALF32 = np.float32(0.5)
 _TWO_PI32 = np.float32(2.0 * np.pi)
 _ZERO = np.float32(0.0)
 _TWO_PI = 2.0 * math.pi
@@ -89,20 +85,7 @@ def leaves(
         fl = math.floor(q)
         idx = int32(fl)
         if idx >= 0 and idx < n_table:
-            u = float32(q - fl)
-            v = _ONE - u
-            u2 = u * u
-            h01 = u2 * (_THREE - _TWO * u)
-            h00 = _ONE - h01
-            h10 = u * v * v
-            h11 = -u2 * v
-            o = uint64(j) * stride + uint64(2 * idx)
-            a_re, a_im = _split(table[o])
-            b_re, b_im = _split(table[o + uint64(1)])
-            c_re, c_im = _split(table[o + uint64(2)])
-            d_re, d_im = _split(table[o + uint64(3)])
-            vr = h00 * a_re + h10 * b_re + h01 * c_re + h11 * d_re
-            vi = h00 * a_im + h10 * b_im + h01 * c_im + h11 * d_im
+            vr, vi = hermite_at(table, uint64(j) * stride + uint64(2 * idx), float32(q - fl))
             c = d * cycles_per_m
             ang = _TWO_PI32 * float32(c - math.floor(c + 0.5))
             cs = math.cos(ang)

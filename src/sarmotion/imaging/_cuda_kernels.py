@@ -23,7 +23,7 @@ if not hasattr(np, "row_stack"):  # numpy >= 2.5 removed the alias numba-cuda 0.
 
 from numba import config, cuda, float32, float64, int32, uint64  # noqa: E402
 
-__all__ = ["BLOCK_X", "PULSE_CHUNK", "backprojection_kernel"]
+__all__ = ["BLOCK_X", "PULSE_CHUNK", "backprojection_kernel", "hermite_at"]
 
 #: Threads per block along image columns (one warp: neighbouring pixels of a row, whose
 #: table positions are close, share cache lines).
@@ -60,6 +60,27 @@ else:  # pragma: no cover - needs a GPU
         lo = int32(word & _LOW32)
         hi = int32(word >> _SHIFT32)
         return libdevice.int_as_float(lo), libdevice.int_as_float(hi)
+
+
+@cuda.jit(device=True, inline=True, fastmath=True)
+def hermite_at(table, o, u):  # pragma: no cover - compiled
+    """``(re, im)`` of the cubic Hermite piece at fraction ``u`` (float32) past position ``o``.
+
+    ``table[o]``, ``table[o + 1]`` hold ``V`` and ``h dV/dt`` at the position,
+    ``table[o + 2]``, ``table[o + 3]`` at the next (each a complex64 word, uint64).
+    """
+    v = _ONE - u
+    u2 = u * u
+    h01 = u2 * (_THREE - _TWO * u)
+    h00 = _ONE - h01
+    h10 = u * v * v
+    h11 = -u2 * v
+    a_re, a_im = _split(table[o])
+    b_re, b_im = _split(table[o + uint64(1)])
+    c_re, c_im = _split(table[o + uint64(2)])
+    d_re, d_im = _split(table[o + uint64(3)])
+    return (h00 * a_re + h10 * b_re + h01 * c_re + h11 * d_re,
+            h00 * a_im + h10 * b_im + h01 * c_im + h11 * d_im)  # fmt: skip
 
 
 def backprojection_kernel(rows_per_thread: int, block_rows: int):
@@ -163,19 +184,7 @@ def _make_kernel(P: int, by: int):  # noqa: N803 - the paper-style name
                     i = i0 + int32(fq)
                     if i >= 0 and i < n_table:
                         u = float32(q - fq)
-                        v = _ONE - u
-                        u2 = u * u
-                        h01 = u2 * (_THREE - _TWO * u)
-                        h00 = _ONE - h01
-                        h10 = u * v * v
-                        h11 = -u2 * v
-                        o = base + uint64(words * i)
-                        a_re, a_im = _split(table[o])
-                        b_re, b_im = _split(table[o + uint64(1)])
-                        c_re, c_im = _split(table[o + uint64(2)])
-                        d_re, d_im = _split(table[o + uint64(3)])
-                        vr = h00 * a_re + h10 * b_re + h01 * c_re + h11 * d_re
-                        vi = h00 * a_im + h10 * b_im + h01 * c_im + h11 * d_im
+                        vr, vi = hermite_at(table, base + uint64(words * i), u)
                         cyc = c0f + dd * k_hi + dd * k_lo
                         cyc = cyc - math.floor(cyc + _HALF32)
                         ang = _TWO_PI * cyc
