@@ -206,7 +206,7 @@ def ffbp_cuda(
     quarter_scale = constants.quarter_scale
     cycles_per_m = 2.0 * st.carrier_hz / C
     idx_scale = constants.idx_scale
-    ant = cuda.to_device(gpu._antennas(traces, np.asarray(velocity_mps, np.float64)))
+    ant: list = []  # the antennas on the device, copied when a window end needs them
 
     def tile_for(pos: NDArray, u: NDArray, v: NDArray) -> tuple[int, int]:
         return tile_shape(pos, u, v, quarter_scale) or TILES[-1]
@@ -214,8 +214,10 @@ def ffbp_cuda(
     def exact_for(x: NDArray, y: NDArray) -> NDArray[np.complex128]:
         dy = abs(float(y[-1]) - float(y[0])) / max(y.size - 1, 1)
         p = gpu.rows_per_thread(st.carrier_hz, dy, x.size * y.size, gpu._min_threads(cuda))
-        kernel, args = gpu._launch_exact(cuda, table, n_up, ant, x, y, idx_scale, cycles_per_m,
-                                         p)  # fmt: skip
+        if not ant:
+            ant.append(cuda.to_device(gpu._antennas(traces, np.asarray(velocity_mps, float))))
+        kernel, args = gpu._launch_exact(cuda, table, n_up, ant[0], x, y, idx_scale,
+                                         cycles_per_m, p)  # fmt: skip
         kernel(table, *args)
         return args[-1].copy_to_host().view(np.complex128)[..., 0]
 
