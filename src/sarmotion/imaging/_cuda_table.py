@@ -21,8 +21,8 @@ and each entry ``V`` within ``eps = 2^-19`` of ``sum |P_kappa| / n`` (:func:`ent
 ``h D'`` within ``eps pi / U`` of it, ``|kappa| <= n / 2``), before its rounding to float32.
 :func:`sarmotion.imaging.cuda.error_bound` counts it.
 
-Cost ``U n^2`` terms per pulse (GOTCHA's 469 x 424 at ``U = 8``: 6.7e8), all on the
-device, against two ``N``-point FFTs per pulse on the host for
+Cost ``U n^2`` terms per pulse (GOTCHA's 469 pulses of 424 samples at ``U = 8``: 6.7e8
+terms in all), on the device, against two ``N``-point FFTs per pulse on the host for
 :func:`~sarmotion.imaging.cuda.hermite_table`.
 """
 
