@@ -89,21 +89,26 @@ def test_image_of_a_scene_focuses_the_target(tmp_path, capsys):
 
 
 def test_image_method_ffbp_against_exact(tmp_path, capsys):
-    # --method ffbp: the factorised image of the same scene, within FFBP's 55 dB target
-    # of the exact one (itself ~88 dB from the exact sum), and recorded as such.
+    # --method ffbp: the factorised image, recorded as such, within FFBP's 55 dB target of
+    # the exact sum (no interpolation) on 2000 seeded pixels.
+    from sarmotion.cli.inputs import read_inputs
+    from sarmotion.imaging.exact_sum import exact_sum
     from sarmotion.imaging.ffbp import TARGET_DB
 
-    images = {}
-    for method in ("exact", "ffbp"):
-        out = tmp_path / method
-        code = run(["image", "rotscatt", "--out", str(out), "--size", "64", "--spacing", "0.25",
-                    "--method", method])  # fmt: skip
-        assert code == 0, capsys.readouterr().err
-        images[method] = load_image(out / "image.h5")
-    record = images["ffbp"]["metadata"]["imaging"]
+    out = tmp_path / "ffbp"
+    code = run(["image", "rotscatt", "--out", str(out), "--size", "64", "--spacing", "0.25",
+                "--method", "ffbp"])  # fmt: skip
+    assert code == 0, capsys.readouterr().err
+    img = load_image(out / "image.h5")
+    record = img["metadata"]["imaging"]
     assert record["method"] == "ffbp" and record["ffbp_path"] != "exact"
     assert record["ffbp_budget_db"] >= TARGET_DB
-    ref, fast = images["exact"]["values"], images["ffbp"]["values"]
+    rng = np.random.default_rng(2027)
+    iy = rng.integers(0, img["y_m"].size, 2000)
+    ix = rng.integers(0, img["x_m"].size, 2000)
+    traces, _ = read_inputs(["rotscatt"])
+    ref = exact_sum(traces, np.stack([img["x_m"][ix], img["y_m"][iy]], axis=-1))
+    fast = img["values"][iy, ix]
     ser = 20 * np.log10(np.linalg.norm(ref) / np.linalg.norm(fast - ref))
     assert ser >= TARGET_DB
 

@@ -84,6 +84,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core import C, ProgressCallback, Traces, to_fast_time, to_frequency
 from ..core.geometry import _as_velocity
+from ._bp_common import Setup, make_setup
 from .grid import Image, ImageGrid
 
 __all__ = ["available", "backproject_cuda", "error_bound", "hermite_table", "rows_per_thread"]
@@ -298,11 +299,12 @@ class _DeviceTables:
 _TABLES = _DeviceTables()
 
 
-def _antennas(traces: Traces, u: NDArray[np.float64]) -> NDArray[np.float64]:
+def _antennas(st: Setup) -> NDArray[np.float64]:
     """``(n_pulses, 4)`` float64: effective antenna ``x``, ``y``, ``z**2`` and ``|r - rho_o|``."""
-    pos = traces.positions_m - traces.slow_times_s[:, None] * u[None, :]
-    ref = np.linalg.norm(traces.positions_m - traces.reference_point_m[None, :], axis=1)
-    return np.ascontiguousarray(np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, ref], axis=1))
+    pos = st.eff_positions
+    return np.ascontiguousarray(
+        np.stack([pos[:, 0], pos[:, 1], pos[:, 2] ** 2, st.ref_ranges], axis=1)
+    )
 
 
 def _launch_exact(
@@ -357,8 +359,9 @@ def _image_on_device(
     x, y = np.ascontiguousarray(grid.x_m), np.ascontiguousarray(grid.y_m)
     dy = (float(y[-1]) - float(y[0])) / (ny - 1)
     p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
-    kernel, args = _launch_exact(cuda, table, n_table, cuda.to_device(_antennas(traces, u)), x, y,
-                                 2.0 / (C * h), 2.0 * carrier / C, p, block_rows)  # fmt: skip
+    ant = cuda.to_device(_antennas(make_setup(traces, u, upsample)))
+    kernel, args = _launch_exact(cuda, table, n_table, ant, x, y, 2.0 / (C * h),
+                                 2.0 * carrier / C, p, block_rows)  # fmt: skip
     kernel(table, *args)  # asynchronous: the check below runs while the GPU works
     if verify and not _TABLES.verify(data):  # data changed in place: new table, again
         kernel(_TABLES.build(cuda, traces, data, upsample), *args)

@@ -25,15 +25,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import C, ProgressCallback, Traces
+from ..core import ProgressCallback, Traces
 from ._bp_common import kernel_constants, make_setup
 from ._bp_kernels import TILES, tile_shape
-from .ffbp import CpuKernels, FfbpPulses, ffbp_values
+from .ffbp import PLAN_CACHE_ENTRIES, CpuKernels, FfbpPulses, ffbp_values
 
 __all__ = ["CudaKernels", "ffbp_cuda"]
 
-#: Frames (geometry of a plan) whose device arrays are kept.
-_FRAMES_KEPT = 8
+#: Frames (geometry of a plan) whose device arrays are kept: one per plan kept.
+_FRAMES_KEPT = PLAN_CACHE_ENTRIES
 
 
 class CudaKernels(CpuKernels):
@@ -110,7 +110,8 @@ class CudaKernels(CpuKernels):
                 rows = int(lv.nv[:n_leaves].max())
                 kern.leaves[kern.blocks(nu, rows, n_leaves), kern.BLOCK](
                     re, im, table, n_table, ax, ay, az2, ref, d["starts"], d["stops"],
-                    dev["us"], d["v0"], d["dv"], d["nv"], idx_scale, idx_offset - 1.0,
+                    dev["us"], d["v0"], d["dv"], d["nv"], idx_scale,
+                    idx_offset - 1.0,  # CPU entry p is sample p - 1; GPU position m is m
                     cycles_per_m, cu, cv, cz2, rref,
                 )  # fmt: skip
             n_parents = lv.kids.shape[0]
@@ -204,7 +205,7 @@ def ffbp_cuda(
     n_up = upsample * traces.n_samples
     constants = kernel_constants(st.sample_interval_s, st.carrier_hz, upsample, n_up)
     quarter_scale = constants.quarter_scale
-    cycles_per_m = 2.0 * st.carrier_hz / C
+    cycles_per_m = quarter_scale / 4.0  # 2 nu_o / c
     idx_scale = constants.idx_scale
     ant: list = []  # the antennas on the device, copied when a window end needs them
 
@@ -215,7 +216,7 @@ def ffbp_cuda(
         dy = abs(float(y[-1]) - float(y[0])) / max(y.size - 1, 1)
         p = gpu.rows_per_thread(st.carrier_hz, dy, x.size * y.size, gpu._min_threads(cuda))
         if not ant:
-            ant.append(cuda.to_device(gpu._antennas(traces, np.asarray(velocity_mps, float))))
+            ant.append(cuda.to_device(gpu._antennas(st)))
         kernel, args = gpu._launch_exact(cuda, table, n_up, ant[0], x, y, idx_scale,
                                          cycles_per_m, p)  # fmt: skip
         kernel(table, *args)
