@@ -175,14 +175,17 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
 
     The analysis's own stages: separation and ``g(u)``, then the bank
     (:mod:`sarmotion.pipeline.defocused`) on the central degree's data and, for the
-    strongest cell of each of its first ``MAX_REJECTED`` echoes, the fit from the cell
-    and the tests against stationary points and of the fit's cancellation of its echo.
-    Recorded: the bank statistic (power over noise, dB) of the candidates the tests do
-    not explain (each one a false mover) and of those they do, with each one's joint-fit
-    ratio and residue.
+    cells of each of its first ``NULL_ECHOES`` echoes that the analysis fits
+    (:func:`~sarmotion.pipeline.defocused.cells_to_fit`: the strongest, then the most
+    powerful if another, until one passes), the fit from the cell and the tests against
+    stationary points and of the fit's cancellation of its echo. Recorded: the bank
+    statistic (power over noise, dB) of the echoes the tests do not explain (each one a
+    false mover) and of those they do, with each fitted cell's joint-fit ratio and
+    residue.
     """
     from sarmotion.pipeline import AnalysisOptions, detect
     from sarmotion.pipeline.defocused import (
+        cells_to_fit,
         distinct_echoes,
         scan_detection,
         search_data,
@@ -201,8 +204,18 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
     scan = scan_detection(found, data, threshold_db=SCREEN_DB)
     moving = scan.speeds_mps != 0.0
     step = float(np.min(np.abs(scan.speeds_mps[moving]))) if moving.any() else np.inf
-    tests = [test_candidate(data, e[0], step) for e in distinct_echoes(scan, data)[:NULL_ECHOES]]
-    left = [t for t in tests if not t.stationary(opts.min_focus_gain_db) and t.cancels]
+    band = float(found.candidates.min_speed_mps)
+    tests, left, explained = [], [], []
+    echoes = distinct_echoes(scan, data)[:NULL_ECHOES]
+    for echo in echoes:
+        for cell in cells_to_fit(echo):
+            t = test_candidate(data, cell, step, band_mps=band)
+            tests.append(t)
+            if not t.stationary(opts.min_focus_gain_db) and t.cancels:
+                left.append(t)
+                break
+        else:
+            explained.append(echo[0].statistic_db)
     # the screen's own level at the analysis's rate: what a candidate left must reach
     thr = float(10.0 * np.log10(np.log(scan.n_cells / opts.false_alarm_rate)))
     return {
@@ -213,16 +226,13 @@ def defocus_candidates(job: tuple[str, int, int]) -> dict:
         }.get(kind, "simulated, combined"),
         "scene": index,
         "statistic_db": [t.candidate.statistic_db for t in left],
-        "stationary_db": [
-            t.candidate.statistic_db
-            for t in tests
-            if t.stationary(opts.min_focus_gain_db) or not t.cancels
-        ],
+        "stationary_db": explained,
         "joint_ratios": [t.joint_ratio for t in tests],
         "coherences": [t.coherence for t in tests],
         "residues": [t.residue for t in tests],
         "focus_gains_db": [t.explanation.focus_gain_db for t in tests],
         "screen_db": scan.threshold_db,
+        "n_echoes": len(echoes),
         "n_candidates": len(tests),
         "threshold_db": thr,
         "declared": int(sum(t.candidate.statistic_db >= thr for t in left)),
@@ -284,10 +294,10 @@ def write_defocus(records: list[dict], out: Path, seconds: float) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "detector_null_defocus.json").write_text(json.dumps({"records": records}, indent=1))
     lines = [
-        "| population | scenes | candidates fitted | explained by the stationary scene "
-        "| left | left: largest statistic (dB) | left over the 1 % screen "
+        "| population | scenes | echoes | cells fitted | echoes explained by the stationary "
+        "scene | left | left: largest statistic (dB) | left over the 1 % screen "
         "| scenes with a false mover |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     pops = sorted({r["population"] for r in records})
     for name in pops + ["all"]:
@@ -295,7 +305,8 @@ def write_defocus(records: list[dict], out: Path, seconds: float) -> None:
         values = [v for r in rs for v in r["statistic_db"]]
         top = f"{max(values):.2f}" if values else "-"
         lines.append(
-            f"| {name} | {len(rs)} | {sum(r['n_candidates'] for r in rs)} | "
+            f"| {name} | {len(rs)} | {sum(r.get('n_echoes', r['n_candidates']) for r in rs)} | "
+            f"{sum(r['n_candidates'] for r in rs)} | "
             f"{sum(len(r['stationary_db']) for r in rs)} | {len(values)} | {top} | "
             f"{sum(r['declared'] for r in rs)} | {sum(r['declared'] > 0 for r in rs)} |"
         )
@@ -306,12 +317,14 @@ def write_defocus(records: list[dict], out: Path, seconds: float) -> None:
             "Each scene through the analysis's separation and g(u) stages, then the bank "
             "(sarmotion.pipeline.defocused) over the stationary band of the central degree, "
             f"its screen lowered to {SCREEN_DB:g} dB over the interference: the strongest cell "
-            f"of each of its first {NULL_ECHOES} echoes, fitted from its cell and tested "
-            "against the stationary scene (focused as stationary; the best stationary point's "
-            "focus gain under 1 dB; the stationary points near its range history, fitted "
+            f"of each of its first {NULL_ECHOES} echoes, and its most powerful cell if another "
+            "when the first is explained (as the analysis fits them), fitted from the cell and "
+            "tested against the stationary scene (focused as stationary; the best stationary "
+            "point's focus gain under 1 dB; the stationary points near its range history, fitted "
             "jointly with it, leaving under half its amplitude; its per-pulse sums keeping "
             "under half their power in their coherent sum), and whether its fit, "
-            "subtracted, removes its echo (at most 1/4 of the echo's peak power left). "
+            "subtracted, removes its echo (at most 1/4 of the echo's peak power left at its "
+            "main lobe and at the cells of its extent that no stationary smear explains). "
             "'left': the candidates those "
             "tests do not explain; 'left over the 1 % screen': those whose statistic (dB over "
             "the interference) reaches the screen's level for a 1 % rate, each a false mover "

@@ -48,8 +48,9 @@ point of value ``X_0(t', f')`` reads ``|X_0(t', f')| H_w(f - f')`` in hypothesis
 must exceed the largest such, over the range bins a stationary point of the band
 crosses during the aperture (``band T``) and one more either side, by
 ``SMEAR_MARGIN_DB``: 6.02 dB, what two smears of equal size reach in phase (the model
-takes each stationary point alone). Candidates are ranked by power (a mover's own
-smears at other ``w`` have less). The screen does not decide: the mover stage fits
+takes each stationary point alone). Candidates are ranked by their statistic, power over
+interference, and keep their power (of one target's cells at several ``w``, the most
+powerful is where it focuses best). The screen does not decide: the mover stage fits
 each candidate by maximum likelihood and tests it against the stationary scene
 (:mod:`sarmotion.pipeline.defocused`).
 
@@ -71,11 +72,13 @@ from .speed_resolution import range_speed_resolution
 __all__ = [
     "DefocusCandidate",
     "DefocusScan",
+    "ECHO_LOBE",
     "EDGE_PHASE_STEP_RAD",
     "SMEAR_MARGIN_DB",
     "cross_speed_bank",
     "defocus_scan",
     "echo_peak_power",
+    "echo_residue",
     "edge_phase_rad",
     "hypothesis_delays_s",
 ]
@@ -86,6 +89,10 @@ EDGE_PHASE_STEP_RAD = 0.5 * np.pi
 #: Least margin of a candidate over the brightest stationary smear at its cell (dB):
 #: two equal smears in phase, ``20 log10 2``.
 SMEAR_MARGIN_DB = float(20.0 * np.log10(2.0))
+
+#: The cells of a model's own echo (:func:`echo_residue`): where its power is at least this
+#: share of its peak, ``(1/2)^2``, its main lobe at half amplitude.
+ECHO_LOBE = 0.25
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -104,6 +111,10 @@ class DefocusCandidate:
         ``10 log10(|X|^2 / p)``: its power over its interference level (dB, module notes).
     leak_db : float
         Its amplitude over the brightest stationary smear at its cell (dB, > 0).
+    power : float
+        ``|X|^2`` at its cell (data units squared): the statistic times the cell's
+        interference level. Of one echo's cells (one target seen at several ``w``) the
+        most powerful is the hypothesis that focuses it best.
     """
 
     range_speed_mps: float
@@ -111,6 +122,7 @@ class DefocusCandidate:
     delay_s: float
     statistic_db: float
     leak_db: float
+    power: float
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -228,10 +240,10 @@ def _doppler_cells(n_pulses: int) -> int:
     return int(2 ** np.ceil(np.log2(2 * n_pulses)))
 
 
-def _hypothesis_power(
+def _hypothesis_values(
     traces: Traces, spectrum: NDArray, delays_s: NDArray, rows: NDArray, n_dop: int
-) -> tuple[float, NDArray[np.float64]]:
-    """One hypothesis of the bank: ``(u_w, |X|^2)``, the power of shape ``(n_dop, rows)``.
+) -> tuple[float, NDArray[np.complex128]]:
+    """One hypothesis of the bank: ``(u_w, X)``, the values of shape ``(n_dop, rows)``.
 
     ``spectrum`` (the data over frequency) aligned by ``delays_s`` (carrier included),
     back to fast time at ``rows``, transformed over slow time on ``n_dop`` cells;
@@ -239,7 +251,15 @@ def _hypothesis_power(
     """
     u_w = 0.5 * C * float(np.polyfit(traces.slow_times_s, delays_s, 1)[0])
     aligned = to_fast_time(spectrum * delay_phase(delays_s, traces.frequencies_hz))[:, rows]
-    return u_w, np.abs(np.fft.fft(aligned, n=n_dop, axis=0)) ** 2
+    return u_w, np.fft.fft(aligned, n=n_dop, axis=0)
+
+
+def _hypothesis_power(
+    traces: Traces, spectrum: NDArray, delays_s: NDArray, rows: NDArray, n_dop: int
+) -> tuple[float, NDArray[np.float64]]:
+    """One hypothesis of the bank: ``(u_w, |X|^2)`` (:func:`_hypothesis_values`)."""
+    u_w, values = _hypothesis_values(traces, spectrum, delays_s, rows, n_dop)
+    return u_w, np.abs(values) ** 2
 
 
 def defocus_scan(
@@ -289,7 +309,6 @@ def defocus_scan(
     t = traces.fast_times_s
     rows = np.flatnonzero(np.abs(t) <= half_span_s)
     spectrum = to_frequency(traces.data)
-    s = traces.slow_times_s
     u_w = np.empty(speeds.size)
     maps = np.empty((speeds.size, rows.size, n_dop), dtype=np.float32)
     smears = np.empty((speeds.size, n_dop), dtype=np.float64)
@@ -298,9 +317,7 @@ def defocus_scan(
         delays = hypothesis_delays_s(traces, w)
         u_w[k], power = _hypothesis_power(traces, spectrum, delays, rows, n_dop)
         maps[k] = power.T
-        # a stationary point's smear in hypothesis w: its phase relative to hypothesis 0
-        smear = np.exp(2j * np.pi * traces.radar.carrier_hz * (delays - still))
-        smears[k] = np.abs(np.fft.fft(smear, n=n_dop)) / n_p
+        smears[k] = _smear(traces, delays, still, n_dop)
     # the Doppler of each cell in each hypothesis, as an apparent range speed
     speed_of = u_w[:, None] - 0.5 * lam * doppler[None, :]
     searched = np.abs(speed_of) <= band_mps  # (n_w, n_dop)
@@ -321,8 +338,7 @@ def defocus_scan(
     stationary = np.sqrt(maps[zero])  # |X_0|, (rows, n_dop)
     # a stationary point of the band migrates by up to band * T in range over the
     # aperture: its smear is sought over the rows it crosses, and one more either side
-    dt = float(np.median(np.diff(t)))
-    reach = 1 + int(np.ceil(2.0 * band_mps * float(np.ptp(s)) / C / dt))
+    reach = _smear_reach(traces, band_mps)
     found: list[DefocusCandidate] = []
     # a focused point's main lobe, null to null, in Doppler cells (either side)
     guard = 2 * int(np.ceil(n_dop / n_p))
@@ -354,6 +370,7 @@ def defocus_scan(
                     delay_s=float(t[rows[r]]),
                     statistic_db=float(10.0 * np.log10(maps[k, r, f] / floor[r, j])),
                     leak_db=float(20.0 * np.log10(amp / max(leak, 1e-300))),
+                    power=float(maps[k, r, f]),
                 )
             )
     found.sort(key=lambda c: -c.statistic_db)
@@ -366,28 +383,136 @@ def defocus_scan(
     )
 
 
-def echo_peak_power(
-    traces: Traces, candidate: DefocusCandidate, data: NDArray | None = None
-) -> float:
-    """Largest ``|X|^2`` of ``candidate``'s echo in its own hypothesis (data units squared).
+def _smear(traces: Traces, delays_s: NDArray, still_s: NDArray, n_dop: int) -> NDArray:
+    """``|H_w|``, shape ``(n_dop,)``: a stationary point's smear in the hypothesis of ``delays_s``.
+
+    The transform over slow time of its phase relative to hypothesis 0 (``still_s``),
+    over the pulses: 1 at its peak when the two hypotheses are the same.
+    """
+    smear = np.exp(2j * np.pi * traces.radar.carrier_hz * (delays_s - still_s))
+    return np.abs(np.fft.fft(smear, n=n_dop)) / traces.n_pulses
+
+
+def _smear_reach(traces: Traces, band_mps: float) -> int:
+    """Range rows a stationary point of the band crosses during the aperture, plus one."""
+    dt = float(np.median(np.diff(traces.fast_times_s)))
+    return 1 + int(np.ceil(2.0 * band_mps * float(np.ptp(traces.slow_times_s)) / C / dt))
+
+
+def _echo_extent(
+    traces: Traces, candidate: DefocusCandidate
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64], int]:
+    """``(rows, cols, delays_s, n_dop)``: the cells of ``candidate``'s echo in its hypothesis.
 
     The bank's cells of hypothesis ``w = candidate.cross_range_speed_mps``
     (:func:`defocus_scan`, same Doppler oversampling) within two range cells of its delay
-    and two range-speed resolutions of its range speed: the extent of one echo (the
-    mover stage's grouping, :func:`~sarmotion.pipeline.defocused.distinct_echoes`).
-    ``data`` (``traces``' shape) replaces ``traces.data`` when given, so that the same
-    echo is measured before and after a model is subtracted.
+    (fast-time rows) and two range-speed resolutions of its range speed (Doppler
+    columns): the extent of one echo (the mover stage's grouping,
+    :func:`~sarmotion.pipeline.defocused.distinct_echoes`). Either may be empty.
     """
-    d = traces.data if data is None else data
     rows = np.flatnonzero(
         np.abs(traces.fast_times_s - candidate.delay_s) <= 2.0 / traces.radar.bandwidth_hz
     )
     n_dop = _doppler_cells(traces.n_pulses)
     delays = hypothesis_delays_s(traces, candidate.cross_range_speed_mps)
-    u_w, power = _hypothesis_power(traces, to_frequency(d), delays, rows, n_dop)
+    u_w = 0.5 * C * float(np.polyfit(traces.slow_times_s, delays, 1)[0])
     prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
     speed = u_w - 0.5 * traces.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
-    cols = np.abs(speed - candidate.range_speed_mps) <= 2.0 * range_speed_resolution(traces)
-    if rows.size == 0 or not cols.any():
-        return 0.0
-    return float(np.max(power[cols]))
+    res = range_speed_resolution(traces)
+    cols = np.flatnonzero(np.abs(speed - candidate.range_speed_mps) <= 2.0 * res)
+    return rows, cols, delays, n_dop
+
+
+def _echo_values(traces: Traces, candidate: DefocusCandidate, data: NDArray) -> NDArray:
+    """``X`` of ``data`` over ``candidate``'s echo (:func:`_echo_extent`), ``(cols, rows)``."""
+    rows, cols, delays, n_dop = _echo_extent(traces, candidate)
+    if rows.size == 0 or cols.size == 0:
+        return np.zeros((cols.size, rows.size), dtype=np.complex128)
+    return _hypothesis_values(traces, to_frequency(data), delays, rows, n_dop)[1][cols]
+
+
+def _smear_bound(
+    traces: Traces,
+    candidate: DefocusCandidate,
+    data: NDArray,
+    band_mps: float,
+    cells: tuple[NDArray[np.int64], NDArray[np.int64]],
+) -> NDArray[np.float64]:
+    """Largest stationary smear at some cells of ``candidate``'s echo, shape ``(k,)``.
+
+    ``cells``: (column, row) indices into the extent's ``(cols, rows)``
+    (:func:`_echo_extent`). As the screen's (:func:`defocus_scan`): ``max |X_0(t', f')|
+    |H_w(f - f')|`` over the Doppler cells ``f'`` of the stationary image ``X_0`` of
+    ``data`` and over the range rows a stationary point of the band ``|u| <= band_mps``
+    crosses, and one more either side.
+    """
+    rows, cols, delays, n_dop = _echo_extent(traces, candidate)
+    ci, ri = (np.asarray(a, dtype=np.int64) for a in cells)
+    if ci.size == 0:
+        return np.zeros(0)
+    reach = _smear_reach(traces, band_mps)
+    lo, hi = (
+        max(0, int(rows[ri].min()) - reach),
+        min(traces.n_samples, int(rows[ri].max()) + reach + 1),
+    )
+    near = np.arange(lo, hi)
+    still = hypothesis_delays_s(traces, 0.0)
+    a0 = np.abs(_hypothesis_values(traces, to_frequency(data), still, near, n_dop)[1])
+    smear = _smear(traces, delays, still, n_dop)
+    out = np.empty(ci.size)
+    for k in range(ci.size):
+        h = smear[(cols[ci[k]] - np.arange(n_dop)) % n_dop]  # (n_dop,)
+        js = np.abs(near - rows[ri[k]]) <= reach
+        out[k] = float(np.max(h[:, None] * a0[:, js]))
+    return out
+
+
+def echo_peak_power(
+    traces: Traces, candidate: DefocusCandidate, data: NDArray | None = None
+) -> float:
+    """Largest ``|X|^2`` of ``candidate``'s echo in its own hypothesis (data units squared).
+
+    Over the extent of one echo (:func:`_echo_values`). ``data`` (``traces``' shape)
+    replaces ``traces.data`` when given.
+    """
+    values = _echo_values(traces, candidate, traces.data if data is None else data)
+    return float(np.max(np.abs(values) ** 2)) if values.size else 0.0
+
+
+def echo_residue(
+    traces: Traces, candidate: DefocusCandidate, model: NDArray, band_mps: float
+) -> float:
+    """What ``model`` leaves of ``candidate``'s echo: peak power after over before (ratio).
+
+    After: the largest ``|X(D - M)|^2`` over the cells of the echo's extent
+    (:func:`_echo_extent`: two range cells, two range-speed resolutions) that are the
+    model's own echo (its main lobe, where the model's power is at least ``ECHO_LOBE``
+    of its largest: half amplitude) or that no stationary point's smear explains
+    (``|X(D - M)|`` over the largest smear there by the screen's ``SMEAR_MARGIN_DB``, the
+    smears of the stationary image of ``D`` over the band ``|u| <= band_mps``, m/s, as
+    :func:`defocus_scan` takes them). Before: the largest ``|X(D)|^2`` of the main lobe.
+    The extent groups one target's cells over the bank's hypotheses; within one
+    hypothesis it also spans the echoes of stationary points a few cross-range cells away
+    (a range-speed resolution is the range migration's, many Doppler cells), nearly
+    focused in a hypothesis near ``w = 0``: not the model's to remove, and explained by
+    their smears. ``X(D - M) = X(D) - X(M)``. ``model`` has ``traces``' shape; a model
+    with no power in the extent gives ``inf`` (it describes no echo of the candidate).
+    """
+    x_d = _echo_values(traces, candidate, traces.data)
+    x_m = _echo_values(traces, candidate, model)
+    p_m = np.abs(x_m) ** 2
+    if p_m.size == 0 or not p_m.max() > 0.0:
+        return float("inf")
+    lobe = p_m >= ECHO_LOBE * p_m.max()
+    left = np.abs(x_d - x_m)
+    before = float(np.max(np.abs(x_d[lobe]) ** 2))
+    after = float(np.max(left[lobe]))
+    # only the cells brighter than the lobe's residue can raise it: their smears decide
+    ci, ri = np.nonzero(~lobe & (left > after))
+    if ci.size:
+        margin = 10.0 ** (SMEAR_MARGIN_DB / 20.0)
+        bound = _smear_bound(traces, candidate, traces.data, band_mps, (ci, ri))
+        unexplained = left[ci, ri] > margin * bound
+        if unexplained.any():
+            after = max(after, float(np.max(left[ci, ri][unexplained])))
+    return after**2 / before if before > 0.0 else float("inf")

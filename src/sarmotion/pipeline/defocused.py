@@ -25,13 +25,17 @@ amplitude: :func:`search_data`), one at a time:
    target's echo keeps all of it; clutter matched in part turns in phase from pulse to
    pulse). A fit that stationary points do not explain is still rejected when it does
    not cancel its echo (:attr:`CandidateTest.residue`): one point target's model,
-   subtracted, leaves at its echo's cells only the interference there, which the
-   screen's smear margin holds under half the candidate's amplitude, so at most
-   ``MAX_ECHO_RESIDUE`` of its peak power; an echo the model does not describe (the
-   residue of a bright echo cut by a patch's fast-time window among clutter smears)
-   keeps its power or gains. The false-alarm rate is the screen's (the interference
-   model and the union bound over the bank's cells); the tests only remove candidates,
-   and their measured effect on data without movers is
+   subtracted, leaves at the cells of its own echo (its main lobe in the candidate's
+   hypothesis) only the interference there, which the screen's smear margin holds under
+   half the candidate's amplitude, so at most ``MAX_ECHO_RESIDUE`` of its peak power; an
+   echo the model does not describe (the residue of a bright echo cut by a patch's
+   fast-time window among clutter smears) keeps its power or gains. A rejected echo's
+   most powerful cell, when it is another (:func:`cells_to_fit`), is fitted and tested
+   the same way: the statistic divides by the interference of the cell's range bin, so
+   a hypothesis whose bin holds less clutter can rank a cell first where the echo
+   focuses worse. The false-alarm rate is the screen's (the interference model and the
+   union bound over the bank's cells); the tests only remove candidates, and their
+   measured effect on data without movers is
    ``benchmarks/results/detector_null_defocus.md``;
 3. an accepted fit's model is subtracted and the bank runs again, until a bank gives
    no candidate that passes, ``max_movers`` is reached, or its first ``MAX_REJECTED``
@@ -67,7 +71,7 @@ from ..motion import (
 )
 from ..motion.acceleration import HOLD_COHERENCE, uniform_start_holds
 from ..motion.aperture import ranges_m
-from ..motion.defocus import DefocusCandidate, DefocusScan, echo_peak_power
+from ..motion.defocus import DefocusCandidate, DefocusScan, echo_residue
 from ..motion.detector import peak_statistics
 from ..motion.likelihood import noise_variance
 from ..motion.range_speed import range_speed_objective
@@ -83,6 +87,7 @@ __all__ = [
     "MAX_REJECTED",
     "CandidateTest",
     "defocused_movers",
+    "cells_to_fit",
     "distinct_echoes",
     "JOINT_RATIO",
     "MAX_NEAR",
@@ -108,9 +113,10 @@ MAX_NEAR = 16
 #: near its range history (:func:`joint_amplitude`): half, the bank's 6 dB smear margin.
 JOINT_RATIO = 0.5
 
-#: Most of a candidate's echo power (the peak of its cells, :func:`echo_peak_power`) that
-#: its fit may leave once subtracted: ``(1/2)^2``, the screen's smear margin (what is
-#: left of a point target's echo are the smears, under half its amplitude).
+#: Most of a candidate's echo power (the peak over its model's main lobe,
+#: :func:`~sarmotion.motion.defocus.echo_residue`) that its fit may leave once subtracted:
+#: ``(1/2)^2``, the screen's smear margin (what is left of a point target's echo are the
+#: smears, under half its amplitude).
 MAX_ECHO_RESIDUE = 0.25
 
 
@@ -171,8 +177,9 @@ class CandidateTest:
         target's echo, NaN without power above the noise.
     residue : float
         The peak power of the candidate's echo once the fit's model is subtracted, over
-        its peak power before (:func:`~sarmotion.motion.defocus.echo_peak_power`): near 0
-        for one point target's echo.
+        its peak power before, at the cells of the model's own echo
+        (:func:`~sarmotion.motion.defocus.echo_residue`): near 0 for one point target's
+        echo.
     """
 
     candidate: DefocusCandidate
@@ -299,15 +306,18 @@ def test_candidate(
     cand: DefocusCandidate,
     min_step_mps: float,
     min_focus_gain_db: float | None = None,
+    *,
+    band_mps: float,
 ) -> CandidateTest:
     """Fit one bank candidate on ``data`` from its cell and test it against stationary points.
 
     The stationary points that may explain it (:func:`stationary_near`) are fitted with
     it (:func:`joint_amplitude`), and its echo is measured with and without the fit's
-    model (:attr:`CandidateTest.residue`). With ``min_focus_gain_db`` (the analysis's
-    rule, dB) that joint fit, the costliest test, runs only when the others have not
-    already refused the candidate (its echo not cancelled, focused as stationary, a
-    stationary point within the focus gain, or incoherent): the verdict of
+    model (:attr:`CandidateTest.residue`; ``band_mps``, m/s, the bank's stationary band,
+    whose points' smears explain cells of the echo's extent). With ``min_focus_gain_db``
+    (the analysis's rule, dB) that joint fit, the costliest test, runs only when the others
+    have not already refused the candidate (its echo not cancelled, focused as stationary,
+    a stationary point within the focus gain, or incoherent): the verdict of
     :meth:`CandidateTest.stationary` and :attr:`CandidateTest.cancels` together is the
     same, and ``joint_ratio`` is NaN when skipped. Without it every test runs.
     """
@@ -318,9 +328,7 @@ def test_candidate(
     why = stationary_explanation(data, fit.position_m, fit.velocity_mps, value)
     track = fit.position_m[None, :] + data.slow_times_s[:, None] * np.r_[fit.velocity_mps, 0.0]
     _, kappa = uniform_start_holds(data, track, noise_variance=noise_variance(data.data))
-    before = echo_peak_power(data, cand)
     model = point_model(data, fit.position_m, fit.velocity_mps, fit.amplitude)
-    after = echo_peak_power(data, cand, np.asarray(data.data) - model)
     test = CandidateTest(
         candidate=cand,
         fit=fit,
@@ -328,7 +336,7 @@ def test_candidate(
         focused_stationary=abs(fit.cross_range_speed_mps) < min_step_mps,
         joint_ratio=float("nan"),
         coherence=float(kappa),
-        residue=after / before if before > 0.0 else float("inf"),
+        residue=echo_residue(data, cand, model, band_mps),
     )
     if min_focus_gain_db is not None and (not test.cancels or test.stationary(min_focus_gain_db)):
         return test  # refused whatever the joint fit gives
@@ -393,6 +401,17 @@ def distinct_echoes(scan: DefocusScan, data: Traces) -> list[list[DefocusCandida
     return groups
 
 
+def cells_to_fit(echo: Sequence[DefocusCandidate]) -> list[DefocusCandidate]:
+    """The cells of one echo that are fitted, in turn, until one passes.
+
+    Its strongest cell by statistic (the screen's ranking, ``echo[0]`` of
+    :func:`distinct_echoes`), then its most powerful (``power``: the hypothesis that
+    focuses the target best) if that is another cell.
+    """
+    best = max(echo, key=lambda c: c.power)
+    return [echo[0]] if best is echo[0] else [echo[0], best]
+
+
 def defocused_movers(
     detection: DetectionResult,
     accepted: Sequence[PointFit],
@@ -424,6 +443,7 @@ def defocused_movers(
     taken: list[DefocusCandidate] = []
     cell_s = 1.0 / sub.radar.bandwidth_hz
     res_u = range_speed_resolution(sub)
+    band = float(detection.candidates.min_speed_mps)  # the bank's, scan_detection
     while len(out) < max_movers:
         here = sub.with_data(data)
         scan = scan_detection(detection, here)
@@ -435,29 +455,14 @@ def defocused_movers(
             if not any(_same_echo(e[0], a, cell_s, res_u) for a in taken)
         ]
         for echo in echoes[:MAX_REJECTED]:
-            test = test_candidate(here, echo[0], step, opts.min_focus_gain_db)
-            if not test.stationary(opts.min_focus_gain_db) and test.cancels:
-                found = test
+            for cell in cells_to_fit(echo):
+                test = test_candidate(here, cell, step, opts.min_focus_gain_db, band_mps=band)
+                if not test.stationary(opts.min_focus_gain_db) and test.cancels:
+                    found = test
+                    break
+                _log_refusal(test)
+            if found is not None:
                 break
-            if not test.cancels:
-                log.info(
-                    "defocus candidate at u_p %.2f m/s: its fit leaves %.2f of its echo's "
-                    "peak power (not one point target's echo)",
-                    test.fit.cross_range_speed_mps,
-                    test.residue,
-                )
-                continue
-            why = test.explanation
-            log.info(
-                "defocus candidate at u_p %.2f m/s: stationary (focus gain %.2f dB over "
-                "(%.1f, %.1f) m, %.2f of its amplitude left by the stationary points near it, "
-                "coherence %.2f)",
-                test.fit.cross_range_speed_mps,
-                why.focus_gain_db,
-                *why.position_m[:2],
-                test.joint_ratio,
-                test.coherence,
-            )
         if found is None:
             break
         fit = found.fit
@@ -475,6 +480,28 @@ def defocused_movers(
             found.joint_ratio,
         )
     return out
+
+
+def _log_refusal(test: CandidateTest) -> None:
+    if not test.cancels:
+        log.info(
+            "defocus candidate at u_p %.2f m/s: its fit leaves %.2f of its echo's "
+            "peak power (not one point target's echo)",
+            test.fit.cross_range_speed_mps,
+            test.residue,
+        )
+        return
+    why = test.explanation
+    log.info(
+        "defocus candidate at u_p %.2f m/s: stationary (focus gain %.2f dB over "
+        "(%.1f, %.1f) m, %.2f of its amplitude left by the stationary points near it, "
+        "coherence %.2f)",
+        test.fit.cross_range_speed_mps,
+        why.focus_gain_db,
+        *why.position_m[:2],
+        test.joint_ratio,
+        test.coherence,
+    )
 
 
 def _evidence(
