@@ -185,6 +185,34 @@ def test_echo_residue_is_what_a_model_leaves_of_its_own_echo():
             assert left > MAX_ECHO_RESIDUE * echo_peak_power(sub, cand)
 
 
+def test_the_residues_smear_bound_is_the_screens():
+    """At a candidate's own cell, the smear bound of the echo test is the screen's.
+
+    The screen keeps a cell brighter than ``SMEAR_MARGIN_DB`` over the largest smear a
+    stationary point could put there (``leak_db``); the echo test counts a residual cell
+    that no smear explains by the same bound, computed for the cells of the echo.
+    """
+    from sarmotion.core.constants import C
+    from sarmotion.motion.defocus import _echo_extent, _smear_bound
+
+    tr, _, _ = _beside(1, 1.5, (-0.25, 7.0))
+    sub = _central(tr)
+    band = 1.0
+    scan = defocus_scan(
+        sub, max_speed_mps=30.0, band_mps=band, half_span_s=2 * 60.0 / 3e8, false_alarm_rate=0.01
+    )
+    assert len(scan.candidates) >= 3
+    for cand in scan.candidates[:3]:
+        rows, cols, delays, n_dop = _echo_extent(sub, cand)
+        r = int(np.argmin(np.abs(sub.fast_times_s[rows] - cand.delay_s)))
+        prf = 1.0 / float(np.median(np.diff(sub.slow_times_s)))
+        u_w = 0.5 * C * float(np.polyfit(sub.slow_times_s, delays, 1)[0])
+        speed = u_w - 0.5 * sub.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
+        c = int(np.argmin(np.abs(speed[cols] - cand.range_speed_mps)))
+        bound = _smear_bound(sub, cand, sub.data, band, (np.array([c]), np.array([r])))[0]
+        assert 20 * np.log10(np.sqrt(cand.power) / bound) == pytest.approx(cand.leak_db, abs=1e-6)
+
+
 def test_the_echos_most_powerful_cell_is_fitted_after_its_strongest():
     from sarmotion.pipeline.defocused import cells_to_fit
 
