@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
+from sarmotion.core import Radar, Traces, Trajectory, to_fast_time, to_frequency
 from sarmotion.imaging import resolution
 from sarmotion.motion import central_sub_aperture, defocus_scan, family_member, point_model
 from sarmotion.motion.defocus import (
@@ -209,7 +209,8 @@ def test_the_residues_smear_bound_is_the_screens():
         u_w = 0.5 * C * float(np.polyfit(sub.slow_times_s, delays, 1)[0])
         speed = u_w - 0.5 * sub.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
         c = int(np.argmin(np.abs(speed[cols] - cand.range_speed_mps)))
-        bound = _smear_bound(sub, cand, sub.data, band, (np.array([c]), np.array([r])))[0]
+        spectrum = to_frequency(sub.data)
+        bound = _smear_bound(sub, cand, spectrum, band, (np.array([c]), np.array([r])))[0]
         assert 20 * np.log10(np.sqrt(cand.power) / bound) == pytest.approx(cand.leak_db, abs=1e-6)
 
 

@@ -240,6 +240,11 @@ def _doppler_cells(n_pulses: int) -> int:
     return int(2 ** np.ceil(np.log2(2 * n_pulses)))
 
 
+def _hypothesis_rate(traces: Traces, delays_s: NDArray) -> float:
+    """``u_w`` (m/s): a hypothesis' own range rate, the slope of ``c delays_s / 2``."""
+    return 0.5 * C * float(np.polyfit(traces.slow_times_s, delays_s, 1)[0])
+
+
 def _hypothesis_values(
     traces: Traces, spectrum: NDArray, delays_s: NDArray, rows: NDArray, n_dop: int
 ) -> tuple[float, NDArray[np.complex128]]:
@@ -247,9 +252,9 @@ def _hypothesis_values(
 
     ``spectrum`` (the data over frequency) aligned by ``delays_s`` (carrier included),
     back to fast time at ``rows``, transformed over slow time on ``n_dop`` cells;
-    ``u_w`` (m/s) the hypothesis' own range rate, the slope of ``c delays_s / 2``.
+    ``u_w`` (m/s) the hypothesis' own range rate (:func:`_hypothesis_rate`).
     """
-    u_w = 0.5 * C * float(np.polyfit(traces.slow_times_s, delays_s, 1)[0])
+    u_w = _hypothesis_rate(traces, delays_s)
     aligned = to_fast_time(spectrum * delay_phase(delays_s, traces.frequencies_hz))[:, rows]
     return u_w, np.fft.fft(aligned, n=n_dop, axis=0)
 
@@ -415,7 +420,7 @@ def _echo_extent(
     )
     n_dop = _doppler_cells(traces.n_pulses)
     delays = hypothesis_delays_s(traces, candidate.cross_range_speed_mps)
-    u_w = 0.5 * C * float(np.polyfit(traces.slow_times_s, delays, 1)[0])
+    u_w = _hypothesis_rate(traces, delays)
     prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
     speed = u_w - 0.5 * traces.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
     res = range_speed_resolution(traces)
@@ -423,18 +428,21 @@ def _echo_extent(
     return rows, cols, delays, n_dop
 
 
-def _echo_values(traces: Traces, candidate: DefocusCandidate, data: NDArray) -> NDArray:
-    """``X`` of ``data`` over ``candidate``'s echo (:func:`_echo_extent`), ``(cols, rows)``."""
+def _echo_values(traces: Traces, candidate: DefocusCandidate, spectrum: NDArray) -> NDArray:
+    """``X`` over ``candidate``'s echo (:func:`_echo_extent`), ``(cols, rows)``.
+
+    ``spectrum``: the data over frequency (:func:`~sarmotion.core.to_frequency`).
+    """
     rows, cols, delays, n_dop = _echo_extent(traces, candidate)
     if rows.size == 0 or cols.size == 0:
         return np.zeros((cols.size, rows.size), dtype=np.complex128)
-    return _hypothesis_values(traces, to_frequency(data), delays, rows, n_dop)[1][cols]
+    return _hypothesis_values(traces, spectrum, delays, rows, n_dop)[1][cols]
 
 
 def _smear_bound(
     traces: Traces,
     candidate: DefocusCandidate,
-    data: NDArray,
+    spectrum: NDArray,
     band_mps: float,
     cells: tuple[NDArray[np.int64], NDArray[np.int64]],
 ) -> NDArray[np.float64]:
@@ -442,9 +450,9 @@ def _smear_bound(
 
     ``cells``: (column, row) indices into the extent's ``(cols, rows)``
     (:func:`_echo_extent`). As the screen's (:func:`defocus_scan`): ``max |X_0(t', f')|
-    |H_w(f - f')|`` over the Doppler cells ``f'`` of the stationary image ``X_0`` of
-    ``data`` and over the range rows a stationary point of the band ``|u| <= band_mps``
-    crosses, and one more either side.
+    |H_w(f - f')|`` over the Doppler cells ``f'`` of the stationary image ``X_0`` of the
+    data (``spectrum``, over frequency) and over the range rows a stationary point of the
+    band ``|u| <= band_mps`` crosses, and one more either side.
     """
     rows, cols, delays, n_dop = _echo_extent(traces, candidate)
     ci, ri = (np.asarray(a, dtype=np.int64) for a in cells)
@@ -457,7 +465,7 @@ def _smear_bound(
     )
     near = np.arange(lo, hi)
     still = hypothesis_delays_s(traces, 0.0)
-    a0 = np.abs(_hypothesis_values(traces, to_frequency(data), still, near, n_dop)[1])
+    a0 = np.abs(_hypothesis_values(traces, spectrum, still, near, n_dop)[1])
     smear = _smear(traces, delays, still, n_dop)
     out = np.empty(ci.size)
     for k in range(ci.size):
@@ -475,7 +483,8 @@ def echo_peak_power(
     Over the extent of one echo (:func:`_echo_values`). ``data`` (``traces``' shape)
     replaces ``traces.data`` when given.
     """
-    values = _echo_values(traces, candidate, traces.data if data is None else data)
+    d = traces.data if data is None else data
+    values = _echo_values(traces, candidate, to_frequency(d))
     return float(np.max(np.abs(values) ** 2)) if values.size else 0.0
 
 
@@ -498,8 +507,9 @@ def echo_residue(
     their smears. ``X(D - M) = X(D) - X(M)``. ``model`` has ``traces``' shape; a model
     with no power in the extent gives ``inf`` (it describes no echo of the candidate).
     """
-    x_d = _echo_values(traces, candidate, traces.data)
-    x_m = _echo_values(traces, candidate, model)
+    spectrum = to_frequency(traces.data)
+    x_d = _echo_values(traces, candidate, spectrum)
+    x_m = _echo_values(traces, candidate, to_frequency(model))
     p_m = np.abs(x_m) ** 2
     if p_m.size == 0 or not p_m.max() > 0.0:
         return float("inf")
@@ -511,7 +521,7 @@ def echo_residue(
     ci, ri = np.nonzero(~lobe & (left > after))
     if ci.size:
         margin = 10.0 ** (SMEAR_MARGIN_DB / 20.0)
-        bound = _smear_bound(traces, candidate, traces.data, band_mps, (ci, ri))
+        bound = _smear_bound(traces, candidate, spectrum, band_mps, (ci, ri))
         unexplained = left[ci, ri] > margin * bound
         if unexplained.any():
             after = max(after, float(np.max(left[ci, ri][unexplained])))

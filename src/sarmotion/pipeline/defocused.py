@@ -27,7 +27,9 @@ amplitude: :func:`search_data`), one at a time:
    not cancel its echo (:attr:`CandidateTest.residue`): one point target's model,
    subtracted, leaves at the cells of its own echo (its main lobe in the candidate's
    hypothesis) only the interference there, which the screen's smear margin holds under
-   half the candidate's amplitude, so at most ``MAX_ECHO_RESIDUE`` of its peak power; an
+   half the candidate's amplitude, so at most ``MAX_ECHO_RESIDUE`` of its peak power, and
+   nothing elsewhere in the echo's extent that the stationary points' smears do not
+   explain (:func:`~sarmotion.motion.defocus.echo_residue`); an
    echo the model does not describe (the residue of a bright echo cut by a patch's
    fast-time window among clutter smears) keeps its power or gains. A rejected echo's
    most powerful cell, when it is another (:func:`cells_to_fit`), is fitted and tested
@@ -113,8 +115,9 @@ MAX_NEAR = 16
 #: near its range history (:func:`joint_amplitude`): half, the bank's 6 dB smear margin.
 JOINT_RATIO = 0.5
 
-#: Most of a candidate's echo power (the peak over its model's main lobe,
-#: :func:`~sarmotion.motion.defocus.echo_residue`) that its fit may leave once subtracted:
+#: Most of a candidate's echo power (the peak over its model's main lobe and the echo's
+#: cells no stationary smear explains, :func:`~sarmotion.motion.defocus.echo_residue`)
+#: that its fit may leave once subtracted:
 #: ``(1/2)^2``, the screen's smear margin (what is left of a point target's echo are the
 #: smears, under half its amplitude).
 MAX_ECHO_RESIDUE = 0.25
@@ -177,7 +180,8 @@ class CandidateTest:
         target's echo, NaN without power above the noise.
     residue : float
         The peak power of the candidate's echo once the fit's model is subtracted, over
-        its peak power before, at the cells of the model's own echo
+        its peak power before, at the cells of the model's own echo and at those of the
+        echo's extent that no stationary smear explains
         (:func:`~sarmotion.motion.defocus.echo_residue`): near 0 for one point target's
         echo.
     """
