@@ -20,7 +20,7 @@ from sarmotion.imaging import (
     backproject,
     ffbp,
 )
-from sarmotion.imaging._bp_common import kernel_constants
+from sarmotion.imaging._bp_common import kernel_constants, table_samples
 from sarmotion.imaging._simd import LANES
 from sarmotion.imaging.ffbp import half_sample_filter
 from sarmotion.io import read_gotcha
@@ -92,8 +92,9 @@ def test_float32_kernel_reads_the_table_by_windows_or_gathers(look_deg, spacing_
     grid = ImageGrid.from_extent(x_range_m=(-45 * spacing_m, 44.5 * spacing_m),
                                  y_range_m=(-40 * spacing_m, 39.5 * spacing_m),
                                  spacing_m=spacing_m)  # fmt: skip
-    consts = kernel_constants(tr.radar.sample_interval_s, tr.radar.carrier_hz, 6,
-                              6 * tr.n_samples)  # fmt: skip
+    n_up = table_samples(tr.n_samples, 6)
+    consts = kernel_constants(tr.radar.sample_interval_s, tr.radar.carrier_hz, tr.n_samples,
+                              n_up)  # fmt: skip
     span_x, span_y = _bp_kernels.lane_spans(tr.positions_m, grid.x_m, grid.y_m, consts[0])
     if path == "gathers":  # the premise: no axis keeps the lanes within a window
         assert min(span_x, span_y) > 2 * LANES
@@ -119,10 +120,11 @@ def test_window_edge_mask_skips_only_blocks_without_edges(four_degrees):
     # The mask of pixels near an end of the fast-time window, computed block by block with
     # the range's extremes over each block first, equals the pixel-by-pixel test.
     tr = four_degrees
-    consts = kernel_constants(tr.radar.sample_interval_s, tr.radar.carrier_hz, 6,
-                              6 * tr.n_samples)  # fmt: skip
+    n_up = table_samples(tr.n_samples, 6)
+    consts = kernel_constants(tr.radar.sample_interval_s, tr.radar.carrier_hz, tr.n_samples,
+                              n_up)  # fmt: skip
     d_lo = (1.0 - consts[1]) / consts[0]
-    d_hi = (6 * tr.n_samples - consts[1]) / consts[0]
+    d_hi = (n_up - consts[1]) / consts[0]
     half = 2.0 * max(-d_lo, d_hi)  # ground metres: the window's ends cross the grid
     x = np.arange(-half, half, 0.7)
     y = np.arange(-half, half, 0.9)[::-1].copy()

@@ -22,6 +22,7 @@ from sarmotion.imaging import (
     resolution,
     width_3db,
 )
+from sarmotion.imaging._bp_common import table_samples
 from sarmotion.imaging._bp_table import hermite_coefficients, upsample_fast_time
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate, simulate_phase_history
 
@@ -89,16 +90,23 @@ def test_upsampling_is_the_band_limited_trace(n_samples: int) -> None:
     assert np.max(np.abs(up - direct)) < 1e-12 * np.max(np.abs(direct))
     idx = big // 2 + 8 * (np.arange(n_samples) - n_samples // 2)
     np.testing.assert_allclose(up[:, idx], data.data, rtol=0, atol=1e-13)
-    # The kernels' table of cubic pieces: entry m + 1 starts at sample m (c0), its
-    # derivative is h D'(t_m) (c1, against the direct sum), the piece ends on sample m + 1
-    # with slope h D'(t_{m+1}); entries 0 and N + 1 are zero.
+    # The kernels' table of cubic pieces, over the same period on its own grid
+    # t_m = (m - N//2) h, h = n dt / N (N = table_samples: 8 n_fast, the bins padded to a
+    # fast length, 432 for 424): entry m + 1 starts at sample m (c0, against the direct
+    # sum), its derivative is h D'(t_m) (c1), the piece ends on sample m + 1 with slope
+    # h D'(t_{m+1}); entries 0 and N + 1 are zero.
     coef = hermite_coefficients(data.data, 8)
-    np.testing.assert_allclose(coef[:, 1:-1, 0], up, rtol=0, atol=1e-13)
-    h = radar.sample_interval_s / 8
-    slope = ph @ (2j * np.pi * h * nu[:, None] * np.exp(2j * np.pi * np.outer(nu, t_up)))
+    big = table_samples(n_samples, 8)
+    assert coef.shape[1] == big + 2 and big >= 8 * n_samples
+    h = n_samples * radar.sample_interval_s / big
+    t_tab = (np.arange(big) - big // 2) * h
+    phasors = np.exp(2j * np.pi * np.outer(nu, t_tab))
+    values = ph @ phasors / n_samples
+    np.testing.assert_allclose(coef[:, 1:-1, 0], values, rtol=0, atol=1e-12)
+    slope = ph @ (2j * np.pi * h * nu[:, None] * phasors)
     np.testing.assert_allclose(coef[:, 1:-1, 1], slope / n_samples, rtol=0, atol=1e-12)
     end = coef[:, 1:-1].sum(axis=-1)
-    np.testing.assert_allclose(end[:, :-1], up[:, 1:], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(end[:, :-1], values[:, 1:], rtol=0, atol=1e-12)
     end_slope = coef[:, 1:-1, 1] + 2 * coef[:, 1:-1, 2] + 3 * coef[:, 1:-1, 3]
     np.testing.assert_allclose(end_slope[:, :-1], slope[:, 1:] / n_samples, rtol=0, atol=1e-12)
     assert np.all(coef[:, [0, -1]] == 0)

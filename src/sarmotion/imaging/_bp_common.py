@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+import scipy.fft as sp_fft
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import C, Traces
@@ -69,14 +70,27 @@ def make_setup(traces: Traces, velocity_mps: ArrayLike | None, upsample: int) ->
     )
 
 
+def table_samples(n_samples: int, upsample: int) -> int:
+    """Samples ``N`` of an upsampled trace table over one period ``n dt`` of the trace.
+
+    ``N = upsample n_fast``, ``n_fast = scipy.fft.next_fast_len(n)`` (``>= n``, its prime
+    factors at most 11): the trace's ``n`` spectral bins zero-padded to ``n_fast`` sample
+    the same band-limited trace over the same period, at ``h = n dt / N <= dt / upsample``
+    (every interpolation bound stated for ``dt / upsample`` holds), with transforms of a
+    length that has no large prime factor (GOTCHA's 424 = 8 x 53 becomes 432 = 2^4 3^3).
+    """
+    return int(upsample) * sp_fft.next_fast_len(int(n_samples))
+
+
 def kernel_constants(
-    sample_interval_s: float, carrier_hz: float, upsample: int, n_up: int
+    sample_interval_s: float, carrier_hz: float, n_samples: int, n_up: int
 ) -> KernelConstants:
     """The scales of a table of ``n_up`` upsampled samples (entry ``p`` is sample ``p - 1``).
 
-    ``t = 0`` is upsampled sample ``n_up // 2``, table entry ``n_up // 2 + 1``; a delay
-    ``2 d / c`` is ``2 d / (c h)`` samples, ``h = dt / upsample``; the carrier phase
-    ``2 pi nu_o 2 d / c`` is ``4 (2 nu_o / c) d`` quarter cycles.
+    The table samples one period ``n dt`` of traces of ``n = n_samples`` samples at
+    ``h = n dt / n_up`` (:func:`table_samples`). ``t = 0`` is upsampled sample
+    ``n_up // 2``, table entry ``n_up // 2 + 1``; a delay ``2 d / c`` is ``2 d / (c h)``
+    samples; the carrier phase ``2 pi nu_o 2 d / c`` is ``4 (2 nu_o / c) d`` quarter cycles.
     """
-    dt_up = sample_interval_s / upsample
+    dt_up = sample_interval_s * n_samples / n_up
     return KernelConstants(2.0 / (C * dt_up), float(n_up // 2 + 1), 4.0 * 2.0 * carrier_hz / C)

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from ..core import ProgressCallback
 from ..core.spectral import quarter_turns
-from ._bp_common import KernelConstants, Setup, kernel_constants
+from ._bp_common import KernelConstants, Setup, kernel_constants, table_samples
 from ._bp_table import hermite_coefficients
 from ._simd import LANES, tile_pulses
 from .grid import ImageGrid
@@ -181,8 +181,8 @@ def run_numba_f64(
 ) -> NDArray[np.complex128]:
     """The float64 compiled kernel (fallback of the float32 one)."""
     n_pulses, n = st.data.shape
-    n_up = st.upsample * n
-    consts = kernel_constants(st.sample_interval_s, st.carrier_hz, st.upsample, n_up)
+    n_up = table_samples(n, st.upsample)
+    consts = kernel_constants(st.sample_interval_s, st.carrier_hz, n, n_up)
     ny, nx = grid.shape
     out = np.zeros((2, ny, nx))
     x = np.ascontiguousarray(grid.x_m)

@@ -22,7 +22,7 @@ def accumulate(
     """Add pulses ``j0:j1`` of ``eq:imagecompu`` at points ``(px, py, 0)`` to ``out``."""
     coef = hermite_coefficients(st.data[j0:j1], st.upsample)
     big = coef.shape[1] - 2
-    h = st.sample_interval_s / st.upsample
+    h = st.sample_interval_s * st.data.shape[1] / big  # n dt / N
     for k, j in enumerate(range(j0, j1)):
         r = st.eff_positions[j]
         dist = np.sqrt((r[0] - px) ** 2 + (r[1] - py) ** 2 + r[2] ** 2)  # |r - s u - rho|

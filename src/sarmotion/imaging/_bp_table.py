@@ -2,8 +2,10 @@
 
 A trace is ``D(t) = (1/n) sum_k P_k exp(2i pi (k - n//2) df t)``, sampled at
 ``t_l = (l - n//2) dt`` (:mod:`sarmotion.core.spectral`). Zero-padding its spectrum gives
-``D`` and ``h D'`` exactly at ``t_m = (m - N//2) h``, ``h = dt / upsample``,
-``N = upsample n`` (the derivative multiplies bin ``k`` by ``2i pi k / N``). On the
+``D`` and ``h D'`` exactly at ``t_m = (m - N//2) h`` over one period ``n dt``,
+``h = n dt / N``, ``N = upsample n_fast`` (:func:`~._bp_common.table_samples`: ``n_fast``
+the first length ``>= n`` of fast transforms, so ``h <= dt / upsample``; the derivative
+multiplies bin ``k`` by ``2i pi k / N``). On the
 interval ``[t_m, t_{m+1}]``, ``t = t_m + w h``, the cubic Hermite piece
 
     D(t) ~ c0 + w (c1 + w (c2 + w c3)),
@@ -43,6 +45,7 @@ import scipy.fft as sp_fft
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import Traces, to_fast_time, to_frequency
+from ._bp_common import table_samples
 
 #: Bytes of trace tables, and of the data they were built from, kept by the cache (least
 #: recently used dropped first).
@@ -79,22 +82,26 @@ def upsample_fast_time(data: ArrayLike, factor: int) -> NDArray[np.complex128]:
     return to_fast_time(spec) * factor
 
 
-def _phase_turns(n: int, factor: int) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
-    """The factors :func:`_polyphase` multiplies a trace's spectrum by, flat.
+def _phase_turns(
+    n: int, n_fast: int, factor: int
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+    """The factors :func:`_polyphase` multiplies a padded spectrum by, flat.
 
     Returns
     -------
-    turn : (n factor,) ndarray
-        At ``kappa_i factor + r``: ``exp(2i pi kappa (r - N//2) / N)`` for bin ``kappa``
-        (signed offsets, the bins' order, ``i`` its index) and phase ``r``, complex128.
-    slope : (n factor,) ndarray
+    turn : (n_fast factor,) ndarray
+        At ``kappa_i factor + r``: ``(n_fast / n) exp(2i pi kappa (r - N//2) / N)`` for bin
+        ``kappa`` of the ``n_fast``-point layout (signed offsets, the bins' order, ``i`` its
+        index) and phase ``r``, ``N = factor n_fast``, complex128 (``n_fast / n`` turns the
+        inverse transform's ``1 / n_fast`` into the trace's ``1 / n``).
+    slope : (n_fast factor,) ndarray
         At ``kappa_i factor + r``: ``2i pi kappa / N``, the derivative's factor (``h D'``),
         complex128.
     """
-    big = factor * n
-    kappa = np.round(np.fft.fftfreq(n) * n)  # signed offsets, the bins' order
+    big = factor * n_fast
+    kappa = np.round(np.fft.fftfreq(n_fast) * n_fast)  # signed offsets, the bins' order
     r = np.arange(factor)[None, :]
-    turn = np.exp(2j * np.pi * kappa[:, None] * (r - big // 2) / big)
+    turn = (n_fast / n) * np.exp(2j * np.pi * kappa[:, None] * (r - big // 2) / big)
     return turn.reshape(big), np.repeat((2j * np.pi / big) * kappa, factor)
 
 
@@ -102,30 +109,35 @@ def _polyphase(
     d: NDArray[np.complex128],
     turn: NDArray[np.complex128],
     slope: NDArray[np.complex128],
+    factor: int,
     work: NDArray[np.complex128],
     workers: int = 1,
 ) -> NDArray[np.complex128]:
     """``D_m`` and ``h D'_m`` of every upsampled sample, in order: ``(2, n_pulses, N)``.
 
     ``out[0, i, m]`` is ``D`` of pulse ``i`` at upsampled sample ``m`` (time
-    ``t_m = (m - N//2) h``), ``out[1, i, m]`` is ``h D'`` there. With the ``n`` bins
-    ``F_kappa`` of the trace (signed offsets ``kappa``), ``D(t_m) = (1/n) sum_kappa F_kappa
-    exp(2i pi kappa (m - N//2) / N)``, and ``m = q factor + r`` splits the phase into
-    ``kappa q / n`` and ``kappa (r - N//2) / N``: each phase ``r`` is an ``n``-point
-    inverse transform of ``F`` turned by the second (``turn``; the derivative multiplies
-    bin ``kappa`` by ``2i pi kappa / N``, ``slope``). The same values as the zero-padded
-    ``N``-point transform, at the cost of ``2 factor`` transforms of the trace's own length
-    (``N`` often has the trace length's large prime factors, ``n`` no more). The spectra
-    are laid out ``(2, n_pulses, n, factor)`` in ``work`` and transformed along the bins
-    in place, so the samples come out in order (``m = q factor + r``).
+    ``t_m = (m - N//2) h``, ``h = n dt / N``), ``out[1, i, m]`` is ``h D'`` there. With the
+    ``n`` bins ``F_kappa`` of the trace (signed offsets ``kappa``), ``D(t_m) = (1/n)
+    sum_kappa F_kappa exp(2i pi kappa (m - N//2) / N)``. The bins are laid out as ``n_fast
+    = N / factor`` bins (the same signed offsets, zeros beyond them), and ``m = q factor +
+    r`` splits the phase into ``kappa q / n_fast`` and ``kappa (r - N//2) / N``: each phase
+    ``r`` is an ``n_fast``-point inverse transform of the padded bins turned by the second
+    (``turn``; the derivative multiplies bin ``kappa`` by ``2i pi kappa / N``, ``slope``).
+    The same values as the zero-padded ``N``-point transform, at the cost of ``2 factor``
+    transforms of length ``n_fast`` (``N`` often has the trace length's large prime
+    factors, ``n_fast`` none). The spectra are laid out ``(2, n_pulses, n_fast, factor)``
+    in ``work`` and transformed along the bins in place, so the samples come out in order
+    (``m = q factor + r``).
 
     Parameters
     ----------
     d : (n_pulses, n) ndarray
         complex128 traces, ``t = 0`` at index ``n // 2``.
-    turn, slope : (n factor,) ndarray
+    turn, slope : (N,) ndarray
         :func:`_phase_turns`.
-    work : (2 n_pulses n factor,) ndarray
+    factor : int
+        Phases per bin, ``N / n_fast``.
+    work : (2 n_pulses N,) ndarray
         complex128 scratch, or longer (its start is used); overwritten, and the result is
         normally a view of it.
     workers : int
@@ -133,12 +145,20 @@ def _polyphase(
     """
     m, n = d.shape
     big = turn.shape[0]
+    n_fast = big // factor
     spec = work[: 2 * m * big].reshape(2, m, big)
     f = sp_fft.fft(np.fft.ifftshift(d, axes=-1), axis=-1, workers=workers)
+    if n_fast > n:  # the bins at their signed offsets of the n_fast-point layout
+        padded = np.zeros((m, n_fast), np.complex128)
+        positive = (n + 1) // 2  # offsets 0 .. (n - 1) // 2, then the negative ones
+        padded[:, :positive] = f[:, :positive]
+        padded[:, n_fast - (n - positive) :] = f[:, positive:]
+        f = padded
     # each bin repeated for its phases: both products run over contiguous rows of N
-    np.multiply(np.repeat(f, big // n, axis=1), turn, out=spec[0])
+    np.multiply(np.repeat(f, factor, axis=1), turn, out=spec[0])
     np.multiply(spec[0], slope, out=spec[1])
-    out = sp_fft.ifft(spec.reshape(2, m, n, big // n), axis=2, workers=workers, overwrite_x=True)
+    out = sp_fft.ifft(spec.reshape(2, m, n_fast, factor), axis=2, workers=workers,
+                      overwrite_x=True)  # fmt: skip
     return out.reshape(2, m, big)
 
 
@@ -152,9 +172,9 @@ def hermite_coefficients(
     """
     d = np.asarray(data, np.complex128)
     m, n = d.shape
-    turn, slope = _phase_turns(n, factor)
-    work = np.empty(2 * m * n * factor, np.complex128)
-    y, hd = _polyphase(d, turn, slope, work, workers=-1)
+    turn, slope = _phase_turns(n, table_samples(n, factor) // factor, factor)
+    work = np.empty(2 * m * turn.size, np.complex128)
+    y, hd = _polyphase(d, turn, slope, factor, work, workers=-1)
     big = y.shape[1]
     y1 = np.roll(y, -1, axis=-1)
     hd1 = np.roll(hd, -1, axis=-1)
@@ -248,7 +268,7 @@ class TraceTable:
 
 
 #: Pulses per block of :func:`make_table`: a block's spectra and samples,
-#: ``2 x 16 x N x 16`` bytes (1.3 MB at ``N = 2544``), stay in one core's cache between the
+#: ``2 x 16 x N x 16`` bytes (1.3 MB at ``N = 2592``), stay in one core's cache between the
 #: transforms and the packing.
 BLOCK_PULSES = 16
 
@@ -293,10 +313,10 @@ def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
     """
     d = np.asarray(data, np.complex128)
     m, n = d.shape
-    big = factor * n
+    big = table_samples(n, factor)
     length = plane_length(big)
     values = np.zeros((m, 8 * length), np.float32)
-    turn, slope = _phase_turns(n, factor)
+    turn, slope = _phase_turns(n, big // factor, factor)
     starts = iter(range(0, m, BLOCK_PULSES))
     lock = threading.Lock()
 
@@ -308,7 +328,7 @@ def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
             if i0 is None:
                 return
             i1 = min(i0 + BLOCK_PULSES, m)
-            both = _polyphase(d[i0:i1], turn, slope, scratch)
+            both = _polyphase(d[i0:i1], turn, slope, factor, scratch)
             _pack(both.view(np.float64), values[i0:i1], length)
 
     n_blocks = -(-m // BLOCK_PULSES)

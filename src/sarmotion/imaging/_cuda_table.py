@@ -1,9 +1,10 @@
 """The trace table of the GPU kernels, built on the GPU (:func:`build_table`).
 
 The table of :func:`sarmotion.imaging.cuda.hermite_table`: per pulse, the band-limited
-trace ``V = D(t_m)`` and ``h D'(t_m)`` at ``t_m = (m - N//2) h``, ``h = dt / U``,
-``N = U n``, ``m = 0 .. N`` (position ``N`` repeats position 0), each complex64 value
-stored as one uint64 word (its two float32), two words per position. From the spectrum
+trace ``V = D(t_m)`` and ``h D'(t_m)`` at ``t_m = (m - N//2) h``, ``h = n dt / N``,
+``N = table_samples(n, U)`` (:func:`~._bp_common.table_samples`), ``m = 0 .. N``
+(position ``N`` repeats position 0), each complex64 value stored as one uint64 word (its
+two float32), two words per position. From the spectrum
 ``P_kappa`` of the pulse (:func:`~sarmotion.core.spectral.to_frequency`, signed bins
 ``kappa = k - n//2``),
 
@@ -21,9 +22,9 @@ and each entry ``V`` within ``eps = 2^-19`` of ``sum |P_kappa| / n`` (:func:`ent
 ``h D'`` within ``eps pi / U`` of it, ``|kappa| <= n / 2``), before its rounding to float32.
 :func:`sarmotion.imaging.cuda.error_bound` counts it.
 
-Cost ``U n^2`` terms per pulse (GOTCHA's 469 pulses of 424 samples at ``U = 8``: 6.7e8
-terms in all), on the device, against two ``N``-point FFTs per pulse on the host for
-:func:`~sarmotion.imaging.cuda.hermite_table`.
+Cost ``N n`` terms per pulse (GOTCHA's 469 pulses of 424 samples at ``U = 8``,
+``N = 3456``: 6.9e8 terms in all), on the device, against two ``N``-point FFTs per pulse
+on the host for :func:`~sarmotion.imaging.cuda.hermite_table`.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ import math
 import numpy as np
 from numba import config, float32, float64, int32, int64, uint32, uint64
 
+from ._bp_common import table_samples
 from ._cuda_kernels import cuda  # numba.cuda, after its numpy alias
 
 __all__ = ["BINS_PER_STAGE", "THREADS", "build_table", "builds_on_device", "entry_error"]
@@ -64,12 +66,11 @@ else:  # pragma: no cover - needs a GPU
 
 
 @cuda.jit(fastmath=True)
-def _table_kernel(spec, n, upsample, out):  # pragma: no cover - compiled
-    """Positions ``m`` of pulse ``blockIdx.y``: ``spec`` (n_pulses, n, 2) float32 ``P / n``."""
+def _table_kernel(spec, n, big, out):  # pragma: no cover - compiled
+    """Positions ``m <= big`` of pulse ``blockIdx.y``; ``spec`` (n_pulses, n, 2) ``P / n``."""
     sh = cuda.shared.array((BINS_PER_STAGE, 2), float32)
     j = cuda.blockIdx.y
     m = cuda.blockIdx.x * cuda.blockDim.x + cuda.threadIdx.x
-    big = n * upsample
     stride = 2 * (big + 1)
     mp = int64(m) - big // 2
     mp = mp % big  # m' mod N, in [0, N)
@@ -128,7 +129,7 @@ def entry_error() -> float:
 def builds_on_device() -> bool:
     """Whether images build their tables with :func:`build_table`.
 
-    Not under numba's CUDA simulator, which runs a kernel's threads as Python (``U n^2``
+    Not under numba's CUDA simulator, which runs a kernel's threads as Python (``N n``
     steps per pulse): there the images take :func:`~sarmotion.imaging.cuda.hermite_table`,
     the same table from the host's FFTs, and the tests run :func:`build_table` itself on
     small traces.
@@ -145,8 +146,8 @@ def build_table(cuda_module, data: np.ndarray, upsample: int):
     spec = (to_frequency(np.asarray(d, np.complex128)) / n).astype(np.complex64)
     planes = np.ascontiguousarray(spec).view(np.float32).reshape(n_pulses, n, 2)
     dev_spec = cuda_module.to_device(planes)
-    big = upsample * n
+    big = table_samples(n, upsample)
     out = cuda_module.device_array(n_pulses * 2 * (big + 1), dtype=np.uint64)
     blocks = (-(-(big + 1) // THREADS), n_pulses)
-    _table_kernel[blocks, THREADS](dev_spec, n, upsample, out)
+    _table_kernel[blocks, THREADS](dev_spec, n, big, out)
     return out

@@ -14,8 +14,10 @@ coherent at the true position. The paper writes ``eq:image`` for real passband t
 where the carrier is part of ``D_r``; on baseband data the factor is that same carrier.
 
 Interpolation in fast time. ``D_r(s_j, .)`` is band-limited: ``n`` frequency bins of
-``df = 1 / (n dt)``, ``|f| <= 1 / (2 dt)``. Its samples and derivatives on a grid ``upsample``
-times finer, ``h = dt / upsample``, come exactly from the zero-padded spectrum, and ``D_r``
+``df = 1 / (n dt)``, ``|f| <= 1 / (2 dt)``. Its samples and derivatives on a grid at least
+``upsample`` times finer, ``h = n dt / N <= dt / upsample`` (``N`` from
+:func:`~._bp_common.table_samples`: the spectrum padded to a length of fast transforms), come
+exactly from the zero-padded spectrum, and ``D_r``
 is read between them by the cubic Hermite piece matching ``D`` and ``D'`` at both ends
 (:mod:`._bp_table`). Delays outside the table's span
 (:func:`~sarmotion.imaging.exact_sum.fast_time_window`) contribute 0.
@@ -23,7 +25,7 @@ is read between them by the cubic Hermite piece matching ``D`` and ``D'`` at bot
 Error bound. On an interval, ``t = t_m + w h``, the Hermite remainder of each of ``Re D``
 and ``Im D`` is ``D^(4)(xi) h^4 w^2 (1 - w)^2 / 4!``, and ``w^2 (1 - w)^2 <= 1/16``. By
 Bernstein's inequality ``|D^(4)| <= (pi / dt)^4 A`` with ``A = (1/n) sum_k |P_k|`` (the
-phase history's mean modulus), so
+phase history's mean modulus), so, with ``h <= dt / upsample``,
 
     |error| <= (pi / upsample)^4 / 384 * A          (per real and imaginary part),
 
@@ -117,7 +119,7 @@ def _check_grid(grid: ImageGrid) -> None:
 
 
 def _quarter_scale(st: Setup) -> float:
-    return kernel_constants(st.sample_interval_s, st.carrier_hz, 1, 0).quarter_scale
+    return kernel_constants(st.sample_interval_s, st.carrier_hz, 1, 1).quarter_scale
 
 
 def _run_numba(
@@ -128,7 +130,7 @@ def _run_numba(
     if tile is None:
         return run_numba_f64(st, grid, progress), "numba-float64"
     table = TABLES.get(traces, st.upsample)
-    constants = kernel_constants(st.sample_interval_s, st.carrier_hz, table.upsample, table.n_up)
+    constants = kernel_constants(st.sample_interval_s, st.carrier_hz, traces.n_samples, table.n_up)
     # One parallel region unless progress is reported: each region ends in a barrier, and on
     # a busy machine a barrier waits for a descheduled thread.
     re, im = backproject_f32(
@@ -158,7 +160,7 @@ def _run_ffbp(
         values, variant = _run_numba(st, traces, grid, progress)
         return values, variant, {}
     table = TABLES.get(traces, st.upsample)
-    constants = kernel_constants(st.sample_interval_s, st.carrier_hz, table.upsample, table.n_up)
+    constants = kernel_constants(st.sample_interval_s, st.carrier_hz, traces.n_samples, table.n_up)
 
     def tile_for(pos: NDArray, u: NDArray, v: NDArray) -> tuple[int, int]:
         return tile_shape(pos, u, v, quarter_scale) or TILES[-1]

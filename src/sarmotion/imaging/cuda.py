@@ -11,8 +11,9 @@ samples, ``D(t) = (1/n) sum_k P_k exp(2i pi (k - n//2) df t)``
 
 Method
 ------
-Per pulse, a table holds ``D`` and its derivative ``h D'`` on ``U n`` points of step
-``h = dt / U`` over one period of ``D`` (``U = upsample``), built on the GPU from each
+Per pulse, a table holds ``D`` and its derivative ``h D'`` on ``N`` points of step
+``h = n dt / N <= dt / U`` over one period of ``D`` (``U = upsample``,
+``N = table_samples(n, U)``, :func:`~._bp_common.table_samples`), built on the GPU from each
 pulse's spectrum (:mod:`._cuda_table`: the trigonometric interpolant summed directly,
 within ``2^-19`` of ``sum_k |P_k| / n``, then rounded to float32; :func:`hermite_table` is
 the same table made on the host by zero-padded FFTs). ``D`` at a delay is the cubic
@@ -84,7 +85,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core import C, ProgressCallback, Traces, to_fast_time, to_frequency
 from ..core.geometry import _as_velocity
-from ._bp_common import Setup, make_setup
+from ._bp_common import Setup, make_setup, table_samples
 from .grid import Image, ImageGrid
 
 __all__ = ["available", "backproject_cuda", "error_bound", "hermite_table", "rows_per_thread"]
@@ -141,14 +142,15 @@ def hermite_table(data: ArrayLike, upsample: int) -> NDArray[np.float32]:
 
     Returns
     -------
-    (n_pulses, U n + 1, 4) ndarray
-        float32 ``(Re V, Im V, Re D, Im D)`` at ``t_m = (m - U n // 2) h``, ``h = dt / U``:
-        ``V = D(t_m)`` and ``D = h D'(t_m)`` of the band-limited trace; entry ``U n`` is
+    (n_pulses, N + 1, 4) ndarray
+        float32 ``(Re V, Im V, Re D, Im D)`` at ``t_m = (m - N // 2) h``, ``h = n dt / N``,
+        ``N = table_samples(n, U)`` (:func:`~._bp_common.table_samples`, ``h <= dt / U``):
+        ``V = D(t_m)`` and ``D = h D'(t_m)`` of the band-limited trace; entry ``N`` is
         entry 0 (the trace has period ``n dt``).
     """
     d = np.asarray(data)
     m, n = d.shape
-    big = upsample * n
+    big = table_samples(n, upsample)
     start = big // 2 - n // 2
     ramp = 2j * np.pi * (np.arange(n) - n // 2) / big  # h d/dt on bin k
     out = np.empty((m, big + 1, 4), dtype=np.float32)
@@ -157,9 +159,9 @@ def hermite_table(data: ArrayLike, upsample: int) -> NDArray[np.float32]:
         spec = to_frequency(np.asarray(d[j0:j1], np.complex128))
         pad = np.zeros((j1 - j0, big), dtype=np.complex128)
         pad[:, start : start + n] = spec
-        v = to_fast_time(pad) * upsample
+        v = to_fast_time(pad) * (big / n)
         pad[:, start : start + n] = spec * ramp
-        dv = to_fast_time(pad) * upsample
+        dv = to_fast_time(pad) * (big / n)
         out[j0:j1, :big, 0] = v.real
         out[j0:j1, :big, 1] = v.imag
         out[j0:j1, :big, 2] = dv.real
@@ -353,8 +355,8 @@ def _image_on_device(
     verify = table is not None
     if table is None:
         table = _TABLES.build(cuda, traces, data, upsample)
-    n_table = upsample * traces.n_samples
-    h = float(traces.radar.sample_interval_s) / upsample
+    n_table = table_samples(traces.n_samples, upsample)
+    h = float(traces.radar.sample_interval_s) * traces.n_samples / n_table
     ny, nx = grid.shape
     x, y = np.ascontiguousarray(grid.x_m), np.ascontiguousarray(grid.y_m)
     dy = (float(y[-1]) - float(y[0])) / (ny - 1)

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core import ProgressCallback, Traces
-from ._bp_common import kernel_constants, make_setup
+from ._bp_common import kernel_constants, make_setup, table_samples
 from ._bp_kernels import TILES, tile_shape
 from .ffbp import PLAN_CACHE_ENTRIES, CpuKernels, FfbpPulses, ffbp_values
 
@@ -202,8 +202,8 @@ def ffbp_cuda(
 
     st = make_setup(traces, velocity_mps, upsample)
     table = gpu.device_table(cuda, traces, upsample)
-    n_up = upsample * traces.n_samples
-    constants = kernel_constants(st.sample_interval_s, st.carrier_hz, upsample, n_up)
+    n_up = table_samples(traces.n_samples, upsample)
+    constants = kernel_constants(st.sample_interval_s, st.carrier_hz, traces.n_samples, n_up)
     quarter_scale = constants.quarter_scale
     cycles_per_m = quarter_scale / 4.0  # 2 nu_o / c
     idx_scale = constants.idx_scale

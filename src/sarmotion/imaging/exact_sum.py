@@ -11,11 +11,12 @@ the deramped phase history ``P(s_j, f_k)`` (:meth:`~sarmotion.core.traces.Traces
 with no interpolation: the same value as
 :func:`~sarmotion.imaging.point_response` (which sums every pulse). ``w_j`` is the
 fast-time window rule of backprojection: 1 when ``dtau_j`` lies in the span of the traces'
-table, ``[-(N//2) h, (N - 1 - N//2) h)`` with ``h = dt / upsample`` and ``N = upsample n``
-(:func:`fast_time_window`), else 0 (a pulse contributes nothing where its fast-time window
-does not reach). The sums run compiled, in float64, ``n`` complex products per pulse and
-pixel (the phasor advanced by a fixed rotation and re-seeded exactly every 32 terms):
-slow, meant for references on a few hundred thousand pixels.
+table, ``[-(N//2) h, (N - 1 - N//2) h)`` with ``h = n dt / N`` and ``N`` its samples
+(:func:`~._bp_common.table_samples`; :func:`fast_time_window`), else 0 (a pulse
+contributes nothing where its fast-time window does not reach). The sums run compiled, in
+float64, ``n`` complex products per pulse and pixel (the phasor advanced by a fixed
+rotation and re-seeded exactly every 32 terms): slow, meant for references on a few
+hundred thousand pixels.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core import C, Traces
 from ..core.geometry import _as_velocity
 from ..core.spectral import unit_phasor
-from ._bp_common import DEFAULT_UPSAMPLE
+from ._bp_common import DEFAULT_UPSAMPLE, table_samples
 
 __all__ = ["exact_sum", "fast_time_window"]
 
@@ -40,10 +41,11 @@ def fast_time_window(
     """Delays ``[lo, hi)`` (s) at which backprojection reads a trace.
 
     The span of the upsampled table: from upsampled sample 0 to sample ``N - 1``
-    (``N = upsample n_samples``), ``t_m = (m - N//2) dt / upsample``.
+    (``N = table_samples(n_samples, upsample)``), ``t_m = (m - N//2) h``,
+    ``h = n_samples dt / N``.
     """
-    big = int(upsample) * int(n_samples)
-    h = float(sample_interval_s) / int(upsample)
+    big = table_samples(n_samples, upsample)
+    h = float(sample_interval_s) * int(n_samples) / big
     return -(big // 2) * h, (big - 1 - big // 2) * h
 
 
