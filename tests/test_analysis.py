@@ -163,6 +163,8 @@ def test_results_json_document(scene1):
         lobes = m["likelihood_lobes"]
         assert lobes["ambiguous"] is False and 0.0 <= lobes["lobe_ratio"] < NEAR_EQUAL_LOBES
     assert all(len(s["position_m"]) == 2 and s["peak_db"] <= 0 for s in doc["stationary"])
+    # the combined separation lists Doppler-tested points: none is dropped as a sidelobe
+    assert result.method == "combined" and doc["stationary_sidelobes_dropped"] == 0
 
 
 @pytest.mark.slow

@@ -135,6 +135,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "imaging.point_response": ("test_point_response.py",),
     "imaging.quality": ("test_quality.py",),
     "imaging.resolution": ("test_imaging.py", "test_acquisition.py"),
+    "imaging.sidelobes": ("test_stationary_listing.py", "test_collection_sidelobes.py"),
     # io
     "io.cphd": (
         "test_io_cphd.py",

@@ -46,21 +46,13 @@ patch's stationary image (the slow-time filter has unit gain).
 
 **Sidelobes.** A patch lists the local maxima of its stationary image; beside a bright
 target some are its sidelobes (a neighbour's target seen across the core's edge, where
-the separation's Doppler test has no say). The point-spread function is separable in
-ground range and cross range about the target: along each axis ``|sinc(a)|`` (``a``
-the offset in resolution cells; flat spectra: the rect pulse in range, evenly spaced
-pulses in cross range), or ``exp(-a^2 / 2)`` in range for a Gaussian pulse. Outside
-the main lobe ``|sinc(a)| <= 1 / (pi |a|)``, so a target ``b`` produces nowhere more
-than ``E(a_r) E(a_c)`` of its level, ``E(a) = 1`` for ``|a| < 1`` and ``1 / (pi |a|)``
-beyond (``a_r``, ``a_c`` along ``b``'s own look direction). The image is the sum of
-the targets' responses, so a listing whose level is at most the sum of that bound over
-the brighter listed targets, divided by ``w``, can be their sidelobes alone: it is
-dropped (:func:`drop_sidelobes`; the count is reported). ``w`` is the least fraction
-of a peak its nearest pixel reads (levels are read there): ``sinc(h / rho_r) sinc(h /
-rho_c)``, ``h`` half the pixel spacing. A true target that weak on a brighter one's
-sidelobe ridge cannot be told from the sidelobe by its level and is dropped with it;
-one off the ridges (``|a_r| >= 1`` and ``|a_c| >= 1``) is kept down to ``E E / w``, at
-least ``-20 dB - 20 log10 w`` below its neighbour.
+the separation's Doppler test has no say). A listing whose level is at most the bound
+of the brighter listed targets' sidelobes there (the separable point-spread function's
+envelope, :mod:`sarmotion.imaging.sidelobes`) can be their sidelobes alone: it is dropped
+(:func:`drop_sidelobes`; the count is reported). A true target that weak on a brighter
+one's sidelobe ridge cannot be told from the sidelobe by its level and is dropped with
+it; one off the ridges is kept down to ``-20 dB - 20 log10 w`` below its neighbour (``w``
+the least fraction of a peak its nearest pixel reads).
 
 **Movers' images.** A stationary image holds each mover's smeared echo: the mover's
 range and range rate at slow time ``s`` are a stationary point's at some ``p``, and
@@ -89,6 +81,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.geometry import Trajectory
+from ..imaging.sidelobes import sidelobe_peaks
 
 __all__ = [
     "ECHO_CELLS",
@@ -330,14 +323,6 @@ def merge_stationary(
     return kept
 
 
-def _envelope(a: NDArray, gaussian: bool = False) -> NDArray:
-    """``E(a)``: 1 in the main lobe, ``1 / (pi |a|)`` beyond; ``exp(-a^2/2)`` if Gaussian."""
-    a = np.abs(a)
-    if gaussian:
-        return np.exp(-0.5 * a * a)
-    return np.where(a < 1.0, 1.0, 1.0 / (np.pi * np.maximum(a, 1.0)))
-
-
 def drop_sidelobes(
     targets: Sequence[StationaryRecord],
     *,
@@ -348,6 +333,8 @@ def drop_sidelobes(
     gaussian_range: bool = False,
 ) -> tuple[list[StationaryRecord], int]:
     """The listed targets that are not a brighter listed target's sidelobe (module notes).
+
+    The rule of :func:`~sarmotion.imaging.sidelobes.sidelobe_peaks` on the records' levels.
 
     Parameters
     ----------
@@ -370,24 +357,13 @@ def drop_sidelobes(
     order = sorted(targets, key=lambda t: -t.level)
     if not order:
         return [], 0
-    h = 0.5 * pixel_m
-    w = float(np.sinc(h / range_cell_m) * np.sinc(h / cross_cell_m))
-    pos = np.array([t.position_m for t in order], float)
-    level = np.array([t.level for t in order], float)
-    look = np.asarray(antenna_m, float)[:2][None, :] - pos
-    e_r = look / np.linalg.norm(look, axis=1, keepdims=True)
-    kept: list[int] = []
-    for i in range(len(order)):
-        if kept:
-            k = np.array(kept)
-            d = pos[i][None, :] - pos[k]
-            a_r = np.einsum("ij,ij->i", d, e_r[k]) / range_cell_m
-            a_c = (d[:, 0] * -e_r[k, 1] + d[:, 1] * e_r[k, 0]) / cross_cell_m
-            bound = level[k] * _envelope(a_r, gaussian_range) * _envelope(a_c) / w
-            if level[i] <= float(bound.sum()):
-                continue
-        kept.append(i)
-    return [order[i] for i in kept], len(order) - len(kept)
+    sidelobe = sidelobe_peaks(
+        [t.position_m for t in order], [t.level for t in order], antenna_m=antenna_m,
+        range_cell_m=range_cell_m, cross_cell_m=cross_cell_m, pixel_m=pixel_m,
+        gaussian_range=gaussian_range,
+    )  # fmt: skip
+    kept = [t for t, s in zip(order, sidelobe, strict=True) if not s]
+    return kept, len(order) - len(kept)
 
 
 def _histories(

@@ -147,8 +147,10 @@ class CollectionResult:
     stationary_dropped : int
         Stationary targets beyond that cap, not listed.
     stationary_sidelobes : int
-        Listings taken for a brighter target's sidelobes and dropped
-        (:func:`~sarmotion.collection.merge.drop_sidelobes`).
+        Listings the merge took for a brighter target's sidelobes and dropped
+        (:func:`~sarmotion.collection.merge.drop_sidelobes`); each patch's analysis drops
+        its own image's first (not counted here). One patch: the analysis's count
+        (:attr:`~sarmotion.pipeline.AnalysisResult.stationary_sidelobes`).
     stationary_mover_images : int
         Listings that lie on a found mover's echo and were dropped
         (:func:`~sarmotion.collection.merge.drop_mover_images`).
@@ -486,6 +488,10 @@ def analyze_collection(
     merged = _merge(src, plan, opts, [results[k] for k in sorted(results)], canvas)
     timings["merge"] = time.perf_counter() - t2
     timings["total"] = time.perf_counter() - t0
+    if single_result is not None:  # one patch: the analysis's own listing and its count
+        merged = dataclasses.replace(
+            merged, stationary_sidelobes=single_result.stationary_sidelobes
+        )
     return dataclasses.replace(merged, timings_s=timings, single_result=single_result)
 
 
@@ -658,7 +664,7 @@ def _merge(
     )
     stationary = [t for t in stationary if t.level >= floor]
     sidelobes = 0
-    if not plan.single:  # one patch: today's listing, unchanged
+    if not plan.single:  # one patch: the analysis dropped its sidelobes itself
         stationary, sidelobes = drop_sidelobes(
             stationary,
             antenna_m=traj.positions_m[int(np.argmin(np.abs(traj.slow_times_s)))],

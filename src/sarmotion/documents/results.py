@@ -8,7 +8,8 @@ direction and the unit vectors the range and cross-range coordinates and speeds 
 measured along), ``scene_extent_m``, ``detection`` (the test: statistic, threshold,
 false-alarm rate, the measured null tail, every candidate), ``movers``,
 ``movers_not_estimated`` (candidates above the threshold beyond ``max_movers``),
-``stationary``, ``timings_s``, ``options``, ``source``; for simulated inputs also
+``stationary``, ``stationary_sidelobes_dropped`` (local maxima a brighter one's sidelobes
+explain, not listed), ``timings_s``, ``options``, ``source``; for simulated inputs also
 ``truth``, per-mover ``errors``, ``false_movers`` and ``missed_movers``
 (:mod:`sarmotion.pipeline.truth`).
 
@@ -96,6 +97,7 @@ def results_document(
             {"position_m": list(s.position_m), "peak_db": float(s.level_db)}
             for s in result.stationary
         ],
+        "stationary_sidelobes_dropped": int(result.stationary_sidelobes),
         "timings_s": {k: float(v) for k, v in result.timings_s.items()},
         "options": result.options.to_dict(),
         "source": {k: v for k, v in tr.metadata.items() if _jsonable(v)},

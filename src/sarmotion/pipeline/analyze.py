@@ -110,7 +110,7 @@ def analyze(
         )
         movers = mover_images(movers, stat_img, opts, acquisition=acq)
     with timed(timings, "stationary_targets"):
-        stationary = stationary_targets(stat_img, sep, opts, acquisition=acq)
+        stationary, sidelobes = stationary_targets(stat_img, sep, opts, acquisition=acq)
     timings["total"] = float(sum(timings.values()))
     timings.update(stage.timings_s)
     return AnalysisResult(
@@ -126,4 +126,5 @@ def analyze(
         timings_s=timings,
         options=opts,
         movers_not_estimated=stage.not_estimated,
+        stationary_sidelobes=sidelobes,
     )

@@ -297,6 +297,10 @@ class AnalysisResult:
         The candidates that passed the detector after ``options.max_movers`` movers were
         accepted, strongest first: detected, neither estimated nor tested against a
         stationary explanation.
+    stationary_sidelobes : int
+        Local maxima of the stationary image above the listing threshold that a brighter
+        one's sidelobes explain, not listed
+        (:func:`~sarmotion.pipeline.stages.stationary_targets`).
     """
 
     traces: Traces
@@ -311,6 +315,7 @@ class AnalysisResult:
     timings_s: dict[str, float]
     options: AnalysisOptions
     movers_not_estimated: tuple[NotEstimated, ...] = ()
+    stationary_sidelobes: int = 0
 
     def __repr__(self) -> str:
         """One line: pulses, samples, movers, stationary targets, method and total time."""

@@ -20,6 +20,7 @@ from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
 from ..errors import EstimationError
 from ..imaging import Image, ImageGrid, backproject, resolution
+from ..imaging.sidelobes import sidelobe_peaks
 from ..motion import TrajectoryEstimate, estimate_trajectory
 from ..separation import Separation
 from ._timing import staged
@@ -38,31 +39,41 @@ log = logging.getLogger(__name__)
 
 def stationary_targets(
     image: Image, sep: Separation, options: AnalysisOptions, *, acquisition: Acquisition
-) -> tuple[StationaryTarget, ...]:
-    """Bright points of the stationary image, brightest first.
+) -> tuple[tuple[StationaryTarget, ...], int]:
+    """Bright points of the stationary image, brightest first, and the sidelobes dropped.
 
     With the combined separation the points are the stationary locations it accepted
     (refined on the point response, Doppler-tested: sidelobes of bright targets are not
-    listed); otherwise the local maxima of ``|I|`` at least one cross-range resolution
-    cell apart. Each keeps its level ``20 log10(|I(rho)| / max |I|)`` (dB, nearest pixel
-    of the refined position, so a point may read a fraction of a dB low) when it is
-    above ``options.stationary_threshold_db``; at most ``options.max_stationary``.
+    listed); otherwise the local maxima of ``|I|`` at least one resolution cell apart,
+    less those a brighter maximum's sidelobes can explain
+    (:func:`~sarmotion.imaging.sidelobes.sidelobe_peaks`: the point-spread function's
+    envelope in ground range and cross range, along the look direction at the aperture's
+    centre). Each keeps its level ``20 log10(|I(rho)| / max |I|)`` (dB, nearest pixel of
+    the refined position, so a point may read a fraction of a dB low) when it is above
+    ``options.stationary_threshold_db``; at most ``options.max_stationary``.
+
+    Returns
+    -------
+    (tuple of StationaryTarget, int)
+        The targets, and how many local maxima above the threshold were dropped as
+        sidelobes.
     """
     threshold_db, max_targets = options.stationary_threshold_db, options.max_stationary
     if max_targets == 0:
-        return ()
+        return (), 0
     mag = image.magnitude
     peak = float(mag.max())
     if peak <= 0:
-        return ()
-    if sep.method == "combined" and len(sep.stationary_points_m):
+        return (), 0
+    combined = sep.method == "combined" and len(sep.stationary_points_m)
+    cells = resolution(acquisition)
+    if combined:
         points = [tuple(p[:2]) for p in sep.stationary_points_m]
-    else:
-        cells = resolution(acquisition)
+    else:  # sidelobes dropped below: ask for more maxima than will be listed
         cell = max(cells.ground_range_m, cells.cross_range_m)
-        points = [(x, y) for x, y, _ in image.peaks(max_targets, min_separation_m=cell)]
+        points = [(x, y) for x, y, _ in image.peaks(2 * max_targets, min_separation_m=cell)]
     left, right, bottom, top = image.grid.extent
-    found = []
+    found, levels = [], []
     for x, y in points:
         if not (left <= x <= right and bottom <= y <= top):
             continue
@@ -70,8 +81,20 @@ def stationary_targets(
         db = float(20.0 * np.log10(max(mag[iy, ix], 1e-300) / peak))
         if db >= threshold_db:
             found.append(StationaryTarget(position_m=(float(x), float(y)), level_db=db))
+            levels.append(float(mag[iy, ix]))
+    n_sidelobes = 0
+    if not combined and found:
+        traj = acquisition.trajectory
+        sidelobe = sidelobe_peaks(
+            [t.position_m for t in found], levels,
+            antenna_m=traj.positions_m[int(np.argmin(np.abs(traj.slow_times_s)))],
+            range_cell_m=cells.ground_range_m, cross_cell_m=cells.cross_range_m,
+            pixel_m=max(image.grid.spacing_m), gaussian_range=acquisition.radar.pulse == "gaussian",
+        )  # fmt: skip
+        n_sidelobes = int(sidelobe.sum())
+        found = [t for t, s in zip(found, sidelobe, strict=True) if not s]
     found.sort(key=lambda t: -t.level_db)
-    return tuple(found[:max_targets])
+    return tuple(found[:max_targets]), n_sidelobes
 
 
 def estimate_trajectories(

@@ -1,0 +1,98 @@
+"""One analysis lists the stationary image's targets, not a bright target's sidelobes.
+
+With a separation other than the combined one (measured data default to RPCA) the
+listing is the local maxima of the stationary image; the sidelobe rule
+(:func:`sarmotion.imaging.sidelobes.sidelobe_peaks`, the point-spread function's envelope)
+must drop the strong target's sidelobes and keep every true target, weak ones beside the
+strong one included, on scenes the rule was not tuned on (seeded positions and levels).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
+from sarmotion.imaging import ImageGrid, backproject, resolution
+from sarmotion.imaging.sidelobes import envelope, sidelobe_peaks
+from sarmotion.pipeline import AnalysisOptions
+from sarmotion.pipeline.stages import stationary_targets
+from sarmotion.separation import Separation
+from sarmotion.simulation import PointTarget, simulate_phase_history
+
+
+def _offset(cells, a_r, a_c):
+    """Ground point ``a_r`` range cells and ``a_c`` cross-range cells from the origin."""
+    e_r = np.asarray(cells.range_direction, float)
+    e_c = np.asarray(cells.cross_range_direction, float)
+    return a_r * cells.ground_range_m * e_r + a_c * cells.cross_range_m * e_c
+
+
+def test_envelope_bounds_the_sinc_outside_the_main_lobe():
+    a = np.linspace(-40.0, 40.0, 160001)
+    assert np.all(np.abs(np.sinc(a)) <= envelope(a) + 1e-15)
+    assert np.all(envelope(a)[np.abs(a) < 1.0] == 1.0)
+    np.testing.assert_allclose(envelope(a, gaussian=True), np.exp(-0.5 * a * a))
+
+
+def test_sidelobe_peaks_keeps_the_input_order_and_the_brightest():
+    # Two peaks one cross-range cell and a half apart along the look direction's normal:
+    # the weaker at -20 dB lies under the envelope 1 / (1.5 pi) = -13.5 dB and goes; at
+    # -10 dB it stands above it and stays; listed weaker first, the flags follow the input.
+    antenna = np.array([1.0e4, 0.0, 5.0e3])  # looking along -x: cross range is y
+    common = dict(antenna_m=antenna, range_cell_m=0.3, cross_cell_m=0.3, pixel_m=0.01)
+    pos = [(0.0, 0.45), (0.0, 0.0)]
+    np.testing.assert_array_equal(sidelobe_peaks(pos, [0.1, 1.0], **common), [True, False])
+    np.testing.assert_array_equal(sidelobe_peaks(pos, [0.316, 1.0], **common), [False, False])
+    assert sidelobe_peaks(np.zeros((0, 2)), [], **common).shape == (0,)
+    with pytest.raises(ValueError, match="positions"):
+        sidelobe_peaks(pos, [1.0], **common)
+
+
+def _traces_of(targets) -> Traces:
+    traj, radar = Trajectory.circular(), Radar()
+    ph = simulate_phase_history(targets, traj, radar, (0.0, 0.0, 0.0))
+    return Traces(
+        data=to_fast_time(ph), trajectory=traj, radar=radar, reference_point_m=(0.0, 0.0, 0.0)
+    )
+
+
+def _traces(seed: int):
+    """A strong point and three weak ones (-3 to -15 dB) >= 1.5 cells off its axes."""
+    rng = np.random.default_rng(seed)
+    targets = [PointTarget(position_m=(0.0, 0.0))]
+    cells = resolution(_traces_of(targets))
+    for _ in range(3):
+        a_r, a_c = rng.choice([-1, 1], 2) * rng.uniform(1.5, 6.0, 2)
+        level_db = rng.uniform(-15.0, -3.0)
+        targets.append(
+            PointTarget(
+                position_m=_offset(cells, a_r, a_c),
+                reflectivity=10 ** (level_db / 20) * np.exp(2j * np.pi * rng.random()),
+            )
+        )
+    return _traces_of(targets), targets
+
+
+@pytest.mark.parametrize("seed", [21, 22, 23])
+def test_stationary_listing_drops_sidelobes_keeps_weak_targets(seed):
+    # The stage on a stationary image whose separation is not the combined one (RPCA:
+    # the listing is the image's local maxima, as on measured data).
+    traces, targets = _traces(seed)
+    image = backproject(traces, ImageGrid.square(centre_m=(0.0, 0.0), size_m=24.0,
+                                                 spacing_m=0.25))  # fmt: skip
+    sep = Separation(moving=np.zeros_like(traces.data), stationary=traces.data, method="rpca")
+    listed, dropped = stationary_targets(
+        image, sep, AnalysisOptions(), acquisition=traces.acquisition
+    )
+    cells = resolution(traces)
+    cell = max(cells.ground_range_m, cells.cross_range_m)
+    truth = np.array([t.position_m[:2] for t in targets])
+    found = np.array([t.position_m for t in listed])
+    for p in truth:  # every true target is listed ...
+        assert np.min(np.hypot(*(found - p).T)) <= cell, p
+    for q in found:  # ... and nothing else: the strong target's sidelobes went
+        assert np.min(np.hypot(*(truth - q).T)) <= cell, q
+    assert dropped > 0  # they were local maxima above the listing threshold
+    levels = [t.level_db for t in listed]
+    assert levels == sorted(levels, reverse=True) and levels[0] == 0.0
