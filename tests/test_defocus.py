@@ -4,8 +4,8 @@ A mover moving across the line of sight only (no range speed) at (15, -10) m has
 range rate of the stationary point under it: its image lands inside the scene, in the
 stationary band ``g(u)`` does not test, and the separation keeps its echo in ``L``.
 Its cross-range speed defocuses it by ``edge_phase_rad`` per m/s at the aperture's
-edges; the bank focuses it. The search is opt-in (``defocus_search``, ``OPTIONS``); the
-mover has the clutter points' unit amplitude.
+edges; the bank focuses it. The search is on by default (``defocus_search``; ``OPTIONS``
+names it); the mover has the clutter points' unit amplitude.
 """
 
 from __future__ import annotations
@@ -288,9 +288,9 @@ def test_no_mover_in_stationary_clutter(seed):
 
 
 def test_without_the_search_the_mover_is_missed():
-    """The default analysis: ``g(u)`` leaves the band untested and sees no mover."""
+    """Without the search ``g(u)`` leaves the band untested and sees no mover."""
     tr, _, _ = _scene(1, 12.0)
-    result = analyze(tr)
+    result = analyze(tr, AnalysisOptions(defocus_search=False))
     assert result.movers == ()
 
 
