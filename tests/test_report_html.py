@@ -7,7 +7,7 @@ import io
 import pytest
 
 from sarmotion.pipeline import AnalysisOptions, analyze
-from sarmotion.report.html import _fmt, _merged_stationary, write_report
+from sarmotion.report.html import _fmt, _merged_stationary, _stationary_html, write_report
 from sarmotion.simulation import load_scene, simulate
 
 
@@ -27,6 +27,15 @@ def test_stationary_detections_within_half_a_metre_merge_into_the_brightest():
     ]
     kept = _merged_stationary(found)
     assert [k["peak_db"] for k in kept] == [0.0, -3.0, -9.0]
+
+
+def test_the_sidelobes_left_out_of_the_listing_are_counted():
+    doc = {"stationary": [{"position_m": [-15.6, 21.6], "peak_db": 0.0}]}
+    assert "not listed" not in _stationary_html(doc)
+    doc["stationary_sidelobes_dropped"] = 3
+    assert "3 local maxima of the stationary image that a brighter target's sidelobes " in (
+        _stationary_html(doc)
+    )
 
 
 @pytest.fixture(scope="module")

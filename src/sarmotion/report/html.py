@@ -393,6 +393,12 @@ def _stationary_html(doc: dict[str, Any]) -> str:
         )
     if len(listed) > len(rows):
         text += f'<p class="note">... and {len(listed) - len(rows)} more in results.json.</p>'
+    sidelobes = doc.get("stationary_sidelobes_dropped", 0)
+    if sidelobes:
+        text += (
+            f'<p class="note">{sidelobes} local maxima of the stationary image that a brighter '
+            "target's sidelobes explain are not listed.</p>"
+        )
     if doc.get("point_quality"):
         text += _quality_html(doc["point_quality"])
     return text
