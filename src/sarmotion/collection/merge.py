@@ -340,14 +340,8 @@ def drop_sidelobes(
     ----------
     targets : sequence of StationaryRecord
         De-duplicated targets.
-    antenna_m : (3,) ndarray
-        Antenna position at the aperture centre (m): each target's look direction.
-    range_cell_m, cross_cell_m : float
-        Ground-range and cross-range resolution (m).
-    pixel_m : float
-        Pixel spacing the levels were read at (m).
-    gaussian_range : bool
-        The compressed pulse is Gaussian (no range sidelobes).
+    antenna_m, range_cell_m, cross_cell_m, pixel_m, gaussian_range
+        The geometry, as for :func:`~sarmotion.imaging.sidelobes.sidelobe_peaks`.
 
     Returns
     -------
