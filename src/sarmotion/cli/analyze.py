@@ -163,8 +163,8 @@ def _write_sicd_images(result, stage: Path) -> None:
     "(their image lands inside it, where the separation takes them for stationary), by "
     "their focus over a bank of cross-range speeds. On data without movers its tests "
     "explain every candidate of the null benchmark; on the movers' benchmark, Scene 1 "
-    "and GOTCHA it finds the same movers as without it, at about 0.5 s more per "
-    "analysis.",
+    "and GOTCHA it finds the same movers as without it (on GOTCHA's four degrees in "
+    "about 0.4 s more).",
 )
 @click.option(
     "--trajectory/--no-trajectory",
