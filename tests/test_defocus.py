@@ -203,14 +203,15 @@ def test_the_residues_smear_bound_is_the_screens():
     )
     assert len(scan.candidates) >= 3
     for cand in scan.candidates[:3]:
-        rows, cols, delays, n_dop = _echo_extent(sub, cand)
+        extent = _echo_extent(sub, cand)
+        rows, cols, delays, n_dop = extent
         r = int(np.argmin(np.abs(sub.fast_times_s[rows] - cand.delay_s)))
         prf = 1.0 / float(np.median(np.diff(sub.slow_times_s)))
         u_w = 0.5 * C * float(np.polyfit(sub.slow_times_s, delays, 1)[0])
         speed = u_w - 0.5 * sub.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
         c = int(np.argmin(np.abs(speed[cols] - cand.range_speed_mps)))
         spectrum = to_frequency(sub.data)
-        bound = _smear_bound(sub, cand, spectrum, band, (np.array([c]), np.array([r])))[0]
+        bound = _smear_bound(sub, extent, spectrum, band, (np.array([c]), np.array([r])))[0]
         assert 20 * np.log10(np.sqrt(cand.power) / bound) == pytest.approx(cand.leak_db, abs=1e-6)
 
 

@@ -240,6 +240,15 @@ def _doppler_cells(n_pulses: int) -> int:
     return int(2 ** np.ceil(np.log2(2 * n_pulses)))
 
 
+def _doppler_speeds(traces: Traces, n_dop: int) -> NDArray[np.float64]:
+    """``lambda f / 2`` (m/s) of the ``n_dop`` Doppler cells ``f``, in FFT order.
+
+    A cell of hypothesis ``w`` reads the apparent range speed ``u_w - lambda f / 2``.
+    """
+    prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
+    return 0.5 * traces.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
+
+
 def _hypothesis_rate(traces: Traces, delays_s: NDArray) -> float:
     """``u_w`` (m/s): a hypothesis' own range rate, the slope of ``c delays_s / 2``."""
     return 0.5 * C * float(np.polyfit(traces.slow_times_s, delays_s, 1)[0])
@@ -324,7 +333,7 @@ def defocus_scan(
         maps[k] = power.T
         smears[k] = _smear(traces, delays, still, n_dop)
     # the Doppler of each cell in each hypothesis, as an apparent range speed
-    speed_of = u_w[:, None] - 0.5 * lam * doppler[None, :]
+    speed_of = u_w[:, None] - _doppler_speeds(traces, n_dop)[None, :]
     searched = np.abs(speed_of) <= band_mps  # (n_w, n_dop)
     zero = int(np.argmin(np.abs(speeds)))
     moving = np.ones(speeds.size, bool)
@@ -420,20 +429,18 @@ def _echo_extent(
     )
     n_dop = _doppler_cells(traces.n_pulses)
     delays = hypothesis_delays_s(traces, candidate.cross_range_speed_mps)
-    u_w = _hypothesis_rate(traces, delays)
-    prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
-    speed = u_w - 0.5 * traces.radar.wavelength_m * np.fft.fftfreq(n_dop, d=1.0 / prf)
+    speed = _hypothesis_rate(traces, delays) - _doppler_speeds(traces, n_dop)
     res = range_speed_resolution(traces)
     cols = np.flatnonzero(np.abs(speed - candidate.range_speed_mps) <= 2.0 * res)
     return rows, cols, delays, n_dop
 
 
-def _echo_values(traces: Traces, candidate: DefocusCandidate, spectrum: NDArray) -> NDArray:
-    """``X`` over ``candidate``'s echo (:func:`_echo_extent`), ``(cols, rows)``.
+def _echo_values(traces: Traces, extent: tuple, spectrum: NDArray) -> NDArray:
+    """``X`` over an echo's extent (:func:`_echo_extent`'s tuple), ``(cols, rows)``.
 
     ``spectrum``: the data over frequency (:func:`~sarmotion.core.to_frequency`).
     """
-    rows, cols, delays, n_dop = _echo_extent(traces, candidate)
+    rows, cols, delays, n_dop = extent
     if rows.size == 0 or cols.size == 0:
         return np.zeros((cols.size, rows.size), dtype=np.complex128)
     return _hypothesis_values(traces, spectrum, delays, rows, n_dop)[1][cols]
@@ -441,20 +448,20 @@ def _echo_values(traces: Traces, candidate: DefocusCandidate, spectrum: NDArray)
 
 def _smear_bound(
     traces: Traces,
-    candidate: DefocusCandidate,
+    extent: tuple,
     spectrum: NDArray,
     band_mps: float,
     cells: tuple[NDArray[np.int64], NDArray[np.int64]],
 ) -> NDArray[np.float64]:
-    """Largest stationary smear at some cells of ``candidate``'s echo, shape ``(k,)``.
+    """Largest stationary smear at some cells of an echo, shape ``(k,)``.
 
-    ``cells``: (column, row) indices into the extent's ``(cols, rows)``
-    (:func:`_echo_extent`). As the screen's (:func:`defocus_scan`): ``max |X_0(t', f')|
+    ``extent``: the echo's (:func:`_echo_extent`); ``cells``: (column, row) indices into
+    its ``(cols, rows)``. As the screen's (:func:`defocus_scan`): ``max |X_0(t', f')|
     |H_w(f - f')|`` over the Doppler cells ``f'`` of the stationary image ``X_0`` of the
     data (``spectrum``, over frequency) and over the range rows a stationary point of the
     band ``|u| <= band_mps`` crosses, and one more either side.
     """
-    rows, cols, delays, n_dop = _echo_extent(traces, candidate)
+    rows, cols, delays, n_dop = extent
     ci, ri = (np.asarray(a, dtype=np.int64) for a in cells)
     if ci.size == 0:
         return np.zeros(0)
@@ -484,7 +491,7 @@ def echo_peak_power(
     replaces ``traces.data`` when given.
     """
     d = traces.data if data is None else data
-    values = _echo_values(traces, candidate, to_frequency(d))
+    values = _echo_values(traces, _echo_extent(traces, candidate), to_frequency(d))
     return float(np.max(np.abs(values) ** 2)) if values.size else 0.0
 
 
@@ -507,9 +514,10 @@ def echo_residue(
     their smears. ``X(D - M) = X(D) - X(M)``. ``model`` has ``traces``' shape; a model
     with no power in the extent gives ``inf`` (it describes no echo of the candidate).
     """
+    extent = _echo_extent(traces, candidate)
     spectrum = to_frequency(traces.data)
-    x_d = _echo_values(traces, candidate, spectrum)
-    x_m = _echo_values(traces, candidate, to_frequency(model))
+    x_d = _echo_values(traces, extent, spectrum)
+    x_m = _echo_values(traces, extent, to_frequency(model))
     p_m = np.abs(x_m) ** 2
     if p_m.size == 0 or not p_m.max() > 0.0:
         return float("inf")
@@ -521,7 +529,7 @@ def echo_residue(
     ci, ri = np.nonzero(~lobe & (left > after))
     if ci.size:
         margin = 10.0 ** (SMEAR_MARGIN_DB / 20.0)
-        bound = _smear_bound(traces, candidate, spectrum, band_mps, (ci, ri))
+        bound = _smear_bound(traces, extent, spectrum, band_mps, (ci, ri))
         unexplained = left[ci, ri] > margin * bound
         if unexplained.any():
             after = max(after, float(np.max(left[ci, ri][unexplained])))
