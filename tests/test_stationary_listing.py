@@ -96,3 +96,28 @@ def test_stationary_listing_drops_sidelobes_keeps_weak_targets(seed):
     assert dropped > 0  # they were local maxima above the listing threshold
     levels = [t.level_db for t in listed]
     assert levels == sorted(levels, reverse=True) and levels[0] == 0.0
+
+
+def test_a_capped_listing_reaches_past_the_sidelobes():
+    # A unit point and one at -19 dB, 2.5 range and 3.5 cross-range cells off its axes:
+    # the strong point's first and second sidelobes (-13 and -18 dB) outshine the weak
+    # one. With max_stationary = 2 (listing down to -25 dB) the listing is both points:
+    # maxima are taken brightest first until two are not sidelobes, not a fixed number
+    # of them (twice the cap, 4 maxima, would stop short of the weak point).
+    probe = _traces_of([PointTarget(position_m=(0.0, 0.0))])
+    cells = resolution(probe)
+    weak = PointTarget(position_m=_offset(cells, 2.5, 3.5), reflectivity=10 ** (-19 / 20))
+    traces = _traces_of([PointTarget(position_m=(0.0, 0.0)), weak])
+    image = backproject(traces, ImageGrid.square(centre_m=(0.0, 0.0), size_m=24.0,
+                                                 spacing_m=0.25))  # fmt: skip
+    sep = Separation(moving=np.zeros_like(traces.data), stationary=traces.data, method="rpca")
+    listed, dropped = stationary_targets(
+        image,
+        sep,
+        AnalysisOptions(max_stationary=2, stationary_threshold_db=-25.0),
+        acquisition=traces.acquisition,
+    )
+    cell = max(cells.ground_range_m, cells.cross_range_m)
+    assert len(listed) == 2 and dropped >= 3
+    assert np.hypot(*listed[0].position_m) <= cell
+    assert np.hypot(*(np.asarray(listed[1].position_m) - weak.position_m[:2])) <= cell

@@ -50,28 +50,52 @@ def stationary_targets(
     envelope in ground range and cross range, along the look direction at the aperture's
     centre). Each keeps its level ``20 log10(|I(rho)| / max |I|)`` (dB, nearest pixel of
     the refined position, so a point may read a fraction of a dB low) when it is above
-    ``options.stationary_threshold_db``; at most ``options.max_stationary``.
+    ``options.stationary_threshold_db``; at most ``options.max_stationary``, the brightest
+    (maxima are taken brightest first until that many are not sidelobes).
 
     Returns
     -------
     (tuple of StationaryTarget, int)
-        The targets, and how many local maxima above the threshold were dropped as
-        sidelobes.
+        The targets, and how many of the local maxima above the threshold that were
+        examined were dropped as sidelobes.
     """
     threshold_db, max_targets = options.stationary_threshold_db, options.max_stationary
-    if max_targets == 0:
+    if max_targets == 0 or not float(image.magnitude.max()) > 0.0:
         return (), 0
+    if sep.method == "combined" and len(sep.stationary_points_m):
+        found, _ = _above(image, [tuple(p[:2]) for p in sep.stationary_points_m], threshold_db)
+        found.sort(key=lambda t: -t.level_db)
+        return tuple(found[:max_targets]), 0
+    cells = resolution(acquisition)
+    cell = max(cells.ground_range_m, cells.cross_range_m)
+    traj = acquisition.trajectory
+    n = max_targets
+    while True:  # the brightest maxima until max_targets are not sidelobes, or none is left
+        points = [(x, y) for x, y, _ in image.peaks(n, min_separation_m=cell)]
+        found, levels = _above(image, points, threshold_db)
+        sidelobe = sidelobe_peaks(
+            [t.position_m for t in found], levels,
+            antenna_m=traj.positions_m[int(np.argmin(np.abs(traj.slow_times_s)))],
+            range_cell_m=cells.ground_range_m, cross_cell_m=cells.cross_range_m,
+            pixel_m=max(image.grid.spacing_m), gaussian_range=acquisition.radar.pulse == "gaussian",
+        )  # fmt: skip
+        kept = [t for t, s in zip(found, sidelobe, strict=True) if not s]
+        if len(kept) >= max_targets or len(points) < n or len(found) < len(points):
+            break
+        n *= 2
+    kept.sort(key=lambda t: -t.level_db)
+    return tuple(kept[:max_targets]), int(sidelobe.sum())
+
+
+def _above(
+    image: Image, points: Sequence[tuple[float, float]], threshold_db: float
+) -> tuple[list[StationaryTarget], list[float]]:
+    """The points inside the image whose level is at least ``threshold_db`` (dB re its peak).
+
+    Returns the targets (level at the nearest pixel) and their amplitudes ``|I|``.
+    """
     mag = image.magnitude
     peak = float(mag.max())
-    if peak <= 0:
-        return (), 0
-    combined = sep.method == "combined" and len(sep.stationary_points_m)
-    cells = resolution(acquisition)
-    if combined:
-        points = [tuple(p[:2]) for p in sep.stationary_points_m]
-    else:  # sidelobes dropped below: ask for more maxima than will be listed
-        cell = max(cells.ground_range_m, cells.cross_range_m)
-        points = [(x, y) for x, y, _ in image.peaks(2 * max_targets, min_separation_m=cell)]
     left, right, bottom, top = image.grid.extent
     found, levels = [], []
     for x, y in points:
@@ -82,19 +106,7 @@ def stationary_targets(
         if db >= threshold_db:
             found.append(StationaryTarget(position_m=(float(x), float(y)), level_db=db))
             levels.append(float(mag[iy, ix]))
-    n_sidelobes = 0
-    if not combined and found:
-        traj = acquisition.trajectory
-        sidelobe = sidelobe_peaks(
-            [t.position_m for t in found], levels,
-            antenna_m=traj.positions_m[int(np.argmin(np.abs(traj.slow_times_s)))],
-            range_cell_m=cells.ground_range_m, cross_cell_m=cells.cross_range_m,
-            pixel_m=max(image.grid.spacing_m), gaussian_range=acquisition.radar.pulse == "gaussian",
-        )  # fmt: skip
-        n_sidelobes = int(sidelobe.sum())
-        found = [t for t, s in zip(found, sidelobe, strict=True) if not s]
-    found.sort(key=lambda t: -t.level_db)
-    return tuple(found[:max_targets]), n_sidelobes
+    return found, levels
 
 
 def estimate_trajectories(
