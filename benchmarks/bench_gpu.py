@@ -18,7 +18,9 @@ For each size, warm (the kernel compiled and the trace table on the device), med
   events), with the default pixels per thread, and ``variants``: every pixels-per-thread
   and block-rows choice;
 - ``end_to_end``: :func:`~sarmotion.imaging.cuda.backproject_cuda`, the complex128 image
-  in host memory;
+  in host memory (a page-locked block of :mod:`~sarmotion.imaging._cuda_host`'s pool,
+  reused once the previous image is released), and ``end_to_end_pageable``: the same
+  with the pool off, each image copied into fresh pageable memory;
 - ``ser_db``: signal-to-error ratio against the exact sum
   (:func:`~sarmotion.imaging.point_response`, float64, no interpolation) on
   ``--reference-pixels`` pixels drawn at random (seeded), the same for every method;
@@ -27,17 +29,19 @@ For each size, warm (the kernel compiled and the trace table on the device), med
 - ``ffbp``: fast factorised backprojection on the GPU (``method="ffbp"``,
   :mod:`~sarmotion.imaging.cuda_ffbp`), end to end, its path and SER on the same pixels;
 - ``new_data``: exact and FFBP end to end on a new traces object at every call (the
-  trace table built again, on the host, and copied to the device; FFBP's plan kept for
-  the geometry), as a former that takes the phase history at every call works.
+  trace table built again, on the GPU by :mod:`~sarmotion.imaging._cuda_table`; FFBP's
+  plan kept for the geometry), as a former that takes the phase history at every call
+  works.
 
 With ``--fastsar`` (FastSAR, ``pip install 'sarmotion[bench]'``, and CuPy), the same
 sizes over a 51.2 m square, sarmotion's exact and FFBP also on new data at every call
 (FastSAR's exact former refuses a grid wider than the
 unambiguous range less a margin, ``bench_backprojection.FASTSAR_EXTENT_M``) in the same
-run: sarmotion's kernel (image on the device, and end to end) against FastSAR's CUDA
-exact (cubic) and factorised formers (the phase history on the device, the complex64
-image returned in host memory, as FastSAR's call does), ``window=False``, each warm,
-median of ``--repeats``, with their signal-to-error against the exact sum.
+run: sarmotion's kernel (image on the device, and end to end, pooled and pageable)
+against FastSAR's CUDA exact (cubic) and factorised formers (the phase history on the
+device, the complex64 image returned in host memory, as FastSAR's call does),
+``window=False``, each warm, median of ``--repeats``, with their signal-to-error against
+the exact sum.
 
 Under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``) the same script checks itself
 at tiny sizes (``--sizes 16 --pulses 8 --reference-pixels 64 --cpu-size 16``).
@@ -46,6 +50,7 @@ at tiny sizes (``--sizes 16 --pulses 8 --reference-pixels 64 --cpu-size 16``).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import math
@@ -127,6 +132,19 @@ def _median_time(fn, repeats: int) -> tuple[float, list[float]]:
         fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times), times
+
+
+@contextlib.contextmanager
+def _pageable(cuda):
+    """Images copied into fresh pageable memory (the pool of page-locked blocks off)."""
+    from sarmotion.imaging._cuda_host import pool_for
+
+    pool = pool_for(cuda)
+    limit, pool.limit_bytes = pool.limit_bytes, 0
+    try:
+        yield
+    finally:
+        pool.limit_bytes = limit
 
 
 def _device_run(cuda, tr, grid, p, rows, repeats):
@@ -227,6 +245,11 @@ def main(argv: list[str] | None = None) -> dict:
         med, times = _median_time(lambda g=grid: gpu.backproject_cuda(tr, g), args.repeats)
         entry["end_to_end"] = {"seconds_median": med, "seconds": times,
                                "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
+        with _pageable(cuda):
+            gpu.backproject_cuda(tr, grid)
+            med, times = _median_time(lambda g=grid: gpu.backproject_cuda(tr, g), args.repeats)
+        entry["end_to_end_pageable"] = {"seconds_median": med, "seconds": times,
+                                        "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
         if n == args.cpu_size:
             cpu = backproject(tr, grid).values
             med, times = _median_time(lambda g=grid: backproject(tr, g), min(args.repeats, 3))
@@ -244,7 +267,9 @@ def main(argv: list[str] | None = None) -> dict:
         d, e = entry["device"], entry["end_to_end"]
         line = (f"{n}^2 ({SIDE_M / n:.4g} m): device {d['pixel_pulses_per_second']:.3g} "
                 f"pixel-pulses/s (P={d['pixels_per_thread']}), end-to-end "
-                f"{e['pixel_pulses_per_second']:.3g}, SER {d['ser_db']:.1f} dB")  # fmt: skip
+                f"{e['pixel_pulses_per_second']:.3g} (pageable "
+                f"{entry['end_to_end_pageable']['pixel_pulses_per_second']:.3g}), "
+                f"SER {d['ser_db']:.1f} dB")  # fmt: skip
         if "cpu" in entry:
             c = entry["cpu"]
             line += (f"; CPU {c['pixel_pulses_per_second']:.3g} pixel-pulses/s "
@@ -309,6 +334,11 @@ def _against_fastsar(cuda, tr, n, rng, reference_pixels, repeats) -> dict:
     gpu.backproject_cuda(tr, grid)
     med, _ = _median_time(lambda: gpu.backproject_cuda(tr, grid), repeats)
     entry["formers"]["sarmotion (complex128 image in host memory)"] = {
+        "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
+    with _pageable(cuda):
+        gpu.backproject_cuda(tr, grid)
+        med, _ = _median_time(lambda: gpu.backproject_cuda(tr, grid), repeats)
+    entry["formers"]["sarmotion (complex128 image in fresh pageable memory)"] = {
         "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
     f = _ffbp_row(tr, grid, work, exact, iy, ix, repeats)
     entry["formers"]["sarmotion FFBP (complex128 image in host memory)"] = {

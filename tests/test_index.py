@@ -106,6 +106,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "imaging._bp_table": ("test_fast_imaging.py", "test_imaging_threads.py"),
     "imaging._cuda_kernels": ("test_cuda_sim.py",),
     "imaging._cuda_ffbp_kernels": ("test_cuda_sim.py",),
+    "imaging._cuda_host": ("test_cuda_host.py", "test_cuda_sim.py"),
     "imaging._cuda_table": ("test_cuda_sim.py",),
     "imaging._ffbp_kernels": (
         "test_fast_imaging.py",

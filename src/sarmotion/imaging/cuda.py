@@ -86,6 +86,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core import C, ProgressCallback, Traces, to_fast_time, to_frequency
 from ..core.geometry import _as_velocity
 from ._bp_common import Setup, make_setup, table_samples
+from ._cuda_host import image_to_host
 from .grid import Image, ImageGrid
 
 __all__ = ["available", "backproject_cuda", "error_bound", "hermite_table", "rows_per_thread"]
@@ -471,7 +472,7 @@ def backproject_cuda(
     p = 0
     if values is None:
         out, p = _image_on_device(cuda, traces, grid, u, int(upsample), pixels_per_thread)
-        values = out.copy_to_host().view(np.complex128)[..., 0]
+        values = image_to_host(cuda, out)
         if progress is not None:
             progress("backprojection", 1, 1)
     carrier = float(traces.radar.carrier_hz)

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from ..core import ProgressCallback, Traces
 from ._bp_common import kernel_constants, make_setup, table_samples
 from ._bp_kernels import TILES, tile_shape
+from ._cuda_host import pool_for
 from .ffbp import PLAN_CACHE_ENTRIES, CpuKernels, FfbpPulses, ffbp_values
 
 __all__ = ["CudaKernels", "ffbp_cuda"]
@@ -123,6 +124,13 @@ class CudaKernels(CpuKernels):
             cre, cim = re, im
             report()
         return cre, cim
+
+    def host_image(self, shape: tuple[int, int], covered: bool) -> NDArray[np.complex128]:
+        """A pooled page-locked array (:mod:`._cuda_host`), zeroed unless ``covered``."""
+        out = pool_for(self.cuda).empty(shape, np.complex128)
+        if not covered:
+            out[...] = 0.0
+        return out
 
     def image_rows(self, out, k_lo, rows, cre, cim, g, frame: dict, remodulate: bool = True):
         """The image rows (:func:`.ffbp._root_rows`) into ``out[:, k_lo:]`` (host)."""

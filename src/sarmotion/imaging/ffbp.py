@@ -804,6 +804,13 @@ class CpuKernels:
         """The tree's regions in order (:func:`_run_levels`); returns depth 1's planes."""
         return _run_levels(levels, frame, table, report)
 
+    def host_image(self, shape: tuple[int, int], covered: bool) -> NDArray[np.complex128]:
+        """The complex128 host array :meth:`image_rows` fills; zero unless ``covered``.
+
+        ``covered``: the rows will write every element (then the GPU's may skip zeroing).
+        """
+        return np.zeros(shape, np.complex128)
+
     def image_rows(self, out, k_lo, rows, cre, cim, g, frame: dict, remodulate: bool = True):
         """The image rows into the host array ``out`` (:func:`_image_rows`)."""
         _image_rows(out, k_lo, rows, cre, cim, g, frame, remodulate)
@@ -1275,7 +1282,8 @@ def _run_aligned(
         info["first_column"] = plan.k_lo
         report()
         return out, info
-    out = np.zeros((frame["y"].size, nx if not plan.transpose else ny), np.complex128)
+    width = nx if not plan.transpose else ny
+    out = kernels.host_image((frame["y"].size, width), plan.k_lo == 0 and frame["us"].size == width)
     kernels.image_rows(out, plan.k_lo, plan.rows, cre, cim, plan.g, frame)
     report()
     return (out.T if plan.transpose else out), info
