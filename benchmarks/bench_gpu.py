@@ -19,8 +19,10 @@ For each size, warm (the kernel compiled and the trace table on the device), med
   and block-rows choice;
 - ``end_to_end``: :func:`~sarmotion.imaging.cuda.backproject_cuda`, the complex128 image
   in host memory (a page-locked block of :mod:`~sarmotion.imaging._cuda_host`'s pool,
-  reused once the previous image is released), and ``end_to_end_pageable``: the same
-  with the pool off, each image copied into fresh pageable memory;
+  reused once the previous image is released; the image in row bands, each copied while
+  the next is computed, :func:`~sarmotion.imaging.cuda.row_bands`), ``end_to_end_pageable``:
+  the same with the pool off, each image copied into fresh pageable memory, and
+  ``end_to_end_one_band``: pooled, one band (the copy after the whole image);
 - ``ser_db``: signal-to-error ratio against the exact sum
   (:func:`~sarmotion.imaging.point_response`, float64, no interpolation) on
   ``--reference-pixels`` pixels drawn at random (seeded), the same for every method;
@@ -147,6 +149,16 @@ def _pageable(cuda):
         pool.limit_bytes = limit
 
 
+@contextlib.contextmanager
+def _one_band():
+    """The exact image computed in one launch, then copied (no overlap of the two)."""
+    bands, gpu.MAX_BANDS = gpu.MAX_BANDS, 1
+    try:
+        yield
+    finally:
+        gpu.MAX_BANDS = bands
+
+
 def _device_run(cuda, tr, grid, p, rows, repeats):
     """Median device time (s) of one image left on the GPU, and the image (host)."""
     u = np.zeros(3)
@@ -250,6 +262,11 @@ def main(argv: list[str] | None = None) -> dict:
             med, times = _median_time(lambda g=grid: gpu.backproject_cuda(tr, g), args.repeats)
         entry["end_to_end_pageable"] = {"seconds_median": med, "seconds": times,
                                         "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
+        with _one_band():
+            gpu.backproject_cuda(tr, grid)
+            med, times = _median_time(lambda g=grid: gpu.backproject_cuda(tr, g), args.repeats)
+        entry["end_to_end_one_band"] = {"seconds_median": med, "seconds": times,
+                                        "pixel_pulses_per_second": _rate(work, med)}  # fmt: skip
         if n == args.cpu_size:
             cpu = backproject(tr, grid).values
             med, times = _median_time(lambda g=grid: backproject(tr, g), min(args.repeats, 3))
@@ -268,7 +285,8 @@ def main(argv: list[str] | None = None) -> dict:
         line = (f"{n}^2 ({SIDE_M / n:.4g} m): device {d['pixel_pulses_per_second']:.3g} "
                 f"pixel-pulses/s (P={d['pixels_per_thread']}), end-to-end "
                 f"{e['pixel_pulses_per_second']:.3g} (pageable "
-                f"{entry['end_to_end_pageable']['pixel_pulses_per_second']:.3g}), "
+                f"{entry['end_to_end_pageable']['pixel_pulses_per_second']:.3g}, one band "
+                f"{entry['end_to_end_one_band']['pixel_pulses_per_second']:.3g}), "
                 f"SER {d['ser_db']:.1f} dB")  # fmt: skip
         if "cpu" in entry:
             c = entry["cpu"]

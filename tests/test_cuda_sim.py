@@ -38,7 +38,15 @@ import pytest
 from conftest import gotcha_directory
 from sarmotion.core import C
 from sarmotion.imaging._bp_common import table_samples
-from sarmotion.imaging.cuda import NEEDS, available, hermite_table, rows_per_thread
+from sarmotion.imaging.cuda import (
+    BLOCK_ROWS,
+    MAX_BANDS,
+    NEEDS,
+    available,
+    hermite_table,
+    row_bands,
+    rows_per_thread,
+)
 
 #: The accuracy the GPU path promises against the exact sum (signal-to-error, dB).
 MIN_SER_DB = 80.0
@@ -238,7 +246,28 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
         results.append(_case(traces, grid, 1, None, "gotcha_p1"))  # the float64 path alone
     results.append(changed)
     out.write_text(json.dumps({"cases": results, "outside": outside, "cli": cli,
-                               "ffbp": _ffbp_cases(), "tables": _device_tables()}))  # fmt: skip
+                               "ffbp": _ffbp_cases(), "tables": _device_tables(),
+                               "banding": _banding()}))  # fmt: skip
+
+
+def _banding() -> dict:
+    """Row bands against one launch (the simulator sets no minimum of threads per band)."""
+    from sarmotion.imaging import ImageGrid
+    from sarmotion.imaging import cuda as gpu
+
+    traces = _simulated(0.0, seed=5400, extent_m=1.0)
+    grid = ImageGrid.from_extent(x_range_m=(-0.5, 0.5), y_range_m=(-2.0, 2.0), spacing_m=0.1)
+    banded = gpu.backproject_cuda(traces, grid, pixels_per_thread=1).values
+    out, _ = gpu._image_on_device(gpu._cuda(), traces, grid, np.zeros(3), 8, 1)
+    single = out.copy_to_host().view(np.complex128)[..., 0]
+    bands = gpu.row_bands(grid.shape[0], grid.shape[1], 1, gpu.BLOCK_ROWS, 0)
+    try:  # float32 sums past 3.4e38
+        gpu.backproject_cuda(traces.with_data(traces.data * 1e38), grid)
+        overflow = ""
+    except ValueError as err:
+        overflow = str(err)
+    return {"bands": bands, "rows": grid.shape[0], "equal": bool(np.array_equal(banded, single)),
+            "overflow": overflow}  # fmt: skip
 
 
 # ================================================================== the tests (pytest)
@@ -311,6 +340,35 @@ def test_ffbp_on_the_gpu_reaches_its_accuracy(simulated, case):
     assert got["ser_db"] >= TARGET_DB, got
     assert got["ser_db"] >= got["budget_db"] - BUDGET_MARGIN_DB, got
     assert got["repeatable"]  # the second image reuses the plan and its device arrays
+
+
+def test_row_bands_give_the_image_of_one_launch(simulated):
+    banding = simulated["banding"]
+    assert len(banding["bands"]) > 1
+    assert banding["bands"][0][0] == 0 and banding["bands"][-1][1] == banding["rows"]
+    assert banding["equal"]
+
+
+def test_an_overflowing_gpu_image_is_refused(simulated):
+    assert "NaN or infinite" in simulated["banding"]["overflow"]
+
+
+@pytest.mark.parametrize(
+    "ny, nx, p", [(4096, 4096, 8), (2048, 2048, 8), (1000, 37, 2), (7, 5, 1), (448, 4000, 8)]
+)
+@pytest.mark.parametrize("min_threads", [0, 135168])
+def test_row_bands_tile_the_rows_in_whole_blocks(ny, nx, p, min_threads):
+    bands = row_bands(ny, nx, p, BLOCK_ROWS, min_threads)
+    assert 1 <= len(bands) <= MAX_BANDS
+    assert bands[0][0] == 0 and bands[-1][1] == ny
+    assert all(a[1] == b[0] for a, b in zip(bands[:-1], bands[1:], strict=True))
+    assert all(r0 % (BLOCK_ROWS * p) == 0 and r1 > r0 for r0, r1 in bands)
+    if len(bands) > 1 and min_threads:  # every band fills half the GPU
+        assert all((r1 - r0) * nx / p >= min_threads for r0, r1 in bands)
+
+
+def test_a_small_image_is_one_band():
+    assert row_bands(1024, 1024, 4, BLOCK_ROWS, 135168) == [(0, 1024)]
 
 
 def test_table_built_on_the_device_within_its_bound(simulated):

@@ -24,6 +24,7 @@ from sarmotion.imaging import (
 )
 from sarmotion.imaging._bp_common import table_samples
 from sarmotion.imaging._bp_table import hermite_coefficients, upsample_fast_time
+from sarmotion.imaging.grid import all_finite, checked_values
 from sarmotion.simulation import PointTarget, Scene, add_noise, simulate, simulate_phase_history
 
 TARGET = (7.3, -4.1)  # off the reference point (origin) and off the pixel lattice
@@ -393,3 +394,24 @@ def test_device_keyword(point_1deg: Traces) -> None:
     else:  # one line naming what is missing
         with pytest.raises(RuntimeError, match=r"sarmotion\[gpu\] extra and an NVIDIA GPU"):
             backproject(point_1deg, grid, device="cuda")
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf, complex(0, np.nan), complex(np.inf, 1)])
+def test_all_finite_finds_any_non_finite_part(bad):
+    values = np.ones((5, 7), np.complex128)
+    assert all_finite(values) and all_finite(values.real)
+    values[3, 2] = bad
+    assert not all_finite(values)
+    assert not all_finite(values.T)  # not contiguous
+
+
+def test_an_image_refuses_non_finite_values_unless_its_producer_checked():
+    grid = ImageGrid.square(size_m=0.4, spacing_m=0.1)
+    values = np.ones(grid.shape, np.complex128)
+    values[1, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        Image(values=values, grid=grid)
+    with checked_values():  # the producer's own check stands for this one
+        assert np.isnan(Image(values=values, grid=grid).values[1, 1])
+    with pytest.raises(ValueError, match="NaN or infinite"):  # only inside the block
+        Image(values=values, grid=grid)

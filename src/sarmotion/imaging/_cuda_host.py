@@ -162,24 +162,3 @@ def pool_for(cuda: Any) -> PinnedPool:
         if pool is None:
             pool = _POOLS[id(cuda)] = PinnedPool(cuda)
         return pool
-
-
-def image_to_host(cuda: Any, device_image: Any) -> NDArray[np.complex128]:
-    """Copy a ``(ny, nx, 2)`` float64 device image into a pooled complex128 host array.
-
-    Parameters
-    ----------
-    cuda : module
-        numba.cuda.
-    device_image : DeviceNDArray
-        ``(ny, nx, 2)`` float64: real and imaginary parts.
-
-    Returns
-    -------
-    ndarray
-        ``(ny, nx)`` complex128, page-locked where the pool's limit allows.
-    """
-    ny, nx, _ = device_image.shape
-    host = pool_for(cuda).empty((ny, nx), np.complex128)
-    device_image.copy_to_host(host.view(np.float64).reshape(ny, nx, 2))
-    return host

@@ -75,6 +75,7 @@ All quantities are SI: metres, seconds, hertz, m/s.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import weakref
 import zlib
@@ -86,8 +87,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..core import C, ProgressCallback, Traces, to_fast_time, to_frequency
 from ..core.geometry import _as_velocity
 from ._bp_common import Setup, make_setup, table_samples
-from ._cuda_host import image_to_host
-from .grid import Image, ImageGrid
+from ._cuda_host import pool_for
+from .grid import Image, ImageGrid, all_finite, checked_values
 
 __all__ = ["available", "backproject_cuda", "error_bound", "hermite_table", "rows_per_thread"]
 
@@ -100,6 +101,10 @@ _MAX_PHASE_ERROR_RAD = 1e-4
 
 #: Thread rows per block (the block is 32 columns by this many rows of threads).
 BLOCK_ROWS = 8
+
+#: Most row bands of an exact image (:func:`row_bands`): each band's copy to host memory
+#: runs while the next is computed, so only the last band's copy is not hidden.
+MAX_BANDS = 8
 
 #: Pixels per thread considered, most first.
 _ROWS_PER_THREAD = (8, 4, 2)
@@ -321,19 +326,22 @@ def _launch_exact(
     cycles_per_m: float,
     p: int,
     block_rows: int = BLOCK_ROWS,
+    stream: Any = 0,
 ) -> Any:
     """Launch the exact kernel on the pixels ``x`` x ``y`` (m); returns its launcher and args.
 
     ``ant`` the device copy of :func:`_antennas`, ``idx_scale`` table steps per metre of
     range offset, ``cycles_per_m = 2 nu_o / c``, ``p`` pixels per thread. The image is the
-    last argument, a ``(ny, nx, 2)`` float64 device array; call ``kernel(table, *args)``.
+    last argument, a ``(ny, nx, 2)`` float64 device array; call ``kernel(table, *args)``
+    (on ``stream``; the arguments are copied to the device here, before).
     """
     from . import _cuda_kernels as kern
 
     ny, nx = y.size, x.size
     blocks = (-(-nx // kern.BLOCK_X), -(-ny // (block_rows * p)))
     out = cuda.device_array((ny, nx, 2), dtype=np.float64)
-    kernel = kern.backprojection_kernel(p, block_rows)[blocks, (kern.BLOCK_X, block_rows)]
+    threads = (kern.BLOCK_X, block_rows)
+    kernel = kern.backprojection_kernel(p, block_rows)[blocks, threads, stream]
     args = (n_table, ant, cuda.to_device(np.ascontiguousarray(x)),
             cuda.to_device(np.ascontiguousarray(y)), idx_scale, float(n_table // 2),
             cycles_per_m, out)  # fmt: skip
@@ -369,6 +377,92 @@ def _image_on_device(
     if verify and not _TABLES.verify(data):  # data changed in place: new table, again
         kernel(_TABLES.build(cuda, traces, data, upsample), *args)
     return args[-1], p
+
+
+def row_bands(ny: int, nx: int, p: int, block_rows: int, min_threads: int) -> list[tuple[int, int]]:
+    """Row ranges ``[r0, r1)`` of an image computed and copied to host memory in turn.
+
+    Each band is a whole number of thread blocks' rows (``block_rows * p``), so every
+    thread sums the same pixels as in one launch (the same bits); each holds at least
+    ``min_threads`` threads (half the GPU's, :func:`_min_threads`; 0: no minimum), at most
+    :data:`MAX_BANDS` bands, as even as whole blocks allow; one band for a small image.
+    """
+    unit = block_rows * p
+    units = -(-ny // unit)
+    k = min(MAX_BANDS, units)
+    while k > 1 and (units // k) * nx * block_rows < min_threads:  # the smallest band's
+        k -= 1
+    edges = [min(ny, (i * units // k) * unit) for i in range(k)] + [ny]
+    return list(zip(edges[:-1], edges[1:], strict=True))
+
+
+def _exact_to_host(
+    cuda: Any,
+    traces: Traces,
+    grid: ImageGrid,
+    u: NDArray[np.float64],
+    upsample: int,
+    pixels_per_thread: int | None = None,
+    block_rows: int = BLOCK_ROWS,
+) -> tuple[NDArray[np.complex128], int]:
+    """The exact image in host memory, checked finite; returns it and ``P``.
+
+    The image is computed in row bands (:func:`row_bands`) on one stream while another
+    copies each finished band into a page-locked host block (:mod:`._cuda_host`), and
+    the host checks each band as it arrives: the copies and the check run while the GPU
+    computes the next bands.
+
+    Raises
+    ------
+    ValueError
+        When a value is not finite (a float32 sum overflowed).
+    """
+    carrier = float(traces.radar.carrier_hz)
+    data = np.ascontiguousarray(traces.data)
+    table = _TABLES.cached(traces, upsample)
+    verify = table is not None
+    if table is None:
+        table = _TABLES.build(cuda, traces, data, upsample)
+    n_table = table_samples(traces.n_samples, upsample)
+    h = float(traces.radar.sample_interval_s) * traces.n_samples / n_table
+    ny, nx = grid.shape
+    x, y = np.ascontiguousarray(grid.x_m), np.ascontiguousarray(grid.y_m)
+    dy = (float(y[-1]) - float(y[0])) / (ny - 1) if ny > 1 else 0.0
+    p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
+    ant = cuda.to_device(_antennas(make_setup(traces, u, upsample)))
+    host = pool_for(cuda).empty((ny, nx), np.complex128)
+    parts = host.view(np.float64).reshape(ny, nx, 2)
+    bands = row_bands(ny, nx, p, block_rows, _min_threads(cuda))
+    compute, copier = cuda.stream(), cuda.stream()
+    launches = [_launch_exact(cuda, table, n_table, ant, x, y[r0:r1], 2.0 / (C * h),
+                              2.0 * carrier / C, p, block_rows, compute)
+                for r0, r1 in bands]  # fmt: skip
+
+    def run(table: Any) -> list[Any]:
+        copied = []
+        for (r0, r1), (kernel, args) in zip(bands, launches, strict=True):
+            kernel(table, *args)
+            done = cuda.event()
+            done.record(compute)
+            done.wait(copier)
+            args[-1].copy_to_host(parts[r0:r1], stream=copier)
+            arrived = cuda.event()
+            arrived.record(copier)
+            copied.append(arrived)
+        return copied
+
+    copied = run(table)  # asynchronous: the check below runs while the GPU works
+    if verify and not _TABLES.verify(data):  # data changed in place: new table, again
+        for arrived in copied:
+            arrived.synchronize()
+        copied = run(_TABLES.build(cuda, traces, data, upsample))
+    finite = True
+    for (r0, r1), arrived in zip(bands, copied, strict=True):
+        arrived.synchronize()
+        finite = finite and all_finite(host[r0:r1])
+    if not finite:
+        raise ValueError("values contains NaN or infinite entries")
+    return host, p
 
 
 def device_table(cuda: Any, traces: Traces, upsample: int) -> Any:
@@ -470,9 +564,9 @@ def backproject_cuda(
         values, extra = ffbp_cuda(cuda, traces, grid.x_m, grid.y_m, u, int(upsample),
                                   alpha=alpha, progress=progress)  # fmt: skip
     p = 0
-    if values is None:
-        out, p = _image_on_device(cuda, traces, grid, u, int(upsample), pixels_per_thread)
-        values = image_to_host(cuda, out)
+    checked = values is None  # the exact path checks its bands as they arrive
+    if checked:
+        values, p = _exact_to_host(cuda, traces, grid, u, int(upsample), pixels_per_thread)
         if progress is not None:
             progress("backprojection", 1, 1)
     carrier = float(traces.radar.carrier_hz)
@@ -491,4 +585,5 @@ def backproject_cuda(
     }
     if extra:
         meta["ffbp"] = extra
-    return Image(values=values, grid=grid, velocity_mps=u[:2], metadata=meta)
+    with checked_values() if checked else contextlib.nullcontext():
+        return Image(values=values, grid=grid, velocity_mps=u[:2], metadata=meta)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -216,6 +219,33 @@ def _all_finite(flat: NDArray[np.float64]) -> bool:  # pragma: no cover - compil
     return bad == 0
 
 
+def all_finite(values: NDArray) -> bool:
+    """Whether every entry of a float or complex array is finite (one compiled pass)."""
+    v = np.ascontiguousarray(values)
+    if v.dtype.kind == "c":
+        v = v.view(v.real.dtype)
+    return bool(_all_finite(v.reshape(-1).astype(np.float64, copy=False)))
+
+
+#: True while :func:`checked_values` is active: an :class:`Image` then takes its values
+#: as already checked finite by their producer.
+_CHECKED: ContextVar[bool] = ContextVar("sarmotion_image_values_checked", default=False)
+
+
+@contextlib.contextmanager
+def checked_values() -> Iterator[None]:
+    """Images made inside skip the finite check of their values: the producer made it.
+
+    For an image former that checks its values piece by piece while it forms them (the
+    GPU's, band by band as each reaches host memory, :func:`all_finite`).
+    """
+    token = _CHECKED.set(True)
+    try:
+        yield
+    finally:
+        _CHECKED.reset(token)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Image:
     """A complex image on an :class:`ImageGrid`.
@@ -248,7 +278,9 @@ class Image:
                 f"values must have the grid shape (ny, nx) = {self.grid.shape}, got {v.shape}"
             )
         v = np.asarray(v, dtype=np.complex128)  # not copied when complex128 already
-        if not _all_finite(np.ascontiguousarray(v).reshape(-1).view(np.float64)):
+        if not _CHECKED.get() and not _all_finite(
+            np.ascontiguousarray(v).reshape(-1).view(np.float64)
+        ):
             raise ValueError("values contains NaN or infinite entries")
         u = np.asarray(self.velocity_mps, dtype=np.float64)
         if u.shape != (2,) or not np.all(np.isfinite(u)):
