@@ -326,22 +326,19 @@ def _launch_exact(
     cycles_per_m: float,
     p: int,
     block_rows: int = BLOCK_ROWS,
-    stream: Any = 0,
 ) -> Any:
     """Launch the exact kernel on the pixels ``x`` x ``y`` (m); returns its launcher and args.
 
     ``ant`` the device copy of :func:`_antennas`, ``idx_scale`` table steps per metre of
     range offset, ``cycles_per_m = 2 nu_o / c``, ``p`` pixels per thread. The image is the
-    last argument, a ``(ny, nx, 2)`` float64 device array; call ``kernel(table, *args)``
-    (on ``stream``; the arguments are copied to the device here, before).
+    last argument, a ``(ny, nx, 2)`` float64 device array; call ``kernel(table, *args)``.
     """
     from . import _cuda_kernels as kern
 
     ny, nx = y.size, x.size
     blocks = (-(-nx // kern.BLOCK_X), -(-ny // (block_rows * p)))
     out = cuda.device_array((ny, nx, 2), dtype=np.float64)
-    threads = (kern.BLOCK_X, block_rows)
-    kernel = kern.backprojection_kernel(p, block_rows)[blocks, threads, stream]
+    kernel = kern.backprojection_kernel(p, block_rows)[blocks, (kern.BLOCK_X, block_rows)]
     args = (n_table, ant, cuda.to_device(np.ascontiguousarray(x)),
             cuda.to_device(np.ascontiguousarray(y)), idx_scale, float(n_table // 2),
             cycles_per_m, out)  # fmt: skip
@@ -417,6 +414,8 @@ def _exact_to_host(
     ValueError
         When a value is not finite (a float32 sum overflowed).
     """
+    from . import _cuda_kernels as kern
+
     carrier = float(traces.radar.carrier_hz)
     data = np.ascontiguousarray(traces.data)
     table = _TABLES.cached(traces, upsample)
@@ -434,18 +433,24 @@ def _exact_to_host(
     parts = host.view(np.float64).reshape(ny, nx, 2)
     bands = row_bands(ny, nx, p, block_rows, _min_threads(cuda))
     compute, copier = cuda.stream(), cuda.stream()
-    launches = [_launch_exact(cuda, table, n_table, ant, x, y[r0:r1], 2.0 / (C * h),
-                              2.0 * carrier / C, p, block_rows, compute)
-                for r0, r1 in bands]  # fmt: skip
+    # Every band reads views of one copy of the axes and writes a view of one image.
+    d_x, d_y = cuda.to_device(x), cuda.to_device(y)
+    image = cuda.device_array((ny, nx, 2), dtype=np.float64)
+    fn = kern.backprojection_kernel(p, block_rows)
+    threads = (kern.BLOCK_X, block_rows)
+    columns = -(-nx // kern.BLOCK_X)
+    constants = (2.0 / (C * h), float(n_table // 2), 2.0 * carrier / C)
 
     def run(table: Any) -> list[Any]:
         copied = []
-        for (r0, r1), (kernel, args) in zip(bands, launches, strict=True):
-            kernel(table, *args)
+        for r0, r1 in bands:
+            blocks = (columns, -(-(r1 - r0) // (block_rows * p)))
+            fn[blocks, threads, compute](table, n_table, ant, d_x, d_y[r0:r1], *constants,
+                                         image[r0:r1])  # fmt: skip
             done = cuda.event()
             done.record(compute)
             done.wait(copier)
-            args[-1].copy_to_host(parts[r0:r1], stream=copier)
+            image[r0:r1].copy_to_host(parts[r0:r1], stream=copier)
             arrived = cuda.event()
             arrived.record(copier)
             copied.append(arrived)
