@@ -79,7 +79,7 @@ import contextlib
 import math
 import weakref
 import zlib
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -355,6 +355,39 @@ def _image_on_device(
     block_rows: int = BLOCK_ROWS,
 ) -> tuple[Any, int]:
     """Launch the kernel; returns the image as a (ny, nx, 2) float64 device array and P."""
+    e = _exact_inputs(cuda, traces, grid, u, upsample, pixels_per_thread)
+    kernel, args = _launch_exact(cuda, e.table, e.n_table, e.antennas, e.x, e.y, e.idx_scale,
+                                 e.cycles_per_m, e.p, block_rows)  # fmt: skip
+    kernel(e.table, *args)  # asynchronous: the check below runs while the GPU works
+    if e.verify and not _TABLES.verify(e.data):  # data changed in place: new table, again
+        kernel(_TABLES.build(cuda, traces, e.data, upsample), *args)
+    return args[-1], e.p
+
+
+class _ExactInputs(NamedTuple):
+    """What an exact image needs on the device (:func:`_exact_inputs`)."""
+
+    data: NDArray[np.complex128]  # the traces, C-ordered
+    table: Any  # the device table (cached: ``verify`` it against ``data``)
+    verify: bool
+    n_table: int
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    p: int  # pixels per thread
+    antennas: Any  # device (n_pulses, 4), :func:`_antennas`
+    idx_scale: float  # table steps per metre of range offset
+    cycles_per_m: float  # 2 nu_o / c
+
+
+def _exact_inputs(
+    cuda: Any,
+    traces: Traces,
+    grid: ImageGrid,
+    u: NDArray[np.float64],
+    upsample: int,
+    pixels_per_thread: int | None,
+) -> _ExactInputs:
+    """The table (cached or built), axes, pixels per thread and antennas of an exact image."""
     carrier = float(traces.radar.carrier_hz)
     data = np.ascontiguousarray(traces.data)
     table = _TABLES.cached(traces, upsample)
@@ -365,15 +398,11 @@ def _image_on_device(
     h = float(traces.radar.sample_interval_s) * traces.n_samples / n_table
     ny, nx = grid.shape
     x, y = np.ascontiguousarray(grid.x_m), np.ascontiguousarray(grid.y_m)
-    dy = (float(y[-1]) - float(y[0])) / (ny - 1)
+    dy = (float(y[-1]) - float(y[0])) / (ny - 1) if ny > 1 else 0.0
     p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
     ant = cuda.to_device(_antennas(make_setup(traces, u, upsample)))
-    kernel, args = _launch_exact(cuda, table, n_table, ant, x, y, 2.0 / (C * h),
-                                 2.0 * carrier / C, p, block_rows)  # fmt: skip
-    kernel(table, *args)  # asynchronous: the check below runs while the GPU works
-    if verify and not _TABLES.verify(data):  # data changed in place: new table, again
-        kernel(_TABLES.build(cuda, traces, data, upsample), *args)
-    return args[-1], p
+    return _ExactInputs(data, table, verify, n_table, x, y, p, ant, 2.0 / (C * h),
+                        2.0 * carrier / C)  # fmt: skip
 
 
 def row_bands(ny: int, nx: int, p: int, block_rows: int, min_threads: int) -> list[tuple[int, int]]:
@@ -416,37 +445,26 @@ def _exact_to_host(
     """
     from . import _cuda_kernels as kern
 
-    carrier = float(traces.radar.carrier_hz)
-    data = np.ascontiguousarray(traces.data)
-    table = _TABLES.cached(traces, upsample)
-    verify = table is not None
-    if table is None:
-        table = _TABLES.build(cuda, traces, data, upsample)
-    n_table = table_samples(traces.n_samples, upsample)
-    h = float(traces.radar.sample_interval_s) * traces.n_samples / n_table
+    e = _exact_inputs(cuda, traces, grid, u, upsample, pixels_per_thread)
     ny, nx = grid.shape
-    x, y = np.ascontiguousarray(grid.x_m), np.ascontiguousarray(grid.y_m)
-    dy = (float(y[-1]) - float(y[0])) / (ny - 1) if ny > 1 else 0.0
-    p = pixels_per_thread or rows_per_thread(carrier, dy, nx * ny, _min_threads(cuda))
-    ant = cuda.to_device(_antennas(make_setup(traces, u, upsample)))
     host = pool_for(cuda).empty((ny, nx), np.complex128)
     parts = host.view(np.float64).reshape(ny, nx, 2)
-    bands = row_bands(ny, nx, p, block_rows, _min_threads(cuda))
+    bands = row_bands(ny, nx, e.p, block_rows, _min_threads(cuda))
     compute, copier = cuda.stream(), cuda.stream()
     # Every band reads views of one copy of the axes and writes a view of one image.
-    d_x, d_y = cuda.to_device(x), cuda.to_device(y)
+    d_x, d_y = cuda.to_device(e.x), cuda.to_device(e.y)
     image = cuda.device_array((ny, nx, 2), dtype=np.float64)
-    fn = kern.backprojection_kernel(p, block_rows)
+    fn = kern.backprojection_kernel(e.p, block_rows)
     threads = (kern.BLOCK_X, block_rows)
     columns = -(-nx // kern.BLOCK_X)
-    constants = (2.0 / (C * h), float(n_table // 2), 2.0 * carrier / C)
+    constants = (e.idx_scale, float(e.n_table // 2), e.cycles_per_m)
 
     def run(table: Any) -> list[Any]:
         copied = []
         for r0, r1 in bands:
-            blocks = (columns, -(-(r1 - r0) // (block_rows * p)))
-            fn[blocks, threads, compute](table, n_table, ant, d_x, d_y[r0:r1], *constants,
-                                         image[r0:r1])  # fmt: skip
+            blocks = (columns, -(-(r1 - r0) // (block_rows * e.p)))
+            fn[blocks, threads, compute](table, e.n_table, e.antennas, d_x, d_y[r0:r1],
+                                         *constants, image[r0:r1])  # fmt: skip
             done = cuda.event()
             done.record(compute)
             done.wait(copier)
@@ -456,18 +474,18 @@ def _exact_to_host(
             copied.append(arrived)
         return copied
 
-    copied = run(table)  # asynchronous: the check below runs while the GPU works
-    if verify and not _TABLES.verify(data):  # data changed in place: new table, again
+    copied = run(e.table)  # asynchronous: the check below runs while the GPU works
+    if e.verify and not _TABLES.verify(e.data):  # data changed in place: new table, again
         for arrived in copied:
             arrived.synchronize()
-        copied = run(_TABLES.build(cuda, traces, data, upsample))
+        copied = run(_TABLES.build(cuda, traces, e.data, upsample))
     finite = True
     for (r0, r1), arrived in zip(bands, copied, strict=True):
         arrived.synchronize()
         finite = finite and all_finite(host[r0:r1])
     if not finite:
         raise ValueError("values contains NaN or infinite entries")
-    return host, p
+    return host, e.p
 
 
 def device_table(cuda: Any, traces: Traces, upsample: int) -> Any:
