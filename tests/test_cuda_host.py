@@ -33,30 +33,34 @@ def _in_block(array: np.ndarray) -> bool:
     return type(array.base).__name__ == "_Lease"
 
 
+#: A complex128 image of exactly one block.
+ONE_BLOCK = (BLOCK_GRANULE // (16 * 512), 512)
+
+
 def test_a_released_image_gives_its_block_to_the_next_one():
     cuda = RecordingCuda()
     pool = PinnedPool(cuda, limit_bytes=64 * BLOCK_GRANULE)
-    a = pool.empty((300, 500), np.complex128)
+    a = pool.empty((300, 500), np.complex128)  # 2.4 MB: two blocks
     address = a.ctypes.data
     assert _in_block(a) and a.shape == (300, 500) and a.dtype == np.complex128
     assert a.flags.c_contiguous and a.flags.writeable
     del a
     b = pool.empty((300, 500), np.complex128)
     assert b.ctypes.data == address
-    assert cuda.allocations == [-(-300 * 500 * 16 // BLOCK_GRANULE) * BLOCK_GRANULE]
+    assert cuda.allocations == [2 * BLOCK_GRANULE]
 
 
 def test_a_surviving_view_keeps_its_block():
     cuda = RecordingCuda()
     pool = PinnedPool(cuda, limit_bytes=64 * BLOCK_GRANULE)
-    a = pool.empty((64, 64), np.complex128)
-    a[...] = np.arange(64 * 64).reshape(64, 64) * (1 + 1j)
+    a = pool.empty(ONE_BLOCK, np.complex128)
+    a[...] = np.arange(a.size).reshape(ONE_BLOCK) * (1 + 1j)
     views = [a.T[3:], a.real, a.view(np.float64)[::2]]
     expected = [v.copy() for v in views]
     del a
     gc.collect()
     for _ in range(3):  # each request finds the block still viewed: a new block, not it
-        b = pool.empty((64, 64), np.complex128)
+        b = pool.empty(ONE_BLOCK, np.complex128)
         b[...] = -7.0
         for v, e in zip(views, expected, strict=True):
             np.testing.assert_array_equal(v, e)
@@ -79,7 +83,7 @@ def test_past_the_limit_an_image_is_pageable():
 def test_idle_blocks_are_freed_to_make_room():
     cuda = RecordingCuda()
     pool = PinnedPool(cuda, limit_bytes=3 * BLOCK_GRANULE)
-    small = pool.empty((BLOCK_GRANULE // 16,), np.complex128)
+    small = pool.empty(ONE_BLOCK, np.complex128)
     del small  # idle: one block
     big = pool.empty((3 * BLOCK_GRANULE // 16,), np.complex128)  # needs the whole limit
     assert _in_block(big)
@@ -89,13 +93,15 @@ def test_idle_blocks_are_freed_to_make_room():
 
 def test_a_refusing_driver_gives_pageable_memory():
     pool = PinnedPool(RecordingCuda(refuse=True), limit_bytes=64 * BLOCK_GRANULE)
-    a = pool.empty((10, 10), np.complex128)
-    assert not _in_block(a) and a.shape == (10, 10)
+    a = pool.empty(ONE_BLOCK, np.complex128)
+    assert not _in_block(a) and a.shape == ONE_BLOCK
     assert pool.held_bytes == 0
 
 
-@pytest.mark.parametrize("shape", [(0, 5), (0,)])
-def test_an_empty_request_takes_no_block(shape):
+@pytest.mark.parametrize("shape", [(0, 5), (0,), (1, 1), (ONE_BLOCK[0] - 1, ONE_BLOCK[1])])
+def test_an_array_smaller_than_a_block_takes_none(shape):
     cuda = RecordingCuda()
-    a = PinnedPool(cuda, limit_bytes=BLOCK_GRANULE).empty(shape, np.complex128)
-    assert a.shape == shape and cuda.allocations == []
+    pool = PinnedPool(cuda, limit_bytes=64 * BLOCK_GRANULE)
+    a = pool.empty(shape, np.complex128)
+    assert a.shape == shape and not _in_block(a) and cuda.allocations == []
+    assert _in_block(pool.empty(ONE_BLOCK, np.complex128))  # one block: pooled

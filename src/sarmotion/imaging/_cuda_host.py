@@ -2,7 +2,7 @@
 
 A copy from the device into page-locked (pinned) host memory runs at the bus's rate.
 Into fresh pageable memory the driver stages it through a pinned buffer of its own and
-the operating system maps every new page on first touch, several times slower for an
+the operating system maps every new page on first touch, far slower for an
 image of hundreds of megabytes. Locking pages is itself slow (each page is locked, and
 unlocked when freed), so blocks are allocated once and reused: an image's array views a
 block, and the block returns to the pool when the last array that views it is gone.
@@ -13,6 +13,9 @@ lease object (``array.base``); every view of that array, a slice, a transpose, a
 them and a :func:`weakref.finalize` on it puts the block back. The finalizer only appends
 to a queue (it may run inside the garbage collector, on any thread); the queue is drained
 under the pool's lock at the next request.
+
+An array smaller than a block (:data:`BLOCK_GRANULE`) is ordinary memory: its copy is
+short either way, and a block would lock far more than it holds.
 
 Page-locked pages cannot be swapped, so the pool holds at most ``limit_bytes`` of them
 (default :data:`PINNED_FRACTION` of the machine's physical memory). A request that would
@@ -99,13 +102,13 @@ class PinnedPool:
         Returns
         -------
         ndarray
-            ``shape``, ``dtype``; page-locked (``base`` a lease of a pool block) or, past
-            the limit, an ordinary array.
+            ``shape``, ``dtype``; page-locked (``base`` a lease of a pool block) or, under
+            :data:`BLOCK_GRANULE` bytes or past the limit, an ordinary array.
         """
         dtype = np.dtype(dtype)
         shape = tuple(int(s) for s in shape)
         nbytes = math.prod(shape) * dtype.itemsize
-        if nbytes == 0:
+        if nbytes < BLOCK_GRANULE:  # the driver's own staging serves it; a block would waste
             return np.empty(shape, dtype)
         size = -(-nbytes // BLOCK_GRANULE) * BLOCK_GRANULE
         block = self._take(size)
