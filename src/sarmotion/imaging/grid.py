@@ -262,6 +262,12 @@ class Image:
         zeros for the stationary image ``eq:image``.
     metadata : dict
         Provenance (algorithm, kernel, upsampling, ...); JSON-serialisable values.
+
+    Raises
+    ------
+    ValueError
+        Values of another shape than the grid's, or not all finite (checked unless the
+        image is made inside :func:`checked_values`, by a producer that checked them).
     """
 
     values: NDArray[np.complex128]
