@@ -251,16 +251,20 @@ def run_simulator(out: Path, gotcha_dir: str | None) -> None:
 
 
 def _banding() -> dict:
-    """Row bands against one launch (the simulator sets no minimum of threads per band)."""
+    """Row bands against one launch (the simulator sets no minimum of threads per band).
+
+    41 rows at 2 pixels per thread: three bands of 16, 16 and 9 rows, the last thread of
+    the last band holding one pixel, as in one launch.
+    """
     from sarmotion.imaging import ImageGrid
     from sarmotion.imaging import cuda as gpu
 
     traces = _simulated(0.0, seed=5400, extent_m=1.0)
     grid = ImageGrid.from_extent(x_range_m=(-0.5, 0.5), y_range_m=(-2.0, 2.0), spacing_m=0.1)
-    banded = gpu.backproject_cuda(traces, grid, pixels_per_thread=1).values
-    out, _ = gpu._image_on_device(gpu._cuda(), traces, grid, np.zeros(3), 8, 1)
+    banded = gpu.backproject_cuda(traces, grid, pixels_per_thread=2).values
+    out, _ = gpu._image_on_device(gpu._cuda(), traces, grid, np.zeros(3), 8, 2)
     single = out.copy_to_host().view(np.complex128)[..., 0]
-    bands = gpu.row_bands(grid.shape[0], grid.shape[1], 1, gpu.BLOCK_ROWS, 0)
+    bands = gpu.row_bands(grid.shape[0], grid.shape[1], 2, gpu.BLOCK_ROWS, 0)
     try:  # float32 sums past 3.4e38
         gpu.backproject_cuda(traces.with_data(traces.data * 1e38), grid)
         overflow = ""
