@@ -12,21 +12,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from point_scenes import cell_offset, point_traces, weak_beside_strong
 from sarmotion.collection import StationaryRecord, drop_sidelobes
-from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
 from sarmotion.imaging import ImageGrid, backproject, resolution
-from sarmotion.simulation import PointTarget, simulate_phase_history
+from sarmotion.simulation import PointTarget
 
 SPACING = 0.25
 
 
 def _listing(targets):
     """Every local maximum within 25 dB of the brightest, as records, and the cells."""
-    traj, radar = Trajectory.circular(), Radar()
-    ph = simulate_phase_history(targets, traj, radar, (0.0, 0.0, 0.0))
-    tr = Traces(
-        data=to_fast_time(ph), trajectory=traj, radar=radar, reference_point_m=(0.0, 0.0, 0.0)
-    )
+    tr = point_traces(targets)
     cells = resolution(tr)
     img = backproject(tr, ImageGrid.square(centre_m=(0.0, 0.0), size_m=24.0, spacing_m=SPACING))
     mag = img.magnitude
@@ -37,13 +33,6 @@ def _listing(targets):
         if mag[iy, ix] >= peak * 10 ** (-25 / 20):
             records.append(StationaryRecord(patch=0, position_m=(x, y), level=float(mag[iy, ix])))
     return tr, cells, records
-
-
-def _offset(cells, a_r, a_c):
-    """Ground point ``a_r`` range cells and ``a_c`` cross-range cells from the origin."""
-    e_r = np.asarray(cells.range_direction, float)
-    e_c = np.asarray(cells.cross_range_direction, float)
-    return a_r * cells.ground_range_m * e_r + a_c * cells.cross_range_m * e_c
 
 
 def _check(targets):
@@ -74,11 +63,11 @@ def test_weak_targets_beside_a_strong_one_are_kept_its_sidelobes_dropped():
     strong = PointTarget(position_m=(0.0, 0.0), reflectivity=1.0)
     weak = [
         # on the cross-range sidelobe ridge, above its envelope there
-        PointTarget(position_m=_offset(cells, 0.0, 3.5), reflectivity=10 ** (-6 / 20)),
+        PointTarget(position_m=cell_offset(cells, 0.0, 3.5), reflectivity=10 ** (-6 / 20)),
         # on the range ridge
-        PointTarget(position_m=_offset(cells, -6.0, 0.0), reflectivity=10 ** (-9 / 20)),
+        PointTarget(position_m=cell_offset(cells, -6.0, 0.0), reflectivity=10 ** (-9 / 20)),
         # off both ridges, far below the first sidelobe
-        PointTarget(position_m=_offset(cells, 7.0, -2.5), reflectivity=10 ** (-18 / 20)),
+        PointTarget(position_m=cell_offset(cells, 7.0, -2.5), reflectivity=10 ** (-18 / 20)),
     ]
     _check([strong, *weak])
 
@@ -86,16 +75,5 @@ def test_weak_targets_beside_a_strong_one_are_kept_its_sidelobes_dropped():
 @pytest.mark.parametrize("seed", [11, 12])
 def test_seeded_weak_targets_off_the_ridges_are_kept(seed):
     """Weak targets (-3 to -15 dB) at least 1.5 cells off both of the strong one's axes."""
-    rng = np.random.default_rng(seed)
     _, cells, _ = _listing([PointTarget(position_m=(0.0, 0.0))])
-    targets = [PointTarget(position_m=(0.0, 0.0))]
-    for _ in range(3):
-        a_r, a_c = rng.choice([-1, 1], 2) * rng.uniform(1.5, 6.0, 2)
-        level_db = rng.uniform(-15.0, -3.0)
-        targets.append(
-            PointTarget(
-                position_m=_offset(cells, a_r, a_c),
-                reflectivity=10 ** (level_db / 20) * np.exp(2j * np.pi * rng.random()),
-            )
-        )
-    _check(targets)
+    _check(weak_beside_strong(np.random.default_rng(seed), cells))

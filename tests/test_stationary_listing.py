@@ -12,20 +12,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
+from point_scenes import cell_offset, point_traces, weak_beside_strong
 from sarmotion.imaging import ImageGrid, backproject, resolution
 from sarmotion.imaging.sidelobes import envelope, sidelobe_peaks
 from sarmotion.pipeline import AnalysisOptions
 from sarmotion.pipeline.stages import stationary_targets
 from sarmotion.separation import Separation
-from sarmotion.simulation import PointTarget, simulate_phase_history
-
-
-def _offset(cells, a_r, a_c):
-    """Ground point ``a_r`` range cells and ``a_c`` cross-range cells from the origin."""
-    e_r = np.asarray(cells.range_direction, float)
-    e_c = np.asarray(cells.cross_range_direction, float)
-    return a_r * cells.ground_range_m * e_r + a_c * cells.cross_range_m * e_c
+from sarmotion.simulation import PointTarget
 
 
 def test_envelope_bounds_the_sinc_outside_the_main_lobe():
@@ -49,29 +42,11 @@ def test_sidelobe_peaks_keeps_the_input_order_and_the_brightest():
         sidelobe_peaks(pos, [1.0], **common)
 
 
-def _traces_of(targets) -> Traces:
-    traj, radar = Trajectory.circular(), Radar()
-    ph = simulate_phase_history(targets, traj, radar, (0.0, 0.0, 0.0))
-    return Traces(
-        data=to_fast_time(ph), trajectory=traj, radar=radar, reference_point_m=(0.0, 0.0, 0.0)
-    )
-
-
 def _traces(seed: int):
     """A strong point and three weak ones (-3 to -15 dB) >= 1.5 cells off its axes."""
-    rng = np.random.default_rng(seed)
-    targets = [PointTarget(position_m=(0.0, 0.0))]
-    cells = resolution(_traces_of(targets))
-    for _ in range(3):
-        a_r, a_c = rng.choice([-1, 1], 2) * rng.uniform(1.5, 6.0, 2)
-        level_db = rng.uniform(-15.0, -3.0)
-        targets.append(
-            PointTarget(
-                position_m=_offset(cells, a_r, a_c),
-                reflectivity=10 ** (level_db / 20) * np.exp(2j * np.pi * rng.random()),
-            )
-        )
-    return _traces_of(targets), targets
+    cells = resolution(point_traces([PointTarget(position_m=(0.0, 0.0))]))
+    targets = weak_beside_strong(np.random.default_rng(seed), cells)
+    return point_traces(targets), targets
 
 
 @pytest.mark.parametrize("seed", [21, 22, 23])
@@ -104,10 +79,10 @@ def test_a_capped_listing_reaches_past_the_sidelobes():
     # one. With max_stationary = 2 (listing down to -25 dB) the listing is both points:
     # maxima are taken brightest first until two are not sidelobes, not a fixed number
     # of them (twice the cap, 4 maxima, would stop short of the weak point).
-    probe = _traces_of([PointTarget(position_m=(0.0, 0.0))])
+    probe = point_traces([PointTarget(position_m=(0.0, 0.0))])
     cells = resolution(probe)
-    weak = PointTarget(position_m=_offset(cells, 2.5, 3.5), reflectivity=10 ** (-19 / 20))
-    traces = _traces_of([PointTarget(position_m=(0.0, 0.0)), weak])
+    weak = PointTarget(position_m=cell_offset(cells, 2.5, 3.5), reflectivity=10 ** (-19 / 20))
+    traces = point_traces([PointTarget(position_m=(0.0, 0.0)), weak])
     image = backproject(traces, ImageGrid.square(centre_m=(0.0, 0.0), size_m=24.0,
                                                  spacing_m=0.25))  # fmt: skip
     sep = Separation(moving=np.zeros_like(traces.data), stationary=traces.data, method="rpca")
