@@ -14,6 +14,7 @@ import logging
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core.acquisition import Acquisition
 from ..core.progress import ProgressCallback, report
@@ -60,10 +61,12 @@ def stationary_targets(
         examined were dropped as sidelobes.
     """
     threshold_db, max_targets = options.stationary_threshold_db, options.max_stationary
-    if max_targets == 0 or not float(image.magnitude.max()) > 0.0:
+    mag = image.magnitude
+    if max_targets == 0 or not float(mag.max()) > 0.0:
         return (), 0
     if sep.method == "combined" and len(sep.stationary_points_m):
-        found, _ = _above(image, [tuple(p[:2]) for p in sep.stationary_points_m], threshold_db)
+        found, _ = _above(image.grid, mag, [tuple(p[:2]) for p in sep.stationary_points_m],
+                          threshold_db)  # fmt: skip
         found.sort(key=lambda t: -t.level_db)
         return tuple(found[:max_targets]), 0
     cells = resolution(acquisition)
@@ -72,7 +75,7 @@ def stationary_targets(
     n = max_targets
     while True:  # the brightest maxima until max_targets are not sidelobes, or none is left
         points = [(x, y) for x, y, _ in image.peaks(n, min_separation_m=cell)]
-        found, levels = _above(image, points, threshold_db)
+        found, levels = _above(image.grid, mag, points, threshold_db)
         sidelobe = sidelobe_peaks(
             [t.position_m for t in found], levels,
             antenna_m=traj.positions_m[int(np.argmin(np.abs(traj.slow_times_s)))],
@@ -88,20 +91,23 @@ def stationary_targets(
 
 
 def _above(
-    image: Image, points: Sequence[tuple[float, float]], threshold_db: float
+    grid: ImageGrid,
+    mag: NDArray[np.float64],
+    points: Sequence[tuple[float, float]],
+    threshold_db: float,
 ) -> tuple[list[StationaryTarget], list[float]]:
-    """The points inside the image whose level is at least ``threshold_db`` (dB re its peak).
+    """The points inside the grid whose level is at least ``threshold_db`` (dB re the peak).
 
-    Returns the targets (level at the nearest pixel) and their amplitudes ``|I|``.
+    ``mag`` the image's ``|I|`` on ``grid``. Returns the targets (level at the nearest
+    pixel) and their amplitudes ``|I|``.
     """
-    mag = image.magnitude
     peak = float(mag.max())
-    left, right, bottom, top = image.grid.extent
+    left, right, bottom, top = grid.extent
     found, levels = [], []
     for x, y in points:
         if not (left <= x <= right and bottom <= y <= top):
             continue
-        iy, ix = image.grid.nearest_index((x, y))
+        iy, ix = grid.nearest_index((x, y))
         db = float(20.0 * np.log10(max(mag[iy, ix], 1e-300) / peak))
         if db >= threshold_db:
             found.append(StationaryTarget(position_m=(float(x), float(y)), level_db=db))
