@@ -20,6 +20,7 @@ from sarmotion.imaging import (
     backproject,
     ffbp,
 )
+from sarmotion.imaging._block_pool import BLOCK_GRANULE, BlockPool
 from sarmotion.imaging._bp_common import kernel_constants, table_samples
 from sarmotion.imaging._simd import LANES
 from sarmotion.imaging.ffbp import half_sample_filter
@@ -188,7 +189,9 @@ def test_trace_table_cache(four_degrees):
     assert np.all(got[:, [0, -1]] == 0)
 
 
-@pytest.mark.parametrize(("shape", "factor"), [((37, 101), 6), ((16, 64), 8), ((5, 7), 1)])
+@pytest.mark.parametrize(
+    ("shape", "factor"), [((37, 101), 6), ((16, 64), 8), ((5, 7), 1), ((3, 9), 1)]
+)  # pieces: 647, 511, 7 (none in whole steps of 8) and 8 (no scalar tail)
 def test_trace_table_blocks_and_threads(shape, factor, monkeypatch):
     # Built by blocks in threads: the same bits whatever the threads, each coefficient the
     # float32 rounding of the float64 one (a pulse count that is not a multiple of the
@@ -205,6 +208,29 @@ def test_trace_table_blocks_and_threads(shape, factor, monkeypatch):
         m.setattr(_bp_table.numba, "get_num_threads", lambda: 1)
         alone = _bp_table.make_table(data, factor)
     np.testing.assert_array_equal(alone.values.view(np.uint32), table.values.view(np.uint32))
+
+
+def test_trace_table_memory_is_reused_and_fully_written(monkeypatch):
+    # A table's values come from reused blocks: the next table of the same size takes the
+    # block of one no longer held, and every float of it is written again (a block left
+    # full of NaN gives the same bits as fresh memory: the zero entries and padding too).
+    pool = BlockPool(lambda size: np.zeros(size, np.uint8), limit_bytes=64 << 20)
+    monkeypatch.setattr(_bp_table, "TABLE_BLOCKS", pool)
+    rng = np.random.default_rng(11)
+    data = rng.standard_normal((40, 300)) + 1j * rng.standard_normal((40, 300))
+    first = _bp_table.make_table(data, 8)
+    assert first.values.nbytes >= BLOCK_GRANULE and type(first.values.base).__name__ == "_Lease"
+    expected = first.values.copy()
+    address = first.values.ctypes.data
+    first.values[...] = np.nan
+    del first
+    again = _bp_table.make_table(data, 8)
+    assert again.values.ctypes.data == address
+    np.testing.assert_array_equal(again.values.view(np.uint32), expected.view(np.uint32))
+    held = again  # while a table is held its block is not handed out again
+    other = _bp_table.make_table(-data, 8)
+    assert other.values.ctypes.data != held.values.ctypes.data
+    np.testing.assert_array_equal(other.values, -expected)  # linear in the data, exactly
 
 
 # -------------------------------------------------------------------------- FFBP

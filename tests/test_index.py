@@ -100,6 +100,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "documents.separation": ("test_cli.py",),
     "documents.tracks": ("test_track.py",),
     # imaging
+    "imaging._block_pool": ("test_cuda_host.py", "test_fast_imaging.py"),
     "imaging._bp_common": ("test_imaging.py", "test_fast_imaging.py"),
     "imaging._bp_kernels": ("test_fast_imaging.py", "test_imaging.py"),
     "imaging._bp_reference": ("test_imaging.py", "test_backprojection_accuracy.py"),
@@ -114,6 +115,7 @@ INDEX: dict[str, tuple[str, ...]] = {
         "test_ffbp_accuracy.py",
         "test_ffbp_plan.py",
     ),  # fmt: skip
+    "imaging._pack_simd": ("test_fast_imaging.py",),
     "imaging._simd": ("test_fast_imaging.py",),
     "imaging.autofocus": ("test_autofocus.py",),
     "imaging.backprojection": (

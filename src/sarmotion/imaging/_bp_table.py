@@ -45,7 +45,14 @@ import scipy.fft as sp_fft
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import Traces, to_fast_time, to_frequency
+from ._block_pool import BlockPool
 from ._bp_common import table_samples
+from ._pack_simd import WIDTH, pack_pieces
+
+#: The version of :mod:`._pack_simd`'s IR compiled into :func:`_pack`. numba's on-disk
+#: cache keys on this file's contents, not on :mod:`._pack_simd`'s: change this line
+#: whenever that IR changes, or a stale packing is loaded.
+PACK_VERSION = "pieces-float64-8-1"
 
 #: Bytes of trace tables, and of the data they were built from, kept by the cache (least
 #: recently used dropped first).
@@ -148,18 +155,40 @@ def _polyphase(
     n_fast = big // factor
     spec = work[: 2 * m * big].reshape(2, m, big)
     f = sp_fft.fft(np.fft.ifftshift(d, axes=-1), axis=-1, workers=workers)
-    if n_fast > n:  # the bins at their signed offsets of the n_fast-point layout
-        padded = np.zeros((m, n_fast), np.complex128)
-        positive = (n + 1) // 2  # offsets 0 .. (n - 1) // 2, then the negative ones
-        padded[:, :positive] = f[:, :positive]
-        padded[:, n_fast - (n - positive) :] = f[:, positive:]
-        f = padded
-    # each bin repeated for its phases: both products run over contiguous rows of N
-    np.multiply(np.repeat(f, factor, axis=1), turn, out=spec[0])
-    np.multiply(spec[0], slope, out=spec[1])
+    _spread(f, turn, slope, factor, spec)
     out = sp_fft.ifft(spec.reshape(2, m, n_fast, factor), axis=2, workers=workers,
                       overwrite_x=True)  # fmt: skip
     return out.reshape(2, m, big)
+
+
+@numba.njit(nogil=True, cache=True)
+def _spread(f, turn, slope, factor, spec):  # pragma: no cover - compiled
+    """The turned spectra of :func:`_polyphase`: ``spec[0]`` for ``D``, ``spec[1]`` for ``h D'``.
+
+    ``f`` ``(n_pulses, n)`` holds the bins in transform order (offsets ``0 .. (n - 1) // 2``,
+    then the negative ones); bin ``i`` of the ``n_fast = N / factor``-point layout is the
+    bin of the same signed offset, zero where the trace has none. Entry ``i factor + r`` of
+    a row is that bin times ``turn[i factor + r]`` (complex128 products), and of
+    ``spec[1]`` that product times ``slope[i factor + r]``.
+    """
+    m, n = f.shape
+    big = turn.shape[0]
+    n_fast = big // factor
+    positive = (n + 1) // 2
+    first_negative = n_fast - (n - positive)  # where the negative offsets start
+    for i in range(m):
+        for b in range(n_fast):
+            if b < positive:
+                value = f[i, b]
+            elif b >= first_negative:
+                value = f[i, b - (n_fast - n)]
+            else:
+                value = 0j
+            for r in range(factor):
+                k = b * factor + r
+                v = value * turn[k]
+                spec[0, i, k] = v
+                spec[1, i, k] = v * slope[k]
 
 
 def hermite_coefficients(
@@ -222,15 +251,22 @@ def _pack(both, values, length):  # pragma: no cover - compiled
     ``both`` is the ``(2, n_pulses, 2 N)`` float64 view of the samples (real and imaginary
     parts alternating). Entry ``p = j + 1`` of each of the eight float32 planes is the
     piece starting at upsampled sample ``j`` (its next sample circular, as
-    :func:`hermite_coefficients`); entries 0 and ``N + 1`` and the padding stay as given
-    (zero). One thread (the caller's blocks run in threads, :func:`make_table`).
+    :func:`hermite_coefficients`); entries 0 and ``N + 1`` and the padding are written zero
+    (``values`` may hold anything). One thread (the caller's blocks run in threads,
+    :func:`make_table`).
     """
     m, big = both.shape[1], both.shape[2] // 2
     for i in range(m):
         y = both[0, i]
         d = both[1, i]
         row = values[i]
-        for j in range(big - 1):
+        for plane in range(8):
+            row[plane * length] = 0.0
+            for p in range(big + 1, length):
+                row[plane * length + p] = 0.0
+        vector = (big - 1) // WIDTH * WIDTH
+        pack_pieces(y, d, row, vector, length)
+        for j in range(vector, big - 1):
             k = 2 * j
             _put_piece(
                 row, length, j + 1, y[k], y[k + 1], d[k], d[k + 1],
@@ -266,6 +302,12 @@ class TraceTable:
     upsample: int
     n_up: int
 
+
+#: Memory of the tables' values, reused (:class:`~._block_pool.BlockPool`): a fresh
+#: table's tens of megabytes would otherwise be zeroed by the operating system page by page
+#: as they are first written. Holds at most :data:`CACHE_BYTES`, the cache's own bound, so
+#: the blocks kept idle for the next table never pass what the cache may hold.
+TABLE_BLOCKS = BlockPool(lambda size: np.empty(size, np.uint8), CACHE_BYTES)
 
 #: Pulses per block of :func:`make_table`: a block's spectra and samples,
 #: ``2 x 16 x N x 16`` bytes (1.3 MB at ``N = 2592``), stay in one core's cache between the
@@ -309,13 +351,14 @@ def make_table(data: NDArray[np.complexfloating], factor: int) -> TraceTable:
     and packed (:func:`_pack`) by one thread while it is in that core's cache; the blocks
     are shared out as the threads ask for them (``numba.get_num_threads()`` threads, the
     caller's included). Every pulse's values do not depend on the blocks: each
-    coefficient is the float32 rounding of :func:`hermite_coefficients`' float64 one.
+    coefficient is the float32 rounding of :func:`hermite_coefficients`' float64 one. The
+    values' memory comes from :data:`TABLE_BLOCKS`.
     """
     d = np.asarray(data, np.complex128)
     m, n = d.shape
     big = table_samples(n, factor)
     length = plane_length(big)
-    values = np.zeros((m, 8 * length), np.float32)
+    values = TABLE_BLOCKS.empty((m, 8 * length), np.float32)  # every float written by _pack
     turn, slope = _phase_turns(n, big // factor, factor)
     starts = iter(range(0, m, BLOCK_PULSES))
     lock = threading.Lock()
