@@ -26,7 +26,9 @@ A table is built by blocks of pulses (:func:`make_table`): each block's transfor
 (:func:`_polyphase`) and packing (:func:`_pack`) run in one thread while the block is in
 that core's cache, the blocks shared out between threads, and every coefficient is the
 float32 rounding of the complex128 one of :func:`hermite_coefficients`, bit for bit
-whatever the blocks and threads.
+whatever the blocks and threads. The packing runs eight pieces at a time
+(:mod:`._pack_simd`), and a table's memory is a reused block of :data:`TABLE_BLOCKS`, so a
+new table's pages are not zeroed again by the operating system.
 """
 
 from __future__ import annotations
