@@ -100,7 +100,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "documents.separation": ("test_cli.py",),
     "documents.tracks": ("test_track.py",),
     # imaging
-    "imaging._block_pool": ("test_cuda_host.py", "test_fast_imaging.py"),
+    "imaging._block_pool": ("test_block_pool.py", "test_cuda_host.py", "test_fast_imaging.py"),
     "imaging._bp_common": ("test_imaging.py", "test_fast_imaging.py"),
     "imaging._bp_kernels": ("test_fast_imaging.py", "test_imaging.py"),
     "imaging._bp_reference": ("test_imaging.py", "test_backprojection_accuracy.py"),

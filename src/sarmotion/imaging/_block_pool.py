@@ -9,13 +9,16 @@ keeps, and takes each block back when the last array viewing it is gone.
 Ownership: :meth:`BlockPool.empty` returns an array whose memory is owned by a small lease
 object (``array.base``); every view of that array, a slice, a transpose, a ``.real``,
 holds the lease through its ``base`` chain, so the lease dies with the last of them and a
-:func:`weakref.finalize` on it puts the block back. The finalizer only appends to a queue
-(it may run inside the garbage collector, on any thread, even while the pool's lock is
-held); the queue is drained under the lock at the next request.
+:func:`weakref.finalize` on it puts the block back. The finalizer may run inside the
+garbage collector, on any thread, even while the pool's lock is held: it appends the
+block to a queue and drains the queue only if it gets the lock without waiting;
+otherwise the next request does.
 
 An array smaller than one block (:data:`BLOCK_GRANULE`) is ordinary memory. The pool holds
 at most ``limit_bytes`` in blocks, idle and leased together; a request that would pass the
 limit once the idle blocks are freed, or that the allocator refuses, gets ordinary memory.
+At most ``idle_limit_bytes`` stay idle: past it, the blocks idle longest are freed as
+others come back, so memory no array uses is not kept beyond that.
 """
 
 from __future__ import annotations
@@ -59,13 +62,23 @@ class BlockPool:
         exception it raises means no block (the request gets ordinary memory).
     limit_bytes : int
         Most bytes held in blocks, idle and leased together.
+    idle_limit_bytes : int, optional
+        Most bytes kept in idle blocks (default ``limit_bytes``).
     """
 
-    def __init__(self, allocate: Callable[[int], NDArray[np.uint8]], limit_bytes: int) -> None:
+    def __init__(
+        self,
+        allocate: Callable[[int], NDArray[np.uint8]],
+        limit_bytes: int,
+        idle_limit_bytes: int | None = None,
+    ) -> None:
         self._allocate = allocate
         self.limit_bytes = int(limit_bytes)
+        self.idle_limit_bytes = (
+            self.limit_bytes if idle_limit_bytes is None else int(idle_limit_bytes)
+        )
         self._lock = threading.Lock()
-        self._idle: dict[int, list[NDArray[np.uint8]]] = {}
+        self._idle: list[NDArray[np.uint8]] = []  # idle blocks, longest idle first
         self._returned: collections.deque = collections.deque()
         self.held_bytes = 0  # bytes of the blocks allocated and not freed
 
@@ -96,22 +109,36 @@ class BlockPool:
         if block is None:
             return np.empty(shape, dtype)
         lease = _Lease(block, shape, dtype)
-        weakref.finalize(lease, self._returned.append, block)
+        weakref.finalize(lease, self._give_back, block)
         return np.asarray(lease)
 
+    def _give_back(self, block: NDArray[np.uint8]) -> None:
+        """A lease's finalizer: queue its block, and drain the queue if the lock is free."""
+        self._returned.append(block)
+        if self._lock.acquire(blocking=False):
+            try:
+                self._drain()
+            finally:
+                self._lock.release()
+
     def _drain(self) -> None:
-        """Move the returned blocks to the idle ones (the caller holds the lock)."""
+        """Move the returned blocks to the idle ones, within the idle limit (lock held)."""
         while self._returned:
-            block = self._returned.popleft()
-            self._idle.setdefault(block.nbytes, []).append(block)
+            self._idle.append(self._returned.popleft())
+        idle = sum(b.nbytes for b in self._idle)
+        while idle > self.idle_limit_bytes:
+            block = self._idle.pop(0)
+            idle -= block.nbytes
+            self.held_bytes -= block.nbytes
 
     def _take(self, size: int) -> NDArray[np.uint8] | None:
         """An idle block of ``size`` bytes, a new one, or None past the limit."""
         with self._lock:
             self._drain()
-            blocks = self._idle.get(size)
-            if blocks and self.held_bytes <= self.limit_bytes:
-                return blocks.pop()
+            if self.held_bytes <= self.limit_bytes:
+                for i in range(len(self._idle) - 1, -1, -1):  # the last returned first
+                    if self._idle[i].nbytes == size:
+                        return self._idle.pop(i)
             if self.held_bytes + size > self.limit_bytes:
                 self._free_idle()
             if self.held_bytes + size > self.limit_bytes:
@@ -125,16 +152,14 @@ class BlockPool:
 
     def _free_idle(self) -> None:
         """Release every idle block (the caller holds the lock)."""
-        for blocks in self._idle.values():
-            self.held_bytes -= sum(b.nbytes for b in blocks)
-            blocks.clear()
+        self.held_bytes -= sum(b.nbytes for b in self._idle)
         self._idle.clear()
 
     def idle_bytes(self) -> int:
         """Bytes held by blocks no array views (after the returned ones)."""
         with self._lock:
             self._drain()
-            return sum(b.nbytes for blocks in self._idle.values() for b in blocks)
+            return sum(b.nbytes for b in self._idle)
 
     def release_idle(self) -> None:
         """Free every idle block now (memory the process no longer needs)."""

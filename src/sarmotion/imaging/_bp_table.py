@@ -305,11 +305,17 @@ class TraceTable:
     n_up: int
 
 
+#: Bytes of table memory kept idle for the next tables once their tables are gone: three
+#: tables of the four GOTCHA degrees at x6 (39 MB each; one analysis builds two).
+IDLE_TABLE_BYTES = 128 * 2**20
+
 #: Memory of the tables' values, reused (:class:`~._block_pool.BlockPool`): a fresh
 #: table's tens of megabytes would otherwise be zeroed by the operating system page by page
-#: as they are first written. Holds at most :data:`CACHE_BYTES`, the cache's own bound, so
-#: the blocks kept idle for the next table never pass what the cache may hold.
-TABLE_BLOCKS = BlockPool(lambda size: np.empty(size, np.uint8), CACHE_BYTES)
+#: as they are first written. Holds at most :data:`CACHE_BYTES`, the cache's own bound, of
+#: which at most :data:`IDLE_TABLE_BYTES` idle.
+TABLE_BLOCKS = BlockPool(
+    lambda size: np.empty(size, np.uint8), CACHE_BYTES, idle_limit_bytes=IDLE_TABLE_BYTES
+)
 
 #: Pulses per block of :func:`make_table`: a block's spectra and samples,
 #: ``2 x 16 x N x 16`` bytes (1.3 MB at ``N = 2592``), stay in one core's cache between the
