@@ -211,9 +211,9 @@ def run_numba_f64(
 
 # ===================================================================== float32 kernel
 @numba.njit(nogil=True, parallel=True, cache=True)
-def _tile_kernel(tab, starts, stops, ant, lat, consts, n_up, tile, ty0, ty1, out_re, out_im):
+def _tile_kernel(tab, starts, stops, ant, lat, consts, n_up, tile, ty0, ty1, out):
     # pragma: no cover - compiled
-    """Add pulses to the tiles of tile rows ``ty0:ty1`` of ``out_re + 1j out_im``.
+    """Add pulses to the tiles of tile rows ``ty0:ty1`` of the complex128 images ``out``.
 
     The images ``out[i]`` on the lattice ``lat`` are cut in ``tile = (rows, cols)`` tiles;
     image ``i`` sums pulses ``starts[i]:stops[i]``; one parallel task per (image, tile).
@@ -249,8 +249,7 @@ def _tile_kernel(tab, starts, stops, ant, lat, consts, n_up, tile, ty0, ty1, out
         )  # fmt: skip
         for r in range(nr):
             for k in range(nc):
-                out_re[item, r0 + r, c0 + k] += acc_re[r * ncp + k]
-                out_im[item, r0 + r, c0 + k] += acc_im[r * ncp + k]
+                out[item, r0 + r, c0 + k] += complex(acc_re[r * ncp + k], acc_im[r * ncp + k])
 
 
 def tile_shape(
@@ -324,15 +323,15 @@ def backproject_f32(
     progress: ProgressCallback | None = None,
     steps: int = 1,
     pulse_ranges: NDArray[np.int64] | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+) -> NDArray[np.complex128]:
     """Backprojection images of pulse ranges on the grid ``x_m`` x ``y_m``.
 
     ``table_values``, ``positions`` and ``ref_ranges`` have one row per pulse.
     ``pulse_ranges`` ``(n_images, 2)`` gives each image's pulses ``[start, stop)`` (default
-    one image of every pulse). Returns ``(re, im)``, shape
-    ``(n_images, y_m.size, x_m.size)``, float64. ``steps`` parallel regions, each followed
-    by a progress report. ``tile`` (rows, columns) is :func:`tile_shape`'s for this grid.
-    When the lanes would span fewer table entries along ``y`` than along ``x``
+    one image of every pulse). Returns the images, shape ``(n_images, y_m.size, x_m.size)``,
+    complex128 (each tile's float32 sums, added in float64). ``steps`` parallel regions,
+    each followed by a progress report. ``tile`` (rows, columns) is :func:`tile_shape`'s
+    for this grid. When the lanes would span fewer table entries along ``y`` than along ``x``
     (:func:`lane_spans`), the sum runs on the grid mirrored about ``x = y`` (antennas
     too: every range is unchanged) with the tile :func:`tile_shape` gives there, and the
     images are transposed back.
@@ -342,10 +341,9 @@ def backproject_f32(
         mirrored = np.ascontiguousarray(positions[:, [1, 0, 2]])
         tile_t = tile_shape(mirrored, y_m, x_m, constants[2])
         if tile_t is not None:
-            re, im = _backproject_f32(table_values, mirrored, ref_ranges, y_m, x_m, constants,
+            images = _backproject_f32(table_values, mirrored, ref_ranges, y_m, x_m, constants,
                                       n_up, tile_t, progress, steps, pulse_ranges)  # fmt: skip
-            return (np.ascontiguousarray(re.transpose(0, 2, 1)),
-                    np.ascontiguousarray(im.transpose(0, 2, 1)))  # fmt: skip
+            return np.ascontiguousarray(images.transpose(0, 2, 1))
     return _backproject_f32(table_values, positions, ref_ranges, x_m, y_m, constants, n_up, tile,
                             progress, steps, pulse_ranges)  # fmt: skip
 
@@ -362,8 +360,7 @@ def _backproject_f32(
     if pulse_ranges is None:
         pulse_ranges = np.array([[0, positions.shape[0]]], dtype=np.int64)
     ranges = np.ascontiguousarray(pulse_ranges, dtype=np.int64)
-    out_re = np.zeros((ranges.shape[0], ny, nx))
-    out_im = np.zeros((ranges.shape[0], ny, nx))
+    out = np.zeros((ranges.shape[0], ny, nx), np.complex128)
     consts = KernelConstants(*(float(c) for c in constants))
     ant = antennas(positions, ref_ranges)
     n_tile_rows = -(-ny // tile[0])
@@ -374,8 +371,8 @@ def _backproject_f32(
         with numba.parallel_chunksize(1):  # tiles handed out one at a time
             _tile_kernel(
                 table_values, starts, stops, ant, lat, consts, n_up,
-                (int(tile[0]), int(tile[1])), int(g0), int(g1), out_re, out_im,
+                (int(tile[0]), int(tile[1])), int(g0), int(g1), out,
             )  # fmt: skip
         if progress is not None:
             progress("backprojection", step, len(groups) - 1)
-    return out_re, out_im
+    return out

@@ -133,11 +133,11 @@ def _run_numba(
     constants = kernel_constants(st.sample_interval_s, st.carrier_hz, traces.n_samples, table.n_up)
     # One parallel region unless progress is reported: each region ends in a barrier, and on
     # a busy machine a barrier waits for a descheduled thread.
-    re, im = backproject_f32(
+    images = backproject_f32(
         table.values, st.eff_positions, st.ref_ranges, np.asarray(grid.x_m), np.asarray(grid.y_m),
         constants, table.n_up, tile, progress, STEPS if progress is not None else 1,
     )  # fmt: skip
-    return re[0] + 1j * im[0], "numba-float32"
+    return images[0], "numba-float32"
 
 
 def _run_ffbp(
@@ -166,12 +166,11 @@ def _run_ffbp(
         return tile_shape(pos, u, v, quarter_scale) or TILES[-1]
 
     def exact_for(x: NDArray, y: NDArray) -> NDArray[np.complex128]:
-        re, im = backproject_f32(
+        return backproject_f32(
             table.values, st.eff_positions, st.ref_ranges, np.ascontiguousarray(x),
             np.ascontiguousarray(y), constants, table.n_up, tile_for(st.eff_positions, x, y),
             None, 1,
-        )  # fmt: skip
-        return re[0] + 1j * im[0]
+        )[0]  # fmt: skip
 
     pulses = FfbpPulses(
         table_values=table.values, positions=st.eff_positions, ref_ranges=st.ref_ranges,
