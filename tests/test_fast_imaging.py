@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 import pytest
 from llvmlite import binding as llvm
@@ -109,12 +110,88 @@ def test_float32_kernel_reads_the_table_by_windows_or_gathers(look_deg, spacing_
 
 
 def test_inner_loop_ir_with_and_without_windows():
-    # Both variants of the inner loop are valid IR (the window path needs AVX-512; CPUs
-    # without it compile the gathers alone).
-    for permute in (False, True):
-        ir = _simd._build_ir(permute=permute)
+    # Every variant of the inner loop is valid IR (the window path needs AVX-512; CPUs
+    # without it compile the gathers alone); the unchecked window variant has no gathers.
+    for permute, checked in ((False, True), (True, True), (True, False)):
+        ir = _simd._build_ir(permute=permute, checked=checked)
         llvm.parse_assembly(ir).verify()
         assert ("vpermi2var" in ir) == permute
+        assert ("@llvm.masked.gather" in ir.split("declare")[0]) == checked
+
+
+@numba.njit
+def _one_pulse(tab, nxv, nyv, txv, tyv, scalars, windowed):
+    acc_re = np.zeros(nyv.size * nxv.size, np.float32)
+    acc_im = np.zeros(nyv.size * nxv.size, np.float32)
+    f0, i0f, a1, a2, a3, a4, si, sq, hi = scalars
+    _simd.tile_pulse(nxv, nyv, txv, tyv, tab, 0, acc_re, acc_im, nxv.size, nyv.size, nxv.size,
+                     tab.shape[1] // 8, f0, i0f, a1, a2, a3, a4, si, sq, hi, windowed)  # fmt: skip
+    return acc_re, acc_im
+
+
+def test_the_unchecked_window_variant_sums_the_same_bits():
+    # Where every step's lanes lie in their window, the variant without the check reads
+    # the same entries and sums the same bits as the checked one.
+    rng = np.random.default_rng(7)
+    n_up = 2000
+    tab = rng.standard_normal((1, 8 * (n_up + 2 + 32))).astype(np.float32)
+    nxv = (np.arange(4 * LANES) * 2e-3).astype(np.float32)  # 0.05 entries per lane
+    nyv = (np.arange(8) * 0.04).astype(np.float32)  # one entry per row
+    txv = rng.uniform(-2, 2, nxv.size).astype(np.float32)
+    tyv = rng.uniform(-2, 2, nyv.size).astype(np.float32)
+    scalars = np.array([0.3, 1000.0, 1.0, -1e-5, 0.0, 0.0, 25.0, 0.7, n_up], np.float32)
+    checked = _one_pulse(tab, nxv, nyv, txv, tyv, scalars, False)
+    unchecked = _one_pulse(tab, nxv, nyv, txv, tyv, scalars, True)
+    assert np.any(checked[0] != 0.0)
+    for a, b in zip(checked, unchecked, strict=True):
+        np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
+
+
+def _step_floors_fit_the_window(q: np.ndarray, hi: float) -> bool:
+    """Whether every LANES-pixel step of rows ``q`` (table positions) reads its window."""
+    ix = np.floor(q).astype(np.int64)
+    if ix.min() < 1 or ix.max() >= hi:
+        return False
+    steps = ix.reshape(ix.shape[0], -1, LANES)
+    mn = np.maximum(np.minimum(steps[..., 0], steps[..., -1]) - 4, 0)[..., None]
+    return bool(np.all((steps >= mn) & (steps < mn + 2 * LANES)))
+
+
+def test_the_unchecked_window_variant_is_chosen_only_where_every_step_fits():
+    # lanes_in_window's bounds (the tile within h of its anchor, the range's change along
+    # a step) hold against the float64 table positions of every pixel of seeded tiles:
+    # when it says yes, every step's lanes lie in the window they read.
+    rng = np.random.default_rng(2031)
+    idx_scale, hi = 25.0, 2600.0  # entries per metre, the table's end
+    chosen = refused = 0
+    for _ in range(400):
+        nr, ncp = int(rng.choice([4, 8, 16, 32])), LANES * int(rng.integers(1, 5))
+        dx, dy = rng.choice([0.01, 0.05, 0.2, 0.5], size=2) * rng.choice([-1.0, 1.0], size=2)
+        c0, r0 = 0, 0
+        cc, rc = ncp // 2 - int(rng.integers(0, 2)), nr // 2
+        antenna = rng.normal(0.0, 1.0, 3) * [8000.0, 8000.0, 500.0] + [0.0, 0.0, 6000.0]
+        ref = np.linalg.norm(antenna) + rng.uniform(-60.0, 60.0)
+        cols = (np.arange(ncp) - cc) * dx
+        rows = (np.arange(nr) - rc) * dy
+        offset = rng.uniform(-50.0, 50.0, 2)  # the anchor pixel's position
+        px = offset[0] + cols[None, :] - antenna[0]
+        py = offset[1] + rows[:, None] - antenna[1]
+        r = np.sqrt(px**2 + py**2 + antenna[2] ** 2)
+        q = (r - ref) * idx_scale + hi / 2
+        q0 = q[rc, cc]
+        hx = max(cc - c0, c0 + ncp - 1 - cc) * abs(dx)
+        hy = max(rc - r0, r0 + nr - 1 - rc) * abs(dy)
+        h = np.hypot(hx, hy)
+        lane_run = (LANES - 1) * abs(dx) * idx_scale
+        ok = _simd.lanes_in_window(
+            q0, r[rc, cc], abs(px[0, cc]), h, hx, lane_run, h * idx_scale + 1.0, hi
+        )
+        if ok:
+            chosen += 1
+            assert _step_floors_fit_the_window(q, hi)
+        else:
+            refused += 1
+    assert chosen > 50 and refused > 50  # both sides drawn
 
 
 def test_window_edge_mask_skips_only_blocks_without_edges(four_degrees):

@@ -45,7 +45,7 @@ from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-__all__ = ["LANES", "tile_pulse", "tile_pulses"]
+__all__ = ["LANES", "WINDOW_SPAN", "lanes_in_window", "tile_pulse", "tile_pulses"]
 
 #: Pixels per SIMD step; tile rows are padded to a multiple of it.
 LANES = 16
@@ -72,6 +72,15 @@ PERMUTE = LANES == 16 and _has_avx512()
 #: Change ``SIMD_VERSION`` in :mod:`._bp_kernels` and :mod:`._ffbp_kernels` with this IR
 #: (numba's cache of their kernels does not see this file).
 _NAME = f"sarmotion_bp_tile_pulse_v{LANES}_f32planes{'_window' if PERMUTE else ''}"
+#: The variant without the per-step window check (AVX-512 only), for a pulse whose lanes
+#: :func:`tile_pulses` has shown to lie in the window at every step.
+_NAME_WINDOWED = f"sarmotion_bp_tile_pulse_v{LANES}_f32planes_windowed"
+
+#: Most table entries the lanes of one step may span for the unchecked variant: the window
+#: starts 4 entries below the smaller end lane's entry and holds ``2 LANES``, so lanes
+#: within ``V`` entries of each other (their floors within ``V + 1``) lie inside it when
+#: ``V + 1 <= 4`` and ``2 (V + 1) < 2 LANES - 4``.
+WINDOW_SPAN = 3.0
 #: The table's planes, in order (:class:`~sarmotion.imaging._bp_table.TraceTable`).
 _PLANES = ("c0re", "c0im", "c1re", "c1im", "c2re", "c2im", "c3re", "c3im")
 
@@ -81,7 +90,13 @@ def _f32(x: float) -> str:
     return f"0x{int(np.array(np.float32(x), np.float64).view(np.uint64)):016X}"
 
 
-def _build_ir(v: int = LANES, permute: bool = False) -> str:
+def _build_ir(v: int = LANES, permute: bool = False, checked: bool = True) -> str:
+    """The inner loop's IR (one function).
+
+    With ``permute`` the table is read by windows and permutes; ``checked`` keeps each
+    step's check that its lanes lie in the window (else gathers), the other variant has
+    neither check nor gathers.
+    """
     vf, vi, vp, vb = f"<{v} x float>", f"<{v} x i32>", f"<{v} x ptr>", f"<{v} x i1>"
     fma = f"@llvm.fmuladd.v{v}f32"
     lines: list[str] = []
@@ -96,7 +111,8 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
         return acc
 
     scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi"]
-    a(f"define weak_odr void @{_NAME}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tx,"
+    name = _NAME if checked else _NAME_WINDOWED
+    a(f"define weak_odr void @{name}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tx,"
       " ptr noalias %ty, ptr noalias %tab,"
       " ptr noalias %acc_re, ptr noalias %acc_im, i64 %n, i64 %n_rows, i64 %stride, i64 %plane, "
       + ", ".join(f"float %{s}" for s in scalars) + ") #0 {")  # fmt: skip
@@ -122,7 +138,7 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
     a("  %row.im = getelementptr inbounds float, ptr %acc_im, i64 %off")
     a("  br label %px")
     a("px:")
-    a(f"  %k = phi i64 [0, %row], [%k.next, %{'got' if permute else 'px'}]")
+    a(f"  %k = phi i64 [0, %row], [%k.next, %{'got' if permute and checked else 'px'}]")
     a("  %nx.p = getelementptr inbounds float, ptr %nx, i64 %k")
     a(f"  %nxk = load {vf}, ptr %nx.p, align 4")
     a(f"  %N = fadd fast {vf} %nxk, %nyr.v")
@@ -161,10 +177,11 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
         a(f"  %mn.i = insertelement {vi} poison, i32 %mn, i64 0")
         a(f"  %mn.v = shufflevector {vi} %mn.i, {vi} poison, {vi} zeroinitializer")
         a(f"  %rel = sub {vi} %ix, %mn.v")
-        a(f"  %inw = icmp ult {vi} %rel, splat (i32 {window})")
-        a(f"  %narrow = call i1 @llvm.vector.reduce.and.v{v}i1({vb} %inw)")
-        a("  br i1 %narrow, label %win, label %gat")
-        a("win:")
+        if checked:
+            a(f"  %inw = icmp ult {vi} %rel, splat (i32 {window})")
+            a(f"  %narrow = call i1 @llvm.vector.reduce.and.v{v}i1({vb} %inw)")
+            a("  br i1 %narrow, label %win, label %gat")
+            a("win:")
         a("  %mn64 = sext i32 %mn to i64")
         for p, name in enumerate(_PLANES):
             a(f"  %w{name}.o = add i64 %mn64, %pl{p}")
@@ -172,21 +189,24 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
             a(f"  %w{name}.p1 = getelementptr inbounds float, ptr %w{name}.p0, i64 {v}")
             a(f"  %w{name}.0 = load {vf}, ptr %w{name}.p0, align 4")
             a(f"  %w{name}.1 = load {vf}, ptr %w{name}.p1, align 4")
+            target = f"%w{name}" if checked else f"%{name}"
             a(
-                f"  %w{name} = call {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf} %w{name}.0,"
+                f"  {target} = call {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf} %w{name}.0,"
                 f" {vi} %rel, {vf} %w{name}.1)"
             )
-        a("  br label %got")
-        a("gat:")
-    a(f"  %pbase = getelementptr inbounds float, ptr %tab, {vi} %ix")
-    for p, name in enumerate(_PLANES):
-        a(f"  %p{name} = getelementptr inbounds float, {vp} %pbase, i64 %pl{p}")
-        target = f"%q{name}" if permute else f"%{name}"
-        a(
-            f"  {target} = call {vf} {gather}({vp} %p{name}, i32 4, {vb} splat (i1 true),"
-            f" {vf} poison)"
-        )
-    if permute:
+        if checked:
+            a("  br label %got")
+            a("gat:")
+    if checked:
+        a(f"  %pbase = getelementptr inbounds float, ptr %tab, {vi} %ix")
+        for p, name in enumerate(_PLANES):
+            a(f"  %p{name} = getelementptr inbounds float, {vp} %pbase, i64 %pl{p}")
+            target = f"%q{name}" if permute else f"%{name}"
+            a(
+                f"  {target} = call {vf} {gather}({vp} %p{name}, i32 4, {vb} splat (i1 true),"
+                f" {vf} poison)"
+            )
+    if permute and checked:
         a("  br label %got")
         a("got:")
         for name in _PLANES:
@@ -252,24 +272,32 @@ def _build_ir(v: int = LANES, permute: bool = False) -> str:
 
 
 _IR = _build_ir(permute=PERMUTE)
+if PERMUTE:  # both variants in one module; the declarations once
+    _unchecked = _build_ir(permute=True, checked=False)
+    _IR += _unchecked[: _unchecked.index("\ndeclare ")] + "\n"
 llvm.parse_assembly(_IR).verify()  # fail at import, not inside a compilation
 
 
 @intrinsic
 def tile_pulse(
     typingctx, nx, ny, tx, ty, tab, tab_offset, acc_re, acc_im, n, n_rows, stride, plane,
-    f0, i0f, a1, a2, a3, a4, si, sq, hi,
+    f0, i0f, a1, a2, a3, a4, si, sq, hi, windowed,
 ):  # fmt: skip
     """Add one pulse to one tile (see the module docstring); compiled code only.
 
     ``nx``, ``tx`` (float32, >= n), ``ny``, ``ty`` (float32, >= n_rows), ``tab`` (the float32
     table, the pulse's entries starting at flat index ``tab_offset``), ``acc_re`` /
     ``acc_im`` (float32, row ``r`` at ``r * stride``), ``plane`` the floats per plane of
-    ``tab``; the nine scalars are float32.
+    ``tab``; the nine scalars are float32. ``windowed`` (bool): every step's lanes are known
+    to lie in its window (:data:`WINDOW_SPAN`), so the variant without the check runs
+    (AVX-512; elsewhere the flag changes nothing).
     """
     f = types.float32
     i = types.int64
-    sig = types.void(nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, i, f, f, f, f, f, f, f, f, f)
+    sig = types.void(
+        nx, ny, tx, ty, tab, i, acc_re, acc_im, i, i, i, i, f, f, f, f, f, f, f, f, f,
+        types.boolean,
+    )  # fmt: skip
 
     def codegen(context, builder, signature, args):
         context.active_code_library.add_llvm_module(llvm.parse_assembly(_IR))
@@ -284,10 +312,38 @@ def tile_pulse(
             return builder.bitcast(ptr, byte_ptr)
 
         ptrs = [data(0), data(1), data(2), data(3), data(4, args[5]), data(6), data(7)]
-        builder.call(fn, ptrs + list(args[8:]))
+        call_args = ptrs + list(args[8:21])
+        if not PERMUTE:
+            builder.call(fn, call_args)
+            return context.get_dummy_value()
+        fn_windowed = cgutils.get_or_insert_function(builder.module, fnty, _NAME_WINDOWED)
+        flag = context.cast(builder, args[21], signature.args[21], types.boolean)
+        with builder.if_else(flag) as (then, otherwise):
+            with then:
+                builder.call(fn_windowed, call_args)
+            with otherwise:
+                builder.call(fn, call_args)
         return context.get_dummy_value()
 
     return sig, codegen
+
+
+@numba.njit(inline="always")
+def lanes_in_window(q0, r_anchor, ddx, h, hx, lane_run, reach, hi):
+    """Whether every step of one pulse on one tile may skip the window check (bool).
+
+    ``q0`` the anchor's table position, ``r_anchor`` its range (m), ``ddx`` its distance
+    from the antenna along the lanes (m, >= 0), ``h`` the largest distance of a tile pixel
+    from the anchor (m), ``hx`` its part along the lanes, ``lane_run`` ``(LANES - 1) |dx|
+    |idx_scale|``, ``reach`` ``h |idx_scale| + 1``, ``hi`` the table's end (the bounds of
+    :func:`tile_pulses`).
+    """
+    return (
+        r_anchor > h
+        and lane_run * (ddx + hx) <= WINDOW_SPAN * (r_anchor - h)
+        and q0 - reach >= 2.0
+        and q0 + reach < hi - 1.0
+    )
 
 
 @numba.njit(inline="always")
@@ -305,6 +361,14 @@ def tile_pulses(
     to :func:`tile_pulse` in float32 with the series coefficients of the range; only the
     series' higher terms (a small fraction of a cycle) enter the phase in float32. Shared
     by exact backprojection and the FFBP leaves.
+
+    A pulse runs the unchecked window variant of :func:`tile_pulse` when two bounds hold:
+    every pixel of the tile (padding columns included) is within ``h`` of the anchor, so
+    its range within ``h`` of the anchor's and its table position within ``h |s|`` (``s``
+    = ``idx_scale``) of the anchor's, which lies inside ``[1 + 1, hi - 1)`` (a margin of
+    one entry for the float32 evaluation); and along a step's ``LANES`` pixels the range
+    changes at most ``(LANES - 1) |dx| (|x_a - a_x| + h_x) / (R_a - h)``, which in table
+    entries is at most :data:`WINDOW_SPAN`.
     """
     stride = tab.shape[1]
     plane = stride // 8
@@ -315,6 +379,11 @@ def tile_pulses(
     nyv = np.empty(nr, np.float32)
     txv = np.empty(ncp, np.float32)
     tyv = np.empty(nr, np.float32)
+    hx = max(cc - c0, c0 + ncp - 1 - cc) * abs(dx)
+    hy = max(rc - r0, r0 + nr - 1 - rc) * abs(dy)
+    h = math.sqrt(hx * hx + hy * hy)
+    lane_run = (LANES - 1) * abs(dx) * abs(idx_scale)
+    reach = h * abs(idx_scale) + 1.0
     for j in range(j0, j1):
         ddx = xc - ant_x[j]
         ddy = yc - ant_y[j]
@@ -322,6 +391,7 @@ def tile_pulses(
         d0 = r_anchor - ref[j]
         q0 = d0 * idx_scale + idx_offset
         i0 = math.floor(q0)
+        windowed = lanes_in_window(q0, r_anchor, abs(ddx), h, hx, lane_run, reach, hi)
         t0 = d0 * quarter_scale
         t0 -= 4.0 * np.rint(0.25 * t0)  # whole cycles, exact
         inv = 1.0 / r_anchor
@@ -345,5 +415,5 @@ def tile_pulses(
             nxv, nyv, txv, tyv, tab, j * stride, acc_re, acc_im, ncp, nr, ncp, plane,
             f32(q0 - i0), f32(i0), f32(0.5 * inv), f32(-0.125 * inv * inv2),
             f32(0.0625 * inv * inv2 * inv2), f32(-5.0 / 128.0 * inv * inv2 * inv2 * inv2),
-            si, sq, hi,
+            si, sq, hi, windowed,
         )  # fmt: skip
