@@ -211,11 +211,12 @@ def run_numba_f64(
 
 # ===================================================================== float32 kernel
 @numba.njit(nogil=True, parallel=True, cache=True)
-def _tile_kernel(tab, starts, stops, ant, lat, consts, n_up, tile, ty0, ty1, out):
+def _tile_kernel(tab, starts, stops, ant, lat, consts, n_up, tile, ty0, ty1, out, transposed):
     # pragma: no cover - compiled
     """Add pulses to the tiles of tile rows ``ty0:ty1`` of the complex128 images ``out``.
 
-    The images ``out[i]`` on the lattice ``lat`` are cut in ``tile = (rows, cols)`` tiles;
+    The images ``out[i]`` on the lattice ``lat`` (``out[i, iy, ix]``, or ``out[i, ix, iy]``
+    when ``transposed``) are cut in ``tile = (rows, cols)`` tiles;
     image ``i`` sums pulses ``starts[i]:stops[i]``; one parallel task per (image, tile).
     ``tab`` is :attr:`~._bp_table.TraceTable.values`, one row per pulse (the order of
     ``ant``). Per pulse and tile, the anchor quantities are float64 and the rest float32
@@ -247,9 +248,16 @@ def _tile_kernel(tab, starts, stops, ant, lat, consts, n_up, tile, ty0, ty1, out
             lat.dy, c0, cc, r0, rc, nr, ncp, consts.idx_scale, consts.idx_offset, hi,
             consts.quarter_scale, acc_re, acc_im,
         )  # fmt: skip
-        for r in range(nr):
+        if transposed:
             for k in range(nc):
-                out[item, r0 + r, c0 + k] += complex(acc_re[r * ncp + k], acc_im[r * ncp + k])
+                for r in range(nr):
+                    v = complex(acc_re[r * ncp + k], acc_im[r * ncp + k])
+                    out[item, c0 + k, r0 + r] += v
+        else:
+            for r in range(nr):
+                for k in range(nc):
+                    v = complex(acc_re[r * ncp + k], acc_im[r * ncp + k])
+                    out[item, r0 + r, c0 + k] += v
 
 
 def tile_shape(
@@ -333,26 +341,30 @@ def backproject_f32(
     each followed by a progress report. ``tile`` (rows, columns) is :func:`tile_shape`'s
     for this grid. When the lanes would span fewer table entries along ``y`` than along ``x``
     (:func:`lane_spans`), the sum runs on the grid mirrored about ``x = y`` (antennas
-    too: every range is unchanged) with the tile :func:`tile_shape` gives there, and the
-    images are transposed back.
+    too: every range is unchanged) with the tile :func:`tile_shape` gives there, each tile
+    added to the images at its transposed place.
     """
     span_x, span_y = lane_spans(positions, x_m, y_m, constants[0])
     if y_m.size >= LANES and span_y < span_x:
         mirrored = np.ascontiguousarray(positions[:, [1, 0, 2]])
         tile_t = tile_shape(mirrored, y_m, x_m, constants[2])
         if tile_t is not None:
-            images = _backproject_f32(table_values, mirrored, ref_ranges, y_m, x_m, constants,
-                                      n_up, tile_t, progress, steps, pulse_ranges)  # fmt: skip
-            return np.ascontiguousarray(images.transpose(0, 2, 1))
+            return _backproject_f32(table_values, mirrored, ref_ranges, y_m, x_m, constants,
+                                    n_up, tile_t, progress, steps, pulse_ranges,
+                                    transposed=True)  # fmt: skip
     return _backproject_f32(table_values, positions, ref_ranges, x_m, y_m, constants, n_up, tile,
                             progress, steps, pulse_ranges)  # fmt: skip
 
 
 def _backproject_f32(
     table_values, positions, ref_ranges, x_m, y_m, constants, n_up, tile, progress, steps,
-    pulse_ranges,
+    pulse_ranges, transposed=False,
 ):  # fmt: skip
-    """:func:`backproject_f32` with the lanes along ``x``."""
+    """:func:`backproject_f32` with the lanes along ``x``.
+
+    The images are ``(n_images, y_m.size, x_m.size)``, or ``(n_images, x_m.size, y_m.size)``
+    when ``transposed``.
+    """
     ny, nx = y_m.size, x_m.size
     dx = (float(x_m[-1]) - float(x_m[0])) / (nx - 1) if nx > 1 else 1.0
     dy = (float(y_m[-1]) - float(y_m[0])) / (ny - 1) if ny > 1 else 1.0
@@ -360,7 +372,8 @@ def _backproject_f32(
     if pulse_ranges is None:
         pulse_ranges = np.array([[0, positions.shape[0]]], dtype=np.int64)
     ranges = np.ascontiguousarray(pulse_ranges, dtype=np.int64)
-    out = np.zeros((ranges.shape[0], ny, nx), np.complex128)
+    out = np.zeros((ranges.shape[0], nx, ny) if transposed else (ranges.shape[0], ny, nx),
+                   np.complex128)  # fmt: skip
     consts = KernelConstants(*(float(c) for c in constants))
     ant = antennas(positions, ref_ranges)
     n_tile_rows = -(-ny // tile[0])
@@ -371,7 +384,7 @@ def _backproject_f32(
         with numba.parallel_chunksize(1):  # tiles handed out one at a time
             _tile_kernel(
                 table_values, starts, stops, ant, lat, consts, n_up,
-                (int(tile[0]), int(tile[1])), int(g0), int(g1), out,
+                (int(tile[0]), int(tile[1])), int(g0), int(g1), out, transposed,
             )  # fmt: skip
         if progress is not None:
             progress("backprojection", step, len(groups) - 1)
