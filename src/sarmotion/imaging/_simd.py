@@ -20,7 +20,10 @@ without de-interleaving: where they lie within a window of ``2 LANES`` entries (
 pixels read neighbouring entries: the usual case, see
 :func:`~sarmotion.imaging._bp_kernels.lane_spans`), two vector loads and one two-source
 permute per plane (AVX-512, :data:`PERMUTE`); otherwise, and on other CPUs, one gather per
-plane. Positions outside ``[1, hi)`` read entry 0 (zero) with ``w = 0``.
+plane. Positions outside ``[1, hi)`` read entry 0 (zero) with ``w = 0``. Where
+:func:`tile_pulses` has shown, for a whole pulse and tile, that every step's lanes lie in
+their window (:func:`lanes_in_window`), a second variant runs without the per-step check
+and without the gathers behind it.
 ``exp(i pi T / 2)`` is ``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``, with minimax
 polynomials on ``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4 terms, 5.4e-8).
 
@@ -79,7 +82,7 @@ _NAME_WINDOWED = f"sarmotion_bp_tile_pulse_v{LANES}_f32planes_windowed"
 #: Most table entries the lanes of one step may span for the unchecked variant: the window
 #: starts 4 entries below the smaller end lane's entry and holds ``2 LANES``, so lanes
 #: within ``V`` entries of each other (their floors within ``V + 1``) lie inside it when
-#: ``V + 1 <= 4`` and ``2 (V + 1) < 2 LANES - 4``.
+#: ``V + 1 <= 4`` (below) and ``4 + V + 1 < 2 LANES`` (above).
 WINDOW_SPAN = 3.0
 #: The table's planes, in order (:class:`~sarmotion.imaging._bp_table.TraceTable`).
 _PLANES = ("c0re", "c0im", "c1re", "c1im", "c2re", "c2im", "c3re", "c3im")
