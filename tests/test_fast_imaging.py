@@ -129,9 +129,10 @@ def _one_pulse(tab, nxv, nyv, txv, tyv, scalars, windowed):
     return acc_re, acc_im
 
 
-def test_the_unchecked_window_variant_sums_the_same_bits():
+def test_the_unchecked_window_variant_sums_the_same_pieces():
     # Where every step's lanes lie in their window, the variant without the check reads
-    # the same entries and sums the same bits as the checked one.
+    # the same entries and sums the same expressions as the checked one: equal to float32
+    # rounding (the compiler may contract the two functions' products differently).
     rng = np.random.default_rng(7)
     n_up = 2000
     tab = rng.standard_normal((1, 8 * (n_up + 2 + 32))).astype(np.float32)
@@ -142,9 +143,14 @@ def test_the_unchecked_window_variant_sums_the_same_bits():
     scalars = np.array([0.3, 1000.0, 1.0, -1e-5, 0.0, 0.0, 25.0, 0.7, n_up], np.float32)
     checked = _one_pulse(tab, nxv, nyv, txv, tyv, scalars, False)
     unchecked = _one_pulse(tab, nxv, nyv, txv, tyv, scalars, True)
-    assert np.any(checked[0] != 0.0)
-    for a, b in zip(checked, unchecked, strict=True):
-        np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
+    a = checked[0] + 1j * checked[1].astype(np.complex128)
+    b = unchecked[0] + 1j * unchecked[1].astype(np.complex128)
+    scale = np.max(np.abs(a))
+    assert scale > 0.1
+    assert np.max(np.abs(a - b)) <= 4 * 2.0**-24 * scale
+    # one entry off in the window would move a value by the table's own scale
+    shifted = _one_pulse(tab[:, 1:].copy(), nxv, nyv, txv, tyv, scalars, True)
+    assert np.max(np.abs(shifted[0] - unchecked[0])) > 0.1 * scale
 
 
 def _step_floors_fit_the_window(q: np.ndarray, hi: float) -> bool:
