@@ -344,8 +344,8 @@ def lanes_in_window(q0, r_anchor, ddx, h, hx, lane_run, reach, hi):
     return (
         r_anchor > h
         and lane_run * (ddx + hx) <= WINDOW_SPAN * (r_anchor - h)
-        and q0 - reach >= 2.0
-        and q0 + reach < hi - 1.0
+        and q0 - reach >= 1.0
+        and q0 + reach < hi
     )
 
 
@@ -367,9 +367,9 @@ def tile_pulses(
 
     A pulse runs the unchecked window variant of :func:`tile_pulse` when two bounds hold:
     every pixel of the tile (padding columns included) is within ``h`` of the anchor, so
-    its range within ``h`` of the anchor's and its table position within ``h |s|`` (``s``
-    = ``idx_scale``) of the anchor's, which lies inside ``[1 + 1, hi - 1)`` (a margin of
-    one entry for the float32 evaluation); and along a step's ``LANES`` pixels the range
+    its range is within ``h`` of the anchor's and its table position within ``h |s|``
+    (``s`` = ``idx_scale``) of the anchor's, an interval inside ``[1 + 1, hi - 1)`` (a
+    margin of one entry for the float32 evaluation); and along a step's ``LANES`` pixels the range
     changes at most ``(LANES - 1) |dx| (|x_a - a_x| + h_x) / (R_a - h)``, which in table
     entries is at most :data:`WINDOW_SPAN`.
     """

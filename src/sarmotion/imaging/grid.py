@@ -284,9 +284,7 @@ class Image:
                 f"values must have the grid shape (ny, nx) = {self.grid.shape}, got {v.shape}"
             )
         v = np.asarray(v, dtype=np.complex128)  # not copied when complex128 already
-        if not _CHECKED.get() and not _all_finite(
-            np.ascontiguousarray(v).reshape(-1).view(np.float64)
-        ):
+        if not _CHECKED.get() and not all_finite(v):
             raise ValueError("values contains NaN or infinite entries")
         u = np.asarray(self.velocity_mps, dtype=np.float64)
         if u.shape != (2,) or not np.all(np.isfinite(u)):
