@@ -209,20 +209,44 @@ def test_special_files_and_links_are_refused(tmp_path, capsys, name, kind, force
 
 
 # -------------------------------------------------------------- the whole set
-def test_force_replaces_all_four_gotcha_files(tmp_path, capsys):
+def test_force_replaces_a_previous_gotcha_output_and_keeps_look_alike_files(tmp_path, capsys):
+    """A previous run's files go (by its record); files it did not write stay, named alike or not."""
     out = tmp_path / "g"
-    out.mkdir()
-    old = [f"data_3dsar_pass1_az00{k}_HH.mat" for k in range(1, 5)]
-    for name in old:
-        (out / name).write_bytes(b"old " + name.encode())
+    assert run(["convert", "hyperbola", "--to", "gotcha", "--out", str(out)]) == 0
+    first = set(_entries(out)) - {".sarmotion-written"}
+    assert first == {"data_3dsar_pass1_az359_HH.mat"}
     (out / "notes.txt").write_text("mine")
-    args = ["convert", "hyperbola", "--to", "gotcha", "--out", str(out)]
+    (out / "data_3dsar_pass1_az007_HH.mat").write_bytes(b"the user's own GOTCHA degree")
+    args = ["convert", "scene1", "--to", "gotcha", "--out", str(out)]
     _one_line_refusal(args, capsys, "--force")
     assert run([*args, "--force"]) == 0
     after = _entries(out)
-    assert after.pop("notes.txt") == b"mine"  # a file the command does not write is kept
-    assert after and all(n.endswith(".mat") for n in after)
-    assert not any(v.startswith(b"old ") for v in after.values())  # all four replaced
+    assert after.pop("notes.txt") == b"mine"
+    assert after.pop("data_3dsar_pass1_az007_HH.mat") == b"the user's own GOTCHA degree"
+    assert after.pop(".sarmotion-written") == b'["data_3dsar_pass1_az360_HH.mat"]\n'
+    assert set(after) == {"data_3dsar_pass1_az360_HH.mat"}  # the previous run's az359 went
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["convert", "AZ", "--to", "gotcha"],
+        ["simulate", "hyperbola"],
+        ["inject", "AZ", "--target", "1,2,3,4"],
+    ],
+    ids=["convert", "simulate", "inject"],
+)
+def test_force_never_deletes_the_users_own_mat_files(tmp_path, command):
+    """A folder holding a GOTCHA file and the user's my_calibration.mat: --force keeps the latter."""
+    d = tmp_path / "d"
+    assert run(["convert", "hyperbola", "--to", "gotcha", "--out", str(d)]) == 0
+    (d / ".sarmotion-written").unlink()  # as if the GOTCHA file had come from elsewhere
+    (azfile,) = d.glob("*.mat")
+    (d / "my_calibration.mat").write_bytes(b"calibration")
+    args = [a if a != "AZ" else str(azfile) for a in command]
+    assert run([*args, "--out", str(d), "--force"]) == 0
+    assert (d / "my_calibration.mat").read_bytes() == b"calibration"
+    assert azfile.exists() and azfile.read_bytes() != b""
 
 
 def test_force_leaves_no_stale_output_of_the_same_command(tmp_path, capsys):

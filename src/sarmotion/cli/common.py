@@ -27,6 +27,7 @@ __all__ = [
     "extent_grid",
     "false_alarm_rate_option",
     "force_option",
+    "gotcha_force_option",
     "lenient_option",
     "method_option",
     "noise_options",
@@ -145,6 +146,15 @@ force_option = click.option(
     "other files are kept).",
 )
 
+#: ``--force`` of the commands that write GOTCHA ``.mat`` files into a folder.
+gotcha_force_option = click.option(
+    "--force",
+    is_flag=True,
+    help="Replace the GOTCHA files of the names this command writes "
+    "(data_3dsar_pass1_azNNN_HH.mat, NNN from the data's azimuths); every other file in "
+    "the folder is kept, .mat files included. A single-file output (.h5, .cphd) is replaced as a whole.",
+)
+
 lenient_option = click.option(
     "--lenient",
     is_flag=True,
@@ -162,7 +172,12 @@ def _writable_ancestor(path: Path) -> Path:
 
 
 def check_out(
-    out: Path, *, force: bool, names: Sequence[str] = (), patterns: Sequence[str] = ()
+    out: Path,
+    *,
+    force: bool,
+    names: Sequence[str] = (),
+    patterns: Sequence[str] = (),
+    sweep: bool = True,
 ) -> None:
     """Check and claim ``--out`` before any work is done (:mod:`sarmotion.io.staging`).
 
@@ -185,6 +200,7 @@ def check_out(
             force=force,
             names=names,
             patterns=patterns,
+            sweep=sweep,
             check=lambda: _check_writable(out, is_file=is_file),
         )
     except OutputError as exc:

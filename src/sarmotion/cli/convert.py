@@ -7,12 +7,12 @@ from pathlib import Path
 import click
 
 from ..io import save_traces, staged_directory, staged_file, write_cphd, write_gotcha
-from ..io.gotcha import AZIMUTH_NAME_PATTERN
+from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN
 from .autofocus import autofocus_options, read_focused
 from .common import (
     InputError,
     check_out,
-    force_option,
+    gotcha_force_option,
     lenient_option,
     noise_options,
     out_option,
@@ -34,7 +34,7 @@ __all__ = ["convert"]
     "of GOTCHA .mat files).",
 )
 @out_option("Output file (cphd, h5) or directory (gotcha).")
-@force_option
+@gotcha_force_option
 @click.option(
     "--channel",
     default=None,
@@ -89,7 +89,7 @@ def convert(
         raise InputError("--channel and --vectors apply to a CPHD (.cphd) input only")
     if origin_llh is not None and to != "cphd":
         raise InputError("--origin applies to --to cphd only")
-    check_out(out, force=force, patterns=("*.mat",) if to == "gotcha" else ())
+    check_out(out, force=force, patterns=(AZIMUTH_NAME_GLOB,) if to == "gotcha" else (), sweep=False)
     traces, _, _ = read_focused(
         inputs,
         autofocus=autofocus,

@@ -9,14 +9,14 @@ import click
 import numpy as np
 
 from ..io import save_traces, staged_directory, staged_file, write_gotcha
-from ..io.gotcha import AZIMUTH_NAME_PATTERN
+from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN
 from ..simulation import PointTarget
 from ..simulation import inject as run
 from .common import (
     InputError,
     as_flags,
     check_out,
-    force_option,
+    gotcha_force_option,
     lenient_option,
     out_option,
     speed_option,
@@ -79,7 +79,7 @@ def _parse_target(text: str) -> Any:
     "file's traces). Repeat for several targets.",
 )
 @out_option("Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
-@force_option
+@gotcha_force_option
 @speed_option
 @lenient_option
 def inject(
@@ -92,7 +92,7 @@ def inject(
 ) -> None:
     """Add simulated point targets (stationary or moving) to real or simulated traces."""
     native = out.suffix.lower() in (".h5", ".hdf5")
-    check_out(out, force=force, patterns=() if native else ("*.mat",))
+    check_out(out, force=force, patterns=() if native else (AZIMUTH_NAME_GLOB,), sweep=False)
     for text in targets:
         _parse_target(text)
     with as_flags(speed_mps="--speed"):

@@ -7,10 +7,10 @@ from pathlib import Path
 import click
 
 from ..io import save_traces, staged_directory, staged_file, write_gotcha
-from ..io.gotcha import AZIMUTH_NAME_PATTERN
+from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN
 from ..simulation import load_scene
 from ..simulation import simulate as run
-from .common import as_flags, check_out, force_option, noise_options, out_option
+from .common import as_flags, check_out, gotcha_force_option, noise_options, out_option
 
 __all__ = ["simulate"]
 
@@ -18,7 +18,7 @@ __all__ = ["simulate"]
 @click.command()
 @click.argument("scene")
 @out_option("Output: a .h5 file (native traces) or a directory (GOTCHA .mat files).")
-@force_option
+@gotcha_force_option
 @noise_options
 @click.option(
     "--spreading/--no-spreading",
@@ -36,7 +36,7 @@ def simulate(
     files into the directory OUT.
     """
     native = out.suffix.lower() in (".h5", ".hdf5")
-    check_out(out, force=force, patterns=() if native else ("*.mat",))
+    check_out(out, force=force, patterns=() if native else (AZIMUTH_NAME_GLOB,), sweep=False)
     with as_flags(snr_db="--snr-db", rng="--seed"):
         sim = run(load_scene(scene), snr_db=snr_db, rng=seed, spreading=spreading)
     if native:

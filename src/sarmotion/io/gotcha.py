@@ -149,6 +149,9 @@ DEFAULT_NAME_PATTERN = "data_3dsar_pass1_az{index:03d}_HH.mat"
 #: ``azimuth`` is that ``NNN`` for a file's first pulse (1 to 360).
 AZIMUTH_NAME_PATTERN = "data_3dsar_pass1_az{azimuth:03d}_HH.mat"
 
+#: The shell pattern of the names :data:`AZIMUTH_NAME_PATTERN` gives.
+AZIMUTH_NAME_GLOB = "data_3dsar_pass1_az[0-9][0-9][0-9]_HH.mat"
+
 #: Largest deviation of ``freq`` from its least-squares uniform grid, as a fraction of the
 #: step: float32 rounds ~9.6 GHz to 512 Hz, 3.5e-4 of GOTCHA's 1.47 MHz step; 1e-2 is 30x that.
 _GRID_TOL = 1e-2

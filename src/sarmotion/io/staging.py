@@ -34,10 +34,15 @@ For an output target ``out`` (a file, or a directory of files):
      process's own) marks leftovers, and only the claim's holder touches them.
 4. **``force`` replaces the whole previous output set.** After a swap ``out`` holds
    exactly the entries the new run wrote, plus the files of the previous directory that
-   are not outputs of the command (user files: not named in ``names``, not matching
-   ``patterns``, not written by this run), which are carried over as hard links (copies
-   where the file system has none), so they are never moved out of ``out`` before the
-   swap. A directory holding folders the command does not write, or holding the current
+   are not outputs of the command (user files: not named in ``names``, not written by
+   this run, and not matching ``patterns`` where the claim sweeps them), which are
+   carried over as hard links (copies where the file system has none), so they are
+   never moved out of ``out`` before the swap. A claim with ``sweep=False`` (a
+   command whose files share a naming scheme with files a user keeps, such as GOTCHA
+   ``.mat`` files) replaces only files by name: those the run writes and those the
+   previous sarmotion run listed in its record ``.sarmotion-written`` (a JSON list of
+   names, written beside the outputs); its ``patterns`` only refuse the claim without
+   ``force``. A user's file that merely matches a pattern is never removed. A directory holding folders the command does not write, or holding the current
    directory, is refused: it is not an output directory, and swapping it would move
    them. Without ``force`` an existing output entry refuses the claim before any work;
    a target that appears while the command runs (a file the user created) is not
@@ -55,6 +60,7 @@ import contextlib
 import ctypes
 import errno
 import fnmatch
+import json
 import logging
 import os
 import re
@@ -266,7 +272,12 @@ class OutputClaim:
         replaced.
     names, patterns : tuple of str
         A directory output's entries (names, and shell patterns such as ``"*.mat"``):
-        with ``force`` they are replaced, without it they refuse the claim.
+        without ``force`` they refuse the claim; with it they are replaced (entries
+        matching ``patterns`` only where ``sweep``).
+    sweep : bool
+        Whether ``force`` removes previous entries that match ``patterns`` but that this
+        run did not write (True: a previous output set, e.g. ``mover-3.nitf`` from a run
+        that found more movers). False: only the entries written are replaced.
     existed : bool
         Whether ``out`` existed when claimed.
     """
@@ -276,6 +287,7 @@ class OutputClaim:
     force: bool
     names: tuple[str, ...] = ()
     patterns: tuple[str, ...] = ()
+    sweep: bool = True
     existed: bool = False
     _fd: int | None = field(default=None, repr=False)
     _made: list[Path] = field(default_factory=list, repr=False)
@@ -372,6 +384,7 @@ class OutputClaim:
         return (
             entry in written
             or entry in self.names
+            or (entry == WRITTEN_RECORD and not self.sweep)
             or any(fnmatch.fnmatchcase(entry, p) for p in self.patterns)
         )
 
@@ -459,6 +472,9 @@ class OutputClaim:
     def _swap_directory(self, stage: Path) -> None:
         out = self.out
         written = set(os.listdir(stage))
+        if not self.sweep:
+            _write_record(stage, written)
+            written.add(WRITTEN_RECORD)
         state = _state(out)
         if state == "missing":
             try:
@@ -472,8 +488,13 @@ class OutputClaim:
                     return
             state = _state(out)
         self._present(state, written)
+        previous = set() if self.sweep else _written_record(out)
         for entry in os.listdir(out):
-            if not self._ours(entry, written):
+            if self.sweep:
+                replaced = self._ours(entry, written)
+            else:
+                replaced = entry in written or entry in self.names or entry in previous
+            if not replaced:
                 _carry(out / entry, stage / entry)  # the user's own files stay
         os.chmod(stage, stat.S_IMODE(os.lstat(out).st_mode))
         if _exchange(stage, out):
@@ -487,6 +508,30 @@ class OutputClaim:
                 os.rename(old, out)
             raise
         _rmtree(old)
+
+
+#: A ``sweep=False`` directory output's record of the names its run wrote.
+WRITTEN_RECORD = ".sarmotion-written"
+
+
+def _write_record(stage: Path, written: Set[str]) -> None:
+    (stage / WRITTEN_RECORD).write_text(json.dumps(sorted(written)) + "\n")
+
+
+def _written_record(out: Path) -> set[str]:
+    """The plain file names a previous run recorded in ``out`` (none if unreadable)."""
+    path = out / WRITTEN_RECORD
+    try:
+        if not stat.S_ISREG(os.lstat(path).st_mode) or os.lstat(path).st_size > 1 << 20:
+            return set()
+        names = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return set()
+    if not isinstance(names, list):
+        return set()
+    return {
+        n for n in names if isinstance(n, str) and n not in ("", ".", "..") and "/" not in n
+    }
 
 
 def _holder(fd: int, wait_s: float = 0.5) -> str:
@@ -508,6 +553,7 @@ def claim_output(
     force: bool = False,
     names: Sequence[str] = (),
     patterns: Sequence[str] = (),
+    sweep: bool = True,
     check: Callable[[], None] | None = None,
 ) -> OutputClaim:
     """Claim the output target ``out`` for this process (module notes).
@@ -529,6 +575,9 @@ def claim_output(
         Replace previous outputs.
     names, patterns : sequence of str
         A directory output's entries: names and shell patterns.
+    sweep : bool
+        With ``force``, also remove previous entries matching ``patterns`` that the run
+        does not write (default); False replaces only what the run writes, by name.
     check : callable, optional
         Called once the target is known to be no link or special file, before anything
         is created (the caller's own checks, such as permissions); what it raises
@@ -553,7 +602,12 @@ def claim_output(
     if check is not None:
         check()
     claim = OutputClaim(
-        out=target, kind=kind, force=bool(force), names=tuple(names), patterns=tuple(patterns)
+        out=target,
+        kind=kind,
+        force=bool(force),
+        names=tuple(names),
+        patterns=tuple(patterns),
+        sweep=bool(sweep),
     )
     missing = [d for d in (target.parent, *target.parent.parents) if not d.exists()]
     try:
