@@ -19,7 +19,15 @@ from pathlib import Path
 import pytest
 
 from sarmotion.cli.main import EXIT_BAD_INPUT, run
-from sarmotion.io import OutputError, claim_output, staged_directory, staged_file, staging
+from sarmotion.io import (
+    OutputError,
+    claim_output,
+    read_gotcha,
+    staged_directory,
+    staged_file,
+    staging,
+)
+from sarmotion.io.gotcha import written_by_sarmotion
 
 ROOT = Path(__file__).resolve().parents[1]
 STAGING = ROOT / "src" / "sarmotion" / "io" / "staging.py"
@@ -210,20 +218,18 @@ def test_special_files_and_links_are_refused(tmp_path, capsys, name, kind, force
 
 # -------------------------------------------------------------- the whole set
 def test_force_replaces_a_previous_gotcha_output_and_keeps_look_alike_files(tmp_path, capsys):
-    """A previous run's files go (by its record); files it did not write stay, named alike or not."""
+    """A previous run's files go (their header marks them); the user's files stay."""
     out = tmp_path / "g"
     assert run(["convert", "hyperbola", "--to", "gotcha", "--out", str(out)]) == 0
-    first = set(_entries(out)) - {".sarmotion-written"}
-    assert first == {"data_3dsar_pass1_az359_HH.mat"}
+    assert set(_entries(out)) == {"data_3dsar_pass1_az359_HH.mat"}
     (out / "notes.txt").write_text("mine")
-    (out / "data_3dsar_pass1_az007_HH.mat").write_bytes(b"the user's own GOTCHA degree")
+    (out / "data_3dsar_pass1_az007_HH.mat").write_bytes(b"MATLAB 5.0 the user's own degree")
     args = ["convert", "scene1", "--to", "gotcha", "--out", str(out)]
     _one_line_refusal(args, capsys, "--force")
     assert run([*args, "--force"]) == 0
     after = _entries(out)
     assert after.pop("notes.txt") == b"mine"
-    assert after.pop("data_3dsar_pass1_az007_HH.mat") == b"the user's own GOTCHA degree"
-    assert after.pop(".sarmotion-written") == b'["data_3dsar_pass1_az360_HH.mat"]\n'
+    assert after.pop("data_3dsar_pass1_az007_HH.mat") == b"MATLAB 5.0 the user's own degree"
     assert set(after) == {"data_3dsar_pass1_az360_HH.mat"}  # the previous run's az359 went
 
 
@@ -237,16 +243,27 @@ def test_force_replaces_a_previous_gotcha_output_and_keeps_look_alike_files(tmp_
     ids=["convert", "simulate", "inject"],
 )
 def test_force_never_deletes_the_users_own_mat_files(tmp_path, command):
-    """A folder holding a GOTCHA file and the user's my_calibration.mat: --force keeps the latter."""
+    """A folder holds a GOTCHA file and the user's my_calibration.mat: --force keeps the latter."""
     d = tmp_path / "d"
     assert run(["convert", "hyperbola", "--to", "gotcha", "--out", str(d)]) == 0
-    (d / ".sarmotion-written").unlink()  # as if the GOTCHA file had come from elsewhere
     (azfile,) = d.glob("*.mat")
     (d / "my_calibration.mat").write_bytes(b"calibration")
     args = [a if a != "AZ" else str(azfile) for a in command]
     assert run([*args, "--out", str(d), "--force"]) == 0
     assert (d / "my_calibration.mat").read_bytes() == b"calibration"
-    assert azfile.exists() and azfile.read_bytes() != b""
+    assert azfile.exists() and written_by_sarmotion(azfile)
+
+
+def test_written_gotcha_files_carry_the_writers_mark_and_read_back(tmp_path):
+    out = tmp_path / "g"
+    assert run(["convert", "hyperbola", "--to", "gotcha", "--out", str(out)]) == 0
+    (path,) = out.glob("*.mat")
+    assert written_by_sarmotion(path)
+    assert read_gotcha(path).n_pulses > 0  # the header is free text to every reader
+    import scipy.io
+
+    assert "data" in scipy.io.loadmat(path)
+    assert not written_by_sarmotion(out / "missing.mat")
 
 
 def test_force_leaves_no_stale_output_of_the_same_command(tmp_path, capsys):

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from ..io import save_traces, staged_directory, staged_file, write_cphd, write_gotcha
-from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN
+from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN, written_by_sarmotion
 from .autofocus import autofocus_options, read_focused
 from .common import (
     InputError,
@@ -89,7 +89,12 @@ def convert(
         raise InputError("--channel and --vectors apply to a CPHD (.cphd) input only")
     if origin_llh is not None and to != "cphd":
         raise InputError("--origin applies to --to cphd only")
-    check_out(out, force=force, patterns=(AZIMUTH_NAME_GLOB,) if to == "gotcha" else (), sweep=False)
+    check_out(
+        out,
+        force=force,
+        patterns=(AZIMUTH_NAME_GLOB,) if to == "gotcha" else (),
+        sweep=written_by_sarmotion,
+    )
     traces, _, _ = read_focused(
         inputs,
         autofocus=autofocus,

@@ -9,7 +9,7 @@ import click
 import numpy as np
 
 from ..io import save_traces, staged_directory, staged_file, write_gotcha
-from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN
+from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN, written_by_sarmotion
 from ..simulation import PointTarget
 from ..simulation import inject as run
 from .common import (
@@ -92,7 +92,12 @@ def inject(
 ) -> None:
     """Add simulated point targets (stationary or moving) to real or simulated traces."""
     native = out.suffix.lower() in (".h5", ".hdf5")
-    check_out(out, force=force, patterns=() if native else (AZIMUTH_NAME_GLOB,), sweep=False)
+    check_out(
+        out,
+        force=force,
+        patterns=() if native else (AZIMUTH_NAME_GLOB,),
+        sweep=written_by_sarmotion,
+    )
     for text in targets:
         _parse_target(text)
     with as_flags(speed_mps="--speed"):

@@ -12,7 +12,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..core.traces import Traces
-from ..io import DataError, load_traces, read_cphd, read_gotcha
+from ..io import DataError, read_files
+from ..io.files import SUFFIXES
 from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
 
 __all__ = ["FRAME_HELP", "INPUTS_HELP", "LABELS_HELP", "is_scene_reference", "read_inputs"]
@@ -48,32 +49,6 @@ def is_scene_reference(text: str) -> bool:
     return text in builtin_scene_names() or text.lower().endswith(".toml")
 
 
-def expand_directories(inputs: Sequence[str]) -> list[str]:
-    """``inputs`` with a directory replaced by its GOTCHA ``.mat`` files, sorted by name.
-
-    GOTCHA's files are named by azimuth (``..._az001_HH.mat``), so name order is
-    acquisition order. As ``sarmotion paper --gotcha`` reads a directory.
-
-    Raises
-    ------
-    DataError
-        A directory that holds no ``.mat`` file.
-    """
-    out: list[str] = []
-    for p in inputs:
-        path = Path(p)
-        if path.is_dir():
-            files = sorted(str(f) for f in path.glob("*.mat") if f.is_file())
-            if not files:
-                raise DataError(
-                    f"{p}: a directory of inputs must hold GOTCHA .mat files; none found"
-                )
-            out += files
-        else:
-            out.append(p)
-    return out
-
-
 def read_inputs(
     inputs: Sequence[str],
     *,
@@ -91,7 +66,8 @@ def read_inputs(
     ----------
     inputs : sequence of str
         One scene name or ``.toml``; or one native ``.h5``; or one or more GOTCHA ``.mat``
-        or directories of them (:func:`expand_directories`); or one CPHD ``.cphd``.
+        or directories of them; or one CPHD ``.cphd`` (files are read by
+        :func:`sarmotion.io.read_files`).
     speed_mps : float
         GOTCHA: platform speed that sets slow time (m/s).
     autofocus : bool
@@ -129,23 +105,17 @@ def read_inputs(
                 f"input not found: {p} (no such file; the built-in scenes are "
                 f"{', '.join(builtin_scene_names())})"
             )
-    inputs = expand_directories(inputs)
-    first = inputs[0]
-    suffixes = {Path(p).suffix.lower() for p in inputs}
-    if suffixes == {".h5"} or suffixes == {".hdf5"}:
-        if len(inputs) != 1:
-            raise DataError("give one native traces file (.h5) at a time")
-        return load_traces(first, lenient=lenient), None
-    if suffixes == {".mat"}:
-        traces = read_gotcha(
-            list(inputs), speed_mps=speed_mps, autofocus=autofocus, lenient=lenient
+    if any(Path(p).suffix.lower() not in SUFFIXES for p in inputs if not Path(p).is_dir()):
+        raise DataError(
+            f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
+            "a native traces .h5 file, GOTCHA .mat files, or a CPHD .cphd file"
         )
-        return traces, None
-    if suffixes == {".cphd"}:
-        if len(inputs) != 1:
-            raise DataError("give one CPHD file (.cphd) at a time")
-        return read_cphd(first, channel=channel, vectors=vectors, lenient=lenient), None
-    raise DataError(
-        f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
-        "a native traces .h5 file, GOTCHA .mat files, or a CPHD .cphd file"
+    traces = read_files(
+        inputs,
+        lenient=lenient,
+        speed_mps=speed_mps,
+        autofocus=autofocus,
+        channel=channel,
+        vectors=vectors,
     )
+    return traces, None

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from ..io import save_traces, staged_directory, staged_file, write_gotcha
-from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN
+from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN, written_by_sarmotion
 from ..simulation import load_scene
 from ..simulation import simulate as run
 from .common import as_flags, check_out, gotcha_force_option, noise_options, out_option
@@ -36,7 +36,12 @@ def simulate(
     files into the directory OUT.
     """
     native = out.suffix.lower() in (".h5", ".hdf5")
-    check_out(out, force=force, patterns=() if native else (AZIMUTH_NAME_GLOB,), sweep=False)
+    check_out(
+        out,
+        force=force,
+        patterns=() if native else (AZIMUTH_NAME_GLOB,),
+        sweep=written_by_sarmotion,
+    )
     with as_flags(snr_db="--snr-db", rng="--seed"):
         sim = run(load_scene(scene), snr_db=snr_db, rng=seed, spreading=spreading)
     if native:

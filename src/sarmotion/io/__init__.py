@@ -9,7 +9,9 @@ file and the problem; implausible geometry or samples break the rules of
 :mod:`sarmotion.io.plausibility` (``lenient=True`` logs them instead). Every reader
 computes from the headers of its input what it will allocate and refuses an input beyond
 :func:`memory_limit` (:func:`set_memory_limit`; ``--max-memory`` on the command line)
-before allocating it. Large files are read block by block with :func:`open_cphd_blocks`
+before allocating it. :func:`read_files` and :func:`open_blocks` read any supported
+file by its kind (the one dispatch by suffix, :mod:`sarmotion.io.files`). Large files
+are read block by block with :func:`open_cphd_blocks`
 and :func:`open_native_blocks`, and a CPHD file is written block by block with
 :func:`write_cphd_blocks` (:class:`CphdWriter`).
 """
@@ -25,6 +27,7 @@ from .cphd import (
     write_cphd_blocks,
 )
 from .errors import DataError
+from .files import file_kind, open_blocks, read_files
 from .gotcha import is_gotcha_file, read_gotcha, write_gotcha
 from .jsonfile import write_json
 from .native import (
@@ -47,8 +50,16 @@ from .staging import (
     staged_paths,
 )
 
+#: The native traces reader under the name of the other readers (``read_gotcha``,
+#: ``read_cphd``).
+read_native = load_traces
+
 __all__ = [
     "DataError",
+    "file_kind",
+    "open_blocks",
+    "read_files",
+    "read_native",
     "read_gotcha",
     "write_gotcha",
     "is_gotcha_file",

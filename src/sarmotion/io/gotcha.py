@@ -103,6 +103,7 @@ from __future__ import annotations
 
 import logging
 import os
+import stat
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -151,6 +152,26 @@ AZIMUTH_NAME_PATTERN = "data_3dsar_pass1_az{azimuth:03d}_HH.mat"
 
 #: The shell pattern of the names :data:`AZIMUTH_NAME_PATTERN` gives.
 AZIMUTH_NAME_GLOB = "data_3dsar_pass1_az[0-9][0-9][0-9]_HH.mat"
+
+#: The 116-byte descriptive text that opens every MATLAB v5 file :func:`write_gotcha`
+#: writes (free text by the format; readers skip it): it marks the file as sarmotion's.
+_WRITER_MARK = b"MATLAB 5.0 MAT-file, written by sarmotion.io.write_gotcha"
+_WRITER_HEADER = _WRITER_MARK.ljust(116, b" ")
+
+
+def written_by_sarmotion(path: PathLike) -> bool:
+    """Whether ``path`` is a regular file that :func:`write_gotcha` wrote (by its header).
+
+    Used by ``--force`` to tell a previous output from a user's own file of the same
+    name pattern; a file that cannot be read is not sarmotion's.
+    """
+    try:
+        with open(path, "rb", buffering=0) as fh:
+            if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+                return False
+            return fh.read(len(_WRITER_MARK)) == _WRITER_MARK
+    except OSError:
+        return False
 
 #: Largest deviation of ``freq`` from its least-squares uniform grid, as a fraction of the
 #: step: float32 rounds ~9.6 GHz to 512 Hz, 3.5e-4 of GOTCHA's 1.47 MHz step; 1e-2 is 30x that.
@@ -826,5 +847,7 @@ def write_gotcha(
             }
             with tmp.open("xb") as fh:
                 scipy.io.savemat(fh, {"data": struct}, format="5", oned_as="row")
+                fh.seek(0)
+                fh.write(_WRITER_HEADER)
     logger.debug("wrote %d GOTCHA file(s) to %s", len(targets), out_dir)
     return targets

@@ -37,16 +37,15 @@ For an output target ``out`` (a file, or a directory of files):
    are not outputs of the command (user files: not named in ``names``, not written by
    this run, and not matching ``patterns`` where the claim sweeps them), which are
    carried over as hard links (copies where the file system has none), so they are
-   never moved out of ``out`` before the swap. A claim with ``sweep=False`` (a
-   command whose files share a naming scheme with files a user keeps, such as GOTCHA
-   ``.mat`` files) replaces only files by name: those the run writes and those the
-   previous sarmotion run listed in its record ``.sarmotion-written`` (a JSON list of
-   names, written beside the outputs); its ``patterns`` only refuse the claim without
-   ``force``. A user's file that merely matches a pattern is never removed. A directory holding folders the command does not write, or holding the current
-   directory, is refused: it is not an output directory, and swapping it would move
-   them. Without ``force`` an existing output entry refuses the claim before any work;
-   a target that appears while the command runs (a file the user created) is not
-   replaced without ``force``.
+   never moved out of ``out`` before the swap. A command whose files share a naming
+   scheme with files a user keeps (GOTCHA ``.mat`` files) claims with ``sweep``, a test
+   of a previous output's content (its writer's mark): ``force`` replaces the entries
+   the run writes and the entries matching ``patterns`` that pass the test, never a
+   user's file that merely matches a pattern. A directory holding folders the command
+   does not write, or holding the current directory, is refused: it is not an output
+   directory, and swapping it would move them. Without ``force`` an existing output
+   entry refuses the claim before any work; a target that appears while the command
+   runs (a file the user created) is not replaced without ``force``.
 
 Exceptions and termination signals before the swap remove the staging directory and any
 parent directory the claim created, and leave the target as it was; once the swap is
@@ -60,7 +59,6 @@ import contextlib
 import ctypes
 import errno
 import fnmatch
-import json
 import logging
 import os
 import re
@@ -274,10 +272,11 @@ class OutputClaim:
         A directory output's entries (names, and shell patterns such as ``"*.mat"``):
         without ``force`` they refuse the claim; with it they are replaced (entries
         matching ``patterns`` only where ``sweep``).
-    sweep : bool
+    sweep : bool or callable
         Whether ``force`` removes previous entries that match ``patterns`` but that this
         run did not write (True: a previous output set, e.g. ``mover-3.nitf`` from a run
-        that found more movers). False: only the entries written are replaced.
+        that found more movers); a callable ``sweep(path) -> bool`` removes only those
+        it recognises as a previous output (e.g. by their writer's mark).
     existed : bool
         Whether ``out`` existed when claimed.
     """
@@ -287,7 +286,7 @@ class OutputClaim:
     force: bool
     names: tuple[str, ...] = ()
     patterns: tuple[str, ...] = ()
-    sweep: bool = True
+    sweep: bool | Callable[[Path], bool] = True
     existed: bool = False
     _fd: int | None = field(default=None, repr=False)
     _made: list[Path] = field(default_factory=list, repr=False)
@@ -384,7 +383,6 @@ class OutputClaim:
         return (
             entry in written
             or entry in self.names
-            or (entry == WRITTEN_RECORD and not self.sweep)
             or any(fnmatch.fnmatchcase(entry, p) for p in self.patterns)
         )
 
@@ -472,9 +470,6 @@ class OutputClaim:
     def _swap_directory(self, stage: Path) -> None:
         out = self.out
         written = set(os.listdir(stage))
-        if not self.sweep:
-            _write_record(stage, written)
-            written.add(WRITTEN_RECORD)
         state = _state(out)
         if state == "missing":
             try:
@@ -488,12 +483,10 @@ class OutputClaim:
                     return
             state = _state(out)
         self._present(state, written)
-        previous = set() if self.sweep else _written_record(out)
         for entry in os.listdir(out):
-            if self.sweep:
-                replaced = self._ours(entry, written)
-            else:
-                replaced = entry in written or entry in self.names or entry in previous
+            replaced = self._ours(entry, written)
+            if replaced and callable(self.sweep) and entry not in written:
+                replaced = entry in self.names or self.sweep(out / entry)
             if not replaced:
                 _carry(out / entry, stage / entry)  # the user's own files stay
         os.chmod(stage, stat.S_IMODE(os.lstat(out).st_mode))
@@ -508,30 +501,6 @@ class OutputClaim:
                 os.rename(old, out)
             raise
         _rmtree(old)
-
-
-#: A ``sweep=False`` directory output's record of the names its run wrote.
-WRITTEN_RECORD = ".sarmotion-written"
-
-
-def _write_record(stage: Path, written: Set[str]) -> None:
-    (stage / WRITTEN_RECORD).write_text(json.dumps(sorted(written)) + "\n")
-
-
-def _written_record(out: Path) -> set[str]:
-    """The plain file names a previous run recorded in ``out`` (none if unreadable)."""
-    path = out / WRITTEN_RECORD
-    try:
-        if not stat.S_ISREG(os.lstat(path).st_mode) or os.lstat(path).st_size > 1 << 20:
-            return set()
-        names = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return set()
-    if not isinstance(names, list):
-        return set()
-    return {
-        n for n in names if isinstance(n, str) and n not in ("", ".", "..") and "/" not in n
-    }
 
 
 def _holder(fd: int, wait_s: float = 0.5) -> str:
@@ -553,7 +522,7 @@ def claim_output(
     force: bool = False,
     names: Sequence[str] = (),
     patterns: Sequence[str] = (),
-    sweep: bool = True,
+    sweep: bool | Callable[[Path], bool] = True,
     check: Callable[[], None] | None = None,
 ) -> OutputClaim:
     """Claim the output target ``out`` for this process (module notes).
@@ -575,9 +544,10 @@ def claim_output(
         Replace previous outputs.
     names, patterns : sequence of str
         A directory output's entries: names and shell patterns.
-    sweep : bool
+    sweep : bool or callable
         With ``force``, also remove previous entries matching ``patterns`` that the run
-        does not write (default); False replaces only what the run writes, by name.
+        does not write: all of them (True, default), none (False), or those for which
+        ``sweep(path)`` is true.
     check : callable, optional
         Called once the target is known to be no link or special file, before anything
         is created (the caller's own checks, such as permissions); what it raises
@@ -607,7 +577,7 @@ def claim_output(
         force=bool(force),
         names=tuple(names),
         patterns=tuple(patterns),
-        sweep=bool(sweep),
+        sweep=sweep if callable(sweep) else bool(sweep),
     )
     missing = [d for d in (target.parent, *target.parent.parents) if not d.exists()]
     try:
