@@ -150,9 +150,10 @@ force_option = click.option(
 gotcha_force_option = click.option(
     "--force",
     is_flag=True,
-    help="Replace the GOTCHA files of the names this command writes "
-    "(data_3dsar_pass1_azNNN_HH.mat, NNN from the data's azimuths); every other file in "
-    "the folder is kept, .mat files included. A single-file output (.h5, .cphd) is replaced as a whole.",
+    help="Replace the GOTCHA files this command writes (data_3dsar_pass1_azNNN_HH.mat, NNN "
+    "from the data's azimuths) and those of that name that sarmotion wrote before (marked "
+    "in their header); every other file in the folder is kept, .mat files included. A "
+    "single-file output (.h5, .cphd) is replaced as a whole.",
 )
 
 lenient_option = click.option(
@@ -177,7 +178,7 @@ def check_out(
     force: bool,
     names: Sequence[str] = (),
     patterns: Sequence[str] = (),
-    sweep: bool = True,
+    sweep: bool | Callable[[Path], bool] = True,
 ) -> None:
     """Check and claim ``--out`` before any work is done (:mod:`sarmotion.io.staging`).
 
