@@ -3,11 +3,12 @@
 From the bottom:
 
 1. ``core`` with the package's own helpers ``_validation``, ``_version``, ``_limits`` (the
-   memory budget) and ``errors``;
+   memory budget), ``_lazy`` (names imported on first use) and ``errors``;
 2. science, arrays in and arrays out: ``simulation`` and ``imaging`` import only the
    base; ``separation`` and ``motion`` import the base and ``imaging`` (neither imports
    the other nor ``simulation``);
-3. ``io``, acquisition formats: only the base;
+3. ``io``, acquisition formats: only the base; ``sources`` (any input as traces or
+   blocks: scenes simulated, files read) the base, ``simulation`` and ``io``;
 4. ``pipeline`` (the analysis: the science layers, and ``simulation`` to compare with
    the truth), then ``tracking`` (also ``pipeline``);
 5. ``documents`` (also ``io``, ``pipeline``, ``tracking``), then ``report`` (also
@@ -34,7 +35,7 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = "sarmotion"
 
-BASE = {"core", "_validation", "_version", "_limits", "_cluster", "errors"}
+BASE = {"core", "_validation", "_version", "_limits", "_lazy", "_cluster", "errors"}
 SCIENCE_LOW = BASE | {"simulation", "imaging"}
 SCIENCE = SCIENCE_LOW | {"separation", "motion"}
 
@@ -43,7 +44,8 @@ MAY_IMPORT: dict[str, set[str]] = {
     "core": {"_validation", "_version", "_limits", "errors"},
     "_validation": set(),
     "_limits": set(),
-    "_cluster": set(),
+    "_cluster": {"errors"},
+    "_lazy": set(),
     "_version": set(),
     "errors": set(),
     "simulation": BASE,
@@ -51,6 +53,7 @@ MAY_IMPORT: dict[str, set[str]] = {
     "separation": BASE | {"imaging"},
     "motion": BASE | {"imaging"},
     "io": BASE,
+    "sources": BASE | {"simulation", "io"},
     "pipeline": SCIENCE,
     "tracking": SCIENCE | {"pipeline"},
     "collection": SCIENCE | {"pipeline"},
@@ -59,7 +62,8 @@ MAY_IMPORT: dict[str, set[str]] = {
     "paper.rank": BASE | {"simulation"},
     "paper": SCIENCE
     | {"io", "pipeline", "tracking", "collection", "documents", "report", "paper.rank"},
-    "cli": SCIENCE | {"io", "pipeline", "tracking", "collection", "documents", "report", "paper"},
+    "cli": SCIENCE
+    | {"io", "sources", "pipeline", "tracking", "collection", "documents", "report", "paper"},
     "__main__": {"cli"},
 }
 

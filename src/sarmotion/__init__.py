@@ -7,7 +7,8 @@ PCA and their combination), range and cross-range speed estimation, separation o
 movers, trajectory estimation and focused imaging.
 
 The names a user starts with are here: :func:`analyze` with :class:`AnalysisOptions`,
-:func:`read_gotcha`, :func:`load_scene` and :func:`simulate`, :func:`backproject`,
+:func:`read` (any input as traces) and :func:`open` (as pulse blocks), :func:`read_gotcha`,
+:func:`load_scene` and :func:`simulate`, :func:`backproject`,
 :class:`Traces` and :class:`Scene`; an analysis is printed with ``print(result)`` (one
 line) or ``print(result.summary())`` and written with :func:`save` (what ``sarmotion
 analyze --out`` writes) or :func:`save_report` (the HTML report alone). The
@@ -18,12 +19,12 @@ the layers below its own (``tests/test_layering.py`` states the layers);
 :mod:`sarmotion.errors` holds the exceptions every layer raises.
 """
 
-from importlib import import_module
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING as _TYPE_CHECKING
 
+from ._lazy import attach as _attach
 from ._version import __version__
 
-if TYPE_CHECKING:
+if _TYPE_CHECKING:
     from .core import Traces
     from .imaging import backproject
     from .io import read_gotcha
@@ -54,20 +55,48 @@ __all__ = [
     "analyze",
     "backproject",
     "load_scene",
+    "open",
+    "read",
     "read_gotcha",
     "save",
     "save_report",
     "simulate",
 ]
 
-
-def __getattr__(name: str) -> object:
-    if name in _LAZY:
-        value = getattr(import_module(_LAZY[name], __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__, __dir__ = _attach(__name__, _LAZY, eager=("__version__", "open", "read"))
 
 
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+def read(inputs, **options):  # type: ignore[no-untyped-def]
+    """Read any input as :class:`Traces`: a scene is simulated, a file is read by its kind.
+
+    Parameters
+    ----------
+    inputs : path, str or sequence of them
+        A built-in scene name or a scene ``.toml`` file; a native traces ``.h5`` file;
+        GOTCHA ``.mat`` files or a directory of them (one aperture); or a CPHD ``.cphd``
+        file.
+    **options
+        Those of :func:`sarmotion.sources.read_source`: ``lenient``, ``speed_mps`` and
+        ``autofocus`` (GOTCHA), ``channel`` and ``vectors`` (CPHD), ``snr_db`` and ``seed``
+        (scenes).
+
+    Returns
+    -------
+    Traces
+        The acquisition (a scene's truth: :func:`sarmotion.sources.read_source`).
+    """
+    from .sources import read_source
+
+    return read_source(inputs, **options)[0]
+
+
+def open(inputs, **options):  # type: ignore[no-untyped-def]  # noqa: A001
+    """Open any input as a source of pulse blocks (large files are read block by block).
+
+    Parameters are those of :func:`read`; the source has ``radar``,
+    ``reference_point_m``, ``trajectory``, ``n_pulses``, ``metadata`` and
+    ``blocks(block_pulses)`` (:func:`sarmotion.sources.open_source`).
+    """
+    from .sources import open_source
+
+    return open_source(inputs, **options)

@@ -1,20 +1,19 @@
 """A command's inputs as traces: a scene (simulated here), native traces, GOTCHA or CPHD files.
 
-One entry point, :func:`read_inputs`, dispatches on what it is given: a built-in scene
-name or a scene ``.toml`` is simulated (its ground truth kept), a ``.h5`` file is read as
-native traces, ``.mat`` files as GOTCHA phase history (several files form one aperture),
-a ``.cphd`` file as CPHD phase history (one channel).
+One entry point, :func:`read_inputs` (:func:`sarmotion.sources.read_source`), dispatches
+on what it is given: a built-in scene name or a scene ``.toml`` is simulated (its ground
+truth kept), a ``.h5`` file is read as native traces, ``.mat`` files as GOTCHA phase
+history (several files form one aperture), a ``.cphd`` file as CPHD phase history (one
+channel). The help texts of the commands' inputs and frame are here.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 from ..core.traces import Traces
-from ..io import DataError, read_files
-from ..io.files import SUFFIXES
-from ..simulation import Simulation, builtin_scene_names, load_scene, simulate
+from ..simulation import Simulation, builtin_scene_names
+from ..sources import is_scene_reference, read_source
 
 __all__ = ["FRAME_HELP", "INPUTS_HELP", "LABELS_HELP", "is_scene_reference", "read_inputs"]
 
@@ -42,11 +41,6 @@ LABELS_HELP = (
     "Labels in brackets, such as [eq:image] or [sect:RPCA], name equations and sections of "
     "the paper (Borcea, Callaghan & Papanicolaou) by their LaTeX labels."
 )
-
-
-def is_scene_reference(text: str) -> bool:
-    """True for a built-in scene name or a path ending in ``.toml``."""
-    return text in builtin_scene_names() or text.lower().endswith(".toml")
 
 
 def read_inputs(
@@ -93,29 +87,13 @@ def read_inputs(
     DataError
         Missing or unreadable inputs, or a mix of kinds.
     """
-    if not inputs:
-        raise DataError("no INPUT given")
-    first = inputs[0]
-    if len(inputs) == 1 and is_scene_reference(first):
-        sim = simulate(load_scene(first), snr_db=snr_db, rng=seed)
-        return sim.traces, sim
-    for p in inputs:
-        if not Path(p).exists():
-            raise DataError(
-                f"input not found: {p} (no such file; the built-in scenes are "
-                f"{', '.join(builtin_scene_names())})"
-            )
-    if any(Path(p).suffix.lower() not in SUFFIXES for p in inputs if not Path(p).is_dir()):
-        raise DataError(
-            f"cannot read {', '.join(inputs)}: expected a built-in scene name, a scene .toml, "
-            "a native traces .h5 file, GOTCHA .mat files, or a CPHD .cphd file"
-        )
-    traces = read_files(
+    return read_source(
         inputs,
-        lenient=lenient,
         speed_mps=speed_mps,
         autofocus=autofocus,
+        snr_db=snr_db,
+        seed=seed,
+        lenient=lenient,
         channel=channel,
         vectors=vectors,
     )
-    return traces, None
