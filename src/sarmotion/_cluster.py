@@ -6,14 +6,35 @@ in ``collection``); it imports Dask only when a cluster is started.
 
 from __future__ import annotations
 
+import ipaddress
 import logging
 import os
+import re
+import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
+from pathlib import Path
 from typing import Any
 
-__all__ = ["MAX_WORKERS_PER_CORE", "check_workers", "local_cluster"]
+from .errors import InputError
+
+__all__ = [
+    "CONNECT_TIMEOUT_S",
+    "MAX_WORKERS_PER_CORE",
+    "SCHEDULER_SCHEMES",
+    "SCRATCH_PREFIX",
+    "WORKER_WAIT_S",
+    "SchedulerError",
+    "check_address",
+    "check_workers",
+    "connect_scheduler",
+    "local_cluster",
+    "remove_stale_scratch",
+]
+
+log = logging.getLogger(__name__)
 
 
 #: Most local workers per core. Each analysis is CPU-bound, so more workers than cores
@@ -31,6 +52,248 @@ def check_workers(n_workers: int) -> None:
             f"n_workers must be within [0, {limit}] ({MAX_WORKERS_PER_CORE} per core on "
             f"{cores} core(s); 0: no Dask), got {n_workers}"
         )
+
+
+#: Schemes of a scheduler's address: plain TCP, or TLS with the certificates of Dask's
+#: configuration. ``inproc://`` exists only inside the process that made it; ``ucx://``
+#: and ``ws://`` need transports sarmotion does not install.
+SCHEDULER_SCHEMES = ("tcp", "tls")
+#: Seconds to reach a scheduler and complete Dask's handshake. On a network that reaches
+#: the scheduler at all, a TCP connection and a TLS handshake take milliseconds to a few
+#: hundred (a few round trips); a peer silent this long is not a Dask scheduler, or is
+#: not answering.
+CONNECT_TIMEOUT_S = 5.0
+#: Seconds a reached scheduler may take to have its first worker. Workers started with
+#: their scheduler register within a second or two of it; a scheduler without workers
+#: would hold the command's tasks for ever.
+WORKER_WAIT_S = 5.0
+#: Prefix of a local cluster's scratch directory in the system's temporary directory; the
+#: owner's PID follows it (``sarmotion-dask-<pid>-<random>``).
+SCRATCH_PREFIX = "sarmotion-dask-"
+
+#: A host name: dot-separated labels of letters, digits and inner hyphens (RFC 1123).
+_LABEL = re.compile(r"(?!-)[A-Za-z0-9-]{1,63}(?<!-)")
+
+
+class SchedulerError(InputError):
+    """A scheduler address that is malformed, unreachable or without workers."""
+
+
+def check_address(address: Any, name: str = "scheduler") -> str:
+    """A Dask scheduler's address checked and written ``scheme://host:port``.
+
+    ``scheme`` is one of :data:`SCHEDULER_SCHEMES` (``tcp`` when omitted), ``host`` a host
+    name (RFC 1123 labels, at most 253 characters), an IPv4 address or an IPv6 address in
+    brackets, ``port`` a decimal number within [1, 65535]. A ``tls://`` address needs the
+    client certificate and the certificate authority of Dask's configuration
+    (``distributed.comm.tls.client.cert`` and ``distributed.comm.tls.ca-file``).
+    Nothing is connected to.
+
+    Raises
+    ------
+    SchedulerError
+        Anything else, naming ``name`` and the rule.
+    """
+    if not isinstance(address, str):
+        raise SchedulerError(f"{name} must be an address string, got {type(address).__name__}")
+    shown = repr(address) if len(address) <= 80 else repr(address[:77]) + "..."
+    rule = f"scheme://host:port, scheme one of {', '.join(s + '://' for s in SCHEDULER_SCHEMES)}"
+
+    def bad(why: str) -> SchedulerError:
+        return SchedulerError(f"{name} {shown}: {why} (rule: {rule})")
+
+    if not address or len(address) > 300 or not address.isascii() or not address.isprintable():
+        raise bad("not an address" if address else "empty")
+    if any(c.isspace() for c in address):
+        raise bad("holds a space")
+    scheme, sep, rest = address.partition("://")
+    if not sep:
+        scheme, rest = "tcp", address
+    scheme = scheme.lower()
+    if scheme == "inproc":
+        raise bad("inproc:// is an address inside one process, which another cannot reach")
+    if scheme not in SCHEDULER_SCHEMES:
+        raise bad(f"scheme {scheme!r} is not supported")
+    host, colon, port = rest.rpartition(":")
+    if not colon or not host:
+        raise bad("no host:port")
+    if not (port.isdigit() and len(port) <= 5 and 1 <= int(port) <= 65535):
+        raise bad("the port must be a number within [1, 65535]")
+    if host.startswith("[") and host.endswith("]"):
+        try:
+            ipaddress.IPv6Address(host[1:-1])
+        except ValueError:
+            raise bad("not an IPv6 address in brackets") from None
+    elif re.fullmatch(r"[0-9.]+", host):
+        try:
+            ipaddress.IPv4Address(host)
+        except ValueError:
+            raise bad("not an IPv4 address") from None
+    elif len(host) > 253 or not all(_LABEL.fullmatch(label) for label in host.split(".")):
+        raise bad("not a host name")
+    if scheme == "tls":
+        import dask
+
+        missing = [
+            key
+            for key in ("distributed.comm.tls.client.cert", "distributed.comm.tls.ca-file")
+            if not dask.config.get(key, None)
+        ]
+        if missing:
+            raise SchedulerError(
+                f"{name} {shown}: tls:// needs the certificates of Dask's configuration; "
+                f"{' and '.join(missing)} not set"
+            )
+    return f"{scheme}://{host}:{int(port)}"
+
+
+def _identity(address: str, timeout_s: float) -> dict[str, Any]:
+    """The scheduler's ``identity`` (its workers included), within ``timeout_s`` in all.
+
+    Every step (the connection, Dask's handshake, the request and the reply) runs under
+    one deadline in an event loop of its own thread: a peer that accepts and never
+    answers costs ``timeout_s``, not Dask's own retries (a ``distributed.Client`` given a
+    timeout still waits on such a peer without end).
+    """
+    import asyncio
+    import concurrent.futures
+
+    from distributed import Security
+    from distributed.comm import connect
+
+    async def ask() -> dict[str, Any]:
+        kwargs = Security().get_connection_args("client")
+        comm = await connect(address, timeout=timeout_s, **kwargs)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    def run() -> dict[str, Any]:
+        return asyncio.run(asyncio.wait_for(ask(), timeout_s))
+
+    import socket
+
+    host, _, port = address.split("://", 1)[1].rpartition(":")
+    # a refused or unroutable connection is said at once (Dask's connect retries it)
+    with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+        pass
+    pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="sarmotion-probe")
+    try:
+        reply = pool.submit(run).result(timeout=timeout_s + 1.0)
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        raise OSError("the peer is not a Dask scheduler")
+    return reply
+
+
+@contextmanager
+def connect_scheduler(
+    address: str,
+    *,
+    name: str = "scheduler",
+    connect_timeout_s: float | None = None,
+    worker_wait_s: float | None = None,
+) -> Iterator[Any]:
+    """A ``distributed.Client`` of the scheduler at ``address``, with at least one worker.
+
+    The address is checked first (:func:`check_address`). The connection and Dask's
+    handshake must complete within ``connect_timeout_s`` (default
+    :data:`CONNECT_TIMEOUT_S`) and the scheduler must have a worker within
+    ``worker_wait_s`` (default :data:`WORKER_WAIT_S`), so that neither a peer that
+    accepts and never answers nor a scheduler without workers can hold the caller.
+
+    Raises
+    ------
+    SchedulerError
+        A bad address, no answer in time (saying why), or no worker in time.
+    """
+    import time
+
+    from distributed import Client
+
+    address = check_address(address, name)
+    connect_s = CONNECT_TIMEOUT_S if connect_timeout_s is None else float(connect_timeout_s)
+    wait_s = WORKER_WAIT_S if worker_wait_s is None else float(worker_wait_s)
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            identity = _identity(address, connect_s)
+        except Exception as exc:  # the network's and Dask's failures alike: the address's
+            reason = (
+                "no answer"
+                if isinstance(exc, TimeoutError)
+                else str(exc).splitlines()[0]
+                if str(exc)
+                else type(exc).__name__
+            )
+            raise SchedulerError(
+                f"{name} {address}: no Dask scheduler answered within {connect_s:g} s "
+                f"({reason})"
+            ) from None
+        if identity.get("workers"):
+            break
+        if time.monotonic() >= deadline:
+            raise SchedulerError(
+                f"{name} {address}: the scheduler has no worker after {wait_s:g} s (start "
+                f"workers first: dask worker {address})"
+            )
+        time.sleep(min(0.2, max(0.0, deadline - time.monotonic())))
+    try:
+        client = Client(address, timeout=connect_s, set_as_default=False)
+    except Exception as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise SchedulerError(f"{name} {address}: cannot connect ({reason})") from None
+    try:
+        yield client
+    finally:
+        client.close(timeout=connect_s)
+
+
+def _pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (a process of another user counts as alive)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_scratch(directory: str | os.PathLike[str] | None = None) -> list[Path]:
+    """Remove the scratch directories of local clusters whose owner process is gone.
+
+    A local cluster's scratch directory (:data:`SCRATCH_PREFIX` ``<pid>-...`` in the
+    system's temporary directory, or ``directory``) is removed with the cluster; a process
+    killed outright (SIGKILL) cannot remove it. Each one whose PID names no running
+    process, and that belongs to this user, is removed here. Returns those removed.
+    """
+    root = Path(tempfile.gettempdir() if directory is None else directory)
+    removed = []
+    try:
+        entries = list(root.glob(SCRATCH_PREFIX + "*"))
+    except OSError:
+        return removed
+    for entry in entries:
+        m = re.fullmatch(re.escape(SCRATCH_PREFIX) + r"(\d+)-.*", entry.name)
+        if not m:
+            continue
+        try:
+            st = entry.lstat()
+        except OSError:
+            continue
+        if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid():
+            continue
+        if _pid_alive(int(m.group(1))):
+            continue
+        shutil.rmtree(entry, ignore_errors=True)
+        if not entry.exists():
+            removed.append(entry)
+            log.debug("removed the scratch directory %s of a process that ended", entry)
+    return removed
 
 
 @contextmanager
@@ -71,8 +334,11 @@ def local_cluster(
 
     check_workers(n_workers)
     security = Security.temporary() if processes else None
+    remove_stale_scratch()
     with ExitStack() as stack:
-        scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="sarmotion-dask-"))
+        scratch = stack.enter_context(
+            tempfile.TemporaryDirectory(prefix=f"{SCRATCH_PREFIX}{os.getpid()}-")
+        )
         stack.enter_context(
             dask.config.set(
                 {

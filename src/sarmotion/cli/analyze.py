@@ -22,14 +22,19 @@ from .common import (
     InputError,
     Progress,
     as_flags,
+    check_image_size,
     check_out,
+    connect_scheduler_flag,
     false_alarm_rate_option,
     force_option,
     lenient_option,
+    max_speed_callback,
     method_option,
     noise_options,
     out_option,
+    scheduler_callback,
     speed_option,
+    workers_callback,
 )
 from .describe import mover_lines, not_estimated_lines
 from .inputs import FRAME_HELP, INPUTS_HELP
@@ -117,6 +122,13 @@ def run_analyze(
         click.echo(line)
 
 
+#: Why --sicd is refused for a scene cut into patches (``{n}``: the patches).
+SICD_PATCHES = (
+    "--sicd: this analysis is cut into {n} patch(es) (or given a --region); SICD images are "
+    "written for a scene of one patch analysed whole, without --region: leave --sicd out"
+)
+
+
 def _write_sicd_images(result, stage: Path) -> None:
     """The stationary image and each mover's compensated image as SICD files."""
     images = [("stationary.nitf", result.stationary_image, None)]
@@ -185,7 +197,8 @@ def _write_sicd_images(result, stage: Path) -> None:
     "--sicd",
     is_flag=True,
     help="Also write the stationary image and each mover's image as SICD files "
-    "(OUT/stationary.nitf, OUT/mover-K.nitf).",
+    "(OUT/stationary.nitf, OUT/mover-K.nitf). For a scene of one patch (no --region): a "
+    "scene cut into patches is refused before any analysis.",
 )
 @click.option(
     "--region",
@@ -214,19 +227,25 @@ def _write_sicd_images(result, stage: Path) -> None:
     type=float,
     default=15.0,
     show_default=True,
-    help="Patches: largest ground speed of a mover (m/s) their margins are sized for.",
+    callback=max_speed_callback,
+    help="Patches: largest ground speed of a mover (m/s, at most 343: the speed of sound) "
+    "their margins are sized for.",
 )
 @click.option(
     "--scheduler",
     default=None,
-    help="Patches: address of a Dask scheduler (tcp://host:8786); default a local cluster.",
+    callback=scheduler_callback,
+    help="Patches: address of a Dask scheduler (tcp://host:8786, or tls://host:8786 with the "
+    "certificates of Dask's configuration); default a local cluster. It must answer within "
+    "5 s and have a worker within 5 s more, else the command stops before any work.",
 )
 @click.option(
     "--workers",
     "n_workers",
     type=int,
     default=None,
-    help="Patches: local Dask workers (default one per core; 0: no Dask).",
+    callback=workers_callback,
+    help="Patches: local Dask workers (default one per core; at most 4 per core; 0: no Dask).",
 )
 @click.option(
     "--device",
@@ -285,6 +304,8 @@ def analyze(
         device,
         defocus_search,
     )
+    check_image_size(size_m, options.spacing_m)
+    client = connect_scheduler_flag(scheduler)
     # --out is claimed before the inputs are read, whether one analysis or patches will
     # write it: a concurrent run into the same directory is refused at once.
     check_out(
@@ -314,9 +335,10 @@ def analyze(
         out,
         copts,
         region=region,
-        scheduler=scheduler,
+        scheduler=client,
         n_workers=n_workers,
         single=single,
+        refuse_patches=SICD_PATCHES if sicd else None,
         reading=ReadOptions(
             speed_mps=speed_mps,
             snr_db=snr_db,

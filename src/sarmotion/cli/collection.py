@@ -72,6 +72,7 @@ def run_collection(
     reading: ReadOptions | None = None,
     progress: bool = False,
     force: bool = False,
+    refuse_patches: str | None = None,
 ) -> None:
     """Plan the patches of ``inputs``; one patch: ``single(read)``; else the collection.
 
@@ -97,6 +98,13 @@ def run_collection(
     except RegionError as exc:
         text = str(exc).replace("patch size", "--patch-size").replace("region", "--region", 1)
         raise InputError(text) from None
+    if refuse_patches and not (plan.single and region is None):
+        # an option the patches cannot honour: refused from the plan, before any analysis
+        raise InputError(refuse_patches.format(n=len(plan.patches)))
+    if plan.single and region is None and scheduler is not None:
+        logging.getLogger(__name__).info(
+            "one patch: analysed in this process (--scheduler is used for patches)"
+        )
     if plan.single and region is None:
         single(read_first if read_first is not None else read())
         return

@@ -19,21 +19,29 @@ from ..errors import InputError
 from ..imaging import ImageGrid
 
 __all__ = [
+    "MAX_GROUND_SPEED_MPS",
+    "MAX_IMAGE_SIDE_PIXELS",
     "InputError",
     "Progress",
     "as_flags",
+    "check_image_size",
     "check_out",
+    "check_workers_flag",
+    "connect_scheduler_flag",
     "dask_logging",
     "extent_grid",
     "false_alarm_rate_option",
     "force_option",
     "gotcha_force_option",
     "lenient_option",
+    "max_speed_callback",
     "method_option",
     "noise_options",
     "out_option",
+    "scheduler_callback",
     "speed_option",
     "square_grid",
+    "workers_callback",
 ]
 
 
@@ -160,7 +168,8 @@ lenient_option = click.option(
     "--lenient",
     is_flag=True,
     help="Accept input files that break a plausibility rule (antenna track, r0, dynamic "
-    "range), with a warning: for unusual but genuine data.",
+    "range), with a warning: for unusual but genuine data. A scene whose targets lie "
+    "beyond its unambiguous scene is simulated aliased, with a warning saying where to.",
 )
 
 
@@ -265,6 +274,86 @@ speed_option = click.option(
 )
 
 
+#: Largest ground speed of a mover (m/s) that --max-speed accepts: the speed of sound in
+#: air at 20 degC, just above the land speed record (ThrustSSC, 341 m/s in 1997). No ground
+#: vehicle moves faster.
+MAX_GROUND_SPEED_MPS = 343.0
+
+
+def max_speed_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
+    """``--max-speed`` within ``(0, MAX_GROUND_SPEED_MPS]`` m/s."""
+    if not (np.isfinite(value) and 0.0 < value <= MAX_GROUND_SPEED_MPS):
+        raise InputError(
+            f"--max-speed must be within (0, {MAX_GROUND_SPEED_MPS:g}] m/s (a ground mover: "
+            f"below the speed of sound), got {value!r}"
+        )
+    return value
+
+
+def check_workers_flag(n_workers: int | None) -> int | None:
+    """``--workers``: None (one per core), 0 (no Dask) or within the local cluster's limit.
+
+    The rule of :func:`~sarmotion._cluster.check_workers`, for every command that takes
+    the flag.
+    """
+    from .._cluster import check_workers
+
+    if n_workers is not None and n_workers != 0:
+        with as_flags(n_workers="--workers"):
+            check_workers(n_workers)
+    return n_workers
+
+
+def workers_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
+    """Click callback of ``--workers`` (:func:`check_workers_flag`)."""
+    return check_workers_flag(value)
+
+
+def scheduler_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
+    """``--scheduler``: a ``tcp://`` or ``tls://`` address (:func:`~sarmotion._cluster.check_address`)."""
+    from .._cluster import check_address
+
+    if value is None:
+        return None
+    with as_flags():
+        return check_address(value, "--scheduler")
+
+
+def connect_scheduler_flag(address: str | None) -> Any:
+    """A client of ``--scheduler`` held until the command ends, or None without the flag.
+
+    Connected before any work (:func:`~sarmotion._cluster.connect_scheduler`: the
+    address's rule, a connection within its timeout, a worker within its wait); each
+    failure is one line naming the address.
+    """
+    if address is None:
+        return None
+    from .._cluster import connect_scheduler
+
+    ctx = click.get_current_context()
+    with dask_logging():
+        return ctx.with_resource(connect_scheduler(address, name="--scheduler"))
+
+
+#: Most pixels a side of an image (``--size`` / the analysis's pixel spacing): a 4096 x
+#: 4096 complex128 image is 256 MiB, and an analysis holds a few of them at once.
+MAX_IMAGE_SIDE_PIXELS = 4096
+
+
+def check_image_size(size_m: float | None, spacing_m: float, flag: str = "--size") -> None:
+    """InputError unless ``size_m`` (m) gives at most :data:`MAX_IMAGE_SIDE_PIXELS` a side."""
+    if size_m is None:
+        return
+    with as_flags():
+        positive(size_m, flag, unit="m")
+    if size_m / spacing_m > MAX_IMAGE_SIDE_PIXELS:
+        raise InputError(
+            f"{flag} {size_m:g} m at {spacing_m:g} m pixels gives {size_m / spacing_m:.3g} "
+            f"pixels a side (at most {MAX_IMAGE_SIDE_PIXELS}: {flag} <= "
+            f"{MAX_IMAGE_SIDE_PIXELS * spacing_m:g} m)"
+        )
+
+
 def _seed_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
     if value is not None and value < 0:
         raise InputError(f"--seed must be >= 0, got {value}")
@@ -312,9 +401,10 @@ def square_grid(size_m: float, spacing_m: float, centre: tuple[float, float]) ->
         size_m = positive(size_m, "--size", unit="m")
         spacing_m = positive(spacing_m, "--spacing", unit="m")
     _within_envelope("--size/--centre", [c + h for c in centre for h in (-size_m / 2, size_m / 2)])
-    if size_m / spacing_m > 4096:
+    if size_m / spacing_m > MAX_IMAGE_SIDE_PIXELS:
         raise InputError(
-            f"--size/--spacing gives {size_m / spacing_m:.0f} pixels a side (max 4096)"
+            f"--size/--spacing gives {size_m / spacing_m:.0f} pixels a side "
+            f"(max {MAX_IMAGE_SIDE_PIXELS})"
         )
     return ImageGrid.square(centre_m=centre, size_m=size_m, spacing_m=spacing_m)
 
@@ -328,6 +418,6 @@ def extent_grid(extent: tuple[float, float, float, float], spacing_m: float) -> 
             f"{spacing_m}"
         )
     _within_envelope("--grid", extent)
-    if max(x1 - x0, y1 - y0) / spacing_m > 4096:
-        raise InputError("--grid/--spacing gives more than 4096 pixels a side")
+    if max(x1 - x0, y1 - y0) / spacing_m > MAX_IMAGE_SIDE_PIXELS:
+        raise InputError(f"--grid/--spacing gives more than {MAX_IMAGE_SIDE_PIXELS} pixels a side")
     return ImageGrid.from_extent(x_range_m=(x0, x1), y_range_m=(y0, y1), spacing_m=spacing_m)

@@ -17,20 +17,23 @@ from ..report.tracks import turn_line, write_tracks_report
 from ..separation import SeparationOptions
 from ..tracking import TrackingOptions, sub_aperture_slices
 from ..tracking import track as run_tracking
-from ..tracking.scale import check_workers
 from ..tracking.sub_apertures import check_sub_apertures
 from .common import (
     InputError,
     Progress,
     as_flags,
+    check_image_size,
     check_out,
+    connect_scheduler_flag,
     dask_logging,
     false_alarm_rate_option,
     force_option,
     lenient_option,
     method_option,
     out_option,
+    scheduler_callback,
     speed_option,
+    workers_callback,
 )
 from .inputs import FRAME_HELP, INPUTS_HELP, read_inputs
 from .main import elapsed_s
@@ -72,9 +75,11 @@ OUTPUTS = ("tracks.json", "tracks.png", "report.html")
 @click.option(
     "--scheduler",
     default=None,
+    callback=scheduler_callback,
     help="Address of a Dask scheduler (tcp://host:8786, or tls://host:8786 with the "
     "certificates of Dask's configuration); default a local cluster that only this "
-    "process can use.",
+    "process can use. It must answer within 5 s and have a worker within 5 s more, else "
+    "the command stops before any work.",
 )
 @click.option(
     "--dashboard",
@@ -88,6 +93,7 @@ OUTPUTS = ("tracks.json", "tracks.png", "report.html")
     "n_workers",
     type=int,
     default=None,
+    callback=workers_callback,
     help="Local Dask workers (default one per core; at most 4 per core; 0: no Dask).",
 )
 @click.option(
@@ -168,13 +174,10 @@ def track(
             if text.startswith(name + " "):
                 raise InputError(flag + text[len(name) :]) from None
         raise InputError(text) from None
-    if n_workers is not None and n_workers < 0:
-        raise InputError(f"--workers must be >= 0, got {n_workers}")
-    if n_workers:
-        with as_flags(n_workers="--workers"):
-            check_workers(n_workers)
+    check_image_size(size_m, options.analysis.spacing_m)
     if dashboard_address is not None and (scheduler is not None or n_workers == 0):
         raise InputError("--dashboard applies to the local cluster (no --scheduler, --workers > 0)")
+    client = connect_scheduler_flag(scheduler)
     check_out(out, force=force, names=OUTPUTS)
     roads = read_roads(roads_file) if roads_file is not None else ()
     with as_flags(speed_mps="--speed"):
@@ -205,7 +208,7 @@ def track(
             traces,
             options,
             roads=roads,
-            scheduler=scheduler,
+            scheduler=client,
             n_workers=n_workers,
             processes=not threads,
             dashboard_address=dashboard_address,

@@ -537,7 +537,7 @@ def _run(
         return
     from distributed import Client, as_completed
 
-    from .._cluster import local_cluster
+    from .._cluster import connect_scheduler, local_cluster
 
     cores = os.cpu_count() or 1
     with ExitStack() as stack:
@@ -548,8 +548,8 @@ def _run(
             cluster = stack.enter_context(local_cluster(workers, processes=processes))
             client = stack.enter_context(Client(cluster))
             threads: int | None = max(1, cores // workers)
-        elif isinstance(scheduler, str):
-            client = stack.enter_context(Client(scheduler))
+        elif isinstance(scheduler, str):  # within a timeout, with a worker (or refused)
+            client = stack.enter_context(connect_scheduler(scheduler))
             threads = None
         else:
             client = scheduler

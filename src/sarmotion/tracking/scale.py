@@ -20,7 +20,9 @@ Where the tasks run:
 - ``scheduler="tcp://host:8786"`` (or ``"tls://..."``, or a ``distributed.Client``):
   that cluster's workers, which must have sarmotion importable. Its security is the
   cluster's own: a ``tls://`` address is reached with the certificates of Dask's
-  configuration (``distributed.comm.tls.*``), as any Dask client does.
+  configuration (``distributed.comm.tls.*``), as any Dask client does. The scheduler
+  must answer and have a worker within the limits of
+  :func:`~sarmotion._cluster.connect_scheduler`, else ``SchedulerError``.
 - ``n_workers=0``: no Dask, the sub-apertures one after the other in this process.
 """
 
@@ -32,7 +34,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import ExitStack, nullcontext
 from typing import Any
 
-from .._cluster import MAX_WORKERS_PER_CORE, check_workers, local_cluster
+from .._cluster import MAX_WORKERS_PER_CORE, check_workers, connect_scheduler, local_cluster
 from ..core import Traces
 from ..pipeline import AnalysisOptions
 from .sub_apertures import SubApertureDetections, analyze_sub_aperture, sub_aperture_time_s
@@ -137,8 +139,8 @@ def map_sub_apertures(
                 from threadpoolctl import threadpool_limits
 
                 stack.enter_context(threadpool_limits(limits=threads))
-        elif isinstance(scheduler, str):
-            client = stack.enter_context(Client(scheduler))
+        elif isinstance(scheduler, str):  # within a timeout, with a worker (or refused)
+            client = stack.enter_context(connect_scheduler(scheduler))
             threads = numba_threads = None
         else:
             client = scheduler
