@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.constants import MIN_GRAZING_DEG, RANGE_ENVELOPE_M, SPEED_RANGE_MPS
 from .errors import DataError
 
 __all__ = [
@@ -44,16 +45,9 @@ MAX_STEP = 2.5
 MAX_BEND = 0.01
 #: Largest ``max |P| / median |P|`` of a phase history (60 dB).
 MAX_DYNAMIC_RANGE = 1e3
-#: Antenna distance from the scene centre (m) inside which positions are plausible.
-RANGE_ENVELOPE_M = (10.0, 1e6)
-#: Platform speeds (m/s) implied by positions and slow times: from a ground-based rail
-#: SAR (mm/s) to a satellite in low orbit (7.6 km/s), as ``--speed`` accepts.
-SPEED_RANGE_MPS = (1e-3, 1e4)
-#: Smallest grazing angle (deg) at which the antenna sees the reference point. Airborne
-#: SAR images at about 10-60 deg, spaceborne at 15-75 deg; below a few degrees the
-#: ground is in shadow and multipath. 5 deg is half the usual airborne minimum; a
-#: reference point displaced by 100 km from a scene seen from 7 km altitude is at 4 deg.
-MIN_GRAZING_DEG = 5.0
+# The acquisition bounds RANGE_ENVELOPE_M, SPEED_RANGE_MPS and MIN_GRAZING_DEG are stated
+# once, in sarmotion.core.constants: the scene files meet them too.
+
 #: Samples of a constant phase history agree to this fraction of their magnitude
 #: (4 float32 roundings): the value of a fill, not the echoes of a scene.
 _CONSTANT_TOL = 4.0 * float(np.finfo(np.float32).eps)

@@ -467,9 +467,17 @@ def point_peak_width(traces: Traces, *, oversample: int = 16) -> float:
     ``p`` is the inverse transform (oversampled) of the pulse spectrum *measured on the
     data*, ``sqrt(mean_s |P(s, f)|^2)``: the cross terms of targets at different ranges
     average out over slow time, and a file format that does not record the pulse shape
-    (GOTCHA's) cannot mislead it.
+    (GOTCHA's) cannot mislead it. The mean is taken on ``|P|`` scaled by its largest
+    value, so that data of any magnitude (1e-300 squares to zero) give the same shape;
+    data with no signal at all (every sample zero) measure nothing, and the radar's
+    nominal spectrum (:meth:`~sarmotion.core.radar.Radar.spectral_weights`) is used.
     """
-    w = np.sqrt(np.mean(np.abs(traces.phase_history()) ** 2, axis=0))
+    magnitude = np.abs(traces.phase_history())
+    peak = float(magnitude.max()) if magnitude.size else 0.0
+    if peak > 0.0 and np.isfinite(peak):
+        w = np.sqrt(np.mean((magnitude / peak) ** 2, axis=0))
+    else:
+        w = np.asarray(traces.radar.spectral_weights(), dtype=np.float64)
     n = w.size
     pad = n * (oversample - 1)
     spectrum = np.pad(w, (pad // 2, pad - pad // 2))

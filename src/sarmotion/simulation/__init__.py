@@ -15,7 +15,15 @@
 from .collection import CollectionScene, collection_acquisition, random_collection
 from .forward import Simulation, add_noise, inject, simulate, simulate_phase_history
 from .paths import AcceleratingTarget, PathTarget, TurningTarget, radar_with_range_window
-from .scene import PointTarget, Scene, SceneError, builtin_scene_names, load_scene, random_scene
+from .scene import (
+    PointTarget,
+    Scene,
+    SceneError,
+    builtin_scene_names,
+    check_aliasing,
+    load_scene,
+    random_scene,
+)
 
 __all__ = [
     "CollectionScene",
@@ -30,6 +38,7 @@ __all__ = [
     "Simulation",
     "add_noise",
     "builtin_scene_names",
+    "check_aliasing",
     "inject",
     "load_scene",
     "radar_with_range_window",
