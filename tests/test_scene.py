@@ -94,3 +94,195 @@ def test_missing_and_unknown_scenes(tmp_path):
         load_scene(tmp_path / "nope.toml")
     with pytest.raises(SceneError, match="unknown scene 'scene9'"):
         load_scene("scene9")
+
+
+# ------------------------------------------------------------------ unambiguous scene
+# The default acquisition: GOTCHA's radar and one degree of its circle.
+from sarmotion.core import C, Radar  # noqa: E402
+from sarmotion.core.geometry import (  # noqa: E402
+    GOTCHA_ALTITUDE_M,
+    GOTCHA_GROUND_RADIUS_M,
+    GOTCHA_PULSES_PER_DEG,
+)
+from sarmotion.simulation import check_aliasing  # noqa: E402
+
+COS_PSI = GOTCHA_GROUND_RADIUS_M / np.hypot(GOTCHA_GROUND_RADIUS_M, GOTCHA_ALTITUDE_M)
+#: Ground-range window of the default radar at the aperture centre (m): c / (2 df cos psi).
+WINDOW_GROUND_M = C / (2.0 * Radar().frequency_step_hz * COS_PSI)
+#: Alias-free cross-range extent of the default circle (m): lambda / (2 cos psi dphi).
+EXTENT_CROSS_M = Radar().wavelength_m / (2.0 * COS_PSI * np.deg2rad(1.0 / GOTCHA_PULSES_PER_DEG))
+
+
+def _scene_text(targets, radar="", trajectory=""):
+    out = []
+    if radar:
+        out += ["[radar]", radar]
+    if trajectory:
+        out += ["[trajectory]", trajectory]
+    for pos, vel in targets:
+        out += ["[[targets]]", f"position_m = [{float(pos[0])!r}, {float(pos[1])!r}]"]
+        if vel is not None:
+            out += [f"velocity_mps = [{float(vel[0])!r}, {float(vel[1])!r}]"]
+    return "\n".join(out) + "\n"
+
+
+@pytest.mark.parametrize("name", sorted(COUNTS))
+def test_builtin_scenes_lie_inside_their_unambiguous_scene(name):
+    check_aliasing(load_scene(name))  # raises on a target that aliases
+
+
+@pytest.mark.parametrize("share", [0.97, 1.03])
+def test_range_window_bounds_a_target_in_ground_range(tmp_path, share):
+    # x is ground range for the default look (antenna towards +x).
+    x = -share * 0.5 * WINDOW_GROUND_M
+    path = _write(tmp_path, _scene_text([((0.0, 0.0), None), ((x, 0.0), None)]))
+    if share < 1:
+        Scene.from_file(path)
+        return
+    with pytest.raises(SceneError) as info:
+        Scene.from_file(path)
+    text = str(info.value)
+    assert "\n" not in text and text.startswith(str(path))
+    assert "targets[1] at (" in text
+    assert f"{WINDOW_GROUND_M:.6g} m of ground range" in text  # the extent, from c / (2 df)
+    assert "radar.frequency_step_hz <=" in text and "radar.n_samples >=" in text
+    assert "--lenient" in text
+    # the step it names fits the target, with the sample count it names (same band)
+    df = float(text.split("radar.frequency_step_hz <= ")[1].split(" Hz")[0])
+    n = int(text.split("radar.n_samples >= ")[1].split(" ")[0])
+    assert df < Radar().frequency_step_hz
+    Scene.from_file(
+        _write(
+            tmp_path,
+            _scene_text(
+                [((0.0, 0.0), None), ((x, 0.0), None)],
+                radar=f"frequency_step_hz = {float(df * (1 - 1e-6))!r}\nn_samples = {n}",
+            ),
+        )
+    )
+
+
+@pytest.mark.parametrize("share", [0.97, 1.03])
+def test_cross_range_extent_bounds_a_target_on_the_circle(tmp_path, share):
+    y = share * 0.5 * EXTENT_CROSS_M
+    path = _write(tmp_path, _scene_text([((0.0, y), None)]))
+    if share < 1:
+        Scene.from_file(path)
+        return
+    with pytest.raises(SceneError, match=r"trajectory\.pulses_per_deg >= ") as info:
+        Scene.from_file(path)
+    text = str(info.value)
+    assert f"extent of {EXTENT_CROSS_M:.6g} m" in text and "\n" not in text
+    ppd = float(text.split("pulses_per_deg >= ")[1].split(" ")[0])
+    # the density it names fits the target (same aperture, more pulses)
+    Scene.from_file(
+        _write(
+            tmp_path, _scene_text([((0.0, y), None)], trajectory=f"pulses_per_deg = {float(ppd * 1.001)!r}")
+        )
+    )
+
+
+def test_cross_range_extent_of_a_straight_path_is_lambda_r_over_2dx(tmp_path):
+    dx, R = 2.0, 10_000.0
+    traj = (
+        f'kind = "linear"\ncentre_m = [{R / np.sqrt(2)}, 0.0, {R / np.sqrt(2)}]\n'
+        f"pulse_spacing_m = {dx}\naperture_m = 200.0"
+    )
+    extent = Radar().wavelength_m * R / (2.0 * dx)  # broadside: the path along the cross range
+    Scene.from_file(_write(tmp_path, _scene_text([((0.0, 0.47 * extent), None)], trajectory=traj)))
+    with pytest.raises(SceneError, match=r"trajectory\.pulse_spacing_m <= ") as info:
+        Scene.from_file(
+            _write(tmp_path, _scene_text([((0.0, 0.53 * extent), None)], trajectory=traj))
+        )
+    assert f"extent of {extent:.4g}" in str(info.value).replace(f"{extent:.6g}", f"{extent:.4g}")
+
+
+def test_a_mover_is_checked_along_its_path(tmp_path):
+    # inside the window at s = 0, out of it by the aperture's end (0.88 s at 60 m/s: 53 m)
+    x = -0.4 * WINDOW_GROUND_M
+    Scene.from_file(_write(tmp_path, _scene_text([((x, 0.0), None)])))
+    with pytest.raises(SceneError, match=r"targets\[0\] .* moving, at"):
+        Scene.from_file(_write(tmp_path, _scene_text([((x, 0.0), (60.0, 0.0))])))
+
+
+def test_lenient_warns_where_the_target_aliases_to(tmp_path, caplog):
+    x = -110.0
+    path = _write(tmp_path, _scene_text([((0.0, 0.0), None), ((x, 0.0), (6.0, 8.0))]))
+    with caplog.at_level("WARNING", logger="sarmotion.simulation"):
+        scene = load_scene(path, lenient=True)
+    assert len(scene.moving) == 1
+    (record,) = [r for r in caplog.records if "aliases to about" in r.getMessage()]
+    alias = float(record.getMessage().split("aliases to about ")[1].split(" m")[0])
+    assert alias == pytest.approx(x + WINDOW_GROUND_M, abs=0.01)  # folded by one window
+
+
+# ------------------------------------------------------------------ hostile files
+@pytest.mark.parametrize(
+    "text",
+    [
+        "x = " + "[" * 5000 + "]" * 5000 + "\n",
+        "x = " + "{a = " * 3000 + "1" + "}" * 3000 + "\n",
+        "[" + ".".join(["a"] * 20000) + "]\n",
+        "[[targets]]\nposition_m = [0, 0]\nlabel." + ".".join(["b"] * 50) + " = 1\n",
+    ],
+)
+def test_deep_nesting_is_refused_in_one_line(tmp_path, text):
+    with pytest.raises(SceneError, match=r"nest more than 8 deep") as info:
+        Scene.from_file(_write(tmp_path, text))
+    assert "\n" not in str(info.value)
+
+
+def test_brackets_in_strings_and_comments_are_not_nesting(tmp_path):
+    text = (
+        '# [[[[[[[[[[[[\nname = "[[[[[[[[[[[["\ndescription = """{{{{{{{{{{\n]]]]"""\n'
+        "[[targets]]\nposition_m = [0, 0]\nlabel = '[[[[[[[[[[[['\n"
+    )
+    assert Scene.from_file(_write(tmp_path, text)).name == "[[[[[[[[[[[["
+
+
+@pytest.mark.parametrize(
+    ("setting", "pattern"),
+    [
+        (
+            '[trajectory]\nkind = "linear"\ncentre_m = [7000, 0, 7000]\npulse_spacing_m = 0',
+            r"trajectory\.pulse_spacing_m must be > 0",
+        ),
+        (
+            '[trajectory]\nkind = "linear"\ncentre_m = [7000, 0, 7000]\npulse_spacing_m = 1e-320',
+            r"aperture_m / pulse_spacing_m is not a finite number of pulses",
+        ),
+        ("[trajectory]\naltitude_m = 1e30", r"1e\+06 m .*altitude_m"),
+        ("[trajectory]\nground_radius_m = 1e30", r"1e\+06 m .*ground_radius_m"),
+        ("[trajectory]\nground_radius_m = 1e5", r"grazing angle of 4.18 deg"),
+        ("[trajectory]\nspeed_mps = 1e30", r"speed_mps must be within 0.001 to 10000 m/s"),
+        ("[trajectory]\nspeed_mps = 1e-9", r"speed_mps must be within"),
+        ("[radar]\ncarrier_hz = 1e30", r"carrier_hz must be within 3e\+06 to 3e\+12 Hz"),
+        ("[trajectory]\nn_pulses = 1", r"n_pulses must be >= 2"),
+    ],
+)
+def test_values_outside_the_readers_bounds_are_refused(tmp_path, setting, pattern):
+    text = setting + "\n[[targets]]\nposition_m = [1.0, 2.0]\n"
+    with pytest.raises(SceneError, match=pattern) as info:
+        Scene.from_file(_write(tmp_path, text))
+    assert "\n" not in str(info.value)
+
+
+def test_the_bounds_are_the_readers(tmp_path):
+    from sarmotion.io import plausibility
+
+    assert plausibility.SPEED_RANGE_MPS == (1e-3, 1e4)
+    edge = "[trajectory]\nspeed_mps = 1e4\n[[targets]]\nposition_m = [1.0, 2.0]\n"
+    Scene.from_file(_write(tmp_path, edge))
+
+
+@pytest.mark.parametrize(
+    ("amplitude", "ok"),
+    [(1e-15, True), (1e-16, False), (1e-300, False), (1e14, True), (1e15, False)],
+)
+def test_amplitudes_within_float32_power_range(tmp_path, amplitude, ok):
+    text = f"[[targets]]\nposition_m = [1.0, 2.0]\namplitude = {amplitude!r}\n"
+    if ok:
+        assert abs(Scene.from_file(_write(tmp_path, text)).targets[0].reflectivity) == amplitude
+    else:
+        with pytest.raises(SceneError, match="amplitude must be within 1e-15 to 1e"):
+            Scene.from_file(_write(tmp_path, text))

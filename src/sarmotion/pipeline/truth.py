@@ -1,11 +1,19 @@
 """Comparison of an analysis with the true scene of a simulation or an injection.
 
-Each estimated mover is matched to the unused true mover of nearest range speed within
-four range-speed resolutions; an estimate with none is a false mover. Errors are estimate
-minus truth; the position error is also split along the ground range and cross-range
-directions at the reference point. ``family_*`` compare the truth with the member of the
-estimate's cross-range family at the truth's cross-range offset: the part of the error
-the data of a few degrees can resolve (:mod:`sarmotion.motion.aperture`).
+An estimated mover is matched on what the data fix of it: its cross-range family
+(positions and velocities that fit the data equally, ``docs/results.md``), slid to the
+cross range of a true mover. It matches that mover when the family member there lies
+within :data:`MATCH_CELLS` ground-range resolution cells of the true position, its
+velocity within :data:`MATCH_CELLS` cross-range-speed resolutions of the true velocity,
+and its range speed within :data:`MATCH_CELLS` range-speed resolutions; among several,
+the nearest in those units, each true mover once. An estimate with none is a false
+mover, a true mover with none a missed one: an echo that aliased in range (a mover 145 m
+from its truth, folded into the window) is both, whatever its range speed.
+
+Errors are estimate minus truth; the position error is also split along the ground range
+and cross-range directions at the reference point. ``family_*`` compare the truth with
+the member of the estimate's cross-range family at the truth's cross-range offset: the
+part of the error the data of a few degrees can resolve (:mod:`sarmotion.motion.aperture`).
 """
 
 from __future__ import annotations
@@ -20,17 +28,24 @@ from ..core.acquisition import Acquisition
 from ..core.geometry import cross_range_speed, range_speed
 from ..core.traces import Traces
 from ..imaging import resolution
-from ..motion import family_member, trajectory_error
+from ..motion import cross_range_speed_resolution, family_member, trajectory_error
 from ..simulation import Scene
 from .results import AnalysisResult, Mover
 
 __all__ = [
+    "MATCH_CELLS",
     "TrueMover",
     "MoverErrors",
     "TruthComparison",
     "compare_with_truth",
     "family_errors",
+    "family_match",
 ]
+
+
+#: A match lies within this many resolutions (ground range, range speed, cross-range
+#: speed) of the truth: as the range-speed detector's own peak separation, four.
+MATCH_CELLS = 4.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -124,13 +139,31 @@ def compare_with_truth(result: AnalysisResult, scene: Scene) -> TruthComparison:
         )
         for i, t in enumerate(scene.moving)
     )
+    res = resolution(result.traces)
+    scales = (
+        float(res.ground_range_m),
+        float(result.range_speeds.resolution_mps),
+        float(cross_range_speed_resolution(result.traces)),
+    )
     used: set[int] = set()
     errors: list[MoverErrors | None] = []
-    tol = 4.0 * result.range_speeds.resolution_mps
     for m in result.movers:
-        u = m.range_speed_mps
-        cands = [(abs(t.range_speed_mps - u), i) for i, t in enumerate(truth) if i not in used]
-        cands = [c for c in cands if c[0] <= tol]
+        cands = []
+        for i, t in enumerate(truth):
+            if i in used:
+                continue
+            cost = family_match(
+                position_m=m.position_m[:2],
+                velocity_mps=m.velocity_mps,
+                range_speed_mps=m.range_speed_mps,
+                position_per_m=m.family_position_per_m,
+                velocity_per_m=m.family_velocity_per_m,
+                truth=t,
+                cross_range_direction=res.cross_range_direction,
+                scales=scales,
+            )
+            if cost is not None:
+                cands.append((cost, i))
         if not cands:
             errors.append(None)
             continue
@@ -138,6 +171,42 @@ def compare_with_truth(result: AnalysisResult, scene: Scene) -> TruthComparison:
         used.add(i)
         errors.append(_errors(result, m, truth[i]))
     return TruthComparison(truth=truth, errors=tuple(errors))
+
+
+def family_match(
+    *,
+    position_m: Any,
+    velocity_mps: Any,
+    range_speed_mps: float,
+    position_per_m: Any,
+    velocity_per_m: Any,
+    truth: TrueMover,
+    cross_range_direction: Any,
+    scales: tuple[float, float, float],
+) -> float | None:
+    """How far a mover's family passes from a true mover, in resolutions; None: no match.
+
+    The estimate (``position_m`` (2,) m, ``velocity_mps`` (2,) m/s, its range speed and
+    its family tangent per metre of cross-range offset) is slid along its family to the
+    truth's cross-range coordinate (along the unit ground vector
+    ``cross_range_direction``). ``scales`` are the ground-range resolution (m), the
+    range-speed and the cross-range-speed resolutions (m/s). The distances there, of
+    the position, the range speed and the velocity, each divided by its scale, must be
+    at most :data:`MATCH_CELLS`; the result is the root sum of their squares.
+    """
+    e_c = np.asarray(cross_range_direction, dtype=np.float64)
+    a = np.asarray(position_per_m, dtype=np.float64)[:2]
+    dp = np.asarray(position_m, dtype=np.float64)[:2] - np.asarray(truth.position_m)
+    ac = float(a @ e_c)
+    offset = -float(dp @ e_c) / ac if abs(ac) > 1e-12 else 0.0
+    fp = float(np.hypot(*(dp + offset * a)))
+    fv = np.asarray(velocity_mps, dtype=np.float64) + offset * np.asarray(velocity_per_m)
+    fv_err = float(np.hypot(*(fv - np.asarray(truth.velocity_mps))))
+    du = abs(float(range_speed_mps) - truth.range_speed_mps)
+    units = np.array([fp, du, fv_err]) / np.asarray(scales, dtype=np.float64)
+    if not np.all(units <= MATCH_CELLS):
+        return None
+    return float(np.sqrt(np.sum(units**2)))
 
 
 def _errors(result: AnalysisResult, m: Mover, t: TrueMover) -> MoverErrors:

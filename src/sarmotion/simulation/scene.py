@@ -639,6 +639,14 @@ def _range_offsets(antennas: NDArray[np.float64], points: NDArray[np.float64], r
     return (np.sum(dp * dp, axis=2) - rr**2) / (rp + rr)
 
 
+def _six_digits(value: float, *, up: bool) -> float:
+    """``value`` rounded to six significant digits, up or down (a bound a message states)."""
+    if not (np.isfinite(value) and value > 0):
+        return value
+    scale = 10.0 ** (np.floor(np.log10(value)) - 5)
+    return float((np.ceil if up else np.floor)(value / scale) * scale)
+
+
 def check_aliasing(
     scene: Scene,
     *,
@@ -733,19 +741,26 @@ def check_aliasing(
         where = f"targets[{i}] at ({t.position_m[0]:.6g}, {t.position_m[1]:.6g}) m"
         if t.is_moving:
             where += f", moving, at ({p[0]:.6g}, {p[1]:.6g}) m at s = {s[j]:.4g} s"
+        r0, c0 = float((t.position_m - rho_o) @ e_r), float((t.position_m - rho_o) @ e_c)
         if kind == "range":
+            # where the analysis would put it: its position at s = 0 when that is outside
+            if abs(r0) > 0.5 * window_ground:
+                r = r0
             alias = r - window_ground * np.round(r / window_ground) if np.isfinite(r) else r
-            fit_df = radar.frequency_step_hz / ratio
+            fit_df = _six_digits(radar.frequency_step_hz / ratio, up=False)
             fit_n = int(np.ceil(radar.n_samples * radar.frequency_step_hz / fit_df))
             text = (
                 f"{where}: {ratio * half_range:.6g} m of slant range from the reference point "
-                f"at pulse {j}, beyond half the unambiguous range window of {2 * half_range:.6g} m "
-                f"(c / (2 radar.frequency_step_hz); {window_ground:.6g} m of ground range at "
+                f"at pulse {j}, beyond {half_range:.6g} m, half the unambiguous range window of "
+                f"{2 * half_range:.6g} m (c / (2 radar.frequency_step_hz); {window_ground:.6g} m "
+                f"of ground range at "
                 f"{np.rad2deg(np.arccos(cos_psi)):.3g} deg grazing): its echo aliases to about "
                 f"{alias:.4g} m of ground range; radar.frequency_step_hz <= {fit_df:.6g} Hz "
                 f"fits it, with radar.n_samples >= {fit_n} for the same band"
             )
         else:
+            if abs(c0) > 0.5 * extent_cross:
+                c = c0
             alias = c - extent_cross * np.round(c / extent_cross) if np.isfinite(c) else c
             what = (
                 "lambda / (2 cos psi dphi), dphi the angular pulse spacing"
@@ -753,12 +768,14 @@ def check_aliasing(
                 else "lambda R / (2 dx), dx the pulse spacing"
             )
             if spec.get("kind", "circular") == "circular":
-                ppd = float(spec.get("pulses_per_deg", GOTCHA_PULSES_PER_DEG)) * ratio
+                ppd = _six_digits(
+                    float(spec.get("pulses_per_deg", GOTCHA_PULSES_PER_DEG)) * ratio, up=True
+                )
                 fit = f"trajectory.pulses_per_deg >= {ppd:.6g}"
                 if "n_pulses" in spec:
                     fit += f" with trajectory.n_pulses >= {int(np.ceil(n * ratio))}"
             else:
-                dx = float(spec.get("pulse_spacing_m", 1.055)) / ratio
+                dx = _six_digits(float(spec.get("pulse_spacing_m", 1.055)) / ratio, up=False)
                 fit = f"trajectory.pulse_spacing_m <= {dx:.6g}"
             text = (
                 f"{where}: {c:.6g} m of cross range from the reference point, its phase "
