@@ -83,3 +83,75 @@ def test_linear_trajectory_hyperbola_scene():
     assert isinstance(sim.traces.trajectory, Trajectory)
     assert sim.traces.geometry.range_m == pytest.approx(10_000.0, rel=1e-6)
     assert sim.traces.trajectory.aperture_length_m == pytest.approx(400.0, abs=1.1)
+
+
+# ------------------------------------------------------------ the simulate command
+ALIASING = """schema = "sarmotion.scene/1"
+[radar]
+pulse = "gaussian"
+[[targets]]
+position_m = [5.0, -3.0]
+[[targets]]
+position_m = [-12.0, 8.0]
+[[targets]]
+label = "aliased"
+position_m = [-110.0, 0.0]
+velocity_mps = [6.0, 8.0]
+"""
+
+
+def _refusal(args, capsys):
+    from sarmotion.cli.main import run
+
+    capsys.readouterr()
+    assert run(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("sarmotion: error: "), err
+    return err
+
+
+def test_simulate_refuses_a_scene_that_aliases_and_lenient_writes_it(tmp_path, capsys, caplog):
+    from sarmotion.cli.main import run
+    from sarmotion.io import load_traces
+
+    scene = tmp_path / "wide.toml"
+    scene.write_text(ALIASING)
+    out = tmp_path / "wide.h5"
+    err = _refusal(["simulate", str(scene), "--out", str(out)], capsys)
+    assert "targets[2] at (-110, 0) m" in err and "radar.frequency_step_hz <=" in err
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["wide.toml"]
+    with caplog.at_level("WARNING", logger="sarmotion.simulation"):
+        assert run(["simulate", str(scene), "--out", str(out), "--lenient"]) == 0
+    assert any("aliases to about" in r.getMessage() for r in caplog.records)
+    assert load_traces(out).n_pulses == 117  # what simulate writes, the reader accepts
+
+
+def test_simulate_refuses_traces_the_readers_would_refuse(tmp_path, capsys):
+    # A Gaussian pulse sampled to +-7.6 standard deviations: its spectrum spans more than
+    # the readers' dynamic range (1000 x the median magnitude).
+    from sarmotion.cli.main import run
+    from sarmotion.io import DataError, load_traces
+
+    scene = tmp_path / "tails.toml"
+    scene.write_text(
+        '[radar]\npulse = "gaussian"\nn_samples = 1024\n[[targets]]\nposition_m = [1.0, 2.0]\n'
+    )
+    out = tmp_path / "tails.h5"
+    err = _refusal(["simulate", str(scene), "--out", str(out)], capsys)
+    assert "rule: at most 1000 x the median magnitude" in err and not out.exists()
+    assert run(["simulate", str(scene), "--out", str(out), "--lenient"]) == 0
+    with pytest.raises(DataError, match="median magnitude"):
+        load_traces(out)
+    load_traces(out, lenient=True)
+
+
+@pytest.mark.parametrize(
+    "name", ["example1", "example2", "scene1", "filter10", "filter30", "hyperbola", "rotscatt"]
+)
+def test_every_builtin_scene_simulates_to_a_file_the_reader_accepts(tmp_path, name):
+    from sarmotion.cli.main import run
+    from sarmotion.io import load_traces
+
+    assert run(["simulate", name, "--out", str(tmp_path / "t.h5")]) == 0
+    traces = load_traces(tmp_path / "t.h5")
+    np.testing.assert_allclose(traces.data, simulate(load_scene(name)).traces.data, atol=1e-12)
