@@ -152,13 +152,17 @@ def main(ctx: click.Context, verbose: int, quiet: bool, max_memory: str | None) 
     level = logging.WARNING - 10 * min(verbose, 2)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     ctx.ensure_object(dict)
-    ctx.obj["progress"] = not quiet and sys.stderr.isatty()
+    # progress: bars on a terminal, a line per tenth of the work elsewhere, none with -q
+    ctx.obj["progress"] = not quiet
+    ctx.obj["quiet"] = quiet
     _max_memory(ctx, None, max_memory)
 
 
 def _quiet(ctx: click.Context, param: click.Parameter, value: bool) -> None:
     if value:
-        ctx.ensure_object(dict)["progress"] = False
+        obj = ctx.find_root().ensure_object(dict)
+        obj["progress"] = False
+        obj["quiet"] = True
 
 
 def _verbose(ctx: click.Context, param: click.Parameter, value: int) -> None:
