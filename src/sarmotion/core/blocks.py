@@ -10,6 +10,10 @@ so peak memory is set by the block size, not by the file.
 
 :class:`TracesBlocks` serves in-memory :class:`Traces`; file readers implement the same
 protocol (a CPHD or native traces file read block by block).
+
+The image area an input declares (a CPHD's ``SceneCoordinates/ImageArea``) travels in
+its ``metadata["image_area_m"]``: the polygon's vertices ``[[x, y], ...]`` on the ground
+of the scene frame (m), as the reader found them; :func:`declared_area` reads it back.
 """
 
 from __future__ import annotations
@@ -24,7 +28,10 @@ from .geometry import Trajectory
 from .radar import Radar
 from .traces import Traces
 
-__all__ = ["PulseBlocks", "TracesBlocks", "check_block_pulses"]
+__all__ = ["PulseBlocks", "TracesBlocks", "check_block_pulses", "declared_area"]
+
+#: Metadata key of the image area an input declares (module notes).
+IMAGE_AREA_KEY = "image_area_m"
 
 
 @runtime_checkable
@@ -42,7 +49,8 @@ class PulseBlocks(Protocol):
     n_pulses : int
         Number of pulses (``trajectory.n_pulses``).
     metadata : dict
-        Provenance of the data (JSON-serialisable values).
+        Provenance of the data (JSON-serialisable values); ``metadata["image_area_m"]``,
+        where present, is the image area the input declares (module notes).
     """
 
     radar: Radar
@@ -65,6 +73,20 @@ class PulseBlocks(Protocol):
             The block's first pulse, one past its last, and its complex traces.
         """
         ...
+
+
+def declared_area(source: Any) -> NDArray[np.float64] | None:
+    """The image area ``source`` declares, ``(n, 2)`` ground ``x, y`` (m), or None.
+
+    Read from ``source.metadata["image_area_m"]`` (module notes); None where the input
+    declares none (GOTCHA files, native traces, simulations that do not set it).
+    Validating the polygon is the caller's (:mod:`sarmotion.collection.plan`).
+    """
+    meta = getattr(source, "metadata", None) or {}
+    area = meta.get(IMAGE_AREA_KEY) if isinstance(meta, dict) else None
+    if area is None:
+        return None
+    return np.asarray(area, dtype=np.float64)
 
 
 def check_block_pulses(block_pulses: int) -> int:
