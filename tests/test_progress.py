@@ -93,7 +93,7 @@ def test_piped_progress_is_lines_with_the_plan_first(tmp_path):
     assert err[0] == "analyze: reading scene1"
     assert re.fullmatch(r"analyze: 117 pulses x \d+ samples: one analysis of .*", err[1]), err
     lines = [ln for ln in err[2:] if not ln.startswith(("WARNING", "INFO"))]
-    assert lines and all(re.fullmatch(r"[\w ]+: \d+/\d+ \(\d+ %\), \d+\.\d s", ln) for ln in lines)
+    assert lines and all(re.fullmatch(r"[^:]+: \d+/\d+ \(\d+ %\), \d+\.\d s", ln) for ln in lines)
     assert "\r" not in proc.stderr  # no bar drawn into a file
 
 
