@@ -133,3 +133,16 @@ def test_lines_come_at_tenths_at_most_once_a_second_and_always_at_the_end(total,
     off = Progress(enabled=False, stream=silent)
     off("stage", total, total)
     assert silent.text == ""
+
+
+def test_pga_says_what_it_found(tmp_path, capsys):
+    from sarmotion.cli.main import run
+
+    assert (
+        run(["image", "scene1", "--autofocus", "pga", "--size", "20", "--out", str(tmp_path)]) == 0
+    )
+    err = capsys.readouterr().err
+    line = next(ln for ln in err.splitlines() if ln.startswith("autofocus: phase error"))
+    assert re.search(
+        r"RMS [\d.e-]+ rad over the aperture; \d+ iteration\(s\), (not )?converged", line
+    )

@@ -7,14 +7,15 @@ from dataclasses import dataclass
 from typing import Any
 
 import click
+import numpy as np
 
 from ..core import Traces
 from ..imaging.autofocus import AutofocusResult, pga
 from ..simulation import Simulation
-from .common import InputError, as_flags
+from .common import InputError, as_flags, say
 from .inputs import read_inputs
 
-__all__ = ["ReadOptions", "autofocus_options", "read_focused"]
+__all__ = ["ReadOptions", "autofocus_options", "pga_line", "read_focused"]
 
 #: Default most PGA iterations.
 PGA_ITERATIONS = 10
@@ -69,11 +70,33 @@ def read_focused(
             f"--pga-iterations must be at most the number of pulses ({traces.n_pulses}), "
             f"got {pga_iterations}"
         )
+    ctx = click.get_current_context(silent=True)
+    say(ctx, f"autofocus: phase-gradient autofocus of {traces.n_pulses} pulses, at most "
+        f"{pga_iterations} iteration(s)")  # fmt: skip
     try:
         result = pga(traces, max_iter=pga_iterations)
     except ValueError as exc:
         raise InputError(f"--autofocus pga: {exc}") from None
+    say(ctx, pga_line(result))
     return result.traces, sim, result
+
+
+def pga_line(result: AutofocusResult) -> str:
+    """What PGA found, in one line: iterations, the estimate's RMS, the final fit."""
+    phi = np.asarray(result.phase_error_rad, dtype=np.float64)
+    rms = float(np.sqrt(np.mean(phi**2))) if phi.size else 0.0
+    last = float(result.rms_history_rad[-1]) if len(result.rms_history_rad) else float("nan")
+    fit = (
+        f"Legendre fit to order {result.order} on {result.n_fitted_lines} range line(s)"
+        if result.order > 0
+        else "no final fit"
+    )
+    stop = "converged" if result.converged else "not converged"
+    return (
+        f"autofocus: phase error estimated, RMS {rms:.3g} rad over the aperture; "
+        f"{result.n_iter} iteration(s), {stop} (last correction {last:.2g} rad against "
+        f"{result.tol_rad:g}); {fit}"
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
