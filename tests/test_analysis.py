@@ -294,7 +294,7 @@ def test_cli_analyze_writes_results_and_report(tmp_path, capsys):
     out = tmp_path / "run"
     assert run(["analyze", "scene1", "--out", str(out), "--no-trajectory"]) == 0
     doc = json.loads((out / "results.json").read_text())
-    assert doc["schema"] == "sarmotion.results/2"
+    assert doc["schema"] == "sarmotion.results/3"
     for key in ("reference_point_m", "platform_speed_mps", "n_pulses", "movers", "stationary"):
         assert key in doc
     assert len(doc["movers"]) == 2 and "truth" in doc and "timings_s" in doc

@@ -158,7 +158,7 @@ def test_command_line_collection_outputs(scene, tmp_path, capsys, suffix):
     )
     assert code == 0, capsys.readouterr().err
     doc = json.loads((out / "results.json").read_text())
-    assert doc["schema"] == "sarmotion.collection/1"
+    assert doc["schema"] == "sarmotion.results/3"
     assert len(doc["plan"]["patches"]) == 2
     # the patches of a collection search their stationary band unless told not to
     assert doc["options"]["analysis"]["defocus_search"] is True

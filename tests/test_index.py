@@ -69,7 +69,6 @@ INDEX: dict[str, tuple[str, ...]] = {
     "cli.simulate": ("test_cli.py", "test_outputs.py"),
     "cli.track": ("test_track.py", "test_cli_help.py"),
     # collection
-    "collection.document": ("test_collection_run.py",),
     "collection.extract": ("test_collection.py",),
     "collection.merge": (
         "test_collection.py",
@@ -95,7 +94,13 @@ INDEX: dict[str, tuple[str, ...]] = {
     "core.traces": ("test_acquisition.py", "test_io_native.py"),
     # documents
     "documents.peaks": ("test_cli.py",),
-    "documents.results": ("test_analysis.py", "test_report_html.py", "test_results_known.py"),
+    "documents.results": (
+        "test_analysis.py",
+        "test_report_html.py",
+        "test_results_known.py",
+        "test_documents_schema.py",
+    ),
+    "documents.schema": ("test_documents_schema.py", "test_results_known.py"),
     "documents.roads": ("test_track.py", "test_input_limits.py"),
     "documents.separation": ("test_cli.py",),
     "documents.tracks": ("test_track.py",),

@@ -4,7 +4,8 @@ Over a degree a mover's data fix its range history, not its cross-range position
 (:mod:`sarmotion.motion.aperture`). The console, results.json and the report must say so
 (range with its error, cross range unknown, the family across the scene); the candidates
 beyond ``--max-movers`` must be counted and listed; results.json must validate against
-``docs/results-schema.json``, which must describe every key.
+the schema shipped in the package (``sarmotion/documents/schemas/results.json``), which
+must describe every key.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import numpy as np
 import pytest
 
 from sarmotion.documents import RESULTS_SCHEMA
+from sarmotion.documents.schema import load_schema
 from sarmotion.imaging import resolution
 from sarmotion.motion.aperture import ranges_m
 from sarmotion.simulation import load_scene, simulate
@@ -24,7 +26,7 @@ from sarmotion.simulation import load_scene, simulate
 jsonschema = pytest.importorskip("jsonschema")
 
 ROOT = Path(__file__).resolve().parents[1]
-SCHEMA = json.loads((ROOT / "docs" / "results-schema.json").read_text(encoding="utf-8"))
+SCHEMA = load_schema(RESULTS_SCHEMA)
 
 
 @pytest.fixture(scope="module")

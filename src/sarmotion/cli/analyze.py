@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from ..collection import CollectionOptions
+from ..collection import CollectionOptions, drop_smear
 from ..io import DataError
 from ..io.sicd import write_sicd
 from ..io.staging import claimed
@@ -17,7 +17,7 @@ from ..pipeline import analyze as run_analysis
 from ..report.analysis import ANALYSIS_OUTPUTS, save
 from ..separation import SeparationOptions
 from .autofocus import ReadOptions, autofocus_options
-from .collection import COLLECTION_OUTPUTS, run_collection
+from .collection import COLLECTION_OUTPUTS, echo_document, run_collection
 from .common import (
     InputError,
     Progress,
@@ -36,9 +36,7 @@ from .common import (
     speed_option,
     workers_callback,
 )
-from .describe import mover_lines, not_estimated_lines
 from .inputs import FRAME_HELP, INPUTS_HELP
-from .main import elapsed_s
 
 OUTPUTS = ANALYSIS_OUTPUTS
 
@@ -84,13 +82,17 @@ def run_analyze(
     force: bool = False,
     sicd: bool = False,
     read: tuple[Any, Any, Any] | None = None,
+    plan: Any = None,
+    collection_options: dict[str, Any] | None = None,
 ) -> None:
     """Analyse ``inputs`` and write ``out``/results.json, report.html and its figures.
 
     ``reading``: how the inputs are read (:class:`~.autofocus.ReadOptions`, its defaults
     when ``None``): ``autofocus="gotcha"`` applies GOTCHA's stored corrections, ``"pga"``
     phase-gradient autofocus (its phase error goes in the document and report). ``read``:
-    the inputs' ``(traces, simulation, autofocus result)`` when already read.
+    the inputs' ``(traces, simulation, autofocus result)`` when already read. ``plan``
+    and ``collection_options``: the patch plan that made the scene one patch and its
+    options, for the document (a single analysis is a collection of one patch).
 
     With ``sicd``, also the stationary image as ``stationary.nitf`` and each mover's
     compensated image as ``mover-K.nitf`` (SICD, :func:`~sarmotion.io.sicd.write_sicd`).
@@ -100,7 +102,8 @@ def run_analyze(
         check_out(out, force=force, names=OUTPUTS, patterns=("mover-*.nitf",) if sicd else ())
     traces, sim, focus = read if read is not None else reading.read(inputs)
     with Progress(enabled=progress) as bar:
-        result = run_analysis(traces, options, progress=bar)
+        # one smear rule for every size: a mover's echo is not listed as stationary points
+        result = drop_smear(run_analysis(traces, options, progress=bar))
     doc = save(
         result,
         out,
@@ -108,18 +111,10 @@ def run_analyze(
         inputs=inputs,
         autofocus=focus.to_dict() if focus is not None else None,
         also=(lambda stage: _write_sicd_images(result, stage)) if sicd else None,
+        plan=plan,
+        collection_options=collection_options,
     )
-    click.echo(
-        f"wrote {out}/results.json, report.html and figures: {len(result.movers)} mover(s), "
-        f"{len(result.stationary)} stationary target(s); analysis "
-        f"{result.timings_s['total']:.1f} s, {elapsed_s():.1f} s in all (start-up, reading "
-        "and figures included)"
-    )
-    for k, m in enumerate(doc["movers"]):
-        for line in mover_lines(m, f"mover {k + 1}"):
-            click.echo(line)
-    for line in not_estimated_lines(doc):
-        click.echo(line)
+    echo_document(out, doc, result.timings_s["total"])
 
 
 #: Why --sicd is refused for a scene cut into patches (``{n}``: the patches).
@@ -284,10 +279,10 @@ def analyze(
 ) -> None:
     """Separate, estimate and image the stationary and moving targets of INPUTS.
 
-    Writes OUT/results.json (schema sarmotion.results/2),
-    OUT/report.html (self-contained) and the report's figures as PNG. A scene larger
-    than one patch (or any --region) is cut into patches, analysed on Dask and merged:
-    OUT/results.json (schema sarmotion.collection/1), report.html and mosaic.png.
+    Writes OUT/results.json (schema sarmotion.results/3), OUT/report.html
+    (self-contained) and the report's figures as PNG, whatever the scene's size. A scene
+    larger than one patch (or any --region) is cut into patches, analysed on Dask and
+    merged: the same document and report, with mosaic.png and the patch table added.
     """
     if device == "cuda":
         from ..imaging.cuda import NEEDS, available
@@ -315,7 +310,12 @@ def analyze(
         patterns=("mover-*.nitf",) if sicd else (),
     )
 
-    def single(read: tuple[Any, Any, Any]) -> None:
+    with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
+        copts = CollectionOptions(
+            analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
+        )
+
+    def single(read: tuple[Any, Any, Any], plan: Any) -> None:
         run_analyze(
             inputs,
             out,
@@ -324,12 +324,10 @@ def analyze(
             force=force,
             sicd=sicd,
             read=read,
+            plan=plan,
+            collection_options=copts.to_dict(),
         )
 
-    with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
-        copts = CollectionOptions(
-            analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
-        )
     run_collection(
         inputs,
         out,

@@ -13,24 +13,29 @@ from ..collection import (
     CollectionOptions,
     RegionError,
     analyze_collection,
-    collection_document,
     plan_patches,
 )
 from ..core.blocks import TracesBlocks
-from ..core.text import fixed
-from ..documents.results import results_document
+from ..documents.results import collection_document, describe_patch
 from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
 from ..io.staging import claimed
 from ..report.collection import write_collection_report
 from .autofocus import ReadOptions
 from .common import InputError, Progress, check_out
-from .describe import mover_lines
+from .describe import document_lines, stationary_note
 from .main import elapsed_s
 
 __all__ = ["COLLECTION_OUTPUTS", "run_collection"]
 
 #: What the collection path writes into --out.
-COLLECTION_OUTPUTS = ("results.json", "report.html", "mosaic.png")
+COLLECTION_OUTPUTS = (
+    "results.json",
+    "report.html",
+    "mosaic.png",
+    "movers.png",
+    "trajectories.png",
+    "autofocus.png",
+)
 
 
 def _quiet_dask() -> None:
@@ -40,11 +45,6 @@ def _quiet_dask() -> None:
     for name in list(logging.root.manager.loggerDict):
         if name == "distributed" or name.startswith("distributed."):
             logging.getLogger(name).setLevel(logging.WARNING)
-
-
-def mover_entries(result: Any) -> list[dict[str, Any]]:
-    """The ``sarmotion.results`` entries of an analysis's movers."""
-    return results_document(result)["movers"]
 
 
 def _block_source(inputs: Sequence[str], lenient: bool) -> Any:
@@ -74,12 +74,13 @@ def run_collection(
     force: bool = False,
     refuse_patches: str | None = None,
 ) -> None:
-    """Plan the patches of ``inputs``; one patch: ``single(read)``; else the collection.
+    """Plan the patches of ``inputs``; one patch: ``single(read, plan)``; else the collection.
 
-    ``single`` is today's analysis of the inputs already read (``read = (traces,
-    simulation, autofocus result)``); it writes its own outputs, with options of its own
-    (the patches' are ``copts.analysis``). ``reading``: how the inputs are read, as for
-    :func:`~sarmotion.cli.analyze.run_analyze`.
+    ``single`` is the analysis of the inputs already read (``read = (traces, simulation,
+    autofocus result)``) as the one patch of ``plan``; it writes its own outputs, with
+    options of its own (the patches' are ``copts.analysis``). Either way the output is
+    one ``sarmotion.results/3`` document, one report and one console account.
+    ``reading``: how the inputs are read, as for :func:`~sarmotion.cli.analyze.run_analyze`.
     """
     reading = ReadOptions() if reading is None else reading
     if n_workers is not None and n_workers < 0:
@@ -106,9 +107,10 @@ def run_collection(
             "one patch: analysed in this process (--scheduler is used for patches)"
         )
     if plan.single and region is None:
-        single(read_first if read_first is not None else read())
+        single(read_first if read_first is not None else read(), plan)
         return
     focus = read_first[2] if read_first is not None else None
+    sim = read_first[1] if read_first is not None else None
     if claimed(out) is None:  # the analyze command claims it before reading
         check_out(out, force=force, names=COLLECTION_OUTPUTS)
     _quiet_dask()
@@ -119,65 +121,45 @@ def run_collection(
             plan=plan,
             scheduler=scheduler,
             n_workers=n_workers,
-            describe=mover_entries,
+            describe=describe_patch,
             progress=bar,
         )
-    doc = collection_document(result, source)
+    doc = collection_document(result, source, scene=sim.scene if sim is not None else None)
     doc["inputs"] = list(inputs)
     if focus is not None:
         doc["autofocus"] = focus.to_dict()
+    images = "movers.png" if len(plan.patches) > 1 else None
+    for m, im in zip(doc["movers"], _images(result), strict=True):
+        m["image"] = images if im else m.get("image")
     with staged_directory(out) as stage:
         write_json(stage / "results.json", doc)
         write_collection_report(
             result,
             stage,
             document=doc,
-            title=f"sarmotion collection: {', '.join(Path(i).name for i in inputs)}",
+            title=f"sarmotion analysis: {', '.join(Path(i).name for i in inputs)}",
+            inputs=inputs,
         )
+    echo_document(out, doc, result.timings_s["total"])
+
+
+def _images(result: Any) -> list[bool]:
+    """Whether each merged mover kept its image."""
+    from ..documents.results import collection_mover_images
+
+    return [im is not None for im in collection_mover_images(result)]
+
+
+def echo_document(out: Path, doc: dict[str, Any], analysis_s: float) -> None:
+    """The console's account of an analysis of any size: what was written and found."""
+    n = len(doc["plan"]["patches"])
+    patches = f"{n} patches, " if n > 1 else ""
     click.echo(
-        f"wrote {out}/results.json, report.html and mosaic.png: {len(plan.patches)} patch(es), "
-        f"{len(result.movers)} mover(s), {len(result.stationary)} stationary target(s)"
-        + _stationary_note(doc)
-        + f"; analysis {result.timings_s['total']:.1f} s, {elapsed_s():.1f} s in all "
+        f"wrote {out}/results.json, report.html and figures: {patches}"
+        f"{len(doc['movers'])} mover(s), {len(doc['stationary'])} stationary target(s)"
+        + stationary_note(doc)
+        + f"; analysis {analysis_s:.1f} s, {elapsed_s():.1f} s in all "
         "(start-up, reading and figures included)"
     )
-    for k, m in enumerate(doc["movers"]):
-        centre = doc["plan"]["patches"][m["patch"]]["centre_m"]
-        where = f"patch {m['patch']}'s centre ({centre[0]:.1f}, {centre[1]:.1f}) m"
-        for line in mover_lines(m, f"mover {k + 1} (patch {m['patch']})", where):
-            click.echo(line)
-    for line in _not_estimated_lines(doc):
+    for line in document_lines(doc):
         click.echo(line)
-
-
-def _stationary_note(doc: dict[str, Any]) -> str:
-    """The stationary listings left out: beyond the cap, sidelobes, on a mover's echo."""
-    notes = []
-    if doc["stationary_dropped"]:
-        notes.append(f"{doc['stationary_dropped']} beyond the cap not listed")
-    if doc["stationary_sidelobes_dropped"]:
-        notes.append(
-            f"{doc['stationary_sidelobes_dropped']} dropped as a brighter target's sidelobes"
-        )
-    if doc.get("stationary_mover_images_dropped"):
-        notes.append(f"{doc['stationary_mover_images_dropped']} dropped as lying on a mover's echo")
-    return f" ({', '.join(notes)})" if notes else ""
-
-
-def _not_estimated_lines(doc: dict[str, Any]) -> list[str]:
-    """Lines for the candidates each patch left unestimated by ``--max-movers``."""
-    extra = doc.get("movers_not_estimated") or []
-    if not extra:
-        return []
-    cap = doc["options"]["analysis"].get("max_movers")
-    lines = [
-        f"  {len(extra)} more candidate(s) passed a patch's detector, not estimated "
-        f"(--max-movers {cap} per patch):"
-    ]
-    for k, c in enumerate(extra):
-        lines.append(
-            f"    candidate {k + 1} (patch {c['patch']}): statistic {fixed(c['statistic_db'], 1)} "
-            f"dB, range {fixed(c['range_m'], 1)} m from the patch centre (aligned trace, not "
-            f"fitted), range speed {fixed(c['range_speed_mps'], 2)} m/s"
-        )
-    return lines

@@ -8,9 +8,11 @@
   de-duplicated, the stationary mosaic;
 - :mod:`~sarmotion.collection.run` — :func:`analyze_collection`: the patches as tasks
   (Dask or in process) and their merged result.
+
+Its document is the analysis's, ``sarmotion.results/3``
+(:func:`sarmotion.documents.results.collection_document`).
 """
 
-from .document import COLLECTION_SCHEMA, collection_document
 from .extract import PatchBuilder, extract_patches, patch_radar
 from .merge import (
     MoverRecord,
@@ -29,17 +31,16 @@ from .plan import (
     plan_patches,
     unambiguous_scene,
 )
-from .run import CollectionResult, PatchResult, analyze_collection, analyze_patch
+from .run import CollectionResult, PatchResult, analyze_collection, analyze_patch, drop_smear
 
 __all__ = [
-    "COLLECTION_SCHEMA",
     "CollectionResult",
     "MoverRecord",
     "PatchResult",
     "StationaryRecord",
     "analyze_collection",
     "analyze_patch",
-    "collection_document",
+    "drop_smear",
     "drop_sidelobes",
     "merge_movers",
     "merge_stationary",

@@ -78,6 +78,7 @@ __all__ = [
     "analyze_patch",
     "analyze_collection",
     "patch_false_alarm",
+    "drop_smear",
 ]
 
 log = logging.getLogger(__name__)
@@ -309,6 +310,8 @@ def analyze_patch(
     keep = None if single else in_band(traces, patch)
     opts = _patch_options(patch, options, single, traces.trajectory)
     result = analyze(traces, opts, keep=keep)
+    if single:  # the merge drops a collection's smear (one smear rule for every size)
+        result = drop_smear(result)
     entries = describe(result) if describe is not None else [{} for _ in result.movers]
     movers = []
     for m, entry in zip(result.movers, entries, strict=True):
@@ -387,6 +390,57 @@ def _task(
             return analyze_patch(traces, patch, options, **kw)[0]
     finally:
         numba.set_num_threads(previous)
+
+
+def drop_smear(result: AnalysisResult) -> AnalysisResult:
+    """``result`` without the stationary listings that lie on a found mover's echo.
+
+    The collection's rule (:func:`~sarmotion.collection.merge.drop_mover_images`) on one
+    analysis: a mover's echo smeared over the stationary image is not listed as
+    stationary points. The count goes to ``stationary_mover_images``.
+    """
+    if not result.movers or not result.stationary:
+        return result
+    tr = result.traces
+    sl = _analysed_pulses(TracesBlocks(tr), result.options.sub_aperture_deg)
+    analysed = Trajectory(
+        positions_m=tr.trajectory.positions_m[sl], slow_times_s=tr.trajectory.slow_times_s[sl]
+    )
+    wavelength = tr.radar.wavelength_m
+    records = [
+        StationaryRecord(patch=0, position_m=tuple(t.position_m), level=1.0)
+        for t in result.stationary
+    ]
+    movers = [
+        MoverRecord(
+            patch=0,
+            position_m=np.asarray(m.position_m, float),
+            velocity_mps=np.asarray(m.velocity_mps, float),
+            sigma_range_m=math.inf,
+            sigma_range_speed_mps=math.inf,
+            snr_db=-math.inf,
+            document={},
+        )
+        for m in result.movers
+    ]
+    kept, dropped = drop_mover_images(
+        records,
+        movers,
+        trajectory=analysed,
+        range_resolution_m=tr.radar.range_resolution_m,
+        wavelength_m=wavelength,
+        rate_period_mps=0.5 * wavelength / tr.trajectory.pulse_interval_s,
+        height_m=float(tr.reference_point_m[2]),
+    )
+    if not dropped:
+        return result
+    keep = {id(r) for r in kept}
+    stationary = tuple(t for t, r in zip(result.stationary, records, strict=True) if id(r) in keep)
+    return dataclasses.replace(
+        result,
+        stationary=stationary,
+        stationary_mover_images=result.stationary_mover_images + dropped,
+    )
 
 
 # ---------------------------------------------------------------- collection
@@ -488,9 +542,11 @@ def analyze_collection(
     merged = _merge(src, plan, opts, [results[k] for k in sorted(results)], canvas)
     timings["merge"] = time.perf_counter() - t2
     timings["total"] = time.perf_counter() - t0
-    if single_result is not None:  # one patch: the analysis's own listing and its count
+    if single_result is not None:  # one patch: the analysis's own listing and its counts
         merged = dataclasses.replace(
-            merged, stationary_sidelobes=single_result.stationary_sidelobes
+            merged,
+            stationary_sidelobes=single_result.stationary_sidelobes,
+            stationary_mover_images=single_result.stationary_mover_images,
         )
     return dataclasses.replace(merged, timings_s=timings, single_result=single_result)
 

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .schema import stamped
+
 __all__ = ["PEAKS_SCHEMA", "peaks_document"]
 
 #: Schema name of the peaks document.
@@ -45,17 +47,19 @@ def peaks_document(
     pixel_pulses : int
         Pixels of the image times pulses backprojected.
     """
-    return {
-        "schema": PEAKS_SCHEMA,
-        "peaks": [
-            {
-                "position_m": [x, y],
-                "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2])),
-                "quality": q,
-            }
-            for (x, y, v), q in zip([p for p in peaks if abs(p[2]) > 0], quality, strict=True)
-        ],
-        "autofocus": autofocus,
-        "seconds": seconds,
-        "pixel_pulses_per_second": pixel_pulses / seconds,
-    }
+    return stamped(
+        PEAKS_SCHEMA,
+        {
+            "peaks": [
+                {
+                    "position_m": [x, y],
+                    "peak_db": 20 * np.log10(abs(v) / abs(peaks[0][2])),
+                    "quality": q,
+                }
+                for (x, y, v), q in zip([p for p in peaks if abs(p[2]) > 0], quality, strict=True)
+            ],
+            "autofocus": autofocus,
+            "seconds": seconds,
+            "pixel_pulses_per_second": pixel_pulses / seconds,
+        },
+    )

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from ..separation import Separation, quality_against_truth
+from .schema import stamped
 
 if TYPE_CHECKING:
     from ..core.traces import Traces
@@ -49,7 +50,6 @@ def separation_document(
         The simulation ``traces`` came from; adds ``quality`` against its truth.
     """
     doc: dict[str, Any] = {
-        "schema": SEPARATION_SCHEMA,
         "method": separation.method,
         "inputs": list(inputs),
         "n_pulses": traces.n_pulses,
@@ -66,4 +66,4 @@ def separation_document(
             true_moving=simulation.moving,
             movers=simulation.scene.moving,
         )
-    return doc
+    return stamped(SEPARATION_SCHEMA, doc)

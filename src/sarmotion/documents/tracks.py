@@ -45,6 +45,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .schema import stamped
+
 if TYPE_CHECKING:  # annotations only: Stone Soup takes ~0.9 s to import
     from ..tracking import TrackingResult, TrackState, TurnTest
 
@@ -58,33 +60,35 @@ def tracks_document(result: TrackingResult) -> dict[str, Any]:
     """The ``sarmotion.tracks/1`` document of ``result`` (lists, floats, strings)."""
     opts = dataclasses.asdict(result.options)
     opts["analysis"] = result.options.analysis.to_dict()
-    return {
-        "schema": TRACKS_SCHEMA,
-        "sub_apertures": [
-            {
-                "index": s.index,
-                "time_s": s.time_s,
-                "first_pulse": s.pulses.start,
-                "stop_pulse": s.pulses.stop,
-                "look_direction": s.look_direction.tolist(),
-                "n_detections": len(s.detections),
-                "seconds": s.seconds,
-            }
-            for s in result.sub_apertures
-        ],
-        "tracks": [
-            {
-                "id": t.id,
-                "n_detections": t.n_detections,
-                "turn": _turn(t.turn),
-                "states": [_state(s, result) for s in t.states],
-            }
-            for t in result.tracks
-        ],
-        "roads": [{"name": r.name, "points_m": r.points_m.tolist()} for r in result.roads],
-        "options": opts,
-        "timings_s": dict(result.timings_s),
-    }
+    return stamped(
+        TRACKS_SCHEMA,
+        {
+            "sub_apertures": [
+                {
+                    "index": s.index,
+                    "time_s": s.time_s,
+                    "first_pulse": s.pulses.start,
+                    "stop_pulse": s.pulses.stop,
+                    "look_direction": s.look_direction.tolist(),
+                    "n_detections": len(s.detections),
+                    "seconds": s.seconds,
+                }
+                for s in result.sub_apertures
+            ],
+            "tracks": [
+                {
+                    "id": t.id,
+                    "n_detections": t.n_detections,
+                    "turn": _turn(t.turn),
+                    "states": [_state(s, result) for s in t.states],
+                }
+                for t in result.tracks
+            ],
+            "roads": [{"name": r.name, "points_m": r.points_m.tolist()} for r in result.roads],
+            "options": opts,
+            "timings_s": dict(result.timings_s),
+        },
+    )
 
 
 def _turn(turn: TurnTest | None) -> dict[str, Any] | None:

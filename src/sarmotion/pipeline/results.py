@@ -301,6 +301,11 @@ class AnalysisResult:
         Local maxima of the stationary image above the listing threshold that a brighter
         one's sidelobes explain, not listed
         (:func:`~sarmotion.pipeline.stages.stationary_targets`).
+    stationary_mover_images : int
+        Listings of the stationary image that lie on a found mover's smeared echo,
+        dropped from :attr:`stationary` (the collection's rule,
+        :func:`sarmotion.collection.merge.drop_mover_images`, applied by
+        :func:`sarmotion.collection.drop_smear`); 0 when that rule was not applied.
     """
 
     traces: Traces
@@ -316,6 +321,7 @@ class AnalysisResult:
     options: AnalysisOptions
     movers_not_estimated: tuple[NotEstimated, ...] = ()
     stationary_sidelobes: int = 0
+    stationary_mover_images: int = 0
 
     def __repr__(self) -> str:
         """One line: pulses, samples, movers, stationary targets, method and total time."""
@@ -376,7 +382,7 @@ class AnalysisResult:
             )
             lines.append(
                 f"  mover {k + 1}: range offset {fixed(offset)}{err[0]} m, range speed "
-                f"{fixed(m.range_speed_mps)}{err[1]} m/s, cross-range speed "
+                f"{fixed(m.range_speed_mps)}{err[1]} m/s{self._span(m)}, cross-range speed "
                 f"{fixed(m.cross_range_speed_mps)}{err[2]} m/s, statistic "
                 f"{fixed(m.evidence.statistic_db, 1)} dB"
             )
@@ -389,9 +395,11 @@ class AnalysisResult:
             lines.append(f"    range acceleration: {acceleration_text(m.acceleration)}")
         if self.movers:
             lines.append(
-                "  cross range: not known. The data fix each mover's range offset and speeds; "
-                "every member of its family fits them as well, and the position listed is the "
-                "member at the reference point's cross range, not a measurement."
+                "  cross range: not known. The data fix each mover's range offset and range "
+                "history; every member of its family fits them as well, and the position "
+                "listed is the member at the reference point's cross range, not a "
+                "measurement. The standard errors (+-) are conditional on that cross range; "
+                "the range speed's span across the scene is the family's."
             )
         brightest = (
             f" (brightest at {_pair(self.stationary[0].position_m)} m)" if self.stationary else ""
@@ -402,6 +410,22 @@ class AnalysisResult:
             "(timings_s)"
         )
         return "\n".join(lines)
+
+    def _span(self, m: Mover) -> str:
+        """`` at the reference cross range; A to B m/s across the scene`` (the family's)."""
+        from .family import family_segment
+
+        g = self.stationary_image.grid
+        extent = (float(g.x_m[0]), float(g.x_m[-1]), float(g.y_m[0]), float(g.y_m[-1]))
+        tr = self.traces
+        seg = family_segment(tr, m.position_m, m.velocity_mps, m.family_position_per_m, extent)
+        if seg is None:
+            return " at the reference cross range (its family does not cross the scene)"
+        rates = seg.velocities_mps @ np.asarray(tr.geometry.m_o, dtype=np.float64)[:2]
+        return (
+            f" at the reference cross range; {fixed(float(rates.min()))} to "
+            f"{fixed(float(rates.max()))} m/s across the scene"
+        )
 
     @property
     def stationary_traces(self) -> NDArray[np.complexfloating]:

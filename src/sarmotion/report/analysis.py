@@ -1,6 +1,6 @@
 """An analysis written to a directory: what ``sarmotion analyze --out DIR`` writes.
 
-:func:`save` writes ``results.json`` (the ``sarmotion.results/2`` document with the
+:func:`save` writes ``results.json`` (the ``sarmotion.results/3`` document with the
 point-target quality of the brightest stationary targets), ``report.html`` and the
 report's figures as PNG; :func:`save_report` writes the report and its figures alone.
 The command line calls :func:`save` after claiming ``--out``; called from Python, they
@@ -56,6 +56,8 @@ def analysis_document(
     scene: Scene | None = None,
     inputs: Sequence[str] = (),
     autofocus: dict[str, Any] | None = None,
+    plan: Any = None,
+    collection_options: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The ``results.json`` document of ``result``, as ``sarmotion analyze`` writes it.
 
@@ -73,9 +75,15 @@ def analysis_document(
         The input names (``inputs``).
     autofocus : dict, optional
         The autofocus record (``PgaResult.to_dict()`` or the GOTCHA corrections' record).
+    plan : PatchPlan, optional
+        The plan that made the scene one patch; default the analysis's own image.
+    collection_options : dict, optional
+        The patches' options (``CollectionOptions.to_dict()``).
     """
     truth = compare_with_truth(result, scene) if scene is not None else None
-    doc = results_document(result, truth=truth)
+    doc = results_document(result, truth=truth, plan=plan, collection_options=collection_options)
+    for entry, m in zip(doc["movers"], result.movers, strict=True):
+        entry["image"] = "movers.png" if m.image is not None else None  # its panel there
     doc["inputs"] = list(inputs)
     doc["point_quality"] = stationary_quality(result)
     if autofocus is not None:
@@ -119,6 +127,8 @@ def save(
     autofocus: dict[str, Any] | None = None,
     title: str | None = None,
     also: Callable[[Path], None] | None = None,
+    plan: Any = None,
+    collection_options: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Write ``directory``/results.json, report.html and the report's figures (PNG).
 
@@ -146,6 +156,9 @@ def save(
     also : callable, optional
         Called with the staging directory to write more files into the same output
         (the command line's ``--sicd`` images); what it raises aborts the whole output.
+    plan, collection_options
+        The patch plan of one patch and its options, for the document
+        (:func:`analysis_document`).
 
     Returns
     -------
@@ -160,7 +173,14 @@ def save(
     """
     out = Path(directory)
     with _claimed_stage(out, force=force, names=ANALYSIS_OUTPUTS) as stage:
-        doc = analysis_document(result, scene=scene, inputs=inputs, autofocus=autofocus)
+        doc = analysis_document(
+            result,
+            scene=scene,
+            inputs=inputs,
+            autofocus=autofocus,
+            plan=plan,
+            collection_options=collection_options,
+        )
         write_json(stage / "results.json", doc)
         write_report(result, stage, document=doc, title=_title(title, inputs), inputs=inputs)
         if also is not None:

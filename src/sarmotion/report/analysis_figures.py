@@ -42,6 +42,7 @@ __all__ = [
     "objectives_figure",
     "images_figure",
     "movers_figure",
+    "mover_panels_figure",
     "trajectories_figure",
     "write_report",
 ]
@@ -264,10 +265,34 @@ def movers_figure(
     direction (an arrow, :func:`look_direction`). The panels fill rows
     of :func:`_movers_per_row` (rows are added for more movers), so that the legends
     read at :data:`~sarmotion.report.plotting.LEGIBLE_PT` or more in the report's
-    column whatever the number of movers.
+    column whatever the number of movers (:func:`mover_panels_figure`).
     """
     doc = document if document is not None else results_document(result)
-    n = max(1, len(result.movers))
+    panels = [(m.image.grid.x_m, m.image.grid.y_m, m.image.values) for m in result.movers]
+    return mover_panels_figure(panels, doc, truth=truth)
+
+
+def mover_panels_figure(
+    panels: Sequence[tuple[Any, Any, Any] | None],
+    document: dict[str, Any],
+    *,
+    truth: dict[str, Any] | None = None,
+) -> Figure:
+    """One panel per mover of ``document``: its image, its family, the truth if known.
+
+    Parameters
+    ----------
+    panels : sequence of (x_m, y_m, values) or None
+        Each mover's compensated image: its axes (m) and its values (complex or
+        magnitude, shape ``(y, x)``); ``None`` where none was kept.
+    document : dict
+        The results document (its ``movers``, in the same order, and ``frame``).
+    truth : dict, optional
+        ``{"truth": [...], "errors": [...]}``: the true mover each estimate was matched to
+        is marked with a cross.
+    """
+    doc = document
+    n = max(1, len(panels))
     ncols = min(n, _movers_per_row())
     nrows = -(-n // ncols)
     side = MOVER_PANEL_IN
@@ -275,20 +300,27 @@ def movers_figure(
     axes = grid.ravel()
     for extra in axes[n:]:
         extra.set_visible(False)
-    for k, m in enumerate(result.movers):
+    several = len((doc.get("plan") or {}).get("patches") or []) > 1
+    where = "its patch centre's" if several else "the reference"
+    for k, panel in enumerate(panels):
         ax = axes[k]
-        g = m.image.grid
-        u = m.velocity_mps
+        entry = doc["movers"][k]
+        if panel is None:
+            ax.text(0.5, 0.5, f"mover {k + 1}: no image kept", ha="center", va="center")
+            ax.set_axis_off()
+            continue
+        x_m, y_m, values = panel
+        u = entry["velocity_mps"]
         plot_image(
             ax,
-            m.image.values,
-            x_m=g.x_m,
-            y_m=g.y_m,
-            title=f"mover {k + 1}, u = ({u[0]:.2f}, {u[1]:.2f}) m/s\n(the member at the "
-            "reference cross range)",
+            values,
+            x_m=x_m,
+            y_m=y_m,
+            title=f"mover {k + 1}, u = ({u[0]:.2f}, {u[1]:.2f}) m/s\n(the member at "
+            f"{where} cross range)",
             look_direction=look_direction(doc),
         )
-        draw_family(ax, doc["movers"][k], _COLOURS[k % 6], f"mover {k + 1}")
+        draw_family(ax, entry, _COLOURS[k % 6], f"mover {k + 1}")
         if truth and truth["errors"][k] is not None:
             name = truth["errors"][k]["matched"]
             t = next((t for t in truth["truth"] if t["label"] == name), None)
@@ -303,9 +335,9 @@ def movers_figure(
                     label="truth",
                     path_effects=[withStroke(linewidth=3.5, foreground="k")],
                 )
-        ax.set(xlim=(g.x_m[0], g.x_m[-1]), ylim=(g.y_m[0], g.y_m[-1]))
+        ax.set(xlim=(x_m[0], x_m[-1]), ylim=(y_m[0], y_m[-1]))
         _legend_below(ax)
-    if not result.movers:
+    if not panels:
         axes[0].text(0.5, 0.5, "no mover found", ha="center", va="center")
         axes[0].set_axis_off()
     fig.tight_layout()

@@ -1,16 +1,16 @@
 """The whole scene of a collection: the stationary mosaic, the patches and the movers.
 
-Plotting layer. :func:`write_collection_report` saves ``mosaic.png`` (the stationary
-mosaic in dB, every patch's core outlined, each mover at its kept fit with its
-cross-range family drawn as a line clipped to the region, the radar's look direction
-as an arrow) and a self-contained ``report.html`` embedding it, with the movers' and
-patches' tables (the analysis report's page, :mod:`sarmotion.report.page`).
+Plotting layer. :func:`write_collection_report` writes the analysis's report
+(:func:`sarmotion.report.html.write_html`: the same sections for every size) with
+``mosaic.png`` (the stationary mosaic in dB, every patch's core outlined, each mover at
+its kept fit with its cross-range family drawn as a line clipped to the region, the
+radar's look direction as an arrow) and the patch table added, each mover's image as
+its kept patch made it and the trajectories.
 """
 
 from __future__ import annotations
 
-import base64
-import io
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -18,10 +18,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..collection import CollectionResult
-from .page import figure, header_line, page, section, table
+from ..documents.results import collection_mover_images
 from .plotting import draw_look_arrow
 
-__all__ = ["mosaic_figure", "write_collection_report"]
+__all__ = ["mosaic_figure", "trajectories_from_document", "write_collection_report"]
 
 
 def _clip_line(p: np.ndarray, d: np.ndarray, box: tuple[float, float, float, float]):
@@ -85,88 +85,107 @@ def mosaic_figure(result: CollectionResult) -> Figure:
     return fig
 
 
-def _not_estimated_html(document: dict[str, Any]) -> str:
-    """The candidates each patch detected beyond ``max_movers``: listed, not dropped."""
-    extra = document.get("movers_not_estimated") or []
-    if not extra:
-        return ""
-    cap = document["options"]["analysis"].get("max_movers")
-    rows = "".join(
-        f"<tr><td>{c['patch']}</td><td>{c['statistic_db']:.1f}</td><td>{c['range_m']:.1f}</td>"
-        f"<td>{c['range_speed_mps']:.2f}</td></tr>"
-        for c in extra
-    )
-    return (
-        f"<h3>Detected, not estimated: {len(extra)} candidate(s) beyond max_movers = {cap} "
-        "per patch</h3><p>They passed their patch's detector after its movers were "
-        "estimated; neither fitted nor tested against a stationary explanation (range: the "
-        "aligned trace's peak, from the patch's centre). Raise --max-movers to estimate "
-        "them.</p><table><tr><th>patch</th><th>statistic (dB)</th><th>range (m)</th>"
-        f"<th>range speed (m/s)</th></tr>{rows}</table>"
-    )
+def trajectories_from_document(document: dict[str, Any]) -> Figure | None:
+    """The movers' estimated trajectories over the aperture, from the document alone.
+
+    Each mover's ``trajectory.positions_m`` (the knots of its piecewise-linear estimate,
+    the member at its patch centre's cross range), with its cross-range family across the
+    scene (:func:`~sarmotion.report.analysis_figures.draw_family`); ``None`` when no mover
+    has a trajectory.
+    """
+    from .analysis_figures import _COLOURS, draw_family
+
+    movers = [(k, m) for k, m in enumerate(document["movers"]) if m.get("trajectory")]
+    if not movers:
+        return None
+    fig = Figure(figsize=(6.0, 4.2))
+    ax = fig.add_subplot(1, 1, 1)
+    for k, m in movers:
+        colour = _COLOURS[k % 6]
+        p = np.asarray(m["trajectory"]["positions_m"], float)
+        ax.plot(p[:, 0], p[:, 1], "-", color=colour, lw=1.6)
+        draw_family(ax, m, colour, f"mover {k + 1}", marker=False)
+        ax.plot(*m["position_m"], ".", color=colour, label=f"mover {k + 1}, s = 0")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title("estimated trajectories over the aperture, and the families")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
 
 
 def write_collection_report(
-    result: CollectionResult, directory: Path, *, document: dict[str, Any], title: str
-) -> None:
-    """Write ``mosaic.png`` and ``report.html`` into ``directory``.
+    result: CollectionResult,
+    directory: Path,
+    *,
+    document: dict[str, Any],
+    title: str,
+    inputs: Sequence[str] = (),
+) -> Path:
+    """Write ``report.html`` and its figures into ``directory``: the analysis's report.
 
-    The page is the analysis report's (:func:`sarmotion.report.page.page`: its stylesheet,
-    header and sections).
+    The same page and sections as one analysis's (:func:`sarmotion.report.html.write_html`,
+    from the document), the mosaic (``mosaic.png``) and the patch table added when the
+    region has several patches. Figures: each mover's image as its kept patch made it
+    (``movers.png``), the movers' trajectories from the document (``trajectories.png``).
+    A region of one patch is the analysis's own report
+    (:func:`~sarmotion.report.analysis_figures.write_report`).
     """
+    from .analysis_figures import mover_panels_figure, write_report
+    from .html import ReportFigure, write_html
+
     directory = Path(directory)
-    buf = io.BytesIO()
-    mosaic_figure(result).savefig(buf, format="png", dpi=110)
-    png = buf.getvalue()
-    (directory / "mosaic.png").write_bytes(png)
-    rows = [
-        [
-            str(k + 1),
-            "({:.2f}, {:.2f})".format(*m["position_m"]),
-            "({:.2f}, {:.2f})".format(*m["velocity_mps"]),
-            f"{m['range_speed_mps']:.2f}",
-            str(m["patch"]),
-            ", ".join(str(p) for p in m["patches"]),
+    if result.single_result is not None:
+        return write_report(
+            result.single_result, directory, document=document, title=title, inputs=inputs
+        )
+    truth = None
+    if "truth" in document:
+        truth = {
+            "truth": document["truth"],
+            "errors": [m.get("errors") for m in document["movers"]],
+        }
+    families = (
+        "Lines: each mover's cross-range family across its patch, the positions its data fit "
+        "equally (the data fix its range, not where along the line it is); tick: the member "
+        "at its patch centre's cross range, listed in the tables."
+    )
+    figures = [
+        ReportFigure(
+            "Mosaic",
+            "The stationary mosaic (dB re its peak), every patch's core outlined and "
+            "numbered, each mover (circle, numbered as in the table) with its cross-range "
+            "family (line). Arrow: the radar's look direction on the ground at the aperture "
+            "centre.",
+            mosaic_figure(result),
+            "mosaic.png",
+        )
+    ]
+    if document["movers"]:
+        panels = [
+            None if im is None else (im["x_m"], im["y_m"], im["magnitude"])
+            for im in collection_mover_images(result)
         ]
-        for k, m in enumerate(document["movers"])
-    ]
-    patches = [
-        [
-            str(p["index"]),
-            ", ".join(f"{v:.1f}" for v in p["core_m"]),
-            f"{p['n_pulses']} x {p['n_samples']}",
-            str(p["decimation"]),
-        ]
-        for p in document["plan"]["patches"]
-    ]
-    plan = document["plan"]
-    summary = (
-        f"<p>{len(plan['patches'])} patch(es) of {plan['patch_size_m']:.1f} m; "
-        f"{len(document['movers'])} mover(s); {len(document['stationary'])} stationary "
-        f"target(s) listed, {document['stationary_dropped']} beyond the cap not listed, "
-        f"{document.get('stationary_sidelobes_dropped', 0)} dropped as a brighter target's "
-        f"sidelobes, {document.get('stationary_mover_images_dropped', 0)} dropped as lying "
-        "on a mover's echo.</p>"
-    )
-    caption = (
-        "The stationary mosaic (dB re its peak), every patch's core outlined and numbered, "
-        "each mover (circle, numbered as in the table) with its cross-range family (line). "
-        "Arrow: the radar's look direction on the ground at the aperture centre."
-    )
-    movers_head = ["#", "position (m)", "velocity (m/s)", "range speed (m/s)", "patch kept"]
-    movers = (
-        table([*movers_head, "found in patches"], rows)
-        if rows
-        else "<p>No mover found: no candidate passed a patch's detector.</p>"
-    )
-    head = ["patch", "core x0, y0, x1, y1 (m)", "pulses x samples", "decimation"]
-    parts = [
-        section("Mosaic", summary + figure(base64.b64encode(png).decode(), caption)),
-        section("Movers", movers + _not_estimated_html(document)),
-        section("Patches", table(head, patches)),
-    ]
-    found = (
-        f"{len(plan['patches'])} patch(es), {len(document['movers'])} mover(s), "
-        f"{len(document['stationary'])} stationary target(s)"
-    )
-    (directory / "report.html").write_text(page(title, header_line(found), parts), encoding="utf-8")
+        figures.append(
+            ReportFigure(
+                "Images",
+                "Each mover imaged from its kept patch's traces, compensated at its estimated "
+                "velocity. " + families + (" Cross: truth." if truth else ""),
+                mover_panels_figure(panels, document, truth=truth),
+                "movers.png",
+            )
+        )
+    traj = trajectories_from_document(document)
+    if traj is not None:
+        figures.append(
+            ReportFigure(
+                "Trajectories",
+                "Phase-space trajectory estimates (the member at each mover's patch centre's "
+                "cross range) and the families.",
+                traj,
+                "trajectories.png",
+            )
+        )
+    return write_html(document, directory, figures=figures, title=title, inputs=inputs)

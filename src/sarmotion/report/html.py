@@ -152,13 +152,18 @@ def write_html(
         b64 = base64.b64encode(_png(fig, out / name)).decode("ascii")
         sections.setdefault(where, []).append(_figure_html(b64, caption))
     movers = _movers_html(doc) + _not_estimated_html(doc) + (_truth_html(doc) if truth else "")
-    parts = [
-        section("Acquisition", _acquisition_html(doc, inputs)),
-        section("Moving targets", movers),
-    ]
-    for name in ("Autofocus", "Traces", "Motion estimation", "Images", "Trajectories"):
-        if name in sections:
-            parts.append(section(name, "".join(sections[name])))
+    several = len(_patches(doc)) > 1
+    parts = [section("Acquisition", _acquisition_html(doc, inputs))]
+    if several:  # the mosaic and the patch table: only a region of several patches
+        parts.append(section("Mosaic", "".join(sections.get("Mosaic", []))))
+        parts.append(section("Patches", _patches_html(doc)))
+    parts.append(section("Moving targets", movers))
+    if "Autofocus" in sections:
+        parts.append(section("Autofocus", "".join(sections["Autofocus"])))
+    # the same sections for every size: what a size has no figure for is said
+    for name in ("Traces", "Motion estimation", "Images", "Trajectories"):
+        body = "".join(sections.get(name, [])) or f'<p class="note">{_absent(name, doc)}</p>'
+        parts.append(section(name, body))
     parts.append(section("Stationary targets", _stationary_html(doc)))
     timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in doc["timings_s"].items()]
     parts.append(section("Timings", _html_table(["stage", "wall-clock (s)"], timing_rows)))
@@ -169,6 +174,58 @@ def write_html(
     )
     path.write_text(page(title, header_line(found), parts), encoding="utf-8")
     return path
+
+
+def _patches(doc: dict[str, Any]) -> list[dict[str, Any]]:
+    """The plan's patches (a ``/1`` or ``/2`` document: none listed)."""
+    return (doc.get("plan") or {}).get("patches") or []
+
+
+def _absent(name: str, doc: dict[str, Any]) -> str:
+    """Why a section has no figure, in words."""
+    n = len(_patches(doc))
+    if name in ("Traces", "Motion estimation") and n > 1:
+        return (
+            f"The {n} patches' traces and g(u) are not kept by a collection (each patch's "
+            "analysis is let go once its movers and stationary targets are merged); "
+            "results.json lists each patch's analysis in patch_summaries."
+        )
+    if name == "Trajectories":
+        return "No trajectory estimated (no mover, or --no-trajectory)."
+    if name == "Images":
+        return "No image drawn."
+    return "Not drawn."
+
+
+def _patches_html(doc: dict[str, Any]) -> str:
+    """The patch table: core, centre, traces, slow-time decimation, what each found."""
+    summary = {p["index"]: p for p in doc.get("patch_summaries") or []}
+    rows = []
+    for p in _patches(doc):
+        s = summary.get(p["index"], {})
+        rows.append(
+            [
+                str(p["index"]),
+                ", ".join(f"{v:.1f}" for v in p["core_m"]),
+                _fmt(p["centre_m"], 1),
+                f"{p['n_pulses']} &times; {p['n_samples']}",
+                str(p["decimation"]),
+                str(s.get("movers", "&ndash;")),
+                str(s.get("stationary_listed", "&ndash;")),
+            ]
+        )
+    head = ["patch", "core x0, y0, x1, y1 (m)", "centre (m)", "pulses &times; samples"]
+    head += ["decimation", "movers", "stationary listed"]
+    plan = doc.get("plan") or {}
+    text = (
+        f"<p>{len(rows)} patches of {plan.get('patch_size_m', float('nan')):.1f} m over the "
+        f"region {_fmt(doc.get('region_m'), 1)} (x0, y0, x1, y1, m). A mover's range, "
+        "family and speeds are measured from its kept patch's centre.</p>"
+    )
+    outside = plan.get("outside")
+    if outside:
+        text += f'<p class="note">Outside the unambiguous scene: {html.escape(str(outside))}</p>'
+    return text + _html_table(head, rows, escape_head=False)
 
 
 def _autofocus_figure(focus: dict[str, Any]) -> tuple[str, str, Figure, str]:
@@ -204,7 +261,7 @@ def _family_cell(m: dict[str, Any]) -> str:
         return "known: " + _fmt(m["position_m"])
     fam = m["cross_range_family"]
     seg = fam.get("in_scene")
-    text = '<span class="bad">not determined by the data</span>'
+    text = '<span class="info">not determined by the data</span>'
     if seg:
         p, v = seg["positions_m"], seg["velocities_mps"]
         text += (
@@ -216,51 +273,97 @@ def _family_cell(m: dict[str, Any]) -> str:
     return text
 
 
+def range_speed_text(m: dict[str, Any], *, html_out: bool = True) -> str:
+    """A mover's range speed, its standard error and its span across the scene.
+
+    The standard error is conditional on the listed member's cross range; the family's
+    members across the scene (``cross_range_family.range_speed_span_mps``) fit the data as
+    well, so the span is what the data leave of the range speed (absent in ``/1`` and
+    ``/2`` documents).
+    """
+    pm = "&plusmn;" if html_out else "+-"
+    e = m.get("standard_errors") or {}
+    text = f"{m['range_speed_mps']:.3f}"
+    if "range_speed_mps" in e:
+        text += f" {pm} {e['range_speed_mps']:.2g} m/s at the listed cross range"
+    span = (m.get("cross_range_family") or {}).get("range_speed_span_mps")
+    if span and not m.get("cross_range_known"):
+        text += f"; {span[0]:.2f} to {span[1]:.2f} m/s across the scene"
+    return text
+
+
 def _movers_html(doc: dict[str, Any]) -> str:
     """The table of estimated movers (estimates only; truth has its own tables)."""
+    several = len(_patches(doc)) > 1
     rows = []
     for k, m in enumerate(doc["movers"]):
         fam = m["cross_range_family"]
-        rows.append(
-            [
-                str(k + 1),
-                _range_cell(m),
-                _fmt(m["range_speed_mps"], 3),
-                _family_cell(m),
-                _fmt(m["position_m"]),
-                _fmt(m["velocity_mps"]),
-                _fmt(m["cross_range_speed_mps"], 3),
-                _detection_cell(m),
-                _errors_cell(m),
-                _fmt(m["peak_db"], 1),
-                _fmt(fam["position_per_m"], 3) + " / " + _fmt(fam["velocity_mps_per_m"], 4),
-            ]
-        )
+        image = m.get("image")
+        row = [
+            str(k + 1),
+            _range_cell(m),
+            range_speed_text(m),
+            "yes" if m.get("cross_range_known") else "no",
+            _family_cell(m),
+            _fmt(m.get("position_std_m"), 1),
+            _fmt(m["position_m"]),
+            _fmt(m["velocity_mps"]),
+            _fmt(m["cross_range_speed_mps"], 3),
+            _detection_cell(m),
+            _errors_cell(m),
+            _fmt(m["peak_db"], 1),
+            _fmt(fam["position_per_m"], 3) + " / " + _fmt(fam["velocity_mps_per_m"], 4),
+            f"{html.escape(image)} (mover {k + 1})" if image else "&ndash;",
+        ]
+        if several:
+            row += [str(m.get("patch", "&ndash;")), _fmt(m.get("patches"), 0)]
+        rows.append(row)
     if not rows:
         if doc.get("movers_not_estimated"):
             return "<p>No mover estimated: see the candidates not estimated below.</p>"
         return "<p>No mover found: no candidate passed the detector.</p>"
+    reference = "its patch's centre" if several else "the reference point"
     head = [
         "estimate",
         "range (m) &plusmn; standard error",
-        "range speed (m/s)",
+        "range speed (m/s) &plusmn; standard error; span across the scene",
+        "cross range known",
         "cross range",
-        "position at s=0, at the reference cross range (m)",
+        "position spread along the family in the scene (m, standard deviation)",
+        f"position at s=0, at the cross range of {reference} (m)",
         "velocity there (m/s)",
         "cross-range speed there (m/s)",
         "detection: statistic / threshold (dB), p, focus gain (dB)",
         "standard errors: range position (m), range speed, cross-range speed (m/s); SNR (dB)",
         "image peak (dB re the stationary image's peak)",
         "family, per m of cross-range offset: position (m/m) / velocity (m/s per m)",
+        "image",
     ]
+    if several:
+        head += ["patch kept", "found in patches"]
+    conditional = next(
+        (
+            m["standard_errors"].get("conditional_on")
+            for m in doc["movers"]
+            if m.get("standard_errors")
+        ),
+        None,
+    )
+    cond = (
+        f" The standard errors (Cramér–Rao bound at the measured SNR) are conditional on "
+        f"{html.escape(conditional)}."
+        if conditional
+        else ""
+    )
     return _html_table(head, rows, escape_head=False) + (
-        '<p class="note">Range: the ground-range coordinate from the reference point '
+        f'<p class="note">Range: the ground-range coordinate from {reference} '
         "(positive towards the radar), what the data fix. The data of a few degrees do not "
         "fix a mover's cross-range position: position + t a and velocity + t b fit them as "
-        "well for any t metres of cross-range offset (a, b in the last column; "
+        "well for any t metres of cross-range offset (a, b in the family column; "
         "sarmotion.motion.aperture), and the figures draw each mover as that family across "
         "the scene. Position, velocity and cross-range speed are those of the member at "
-        "the reference cross range.</p>"
+        f"the cross range of {reference}; the span is the range speed of the family's "
+        f"members across the scene.{cond}</p>"
     )
 
 
@@ -279,13 +382,16 @@ def _not_estimated_html(doc: dict[str, Any]) -> str:
         ]
         for k, c in enumerate(extra)
     ]
-    cap = doc.get("options", {}).get("max_movers")
+    opts = doc.get("options", {})
+    cap = opts.get("analysis", opts).get("max_movers")
+    per_patch = " per patch" if len(_patches(doc)) > 1 else ""
     threshold = (doc.get("detection") or {}).get("threshold_db")
     over = f" (threshold {threshold:.1f} dB)" if threshold is not None else ""
     head = ["candidate", "statistic (dB)", "range (m)", "range speed (m/s)"]
     head += ["width (resolutions)"]
     return (
-        f"<h3>Detected, not estimated: {len(extra)} candidate(s) beyond max_movers = {cap}</h3>"
+        f"<h3>Detected, not estimated: {len(extra)} candidate(s) beyond max_movers = {cap}"
+        f"{per_patch}</h3>"
         + f"<p>These passed the detector{over} after {cap} mover(s) were estimated; they "
         "were neither fitted nor tested against a stationary explanation. Range: the "
         "aligned trace's peak at the range speed (not fitted). Raise --max-movers to "
@@ -442,7 +548,8 @@ def _quality_html(entries: list[dict[str, Any]]) -> str:
 
 
 def _acquisition_html(doc: dict[str, Any], inputs: Sequence[str]) -> str:
-    sub = float(doc["options"].get("sub_aperture_deg", doc["aperture_deg"]))
+    opts = doc["options"].get("analysis", doc["options"])
+    sub = float(opts.get("sub_aperture_deg", doc["aperture_deg"]))
     searched = (
         f"movers sought on the central {sub:g} deg, then focused on all pulses"
         if doc["aperture_deg"] > 1.5 * sub

@@ -36,7 +36,7 @@ th{background:#eef1f5} td.l,th.l{text-align:left}
 .kv td:first-child{text-align:left;color:#555}
 img{max-width:100%;height:auto;display:block;margin:6px 0}
 .note{font-size:12px;color:#555}
-.bad{color:#b42318;font-weight:600} .ok{color:#067647}
+.bad{color:#b42318;font-weight:600} .ok{color:#067647} .info{color:#1f3a5f;font-style:italic}
 """
 
 
