@@ -9,6 +9,9 @@
 - :mod:`~sarmotion.tracking.roads` — the member of a cross-range family on a road;
 - :mod:`~sarmotion.tracking.turns` — a turn as a change of velocity between
   sub-apertures: the chi-square test and the turn rate;
+- :mod:`~sarmotion.tracking.wide_aspect` — each detection as a measurement of the range
+  history through its look, a track's position fixed where the look turns enough, and
+  the tracks of one uniform mover joined;
 - :mod:`~sarmotion.tracking.track` — :func:`track`, the whole chain.
 """
 
@@ -23,9 +26,11 @@ from .sub_apertures import (
 from .track import TrackingResult, track
 from .tracker import Track, Tracker, TrackingOptions, TrackState
 from .turns import TurnTest, turn_test
+from .wide_aspect import PositionFit, fit_track, join_tracks
 
 __all__ = [
     "Detection",
+    "PositionFit",
     "Road",
     "RoadFix",
     "SubApertureDetections",
@@ -36,6 +41,8 @@ __all__ = [
     "TrackingResult",
     "TurnTest",
     "analyze_sub_aperture",
+    "fit_track",
+    "join_tracks",
     "map_sub_apertures",
     "road_fix",
     "road_misses",

@@ -192,6 +192,12 @@ class Detection:
         cross-range speeds (:attr:`~sarmotion.pipeline.Mover.bound`) in the ground
         frame, ``B C B^T`` with ``B = (b_r, b_p)`` the ground velocities of unit range
         and cross-range speed; None when made without the geometry.
+    bound_cov : (3, 3) ndarray or None
+        The Cramér–Rao bound of the ground-range position (along the sub-aperture's
+        ``range_direction``), the range speed and the cross-range speed
+        (m^2, m^2/s, m^2/s^2; :mod:`sarmotion.motion.bounds`): the covariance of the
+        range history the detection measures (:mod:`sarmotion.tracking.wide_aspect`);
+        None when made without the geometry.
     """
 
     position_m: NDArray[np.float64]
@@ -203,6 +209,7 @@ class Detection:
     peak_db: float
     traces: NDArray[np.complexfloating] | None
     velocity_cov_m2ps2: NDArray[np.float64] | None = None
+    bound_cov: NDArray[np.float64] | None = None
 
     @classmethod
     def from_mover(cls, mover: Mover, geometry: LookGeometry | None = None) -> Detection:
@@ -210,14 +217,16 @@ class Detection:
 
         ``geometry``: the sub-aperture's look geometry, for the velocity's covariance.
         """
-        cov = None
+        cov = bound = None
         if geometry is not None:
+            bound = np.array(mover.bound.covariance[:3, :3], dtype=np.float64)
             basis = np.column_stack(
                 [ground_velocity(1.0, 0.0, geometry), ground_velocity(0.0, 1.0, geometry)]
             )
             cov = basis @ mover.bound.covariance[1:3, 1:3] @ basis.T
         return cls(
             velocity_cov_m2ps2=cov,
+            bound_cov=bound,
             position_m=np.asarray(mover.position_m, dtype=np.float64)[:2].copy(),
             velocity_mps=np.asarray(mover.velocity_mps, dtype=np.float64).copy(),
             range_speed_mps=float(mover.range_speed_mps),

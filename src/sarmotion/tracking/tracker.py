@@ -44,6 +44,15 @@ position along the family, with ``sigma_f``; its updates carry ``100 sigma_f`` t
 i.e. no information along the family. ``position_std_m`` thus stays as large as the data
 make it, and without roads each state carries its family.
 
+**Where the look turns.** Over tens of degrees of a circular pass the families of the
+sub-apertures turn with the look and cross at the mover. :meth:`Tracker.tracks` gives
+each track the fit of its detections' range histories through their looks
+(:func:`~sarmotion.tracking.wide_aspect.fit_track`: the position with its standard
+deviation and whether the data fix it, else the family), and first joins the tracks of
+one uniform mover (:func:`~sarmotion.tracking.wide_aspect.join_tracks`): the filter above
+takes each detection's velocity for the mover's, and on a wide pass a uniform mover's
+detections drift as the look turns, so the filter cuts it into several tracks.
+
 Overlapping sub-apertures share pulses: their measurement errors are correlated, and
 the filter, which takes them as independent, is then overconfident in range and range
 speed (by about ``1 / sqrt(1 - overlap)`` in standard deviation).
@@ -78,6 +87,14 @@ from ..pipeline import AnalysisOptions
 from .roads import Road, RoadFix, road_fix, road_misses
 from .sub_apertures import Detection, SubApertureDetections, check_overlap
 from .turns import TurnTest, turn_test
+from .wide_aspect import (
+    PositionFit,
+    antenna_state,
+    fit_track,
+    join_tracks,
+    look_measurement,
+    pooled_factors,
+)
 
 if TYPE_CHECKING:
     from stonesoup.types.detection import Detection as StoneDetection
@@ -301,11 +318,16 @@ class Track:
         Whether its velocity changed between independent sub-apertures, and its turn
         rate (:mod:`sarmotion.tracking.turns`); None when a detection lacks its
         velocity's covariance.
+    fit : PositionFit or None
+        The uniform motion fitted to the range histories of all its detections through
+        their looks, with whether the data fix its position
+        (:mod:`sarmotion.tracking.wide_aspect`); None when a detection lacks its bound.
     """
 
     id: int
     states: tuple[TrackState, ...]
     turn: TurnTest | None = None
+    fit: PositionFit | None = None
 
     @property
     def n_detections(self) -> int:
@@ -416,16 +438,94 @@ class Tracker:
         self._ended.extend(ended)
 
     def tracks(self) -> tuple[Track, ...]:
-        """The tracks with at least ``min_detections`` detections, trimmed to them."""
+        """The tracks with at least ``min_detections`` detections, trimmed to them.
+
+        Tracks of one uniform mover are first joined (:func:`~sarmotion.tracking.
+        wide_aspect.join_tracks`: the increase of the joint fit's residual within the
+        chi-square gate at ``gate_probability``), each keeping its states; each track
+        carries the fit of its detections' range histories.
+        """
+        raw = sorted([*self._ended, *self._live], key=lambda t: self._order[t])
+        trimmed = []
+        for trk in raw:
+            hits = [i for i, s in enumerate(trk.states) if self._hit(s)]
+            trimmed.append(list(trk.states[hits[0] : hits[-1] + 1]) if hits else [])
+        looks = [self._looks(states) for states in trimmed]
+        factors = None
+        if looks and all(g is not None for g in looks):
+            measured = [g or [] for g in looks]
+            factors = pooled_factors(measured, **self._prior())
+            groups = join_tracks(
+                measured,
+                gate_probability=self.options.gate_probability,
+                error_factors=factors,
+                **self._prior(),
+            )
+        else:  # a detection without its bound: no joining
+            groups = [[k] for k in range(len(raw))]
         out = []
-        for trk in sorted([*self._ended, *self._live], key=lambda t: self._order[t]):
-            states = [self._state(s) for s in trk.states]
-            hits = [i for i, s in enumerate(states) if s.detection is not None]
-            if len(hits) < self.options.min_detections:
+        for group in groups:
+            kept = sorted(
+                (s for k in group for s in trimmed[k]), key=lambda s: self._meta[id(s)].sub.time_s
+            )
+            kept = self._one_per_sub_aperture(kept)
+            if sum(self._hit(s) for s in kept) < self.options.min_detections:
                 continue
-            kept = trk.states[hits[0] : hits[-1] + 1]
-            out.append((tuple(states[hits[0] : hits[-1] + 1]), self._turn(kept)))
-        return tuple(Track(id=k + 1, states=s, turn=turn) for k, (s, turn) in enumerate(out))
+            hits_looks = self._looks(kept)
+            fit = (
+                fit_track(hits_looks, error_factors=factors, **self._prior())
+                if hits_looks
+                else None
+            )
+            out.append((tuple(self._state(s) for s in kept), self._turn(kept), fit))
+        return tuple(
+            Track(id=k + 1, states=s, turn=turn, fit=fit) for k, (s, turn, fit) in enumerate(out)
+        )
+
+    def _hit(self, state: GaussianState) -> bool:
+        """Whether a Stone Soup state was updated by a detection."""
+        return (
+            isinstance(state, _stonesoup().Update) and self._meta[id(state)].detection is not None
+        )
+
+    def _one_per_sub_aperture(self, states: list[GaussianState]) -> list[GaussianState]:
+        """Joined tracks' states in time order, one per sub-aperture (a hit before a coast)."""
+        best: dict[int, GaussianState] = {}
+        for s in states:
+            k = self._meta[id(s)].sub.index
+            if k not in best or (self._hit(s) and not self._hit(best[k])):
+                best[k] = s
+        return [best[k] for k in sorted(best)]
+
+    def _prior(self) -> dict[str, object]:
+        """The scene prior of the wide-aspect fit: its spread, centre and the movers' height."""
+        sub = next(iter(self._meta.values())).sub
+        x0, x1, y0, y1 = sub.grid.extent
+        return {
+            "prior_std_m": self._family_std(sub),
+            "centre_m": np.array([0.5 * (x0 + x1), 0.5 * (y0 + y1)]),
+            "height_m": float(self.traces.reference_point_m[2]),
+        }
+
+    def _looks(self, states: Sequence[GaussianState]) -> list | None:
+        """The hits of ``states`` as range-history measurements; None if one lacks its bound."""
+        out = []
+        height = float(self.traces.reference_point_m[2])
+        for s in states:
+            if not self._hit(s):
+                continue
+            meta = self._meta[id(s)]
+            det = meta.detection
+            assert det is not None
+            if det.bound_cov is None:
+                return None
+            antenna = antenna_state(self.traces, meta.sub.pulses, meta.sub.time_s)
+            out.append(
+                look_measurement(
+                    meta.sub, det, antenna, height_m=height, overlap=self.options.overlap
+                )
+            )
+        return out
 
     def _turn(self, states: Sequence[GaussianState]) -> TurnTest | None:
         """The turn test of a track's detections (:func:`~sarmotion.tracking.turns.turn_test`)."""
