@@ -14,7 +14,7 @@ import shutil
 import stat
 import tempfile
 from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, contextmanager, nullcontext
 from pathlib import Path
 from typing import Any
 
@@ -297,6 +297,29 @@ def remove_stale_scratch(directory: str | os.PathLike[str] | None = None) -> lis
 
 
 @contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """SIGINT ignored by this process while the block runs (in the main thread only).
+
+    A disposition of SIG_IGN is inherited by the processes started meanwhile, through
+    ``exec`` too, and Python leaves an inherited SIG_IGN in place: worker processes
+    started in the block never take the terminal's Ctrl-C (sent to the whole foreground
+    process group) as their own, and stop only when their cluster stops them. A Ctrl-C
+    while the block runs (the workers' start, a few seconds) is not seen.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
 def local_cluster(
     n_workers: int, *, processes: bool = False, dashboard_address: str | None = None
 ) -> Iterator[Any]:
@@ -315,6 +338,12 @@ def local_cluster(
       ``dask-scratch-space`` in the system's temporary directory).
     - The workers' log level is this process's level of the ``distributed`` logger
       (the command line sets it from ``-v``).
+    - Worker processes ignore SIGINT (:func:`_sigint_ignored`): a Ctrl-C at the terminal
+      interrupts this process, which stops its cluster, and not each worker with a
+      traceback of its own.
+    - The scratch directory's name holds this process's PID; the scratch directories of
+      processes that died without removing theirs (SIGKILL) are removed first
+      (:func:`remove_stale_scratch`).
 
     Parameters
     ----------
@@ -349,18 +378,20 @@ def local_cluster(
             )
         )
         level = logging.getLogger("distributed").getEffectiveLevel()
-        cluster = stack.enter_context(
-            LocalCluster(
-                n_workers=n_workers,
-                threads_per_worker=1,
-                processes=processes,
-                **({"host": "127.0.0.1", "protocol": "tls://"} if processes else {}),
-                security=security,
-                dashboard_address=dashboard_address or "127.0.0.1:0",
-                scheduler_kwargs={"dashboard": dashboard_address is not None},
-                worker_dashboard_address="127.0.0.1:0",
-                local_directory=scratch,
-                silence_logs=level,
+        with _sigint_ignored() if processes else nullcontext():
+            # worker processes started now inherit an ignored SIGINT (module notes)
+            cluster = stack.enter_context(
+                LocalCluster(
+                    n_workers=n_workers,
+                    threads_per_worker=1,
+                    processes=processes,
+                    **({"host": "127.0.0.1", "protocol": "tls://"} if processes else {}),
+                    security=security,
+                    dashboard_address=dashboard_address or "127.0.0.1:0",
+                    scheduler_kwargs={"dashboard": dashboard_address is not None},
+                    worker_dashboard_address="127.0.0.1:0",
+                    local_directory=scratch,
+                    silence_logs=level,
+                )
             )
-        )
         yield cluster

@@ -16,7 +16,24 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["finite", "positive", "non_negative", "integer", "interval", "point", "shape", "one_of"]
+__all__ = [
+    "HAE_RANGE_M",
+    "finite",
+    "geodetic_origin",
+    "positive",
+    "non_negative",
+    "integer",
+    "interval",
+    "point",
+    "shape",
+    "one_of",
+]
+
+#: Heights above the WGS 84 ellipsoid (m) of a scene's origin on the ground: the Earth's
+#: land surface spans 430 m below sea level (the Dead Sea shore) to 8849 m above (Everest),
+#: and sea level (the geoid) lies within about 110 m of the ellipsoid; the range holds both
+#: with some margin.
+HAE_RANGE_M = (-1000.0, 10000.0)
 
 
 def finite(value: Any, name: str, *, unit: str = "") -> float:
@@ -74,6 +91,32 @@ def point(value: Any, name: str) -> NDArray[np.float64]:
     if p.size not in (2, 3) or not np.all(np.isfinite(p)):
         raise ValueError(f"{name} must be a finite (x, y) or (x, y, z) point (m), got {value!r}")
     return np.concatenate([p, [0.0]]) if p.size == 2 else p
+
+
+def geodetic_origin(value: Any, name: str) -> NDArray[np.float64]:
+    """A scene origin ``(latitude_deg, longitude_deg, hae_m)`` on the ground, as ``(3,)``.
+
+    Latitude within [-90, 90] deg, longitude within [-180, 360) deg, height above the
+    WGS 84 ellipsoid within :data:`HAE_RANGE_M`; all finite.
+    """
+    try:
+        llh = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be three numbers (lat_deg, lon_deg, hae_m), got {value!r}") from None
+    if llh.shape != (3,):
+        raise ValueError(f"{name} must be three numbers (lat_deg, lon_deg, hae_m), got {value!r}")
+    lat, lon, hae = (float(v) for v in llh)
+    lo, hi = HAE_RANGE_M
+    if not -90.0 <= lat <= 90.0:
+        raise ValueError(f"{name} latitude must be within [-90, 90] deg, got {lat!r}")
+    if not -180.0 <= lon < 360.0:
+        raise ValueError(f"{name} longitude must be within [-180, 360) deg, got {lon!r}")
+    if not lo <= hae <= hi:
+        raise ValueError(
+            f"{name} height must be within [{lo:g}, {hi:g}] m above the WGS 84 ellipsoid "
+            f"(the Earth's land surface), got {hae!r}"
+        )
+    return llh
 
 
 def shape(array: Any, name: str, expected: tuple[int | None, ...], *, what: str = "") -> None:

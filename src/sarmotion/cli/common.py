@@ -39,9 +39,12 @@ __all__ = [
     "max_speed_callback",
     "method_option",
     "noise_options",
+    "ORIGIN_RULE",
+    "origin_callback",
     "out_option",
     "scheduler_callback",
     "speed_option",
+    "say",
     "square_grid",
     "workers_callback",
 ]
@@ -400,6 +403,23 @@ def connect_scheduler_flag(address: str | None) -> Any:
     ctx = click.get_current_context()
     with dask_logging():
         return ctx.with_resource(connect_scheduler(address, name="--scheduler"))
+
+
+def origin_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
+    """``--origin LAT LON HAE``: a scene origin on the ground (:func:`~sarmotion._validation.geodetic_origin`)."""
+    from .._validation import geodetic_origin
+
+    if value is None:
+        return None
+    with as_flags():
+        return tuple(float(v) for v in geodetic_origin(value, "--origin"))
+
+
+#: Help of ``--origin`` (convert, image): what it is and the rule of its values.
+ORIGIN_RULE = (
+    "latitude within [-90, 90], longitude within [-180, 360), height above the WGS 84 "
+    "ellipsoid within [-1000, 10000] m (the Earth's land surface)"
+)
 
 
 #: Most pixels a side of an image (``--size`` / the analysis's pixel spacing): a 4096 x

@@ -10,11 +10,13 @@ from ..io import save_traces, staged_directory, staged_file, write_cphd, write_g
 from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN, written_by_sarmotion
 from .autofocus import autofocus_options, read_focused
 from .common import (
+    ORIGIN_RULE,
     InputError,
     check_out,
     gotcha_force_option,
     lenient_option,
     noise_options,
+    origin_callback,
     out_option,
     speed_option,
 )
@@ -55,8 +57,9 @@ __all__ = ["convert"]
     type=float,
     default=None,
     metavar="LAT LON HAE",
+    callback=origin_callback,
     help="--to cphd: geodetic position (deg, deg, m) of the origin of the scene frame; "
-    "default 0 0 0.",
+    f"default 0 0 0; {ORIGIN_RULE}.",
 )
 @speed_option
 @lenient_option

@@ -18,12 +18,15 @@ from ..report.autofocus import phase_error_figure
 from ..report.plotting import full_resolution_image_figure, save_figure
 from .autofocus import autofocus_options, read_focused
 from .common import (
+    MAX_GROUND_SPEED_MPS,
+    ORIGIN_RULE,
     InputError,
     Progress,
     check_out,
     extent_grid,
     force_option,
     lenient_option,
+    origin_callback,
     out_option,
     speed_option,
     square_grid,
@@ -32,10 +35,6 @@ from .inputs import FRAME_HELP, INPUTS_HELP, LABELS_HELP
 from .main import elapsed_s
 
 OUTPUTS = ("image.png", "image.h5", "peaks.json", "autofocus.png")
-
-#: Largest ground speed (m/s) accepted by --velocity: beyond any ground vehicle or aircraft
-#: on a runway, and far beyond the speeds a few degrees of aperture can resolve.
-MAX_GROUND_SPEED_MPS = 1000.0
 
 __all__ = ["image"]
 
@@ -117,7 +116,9 @@ __all__ = ["image"]
     type=float,
     default=None,
     metavar="LAT LON HAE",
-    help="--sicd: geodetic position (deg, deg, m) of the origin of the scene frame; default 0 0 0.",
+    callback=origin_callback,
+    help="--sicd: geodetic position (deg, deg, m) of the origin of the scene frame; default "
+    f"0 0 0; {ORIGIN_RULE}.",
 )
 @click.option(
     "--dynamic-range",
@@ -172,8 +173,6 @@ def image(
     if origin_llh is not None:
         if sicd_path is None:
             raise InputError("--origin applies to --sicd only")
-        if not (np.all(np.isfinite(origin_llh)) and abs(origin_llh[0]) <= 90):
-            raise InputError(f"--origin must be LAT LON HAE with |LAT| <= 90, got {origin_llh}")
     given = {
         flag
         for name, flag in (("size_m", "--size"), ("centre", "--centre"))

@@ -13,6 +13,7 @@ from ..io.gotcha import AZIMUTH_NAME_GLOB, AZIMUTH_NAME_PATTERN, written_by_sarm
 from ..simulation import PointTarget
 from ..simulation import inject as run
 from .common import (
+    MAX_GROUND_SPEED_MPS,
     InputError,
     as_flags,
     check_out,
@@ -21,7 +22,6 @@ from .common import (
     out_option,
     speed_option,
 )
-from .image import MAX_GROUND_SPEED_MPS
 from .inputs import FRAME_HELP, INPUTS_HELP, read_inputs
 
 __all__ = ["inject"]

@@ -171,16 +171,24 @@ def _verbose(ctx: click.Context, param: click.Parameter, value: int) -> None:
 
 
 def _max_memory(ctx: click.Context, param: click.Parameter | None, value: str | None) -> None:
-    from .._limits import parse_size, set_memory_limit
+    from .._limits import available_memory, format_bytes, parse_size, set_memory_limit
     from ..errors import InputError
 
     if param is None:  # the group's option: reset the limit of a previous run in-process
         set_memory_limit(None)
     if value is not None:
         try:
-            set_memory_limit(parse_size(value))
+            nbytes = parse_size(value)
         except (TypeError, ValueError) as exc:
             raise InputError(f"--max-memory: {exc}") from None
+        usable = available_memory()
+        if nbytes > usable:
+            raise InputError(
+                f"--max-memory {value} ({format_bytes(nbytes)}) is beyond this machine's usable "
+                f"memory ({format_bytes(usable)}: physical memory, cgroup and address-space "
+                "limits)"
+            )
+        set_memory_limit(nbytes)
 
 
 def _add_shared_options(command: click.Command) -> None:
@@ -272,12 +280,26 @@ def run(args: Sequence[str] | None = None, *, started: float | None = None) -> i
     except click.exceptions.Abort:
         click.echo("sarmotion: aborted", err=True)
         return 130
+    except click.UsageError as exc:  # a flag's type, a missing argument: one line too
+        where = exc.ctx.command_path if exc.ctx is not None else "sarmotion"
+        text = " ".join(exc.format_message().split())
+        click.echo(f"sarmotion: error: {text} ({where} --help shows the usage)", err=True)
+        return exc.exit_code
     except click.ClickException as exc:
         exc.show()
         return exc.exit_code
     except _bad_input() as exc:
         log.debug("bad input", exc_info=True)
         click.echo(f"sarmotion: error: {exc}", err=True)
+        return EXIT_BAD_INPUT
+    except MemoryError as exc:  # an input's size that no header declared, or a limit set too high
+        log.debug("out of memory", exc_info=True)
+        what = str(exc).splitlines()[0] if str(exc) else "an allocation failed"
+        click.echo(
+            f"sarmotion: error: out of memory ({what}); --max-memory below this machine's "
+            "free memory refuses such inputs from their headers",
+            err=True,
+        )
         return EXIT_BAD_INPUT
     except Exception as exc:  # a defect of sarmotion, not of the input
         log.debug("internal error", exc_info=True)

@@ -40,7 +40,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Iterator
-from contextlib import ExitStack
+from contextlib import ExitStack, closing
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -522,21 +522,25 @@ def analyze_collection(
         run_opts = dataclasses.replace(
             opts, analysis=patch_false_alarm(opts.analysis, len(plan.patches))
         )
-        for r in _run(
-            src,
-            plan,
-            run_opts,
-            scheduler,
-            n_workers,
-            processes,
-            memory_mb,
-            describe,
-            progress,
-            origin,
-        ):
-            if r.image is not None:
-                paste(canvas[0], r.image, origin[:2], spacing)
-            results[r.index] = dataclasses.replace(r, image=None)
+        # closing: an exception here (Ctrl-C) stops the cluster before it leaves the call
+        with closing(
+            _run(
+                src,
+                plan,
+                run_opts,
+                scheduler,
+                n_workers,
+                processes,
+                memory_mb,
+                describe,
+                progress,
+                origin,
+            )
+        ) as patches:
+            for r in patches:
+                if r.image is not None:
+                    paste(canvas[0], r.image, origin[:2], spacing)
+                results[r.index] = dataclasses.replace(r, image=None)
     timings["patches"] = time.perf_counter() - t1
     t2 = time.perf_counter()
     merged = _merge(src, plan, opts, [results[k] for k in sorted(results)], canvas)

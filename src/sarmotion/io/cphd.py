@@ -95,7 +95,7 @@ import sarkit.wgs84 as skwgs84
 from numpy.typing import ArrayLike, NDArray
 
 from .._limits import over_budget, phase_history_bytes
-from .._validation import integer
+from .._validation import geodetic_origin, integer
 from .._version import __version__
 from ..core import Acquisition, C, Radar, Traces, Trajectory, as_point, delay_phase
 from ..core.blocks import PulseBlocks
@@ -105,6 +105,7 @@ from .native import _to_json
 from .plausibility import (
     MAX_BEND,
     as_lenient,
+    check_coherent_sum,
     check_envelope,
     check_signal,
     check_speed,
@@ -1003,10 +1004,9 @@ def _core_name(meta: dict[str, Any], path: Path) -> str:
 
 
 def _origin(origin_llh: ArrayLike) -> NDArray[np.float64]:
-    """``origin_llh`` checked, its longitude wrapped to [-180, 180) degrees."""
-    llh = np.array(origin_llh, dtype=np.float64)
-    if llh.shape != (3,) or not np.all(np.isfinite(llh)) or abs(llh[0]) > 90:
-        raise ValueError(f"origin_llh must be (lat_deg, lon_deg, hae_m), got {origin_llh!r}")
+    """``origin_llh`` checked (:func:`~sarmotion._validation.geodetic_origin`), its
+    longitude wrapped to [-180, 180) degrees."""
+    llh = geodetic_origin(origin_llh, "origin_llh").copy()
     llh[1] = (llh[1] + 180.0) % 360.0 - 180.0
     return llh
 
@@ -1350,12 +1350,16 @@ class CphdBlocks:
         prep = self._prepared
         first = prep.span[0]
         frequencies = self.radar.frequencies_hz
+        coherent = 0.0
         with self.path.open("rb") as fh:
             reader = _open(self.path, fh)
             for a in range(0, self.n_pulses, rows):
                 b = min(a + rows, self.n_pulses)
                 pvps = prep.pvps[a:b]
                 block = _signal(reader, prep.channel, first + a, first + b, pvps, self.path)
+                coherent = check_coherent_sum(
+                    f"{self.path}: channel {prep.channel}", "signal", block, so_far=coherent
+                )
                 if prep.delays_s is not None:
                     block *= delay_phase(prep.delays_s[a:b], frequencies)
                 yield a, b, to_fast_time(block)

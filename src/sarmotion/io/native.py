@@ -77,6 +77,7 @@ from ..core import Radar, Traces, Trajectory
 from .errors import DataError
 from .plausibility import (
     as_lenient,
+    check_coherent_sum,
     check_envelope,
     check_reference_point,
     check_signal,
@@ -840,9 +841,12 @@ class NativeBlocks:
             d = g.get("data") if isinstance(g, h5py.Group) else None
             if not isinstance(d, h5py.Dataset) or d.shape != (self.n_pulses, self.radar.n_samples):
                 raise DataError(f"{p}: /traces/data changed since the file was opened")
+            coherent = 0.0
             for a in range(0, self.n_pulses, rows):
                 b = min(a + rows, self.n_pulses)
-                yield a, b, _dataset(g, "data", p, ndim=2, rows=slice(a, b))
+                block = _dataset(g, "data", p, ndim=2, rows=slice(a, b))
+                coherent = check_coherent_sum(p, "/traces/data", block, so_far=coherent)
+                yield a, b, block
 
 
 def open_native_blocks(path: PathLike, *, lenient: bool = False) -> NativeBlocks:

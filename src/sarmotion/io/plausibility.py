@@ -27,6 +27,8 @@ __all__ = [
     "RANGE_ENVELOPE_M",
     "SPEED_RANGE_MPS",
     "as_lenient",
+    "MAX_COHERENT_SUM",
+    "check_coherent_sum",
     "check_dynamic_range",
     "check_envelope",
     "check_reference_point",
@@ -48,6 +50,12 @@ MAX_DYNAMIC_RANGE = 1e3
 # The acquisition bounds RANGE_ENVELOPE_M, SPEED_RANGE_MPS and MIN_GRAZING_DEG are stated
 # once, in sarmotion.core.constants: the scene files meet them too.
 
+#: Largest sum of a data set's sample magnitudes, ``sum |P|``. An image pixel is a sum of
+#: the samples with unit-modulus weights, so ``sum |P|`` bounds its modulus, and its power
+#: ``(sum |P|)^2`` must be finite in float32, the precision of the separation's and the
+#: detectors' maps: ``sqrt(float32 max)``, 1.8e19. Measured phase histories are far
+#: below (a 32767-count CI2 sample in each of 1e8 samples sums to 3e12).
+MAX_COHERENT_SUM = float(np.sqrt(np.finfo(np.float32).max))
 #: Samples of a constant phase history agree to this fraction of their magnitude
 #: (4 float32 roundings): the value of a fill, not the echoes of a scene.
 _CONSTANT_TOL = 4.0 * float(np.finfo(np.float32).eps)
@@ -128,10 +136,36 @@ def check_dynamic_range(
         )
 
 
+def check_coherent_sum(
+    path: Path | str,
+    field: str,
+    samples: NDArray[np.complexfloating],
+    *,
+    so_far: float = 0.0,
+) -> float:
+    """``so_far + sum |samples|`` within :data:`MAX_COHERENT_SUM`; returns that sum.
+
+    Refused even leniently: the images of such data overflow single precision, whatever
+    the data's origin. ``so_far`` carries the sum over blocks read one after another.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(so_far) + float(np.sum(np.abs(samples), dtype=np.float64))
+    if not total <= MAX_COHERENT_SUM:
+        peak = float(np.max(np.abs(samples))) if samples.size else 0.0
+        raise DataError(
+            f"{path}: {field}: the sample magnitudes sum to {total:.3g} (largest {peak:.3g}); "
+            f"an image adding them in phase would overflow single precision (rule: at most "
+            f"{MAX_COHERENT_SUM:.3g}, the square root of float32's largest value; rescale "
+            "the data)"
+        )
+    return total
+
+
 def check_signal(
     path: Path | str, field: str, phase_history: NDArray[np.complexfloating], *, lenient: bool
 ) -> None:
-    """Not all zero (refused even leniently), not constant, within the dynamic range.
+    """Not all zero, summing within :data:`MAX_COHERENT_SUM` (both refused even
+    leniently), not constant, within the dynamic range.
 
     An all-zero phase history holds no echo (a never-written array, a fill value): every
     image of it is empty. A constant one (every sample equal to float32 rounding) is a
@@ -141,6 +175,7 @@ def check_signal(
     magnitudes = np.abs(phase_history)
     if phase_history.size == 0 or not np.any(magnitudes):
         raise DataError(f"{path}: {field}: every sample is zero (no echo to image or analyse)")
+    check_coherent_sum(path, field, phase_history)
     first = phase_history.reshape(-1)[0]
     spread = float(np.max(np.abs(phase_history - first)))
     if spread <= _CONSTANT_TOL * float(magnitudes.max()):

@@ -62,6 +62,7 @@ import sarkit.sicd as sksicd
 import sarkit.wgs84 as skwgs84
 from numpy.typing import ArrayLike, NDArray
 
+from .._validation import geodetic_origin
 from .._version import __version__
 from ..core import C, Traces
 from .cphd import _band, _enu_frame, _utc
@@ -459,9 +460,7 @@ def write_sicd(
     if not isinstance(traces, Traces):
         raise TypeError(f"traces must be a Traces object, got {type(traces).__name__}")
     v, x, y = _check_axes(values, x_m, y_m)
-    llh = np.asarray(origin_llh, dtype=np.float64)
-    if llh.shape != (3,) or not np.all(np.isfinite(llh)) or abs(llh[0]) > 90:
-        raise ValueError(f"origin_llh must be (lat_deg, lon_deg, hae_m), got {origin_llh!r}")
+    llh = geodetic_origin(origin_llh, "origin_llh")
     vel = None
     if velocity_mps is not None:
         u = np.asarray(velocity_mps, dtype=np.float64)

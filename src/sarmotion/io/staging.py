@@ -313,6 +313,14 @@ class OutputClaim:
                 raise OutputError(
                     f"--out {self.out}: cannot create {path}: {exc.strerror}"
                 ) from None
+            kind = stat.S_IFMT(os.fstat(fd).st_mode)
+            if kind != stat.S_IFREG:
+                os.close(fd)
+                what = _KINDS.get(kind, "a special file")
+                raise OutputError(
+                    f"--out {self.out}: its lock file {path} is {what}, not a regular file; "
+                    "remove it"
+                )
             try:
                 _flock(fd, path)
             except BlockingIOError:
@@ -331,9 +339,18 @@ class OutputClaim:
                 os.close(fd)  # locked a lock file that its holder has just removed
                 continue
             previous = _holder(fd, wait_s=0.0)
-            os.ftruncate(fd, 0)
-            os.lseek(fd, 0, os.SEEK_SET)
-            os.write(fd, f"{os.getpid()}\n".encode())
+            try:
+                os.ftruncate(fd, 0)
+                os.lseek(fd, 0, os.SEEK_SET)
+                if os.write(fd, f"{os.getpid()}\n".encode()) == 0:
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            except OSError as exc:  # a full disk: no lock file is left behind, empty
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+                os.close(fd)
+                raise OutputError(
+                    f"--out {self.out}: cannot write its lock file {path}: {exc.strerror}"
+                ) from None
             self._fd = fd
             if previous not in ("unknown", str(os.getpid())):
                 log.info("%s: the previous run (pid %s) ended without releasing it", path, previous)
@@ -515,6 +532,39 @@ def _holder(fd: int, wait_s: float = 0.5) -> str:
         time.sleep(0.01)
 
 
+def _longest_name(out: Path) -> str:
+    """The longest name the staging of ``out`` creates beside it: its staging directory's.
+
+    ``.NAME.partial-PID-TOKEN`` (this process's PID, 12 hex digits of token); the lock
+    file ``.NAME.lock``, the set-aside ``.NAME.old-PID-TOKEN`` and the temporary files
+    ``.NAME.TOKEN.tmp`` of :func:`staged_paths` are shorter.
+    """
+    return f".{out.name}.partial-{os.getpid()}-{'0' * 12}"
+
+
+def _check_names(out: Path) -> None:
+    """OutputError if a name the staging of ``out`` creates exceeds the file system's limit.
+
+    The limit is ``NAME_MAX`` (bytes of one path component) of the nearest existing
+    directory at or above ``out``'s parent, where the names will be created.
+    """
+    where = out.parent
+    while not where.exists() and where.parent != where:
+        where = where.parent
+    try:
+        limit = os.pathconf(where, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        limit = 255  # POSIX file systems' usual NAME_MAX
+    longest = _longest_name(out)
+    if len(os.fsencode(longest)) > limit:
+        raise OutputError(
+            f"--out {out}: its name is {len(os.fsencode(out.name))} bytes; with the staging "
+            f"names made beside it (up to {len(os.fsencode(longest))} bytes, such as "
+            f"{longest[:24]}...) it exceeds this file system's limit of {limit} bytes a name: "
+            f"give a name of at most {limit - (len(os.fsencode(longest)) - len(os.fsencode(out.name)))} bytes"
+        )
+
+
 def claim_output(
     out: Path | str,
     *,
@@ -568,7 +618,13 @@ def claim_output(
     target = _absolute(Path(out))
     if target in _CLAIMS:
         raise OutputError(f"--out {out} is already claimed by this process")
-    _state(target)  # refuse links and special files before creating anything
+    state = _state(target)  # refuse links and special files before creating anything
+    _check_names(target)
+    if state != "missing" and os.path.ismount(target):
+        raise OutputError(
+            f"--out {out} is a mount point; outputs are put in place by renaming, which "
+            "cannot move a mount point: give a path inside it"
+        )
     if check is not None:
         check()
     claim = OutputClaim(

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from contextlib import closing
 from dataclasses import dataclass
 from typing import Any
 
@@ -129,24 +130,28 @@ def track(
     subs: list[SubApertureDetections] = []
     power: NDArray[np.float64] | None = None
     grid: ImageGrid | None = None
-    for sub in map_sub_apertures(
-        traces,
-        slices,
-        analysis,
-        scheduler=scheduler,
-        n_workers=n_workers,
-        processes=processes,
-        dashboard_address=dashboard_address,
-    ):
-        tracker.step(sub)
-        # Incoherent mean of the stationary images on the first one's grid; only the
-        # light record of each sub-aperture is kept (a whole pass would hold GBs).
-        if grid is None:
-            grid, power = sub.grid, np.zeros(sub.grid.shape)
-        if sub.grid.shape == grid.shape and sub.stationary_db is not None:
-            power += 10.0 ** (np.asarray(sub.stationary_db, dtype=np.float64) / 10.0)
-        subs.append(sub.light())
-        report(progress, "sub-apertures", len(subs), len(slices))
+    # closing: an exception here (Ctrl-C) stops the cluster before it leaves the call
+    with closing(
+        map_sub_apertures(
+            traces,
+            slices,
+            analysis,
+            scheduler=scheduler,
+            n_workers=n_workers,
+            processes=processes,
+            dashboard_address=dashboard_address,
+        )
+    ) as results:
+        for sub in results:
+            tracker.step(sub)
+            # Incoherent mean of the stationary images on the first one's grid; only the
+            # light record of each sub-aperture is kept (a whole pass would hold GBs).
+            if grid is None:
+                grid, power = sub.grid, np.zeros(sub.grid.shape)
+            if sub.grid.shape == grid.shape and sub.stationary_db is not None:
+                power += 10.0 ** (np.asarray(sub.stationary_db, dtype=np.float64) / 10.0)
+            subs.append(sub.light())
+            report(progress, "sub-apertures", len(subs), len(slices))
     assert grid is not None and power is not None
     top = float(power.max())
     with np.errstate(divide="ignore"):
