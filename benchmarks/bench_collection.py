@@ -21,6 +21,16 @@ the command's ``--no-defocus-search``.
 wall the whole run would take (``k`` over the pieces run times their wall), written to
 ``bench_collection_sampled.json``; a size too long to run whole is estimated so.
 
+``--rate-factors 1.0 1.7 3.0`` is the throughput at realistic pulse rates: the pulse
+spacing sized for that many times the scene (unambiguous cross range ``factor x L``;
+the range window stays ``1.3 L``), each size and factor's patches with the command's
+defaults (the defocus search on; ``--no-defocus`` off) in a process of its own: wall
+time, CPU time (user plus system of the process), peak RSS, km^2 per hour, the pulses
+each patch keeps, and the movers. ``--base-src DIR`` runs each also with the package at
+``DIR`` (a ``git worktree`` of an earlier commit's ``src``) first in the sys.path,
+alternated with today's in the same run. Rows go to ``bench_collection_rates.json``
+(added to, by side, factor and code) and the table ``bench_collection_rates.md``.
+
 Scene of side ``L`` (m), seeded: 0.5 stationary unit points per 1000 m^2 drawn uniformly
 in the ``L x L`` square, 3 movers of ground speed 5-15 m/s (random direction, unit
 amplitude, random phase) inside it, one degree of GOTCHA-like circular spotlight
@@ -73,8 +83,11 @@ METHOD_NAMES = {
 GUARD = 1.3
 
 
-def make_scene(side_m: float, seed: int):
-    """(traces, stationary (n, 2), movers list of PointTarget) of the benchmark scene."""
+def make_scene(side_m: float, seed: int, rate_factor: float = GUARD):
+    """(traces, stationary (n, 2), movers list of PointTarget) of the benchmark scene.
+
+    The pulse spacing's unambiguous cross range is ``rate_factor`` times the side.
+    """
     from sarmotion.collection import unambiguous_scene
     from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
     from sarmotion.core.blocks import TracesBlocks
@@ -95,7 +108,7 @@ def make_scene(side_m: float, seed: int):
     amb = unambiguous_scene(probe)
     e_c = np.array([0.0, 1.0])
     cross = float(np.ptp(amb @ e_c))
-    ppd = 117.0 * GUARD * side_m / cross
+    ppd = 117.0 * rate_factor * side_m / cross
     traj = Trajectory.circular(pulses_per_deg=ppd)
     half = 0.5 * side_m
     n_stat = int(round(DENSITY_PER_M2 * side_m**2))
@@ -188,6 +201,12 @@ def _rss_gb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
+def _cpu_s() -> float:
+    """User plus system CPU time of this process, all its threads (s)."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def run_whole(side_m: float, seed: int) -> dict:
     from sarmotion.pipeline import AnalysisOptions, analyze
 
@@ -221,10 +240,24 @@ def _cells(traces):
 
 
 def run_patches(
-    side_m: float, seed: int, workers: int | None, piece=(0, 1), defocus_search: bool = False
+    side_m: float,
+    seed: int,
+    workers: int | None,
+    piece=(0, 1),
+    defocus_search: bool = False,
+    rate_factor: float = GUARD,
+    src: str | None = None,
 ) -> dict:
-    """The collection on the scene; ``piece = (i, k)``: only every ``k``-th patch from ``i``."""
+    """The collection on the scene; ``piece = (i, k)``: only every ``k``-th patch from ``i``.
+
+    ``src``: the package's source folder to import (first in ``sys.path``); default the
+    installed one.
+    """
     import dataclasses
+    import sys
+
+    if src is not None:
+        sys.path.insert(0, src)
 
     import distributed  # noqa: F401  (its logging set up first, then quietened)
 
@@ -233,21 +266,34 @@ def run_patches(
     from sarmotion.pipeline import AnalysisOptions
 
     logging.getLogger("distributed").setLevel(logging.WARNING)  # the local cluster's
-    traces, stat, movers = make_scene(side_m, seed)
+    traces, stat, movers = make_scene(side_m, seed, rate_factor)
+    import sarmotion
+
     t0 = time.perf_counter()
+    cpu0 = _cpu_s()
     plan = plan_patches(TracesBlocks(traces))
     i, k = piece
     part = dataclasses.replace(plan, patches=plan.patches[i::k]) if k > 1 else plan
     options = CollectionOptions(analysis=AnalysisOptions(defocus_search=defocus_search))
     result = analyze_collection(traces, options, plan=part, n_workers=workers)
     wall = time.perf_counter() - t0
+    cpu = _cpu_s() - cpu0
     stage: dict[str, float] = {}
     for r in result.patches:
         for key, v in r.timings_s.items():
             stage[key] = stage.get(key, 0.0) + v
     return {
         "wall_s": wall,
+        "cpu_s": cpu,
         "rss_gb": _rss_gb(),
+        "package": str(Path(sarmotion.__file__).parent),
+        "input_pulses": traces.n_pulses,
+        "input_samples": traces.n_samples,
+        "prf_hz": 1.0 / traces.trajectory.pulse_interval_s,
+        "pulses_kept": [int(p.pulses.size) for p in part.patches],
+        "ratio": [
+            [int(getattr(p, "interpolation", 1)), int(p.decimation)] for p in part.patches
+        ],
         "patches": len(part.patches),
         "patch_size_m": plan.patch_size_m,
         "pulses_per_patch": [
@@ -279,7 +325,9 @@ def run_patches(
     }
 
 
-def _score_patches(side_m: float, seed: int, parts: list[dict]) -> dict:
+def _score_patches(
+    side_m: float, seed: int, parts: list[dict], rate_factor: float = GUARD
+) -> dict:
     """One run's answer from its pieces (module notes), scored."""
     from sarmotion.collection import MoverRecord, StationaryRecord
     from sarmotion.collection.merge import drop_sidelobes, merge_movers, merge_stationary
@@ -288,7 +336,7 @@ def _score_patches(side_m: float, seed: int, parts: list[dict]) -> dict:
     from sarmotion.core.blocks import TracesBlocks
     from sarmotion.pipeline import AnalysisOptions
 
-    traces, stat, movers = make_scene(side_m, seed)
+    traces, stat, movers = make_scene(side_m, seed, rate_factor)
     cells = _cells(traces)
     recs = [
         MoverRecord(
@@ -491,6 +539,176 @@ def ab_workers(side_m: float, seed: int, workers: list[int], rounds: int) -> lis
     return rows
 
 
+def rate_table(
+    sides: list[float],
+    factors: list[float],
+    seed: int,
+    workers: int | None,
+    defocus_search: bool,
+    base_src: str | None,
+    out: Path | None,
+) -> list[dict]:
+    """Throughput at each side and pulse-rate factor, today's code and ``base_src``'s."""
+    codes = [("now", None)] + ([("base", base_src)] if base_src else [])
+    rows = []
+    pair = 0
+    for side in sides:
+        for factor in factors:
+            pair += 1
+            for code, src in codes if pair % 2 else codes[::-1]:
+                before = os.getloadavg()[0]
+                part = _in_process(
+                    run_patches, side, seed, workers, (0, 1), defocus_search, factor, src
+                )
+                scored = _score_patches(side, seed, [part], factor)
+                kept = np.asarray(part["pulses_kept"])
+                row = {
+                    "side_m": side,
+                    "rate_factor": factor,
+                    "code": code,
+                    "package": part["package"],
+                    "seed": seed,
+                    "defocus_search": defocus_search,
+                    "input_pulses": part["input_pulses"],
+                    "input_samples": part["input_samples"],
+                    "prf_hz": part["prf_hz"],
+                    "patches": part["patches"],
+                    "pulses_kept": [int(kept.min()), int(np.median(kept)), int(kept.max())],
+                    "ratios": sorted({f"{a}/{b}" for a, b in part["ratio"]}),
+                    "samples_per_patch": part["samples_per_patch"],
+                    "wall_s": part["wall_s"],
+                    "cpu_s": part["cpu_s"],
+                    "rss_gb": part["rss_gb"],
+                    "km2_per_hour": (side / 1000.0) ** 2 / part["wall_s"] * 3600,
+                    "patch_stage_s": part["patch_stage_s"],
+                    "accurate": scored["accurate"],
+                    "missed": scored["missed"],
+                    "false": scored["false"],
+                    "stationary_found": scored["stationary_found"],
+                    "n_stationary": int(round(DENSITY_PER_M2 * side**2)),
+                    "stationary_listed": scored["stationary_listed"],
+                    "load_before": before,
+                    "load_after": os.getloadavg()[0],
+                }
+                rows.append(row)
+                print(json.dumps(row), flush=True)
+                if out is not None:
+                    out.mkdir(parents=True, exist_ok=True)
+                    path = out / "bench_collection_rates.json"
+                    old = json.loads(path.read_text()) if path.exists() else []
+                    key = ("side_m", "rate_factor", "code", "defocus_search")
+                    old = [r for r in old if any(r.get(k) != row[k] for k in key)]
+                    doc = sorted(
+                        old + [row], key=lambda r: (r["side_m"], r["rate_factor"], r["code"])
+                    )
+                    path.write_text(json.dumps(doc, indent=2) + "\n")
+                    (out / "bench_collection_rates.md").write_text(_rate_md(doc))
+    return rows
+
+
+def _rate_md(rows: list[dict]) -> str:
+    """Markdown table of ``rate_table``'s rows."""
+    head = (
+        "| side | pulse-rate factor | code | input pulses x samples (PRF) | patches | "
+        "pulses kept per patch (min/median/max) | p/q | wall | CPU | peak RSS | km^2/h | "
+        "movers accurate | false | stationary found / true | load |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    )
+    out = []
+    for r in rows:
+        k = r["pulses_kept"]
+        ratios = ", ".join(r["ratios"][:3]) + (" ..." if len(r["ratios"]) > 3 else "")
+        out.append(
+            f"| {r['side_m']:g} m | {r['rate_factor']:g} | {r['code']} | "
+            f"{r['input_pulses']} x {r['input_samples']} ({r['prf_hz']:.0f} Hz) | "
+            f"{r['patches']} | {k[0]}/{k[1]}/{k[2]} | {ratios} | {r['wall_s']:.0f} s | "
+            f"{r['cpu_s']:.0f} s | {r['rss_gb']:.2f} GB | {r['km2_per_hour']:.3f} | "
+            f"{r['accurate']}/3 | {r['false']} | {r['stationary_found']}/{r['n_stationary']} | "
+            f"{max(r['load_before'], r['load_after']):.1f} |"
+        )
+    return head + "\n".join(out) + "\n"
+
+
+def patch_profile(
+    side_m: float, seed: int, rate_factor: float, pulses: list[int], src: str | None = None
+) -> list[dict]:
+    """One patch's analysis at several pulse counts: its stage timings and their exponent.
+
+    The scene's pulse rate is sized for ``rate_factor`` times the side; the patch holding
+    the first mover is resampled to each count of ``pulses`` (the ratio ``p / q`` of
+    ``resample.slow_time_ratio`` for that many pulses over the aperture, the same pass
+    band and filter rule), and analysed as a collection's patch is
+    (:func:`~sarmotion.collection.run.analyze_patch`, the command's defaults), on the
+    threads the process has.
+    """
+    import dataclasses
+    import sys
+
+    if src is not None:
+        sys.path.insert(0, src)
+    from sarmotion.collection import CollectionOptions, extract_patches, plan_patches
+    from sarmotion.collection.plan import BAND_GUARD
+    from sarmotion.collection.resample import design, output_grid, slow_time_ratio
+    from sarmotion.collection.run import analyze_patch
+    from sarmotion.core.blocks import TracesBlocks
+
+    traces, _, movers = make_scene(side_m, seed, rate_factor)
+    source = TracesBlocks(traces)
+    plan = plan_patches(source)
+    patch = next(p for p in plan.patches if p.contains(movers[0].position_m))
+    prf = 1.0 / traces.trajectory.pulse_interval_s
+    span = float(np.ptp(traces.trajectory.slow_times_s))
+    opts = CollectionOptions().analysis
+    rows = []
+    for n in pulses:
+        rate = max(n / span, 2.0 * (1.0 + BAND_GUARD) * patch.passband_hz)
+        up, down = slow_time_ratio(prf, rate)
+        taps = design(up, patch.passband_hz, prf, 60.0, guard=BAND_GUARD)
+        this = dataclasses.replace(
+            patch,
+            interpolation=up,
+            decimation=down,
+            taps=taps,
+            pulses=output_grid(traces.n_pulses, up, down, taps.size),
+        )
+        (tr,) = extract_patches(source, [this])
+        analyze_patch(tr, this, opts)  # compiled and warmed
+        t0, c0 = time.perf_counter(), _cpu_s()
+        res, _ = analyze_patch(tr, this, opts)
+        rows.append(
+            {
+                "side_m": side_m,
+                "rate_factor": rate_factor,
+                "pulses": tr.n_pulses,
+                "samples": tr.n_samples,
+                "ratio": f"{up}/{down}",
+                "wall_s": time.perf_counter() - t0,
+                "cpu_s": _cpu_s() - c0,
+                "movers": len(res.movers),
+                "timings_s": res.timings_s,
+            }
+        )
+        print(json.dumps(rows[-1]), flush=True)
+    return rows
+
+
+def _profile_md(rows: list[dict]) -> str:
+    """Per-stage table of ``patch_profile``'s rows and each stage's exponent in pulses."""
+    stages = [k for k in rows[0]["timings_s"] if all(k in r["timings_s"] for r in rows)]
+    n = np.array([r["pulses"] for r in rows], dtype=float)
+    head = "| stage | " + " | ".join(f"{int(v)} pulses (s)" for v in n) + " | exponent |\n"
+    head += "|---|" + "---|" * (len(rows) + 1) + "\n"
+    out = []
+    for k in stages:
+        t = np.array([r["timings_s"][k] for r in rows])
+        ok = t > 1e-3
+        slope = np.polyfit(np.log(n[ok]), np.log(t[ok]), 1)[0] if ok.sum() >= 2 else np.nan
+        out.append(
+            f"| {k} | " + " | ".join(f"{v:.2f}" for v in t) + f" | {slope:.2f} |"
+        )
+    return head + "\n".join(out) + "\n"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=float, nargs="+", default=[100, 200, 400, 800])
@@ -511,7 +729,52 @@ def main() -> None:
         action="store_true",
         help="also run the patches with AnalysisOptions(defocus_search=True)",
     )
+    parser.add_argument(
+        "--rate-factors",
+        type=float,
+        nargs="+",
+        default=None,
+        help="pulse spacing sized for these multiples of the scene: the km^2/h table",
+    )
+    parser.add_argument(
+        "--base-src", default=None, help="with --rate-factors: also run the package at DIR"
+    )
+    parser.add_argument(
+        "--no-defocus", action="store_true", help="with --rate-factors: defocus search off"
+    )
+    parser.add_argument(
+        "--profile-pulses",
+        type=int,
+        nargs="+",
+        default=None,
+        help="one patch's stage timings at these pulse counts (first size, first factor)",
+    )
     args = parser.parse_args()
+    if args.profile_pulses:
+        factor = args.rate_factors[0] if args.rate_factors else 3.0
+        rows = _in_process(
+            patch_profile, args.sizes[0], args.seed, factor, args.profile_pulses, args.base_src
+        )
+        print(_profile_md(rows))
+        if args.out is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            (args.out / "bench_collection_profile.json").write_text(
+                json.dumps(rows, indent=2) + "\n"
+            )
+            (args.out / "bench_collection_profile.md").write_text(_profile_md(rows))
+        return
+    if args.rate_factors:
+        base = str(Path(args.base_src).resolve()) if args.base_src else None
+        rate_table(
+            args.sizes,
+            args.rate_factors,
+            args.seed,
+            args.workers,
+            not args.no_defocus,
+            base,
+            args.out,
+        )
+        return
     if args.threads_vs_processes:
         threads_vs_processes()
         return

@@ -15,9 +15,12 @@ For a block of pulses the phase history ``P(s, f_k)`` is formed once; for each p
    radar is that of ``n_p`` bins: they agree at the peak and differ by at most
    ``max |p_n(t) - p_{n_p}(t)|`` over the window (a few times ``1 / n_p``, the sidelobe
    level at the window's edge);
-3. **filter and decimate** in slow time: the patch's FIR (:mod:`~sarmotion.collection.plan`)
-   evaluated only at its output pulses, each from the ``n_taps`` pulses about it; a
-   point's Doppler in the pass band passes with gain within ``10^(-A/20)`` of 1.
+3. **resample** in slow time by the patch's ratio ``p / q``: its polyphase FIR
+   (:mod:`~sarmotion.collection.resample`) evaluated only at its output pulses, each from
+   the ``n_taps / p`` input pulses about it; a point's Doppler in the pass band passes with
+   gain within ``10^(-A/20)`` of 1. The output pulses' slow times and antenna positions
+   are the trajectory's at their (fractional) places on the pulse axis
+   (:func:`~sarmotion.collection.resample.resample_trajectory`).
 
 The rows of step 2 are held only until the last output pulse that needs them is
 formed: memory is a block's phase history, plus per patch its filter's span of rows and
@@ -32,11 +35,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.blocks import PulseBlocks
-from ..core.geometry import Trajectory, travel_time
+from ..core.geometry import travel_time
 from ..core.radar import Radar
 from ..core.spectral import delay_phase, to_frequency
 from ..core.traces import Traces
 from .plan import Patch
+from .resample import phases, resample_trajectory
 
 __all__ = ["patch_radar", "extract_patches", "PatchBuilder"]
 
@@ -92,6 +96,12 @@ class PatchBuilder:
         self._delays = travel_time(pos, patch.centre_m) - travel_time(pos, source.reference_point_m)
         self._freqs = source.radar.frequencies_hz
         self._half = patch.taps.size // 2
+        up = int(patch.interpolation)
+        # each output pulse's weights of the input pulses up to its last (resample.phases)
+        ph = [w.astype(np.float32)[:, None] for w in phases(patch.taps, up)]
+        m = patch.pulses.astype(np.int64) + self._half
+        self._weights = [ph[r] for r in (m % up)]
+        self._last = m // up  # last input pulse each output needs
         self._rows: NDArray[np.complex64] = np.zeros((0, patch.n_samples), np.complex64)
         self._first = 0  # input pulse of self._rows[0]
         self._out = np.zeros((patch.pulses.size, patch.n_samples), np.complex64)
@@ -115,15 +125,18 @@ class PatchBuilder:
         self._rows = np.concatenate([self._rows, rows]) if self._rows.shape[0] else rows
         if self._rows.shape[0] == rows.shape[0]:
             self._first = start
-        pulses, h = self.patch.pulses, self._half
+        n_out, last = self.patch.pulses.size, self._last
         # the taps are real; an explicit weighted sum, not a BLAS product: a vector-matrix
         # product per output pulse is too small for BLAS's threads to pay
-        taps = self.patch.taps.astype(np.float32)[:, None]
-        while self._next < pulses.size and pulses[self._next] + h < stop:
-            a = int(pulses[self._next]) - h - self._first
-            self._out[self._next] = (taps * self._rows[a : a + taps.shape[0]]).sum(axis=0)
+        while self._next < n_out and last[self._next] < stop:
+            w = self._weights[self._next]
+            a = int(last[self._next]) - w.shape[0] + 1 - self._first
+            self._out[self._next] = (w * self._rows[a : a + w.shape[0]]).sum(axis=0)
             self._next += 1
-        keep = (int(pulses[self._next]) - h) if self._next < pulses.size else stop
+        if self._next < n_out:
+            keep = int(last[self._next]) - self._weights[self._next].shape[0] + 1
+        else:
+            keep = stop
         drop = min(max(0, keep - self._first), self._rows.shape[0])
         if drop:
             self._rows = self._rows[drop:]
@@ -141,9 +154,7 @@ class PatchBuilder:
 
 def make_traces(patch: Patch, source: PulseBlocks, data: NDArray) -> Traces:
     """:class:`Traces` of a patch from its output rows."""
-    traj = source.trajectory
-    sel = patch.pulses
-    trajectory = Trajectory(positions_m=traj.positions_m[sel], slow_times_s=traj.slow_times_s[sel])
+    trajectory = resample_trajectory(source.trajectory, patch.pulses, patch.interpolation)
     meta = dict(source.metadata)
     meta.update(patch=patch.index, patch_core_m=list(patch.core_m))
     return Traces(

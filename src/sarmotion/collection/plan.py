@@ -27,10 +27,14 @@ Everything is derived from the data (:func:`plan_patches`):
   - tau(s, x)``, over ground speeds ``<= max_speed_mps``, ``x`` the region's corners.
   The passband is ``+- (b_core + b_mover)``: a mover whose Doppler centre (aliased by
   the data's own pulse rate, where its image lands in cross range) falls on the core
-  keeps its whole spectrum. The decimation ``q = floor(PRF / ((1 + guard) 2 f_pass))``
-  (``guard = 0.3``, the sampling margin of the collections the analysis was validated
-  on); the filter's stop band starts at ``(1 + 2 guard) f_pass``, and there is no filter
-  when that is above the Nyquist rate (the band is the data's).
+  keeps its whole spectrum. The traces are resampled to ``(1 + guard) 2 f_pass`` pulses
+  per second or just above (``guard = 0.3``, the sampling margin of the collections the
+  analysis was validated on): a rational ratio ``p / q`` of the data's pulse rate
+  (:mod:`~sarmotion.collection.resample`, its rule and error bound) where no mover of the
+  speed range is aliased in the data, else the integer decimation ``q = floor(PRF /
+  ((1 + guard) 2 f_pass))``, exact for aliased movers too; the filter's stop
+  band starts at ``(1 + 2 guard) f_pass``, and there is no filter when the ratio is 1 and
+  that is above the Nyquist rate (the band is the data's).
 
 The patches' *extents* (core plus those margins) overlap by twice the margins, which
 exceed the largest displacement in range and the largest Doppler spread of a mover in
@@ -60,6 +64,7 @@ from ..core.blocks import PulseBlocks
 from ..core.constants import C
 from ..core.geometry import look_geometry, travel_time
 from ..pipeline import AnalysisOptions
+from .resample import aliased_doppler_hz, design, output_grid, slow_time_ratio
 
 __all__ = ["CollectionOptions", "Patch", "PatchPlan", "plan_patches", "RegionError"]
 
@@ -151,14 +156,18 @@ class Patch:
     n_samples : int
         Fast-time samples of its traces (centred on ``t = 0``).
     decimation : int
-        Slow-time decimation ``q`` (1: none).
+        Slow-time down factor ``q`` (1: none).
+    interpolation : int
+        Slow-time up factor ``p``: the traces' pulse rate is ``p / q`` of the data's
+        (:mod:`~sarmotion.collection.resample`).
     passband_hz : float
         Half-width ``f_pass`` of its slow-time band (Hz).
     taps : (n_taps,) ndarray
-        Slow-time FIR filter (odd length, linear phase, unit gain at 0 Hz; ``[1]`` when
-        the patch's band is the data's).
+        Slow-time FIR filter on the grid of ``1 / p`` input pulses (odd length, linear
+        phase, gain ``p`` at 0 Hz; ``[1]`` when the patch's band is the data's).
     pulses : (n_out,) ndarray of int
-        The input pulses its output pulses sit on (each with the filter's full support).
+        Where its output pulses sit, on that grid (input pulse ``j`` at ``j p``; the input
+        pulses themselves when ``p = 1``), each with the filter's full support.
     """
 
     index: int
@@ -166,9 +175,15 @@ class Patch:
     centre_m: NDArray[np.float64]
     n_samples: int
     decimation: int
+    interpolation: int = 1
     passband_hz: float
     taps: NDArray[np.float64]
     pulses: NDArray[np.int64]
+
+    @property
+    def pulse_positions(self) -> NDArray[np.float64]:
+        """Output pulses' positions on the data's pulse axis, ``pulses / p`` (pulses)."""
+        return self.pulses / float(self.interpolation)
 
     @property
     def size_m(self) -> float:
@@ -191,6 +206,7 @@ class Patch:
             "n_pulses": int(self.pulses.size),
             "n_samples": int(self.n_samples),
             "decimation": int(self.decimation),
+            "interpolation": int(self.interpolation),
             "passband_hz": float(self.passband_hz),
             "n_taps": int(self.taps.size),
         }
@@ -491,11 +507,18 @@ def plan_patches(
             rate = np.gradient(rel, s, axis=1)
             core_band = float(max(np.max(np.abs(f_lo * rate)), np.max(np.abs(f_hi * rate))))
             passband = core_band + margin_d
-            q = max(1, int(math.floor(prf / ((1.0 + BAND_GUARD) * 2.0 * passband))))
+            need = (1.0 + BAND_GUARD) * 2.0 * passband
+            up, q = slow_time_ratio(prf, need)
+            corners = _lift(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]), z)
+            if up > 1 and aliased_doppler_hz(
+                pos, s, centre, corners, vel, (f_lo, f_hi)
+            ) >= prf - passband:
+                # a mover of the speed range is aliased in the data: whole pulses only
+                up, q = 1, max(1, int(math.floor(prf / need)))
             if single:
-                q, n_samples = 1, radar.n_samples
-            taps = _design(q, passband, prf, opts.stopband_db)
-            pulses = _output_pulses(source.n_pulses, q, taps.size)
+                up, q, n_samples = 1, 1, radar.n_samples
+            taps = _design(passband, prf, opts.stopband_db, up=up)
+            pulses = _output_pulses(source.n_pulses, q, taps.size, up=up)
             if pulses.size < 2:
                 raise RegionError(
                     f"patch {len(patches)} keeps {pulses.size} pulse(s) after its "
@@ -508,6 +531,7 @@ def plan_patches(
                     centre_m=centre if not single else source.reference_point_m.copy(),
                     n_samples=n_samples,
                     decimation=q,
+                    interpolation=up,
                     passband_hz=passband,
                     taps=taps,
                     pulses=pulses,
@@ -534,35 +558,25 @@ def _window_samples(half_s: float, dt: float, n_max: int) -> int:
     return int(min(n, n_max))
 
 
-def _design(q: int, passband_hz: float, prf_hz: float, stopband_db: float) -> NDArray[np.float64]:
+def _design(
+    passband_hz: float, prf_hz: float, stopband_db: float, *, up: int = 1
+) -> NDArray[np.float64]:
     """Kaiser-window low-pass FIR of pass band ``|f| <= f_pass``, stop band ``|f| >= f_stop``.
 
-    ``f_stop = (1 + 2 guard) f_pass``: for a decimation ``q`` the plan has ``prf / q >=
+    ``f_stop = (1 + 2 guard) f_pass``: for a ratio ``p / q`` the plan has ``prf p / q >=
     2 (1 + guard) f_pass``, so what lies between the bands aliases outside the pass band;
-    with ``q = 1`` the filter still removes the echoes of other patches' cores (and the
-    movers there) when ``f_stop`` is below the Nyquist rate ``prf / 2``; else ``[1.0]``
-    (the band is the data's). Ripple ``10^(-A/20)`` in both bands (Kaiser's design
-    formulae, :func:`scipy.signal.kaiserord`).
+    with ``p = q = 1`` the filter still removes the echoes of other patches' cores (and
+    the movers there) when ``f_stop`` is below the Nyquist rate ``prf / 2``; else ``[1.0]``
+    (the band is the data's). On the grid of ``1 / p`` input pulses, within ``10^(-A/20)``
+    in both bands once applied (:func:`~sarmotion.collection.resample.design`).
     """
-    stop = (1.0 + 2.0 * BAND_GUARD) * passband_hz
-    if stop >= 0.5 * prf_hz:
-        return np.ones(1)
-    from scipy.signal import firwin, kaiserord
-
-    n_taps, beta = kaiserord(stopband_db, (stop - passband_hz) / (0.5 * prf_hz))
-    n_taps += 1 - n_taps % 2  # odd: a whole-sample delay
-    return firwin(n_taps, 0.5 * (stop + passband_hz), window=("kaiser", beta), fs=prf_hz)
+    return design(up, passband_hz, prf_hz, stopband_db, guard=BAND_GUARD)
 
 
-def _output_pulses(n_pulses: int, q: int, n_taps: int) -> NDArray[np.int64]:
-    """Input pulses of the output pulses: every ``q``-th with the filter's full support.
+def _output_pulses(n_pulses: int, q: int, n_taps: int, *, up: int = 1) -> NDArray[np.int64]:
+    """Grid indices of the output pulses: every ``q``-th with the filter's full support.
 
-    They are placed symmetrically in the aperture.
+    On the grid of ``1 / up`` input pulses (the input pulses themselves when ``up = 1``),
+    placed symmetrically in the aperture (:func:`~sarmotion.collection.resample.output_grid`).
     """
-    half = n_taps // 2
-    usable = n_pulses - 2 * half
-    if usable <= 0:
-        return np.zeros(0, dtype=np.int64)
-    count = (usable - 1) // q + 1
-    first = half + (usable - 1 - (count - 1) * q) // 2
-    return first + q * np.arange(count, dtype=np.int64)
+    return output_grid(n_pulses, up, q, n_taps)

@@ -253,10 +253,10 @@ def in_band(traces: Traces, patch: Patch) -> Callable[[PointFit], bool]:
 
     Range within the core's span plus ``ECHO_CELLS`` range cells, Doppler within the
     pass band (:mod:`~sarmotion.collection.merge` notes); the data's pulse rate is
-    ``decimation`` times the traces'.
+    ``decimation / interpolation`` times the traces'.
     """
     traj = traces.trajectory
-    prf = patch.decimation / traj.pulse_interval_s
+    prf = patch.decimation / (patch.interpolation * traj.pulse_interval_s)
     period = 0.5 * traces.radar.wavelength_m * prf
     to_hz = 2.0 * traces.radar.carrier_hz / C
     span = max(
