@@ -505,6 +505,12 @@ def _stationary_html(doc: dict[str, Any]) -> str:
             f'<p class="note">{sidelobes} local maxima of the stationary image that a brighter '
             "target's sidelobes explain are not listed.</p>"
         )
+    text += (
+        f'<p class="note">{len(doc["stationary"])} listed; '
+        f"{doc.get('stationary_dropped', 0)} beyond the cap not listed, {sidelobes} dropped "
+        f"as a brighter target's sidelobes, {doc.get('stationary_mover_images_dropped', 0)} "
+        "dropped as lying on a mover's echo (its smear over the stationary image).</p>"
+    )
     if doc.get("point_quality"):
         text += _quality_html(doc["point_quality"])
     return text
