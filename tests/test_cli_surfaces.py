@@ -224,9 +224,7 @@ def test_a_closed_port_is_refused_at_once(tmp_path, capsys):
     _refused(args, capsys, "Connection refused", out)
 
 
-def test_a_scheduler_without_workers_is_refused_after_the_wait(
-    cphd, tmp_path, capsys, monkeypatch
-):
+def test_a_scheduler_without_workers_is_refused_after_the_wait(cphd, tmp_path, capsys, monkeypatch):
     distributed = pytest.importorskip("distributed")
     import sarmotion._cluster as cluster_module
 
@@ -239,7 +237,9 @@ def test_a_scheduler_without_workers_is_refused_after_the_wait(
             out = tmp_path / "out"
             t0 = time.monotonic()
             args = [*cmd, "--out", str(out), "--scheduler", address]
-            _refused(args, capsys, f"--scheduler {address}: the scheduler has no worker after 1 s", out)
+            _refused(
+                args, capsys, f"--scheduler {address}: the scheduler has no worker after 1 s", out
+            )
             assert time.monotonic() - t0 >= 1.0  # it waited the stated time
         # with a worker the same address is accepted
         cluster.scale(1)
@@ -283,7 +283,12 @@ def test_data_near_the_float32_range_is_refused(tmp_path, capsys):
     scipy.io.savemat(huge, {"data": s})
     for cmd in (["image"], ["analyze"], ["analyze", "--lenient"]):
         out = tmp_path / "out"
-        _refused([cmd[0], str(huge), "--out", str(out), *cmd[1:]], capsys, "overflow single precision", out)
+        _refused(
+            [cmd[0], str(huge), "--out", str(out), *cmd[1:]],
+            capsys,
+            "overflow single precision",
+            out,
+        )
     # the bound: sqrt(float32 max); twice below it is read, just above it is not
     assert MAX_COHERENT_SUM == pytest.approx(math.sqrt(float(np.finfo(np.float32).max)))
     read_gotcha(_scaled_gotcha(tmp_path / "under.mat", 0.5 * MAX_COHERENT_SUM))
@@ -320,7 +325,9 @@ def test_huge_cphd_refused_by_the_block_reader(cphd, tmp_path, capsys):
         (["0", "0", "inf"], "height must be within"),
     ],
 )
-def test_origin_off_the_earth_is_refused_by_every_command(gotcha, tmp_path, capsys, origin, pattern):
+def test_origin_off_the_earth_is_refused_by_every_command(
+    gotcha, tmp_path, capsys, origin, pattern
+):
     out = tmp_path / "x.cphd"
     args = ["convert", str(gotcha), "--to", "cphd", "--out", str(out), "--origin", *origin]
     _refused(args, capsys, f"--origin {pattern}", out)
@@ -431,7 +438,9 @@ def test_results_of_a_native_file_with_nan_metadata_are_strict_json(tmp_path, ca
     save_traces(path, odd)
     assert math.isnan(load_traces(path).metadata["antenna_gain_db"])
     out = tmp_path / "out"
-    assert run(["image", str(path), "--out", str(out), "--size", "20"]) == 0, capsys.readouterr().err
+    assert run(["image", str(path), "--out", str(out), "--size", "20"]) == 0, (
+        capsys.readouterr().err
+    )
     for doc in out.glob("*.json"):
         _strict(doc.read_text())
 
@@ -441,7 +450,9 @@ def test_out_name_beyond_name_max_is_refused_before_work(gotcha, tmp_path, capsy
     limit = os.pathconf(tmp_path, "PC_NAME_MAX")
     # fits the file system, but not with the staging names made beside it
     out = tmp_path / "new" / ("a" * (limit - 15))
-    err = _refused(["image", str(gotcha), "--out", str(out)], capsys, f"limit of {limit} bytes", out)
+    err = _refused(
+        ["image", str(gotcha), "--out", str(out)], capsys, f"limit of {limit} bytes", out
+    )
     assert not (tmp_path / "new").exists()
     allowed = int(err.rsplit("at most ", 1)[1].split()[0])
     good = tmp_path / ("b" * allowed)
@@ -455,7 +466,9 @@ def test_out_that_is_a_mount_point_is_refused_before_work(gotcha, capsys):
     if not mounts:
         pytest.skip("no writable mount point")
     before = sorted(os.listdir(mounts[0]))
-    err = _refused(["image", str(gotcha), "--out", str(mounts[0]), "--force"], capsys, "mount point")
+    err = _refused(
+        ["image", str(gotcha), "--out", str(mounts[0]), "--force"], capsys, "mount point"
+    )
     assert str(mounts[0]) in err
     assert sorted(os.listdir(mounts[0])) == before
     assert not os.path.exists(mounts[0].parent / f".{mounts[0].name}.lock")
@@ -464,7 +477,9 @@ def test_out_that_is_a_mount_point_is_refused_before_work(gotcha, capsys):
 def test_lock_file_that_is_a_fifo(gotcha, tmp_path, capsys):
     out = tmp_path / "out"
     os.mkfifo(tmp_path / ".out.lock")
-    _refused(["image", str(gotcha), "--out", str(out)], capsys, f"{tmp_path / '.out.lock'} is a FIFO")
+    _refused(
+        ["image", str(gotcha), "--out", str(out)], capsys, f"{tmp_path / '.out.lock'} is a FIFO"
+    )
     assert not out.exists()
 
 

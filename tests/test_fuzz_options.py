@@ -18,7 +18,6 @@ import os
 import signal
 import socket
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -227,7 +226,9 @@ def test_options_fuzz(command, tmp_path, capsys):
         assert sorted(p.name for p in tmp_path.iterdir()) == [], (where, list(tmp_path.iterdir()))
         stats[expected] = stats.get(expected, 0) + 1
     print(command, stats, f"slowest {slowest:.2f} s")  # shown with -s
-    flags = {"--workers", "--size", "--scheduler"} | ({"--max-speed"} if command == "analyze" else set())
+    flags = {"--workers", "--size", "--scheduler"} | (
+        {"--max-speed"} if command == "analyze" else set()
+    )
     # every option was refused in some cases, and some cases passed every option
     assert flags <= set(stats), stats
     assert stats.get("missing.cphd", 0) + stats.get("--scheduler", 0) > 0, stats

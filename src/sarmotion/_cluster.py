@@ -230,8 +230,7 @@ def connect_scheduler(
                 else type(exc).__name__
             )
             raise SchedulerError(
-                f"{name} {address}: no Dask scheduler answered within {connect_s:g} s "
-                f"({reason})"
+                f"{name} {address}: no Dask scheduler answered within {connect_s:g} s ({reason})"
             ) from None
         if identity.get("workers"):
             break

@@ -102,7 +102,9 @@ def geodetic_origin(value: Any, name: str) -> NDArray[np.float64]:
     try:
         llh = np.asarray(value, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError):
-        raise TypeError(f"{name} must be three numbers (lat_deg, lon_deg, hae_m), got {value!r}") from None
+        raise TypeError(
+            f"{name} must be three numbers (lat_deg, lon_deg, hae_m), got {value!r}"
+        ) from None
     if llh.shape != (3,):
         raise ValueError(f"{name} must be three numbers (lat_deg, lon_deg, hae_m), got {value!r}")
     lat, lon, hae = (float(v) for v in llh)

@@ -380,7 +380,10 @@ def workers_callback(ctx: click.Context, param: click.Parameter, value: Any) -> 
 
 
 def scheduler_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
-    """``--scheduler``: a ``tcp://`` or ``tls://`` address (:func:`~sarmotion._cluster.check_address`)."""
+    """``--scheduler``: a ``tcp://`` or ``tls://`` address.
+
+    The rule of :func:`~sarmotion._cluster.check_address`; nothing is connected to here.
+    """
     from .._cluster import check_address
 
     if value is None:
@@ -406,7 +409,10 @@ def connect_scheduler_flag(address: str | None) -> Any:
 
 
 def origin_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
-    """``--origin LAT LON HAE``: a scene origin on the ground (:func:`~sarmotion._validation.geodetic_origin`)."""
+    """``--origin LAT LON HAE``: a scene origin on the ground.
+
+    The rule of :func:`~sarmotion._validation.geodetic_origin`, for every command.
+    """
     from .._validation import geodetic_origin
 
     if value is None:

@@ -164,8 +164,9 @@ def check_coherent_sum(
 def check_signal(
     path: Path | str, field: str, phase_history: NDArray[np.complexfloating], *, lenient: bool
 ) -> None:
-    """Not all zero, summing within :data:`MAX_COHERENT_SUM` (both refused even
-    leniently), not constant, within the dynamic range.
+    """Not all zero or beyond :data:`MAX_COHERENT_SUM`, not constant, within the dynamic range.
+
+    The first two are refused even leniently.
 
     An all-zero phase history holds no echo (a never-written array, a fill value): every
     image of it is empty. A constant one (every sample equal to float32 rounding) is a

@@ -556,12 +556,12 @@ def _check_names(out: Path) -> None:
     except (OSError, ValueError):
         limit = 255  # POSIX file systems' usual NAME_MAX
     longest = _longest_name(out)
-    if len(os.fsencode(longest)) > limit:
+    size, own = len(os.fsencode(longest)), len(os.fsencode(out.name))
+    if size > limit:
         raise OutputError(
-            f"--out {out}: its name is {len(os.fsencode(out.name))} bytes; with the staging "
-            f"names made beside it (up to {len(os.fsencode(longest))} bytes, such as "
-            f"{longest[:24]}...) it exceeds this file system's limit of {limit} bytes a name: "
-            f"give a name of at most {limit - (len(os.fsencode(longest)) - len(os.fsencode(out.name)))} bytes"
+            f"--out {out}: its name is {own} bytes; with the staging names made beside it "
+            f"(up to {size} bytes, such as {longest[:24]}...) it exceeds this file system's "
+            f"limit of {limit} bytes a name: give a name of at most {limit - (size - own)} bytes"
         )
 
 
