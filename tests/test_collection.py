@@ -184,7 +184,7 @@ def _core_doppler(patch, pos, s, radar):
 def test_unambiguous_scene_holds_at_every_pulse(aperture_deg, azimuth_deg):
     """Every corner stays in the fast-time window and within half the pulse rate at
     every pulse, by the exact delays (the rule is first order: 1 % of slack); and the
-    default region, the box along x and y inside it, lies in the rectangle."""
+    default region is the whole rectangle, each of its points in one core."""
     radar = radar_with_range_window(150.0, radar=Radar())
     traj = Trajectory.circular(
         pulses_per_deg=117.0, aperture_deg=aperture_deg, centre_azimuth_deg=azimuth_deg
@@ -215,14 +215,15 @@ def test_unambiguous_scene_holds_at_every_pulse(aperture_deg, azimuth_deg):
         for i, j in ((-1, -1), (1, -1), (1, 1), (-1, 1))
     ]
     assert any(wraps)
+    # the default region (nothing declared) is the whole rectangle, every point of it in
+    # one core
     plan = plan_patches(src)
-    x0, y0, x1, y1 = plan.region_m
-    e1 = (amb[1] - amb[0]) / np.linalg.norm(amb[1] - amb[0])
-    e2 = (amb[3] - amb[0]) / np.linalg.norm(amb[3] - amb[0])
-    half = 0.5 * np.array([np.linalg.norm(amb[1] - amb[0]), np.linalg.norm(amb[3] - amb[0])])
-    for corner in ((x0, y0), (x1, y0), (x1, y1), (x0, y1)):
-        d = np.asarray(corner) - amb.mean(axis=0)
-        assert abs(d @ e1) <= half[0] * (1 + 1e-9) and abs(d @ e2) <= half[1] * (1 + 1e-9)
+    assert np.allclose(plan.region_polygon, amb, rtol=0, atol=1e-9)
+    rng = np.random.default_rng(3)
+    a, b = rng.uniform(0, 1, size=(2, 500))
+    points = amb[0] + a[:, None] * (amb[1] - amb[0]) + b[:, None] * (amb[3] - amb[0])
+    held = np.sum([p.inside(points) for p in plan.patches], axis=0)
+    assert np.all(held == 1)
 
 
 @pytest.mark.parametrize("beta_deg", [0.0, 3.0, 20.0, 44.0, 60.0, 90.0])

@@ -201,20 +201,33 @@ def _write_sicd_images(result, stage: Path) -> None:
     nargs=4,
     default=None,
     metavar="X0 Y0 X1 Y1",
-    help="Analyse this part of the scene (m); default the data's whole unambiguous scene "
-    "(echoes in the fast-time window and within the pulse rate at every pulse), or the "
-    "largest box along x and y inside it. "
-    "A scene larger than one patch is cut into overlapping patches. A mover is found "
+    help="Analyse this part of the scene (m), a box in the frame of --region-frame; "
+    "default the image area the input declares (a CPHD's SceneCoordinates/ImageArea) "
+    "within the data's unambiguous scene (echoes in the fast-time window and within the "
+    "pulse rate at every pulse), or that whole scene where none is declared. "
+    "A scene larger than one patch is cut into overlapping patches, squares along the "
+    "look's range and cross range. A mover is found "
     "where its Doppler places its image: its range speed shifts it in cross range "
     "(about R/V metres per m/s), so a mover inside the region whose image lands outside "
     "it is not seen, and one outside may be.",
+)
+@click.option(
+    "--region-frame",
+    type=click.Choice(["ground", "look"]),
+    default="ground",
+    show_default=True,
+    help="Frame of --region: 'ground', X0 Y0 X1 Y1 along the scene's x and y; 'look', "
+    "A0 B0 A1 B1 in ground range (towards the antenna) and cross range (range turned a "
+    "quarter counter-clockwise) from the reference point, at the aperture centre.",
 )
 @click.option(
     "--patch-size",
     "patch_size_m",
     type=float,
     default=None,
-    help="Side of each patch's core (m); default from the data's resolution and aperture.",
+    help="Side of each patch's core (m); default from the data's resolution and aperture. "
+    "At least 8 resolution cells (the fast-time guard either side of a core), and at most "
+    "256 patches in a plan.",
 )
 @click.option(
     "--max-speed",
@@ -271,6 +284,7 @@ def analyze(
     pga_iterations: int,
     sicd: bool,
     region: tuple[float, float, float, float] | None,
+    region_frame: str,
     patch_size_m: float | None,
     max_speed_mps: float,
     scheduler: str | None,
@@ -333,6 +347,7 @@ def analyze(
         out,
         copts,
         region=region,
+        region_frame=region_frame,
         scheduler=client,
         n_workers=n_workers,
         single=single,

@@ -66,6 +66,7 @@ def run_collection(
     copts: CollectionOptions,
     *,
     region: tuple[float, float, float, float] | None,
+    region_frame: str = "ground",
     scheduler: str | None,
     n_workers: int | None,
     single: Any,
@@ -95,10 +96,17 @@ def run_collection(
     if source is None:
         source = TracesBlocks(read_first[0])
     try:
-        plan = plan_patches(source, copts, region_m=region)
+        plan = plan_patches(source, copts, region_m=region, region_frame=region_frame)
     except RegionError as exc:
         text = str(exc).replace("patch size", "--patch-size").replace("region", "--region", 1)
         raise InputError(text) from None
+    if plan.declared_outside_m2 > 0.0:
+        click.echo(
+            f"the declared image area: {plan.declared_outside_m2:.4g} m^2 "
+            f"({100.0 * plan.declared_outside_share:.1f} %) outside the data's unambiguous "
+            "scene, not analysed"
+        )
+    _say_plan(plan, source, n_workers, scheduler)
     if refuse_patches and not (plan.single and region is None):
         # an option the patches cannot honour: refused from the plan, before any analysis
         raise InputError(refuse_patches.format(n=len(plan.patches)))

@@ -41,17 +41,43 @@ exceed the largest displacement in range and the largest Doppler spread of a mov
 the speed range: every mover lies wholly inside at least one patch. The cores tile the
 region without overlap.
 
-The default region is the data's unambiguous scene (:func:`unambiguous_scene`: the
-fast-time window ``1 / df`` in range and the pulse rate in cross range, mapped to the
-ground at every pulse, so that the look's turn over the aperture does not wrap the
-scene's corners), or rather the largest box along the scene axes inside it
-(:func:`inscribed_box`): patches are squares along ``x`` and ``y``. A region whose
-extent today's single analysis covers (0.6 of it, the rule of
-:func:`~sarmotion.imaging.default_scene_size_m`, within ``P``) is one patch.
+**Region.** By default the image area the data declare
+(:func:`~sarmotion.core.blocks.declared_area`: a CPHD's ``SceneCoordinates/ImageArea``
+polygon, or its ``X1Y1``/``X2Y2`` rectangle, on the ground of the scene frame), clipped
+to the data's unambiguous scene (:func:`unambiguous_scene`: the fast-time window
+``1 / df`` in range and the pulse rate in cross range, mapped to the ground at every
+pulse, so that the look's turn over the aperture does not wrap the scene's corners);
+the part cut off is stated in m² and as a share of the declared area
+(``PatchPlan.outside``) and logged. Where nothing is declared (GOTCHA, native traces),
+the whole unambiguous scene. A declared area wholly outside the unambiguous scene, or
+not a simple polygon of positive area, is refused. A given region (``region_m``) is a
+box along ``x`` and ``y`` (or a ground polygon), or a box along the look's ground range
+and cross range (``region_frame="look"``); it must lie in the unambiguous scene.
+
+**Tiling.** The cores are rectangles of sides at most ``P`` along the aperture centre's
+ground range ``e_r`` and cross range ``e_c`` (``P`` is a cross-range extent of the
+migration rule and a range extent of the window), tiling the region's bounding
+rectangle in that frame; those that hold part of the region are kept, so the cores
+cover the region at any look azimuth, each point of it in one core
+(:meth:`Patch.inside`: a point-in-rotated-rectangle test, lower sides included). Each
+patch carries its core's true outline; its image is the box along ``x`` and ``y`` that
+holds it, the pixels outside the core not its own.
+
+**Bounds.** A core side below ``MIN_CORE_CELLS`` = 8 resolution cells is refused: the
+fast-time guard either side of a core is ``PULSE_GUARD`` = 8 compressed-pulse lengths,
+so a narrower core makes each patch more guard than core. A region narrower than that
+least core in range or cross range is refused, and so is a plan of more than
+``MAX_PATCHES`` patches (refused from the region's area before the cores are cut).
+
+A default region whose extent along the look today's single analysis covers (0.6 of it,
+the rule of :func:`~sarmotion.imaging.default_scene_size_m`, within ``P``) is one patch,
+provided a declared area lies inside that analysis's image (a square along ``x`` and
+``y`` about the reference point).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -60,9 +86,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import integer, positive
-from ..core.blocks import PulseBlocks
+from ..core.blocks import PulseBlocks, declared_area
 from ..core.constants import C
 from ..core.geometry import look_geometry, travel_time
+from ..core.polygon import clip_convex, inside_convex, polygon_area, polygon_problem
+from ..errors import InputError
 from ..pipeline import AnalysisOptions
 from .resample import aliased_doppler_hz, design, output_grid, slow_time_ratio
 
@@ -78,10 +106,27 @@ BAND_GUARD = 0.3
 TRUSTED_SHARE = 0.6
 #: Ground-velocity directions sampled for the movers' margins.
 _N_DIRECTIONS = 16
+#: Least core side, in resolution cells (the larger of ground range and cross range):
+#: the fast-time guard either side of a core is ``PULSE_GUARD`` = 8 compressed-pulse
+#: lengths, so a core narrower than 8 cells makes each patch's window more guard than
+#: core, and its image (the core) holds a target's main lobe and first sidelobes (3 cells)
+#: only about its centre.
+MIN_CORE_CELLS = 8.0
+#: Most patches a plan holds. A patch costs seconds (its traces extracted, imaged,
+#: separated and searched; 0.5 to 3 s on one core in ``benchmarks/look_azimuth.py``), so
+#: 256 patches are minutes to an hour of a workstation; more is a core far below the
+#: side the data need (a typo, or a scene to analyse region by region).
+MAX_PATCHES = 256
+
+log = logging.getLogger(__name__)
 
 
-class RegionError(ValueError):
-    """A region or patch size the data cannot serve (outside the extent, below a cell)."""
+class RegionError(InputError):
+    """A region or patch size the data cannot serve (outside the extent, below a cell).
+
+    An :class:`~sarmotion.errors.InputError` (and so a ``ValueError``): the command line
+    reports it in one line, exit status 2.
+    """
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -150,7 +195,11 @@ class Patch:
     index : int
         Position in the plan.
     core_m : (float, float, float, float)
-        Core ``(x0, y0, x1, y1)`` (m).
+        The core's bounding box along ``x`` and ``y``, ``(x0, y0, x1, y1)`` (m).
+    outline_m : (4, 2) ndarray or None
+        The core's corners on the ground (m), counter-clockwise: a rectangle along the
+        aperture centre's ground range and cross range, ``o, o + u, o + u + v, o + v``.
+        None: the box ``core_m`` itself.
     centre_m : (3,) ndarray
         Reference point ``rho_p`` (m): the core's centre at the data reference's height.
     n_samples : int
@@ -179,6 +228,7 @@ class Patch:
     passband_hz: float
     taps: NDArray[np.float64]
     pulses: NDArray[np.int64]
+    outline_m: NDArray[np.float64] | None = None
 
     @property
     def pulse_positions(self) -> NDArray[np.float64]:
@@ -187,21 +237,37 @@ class Patch:
 
     @property
     def size_m(self) -> float:
-        """Larger side of the core (m)."""
+        """Larger side of the core's box along ``x`` and ``y`` (m): an image that holds it."""
         x0, y0, x1, y1 = self.core_m
         return float(max(x1 - x0, y1 - y0))
 
-    def contains(self, point_m: ArrayLike) -> bool:
-        """Whether the ground point ``(x, y)`` lies in the core (lower edges included)."""
-        x, y = np.asarray(point_m, dtype=float)[:2]
+    @property
+    def corners_m(self) -> NDArray[np.float64]:
+        """The core's four ground corners ``(4, 2)`` (m), counter-clockwise."""
+        if self.outline_m is not None:
+            return np.asarray(self.outline_m, dtype=np.float64)
         x0, y0, x1, y1 = self.core_m
-        return bool(x0 <= x < x1 and y0 <= y < y1)
+        return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=np.float64)
+
+    def inside(self, points_m: ArrayLike) -> NDArray[np.bool_]:
+        """Whether each ground point ``(n, 2)`` lies in the core (its lower sides included).
+
+        Cores sharing sides hold each point once
+        (:func:`~sarmotion.core.polygon.inside_convex`).
+        """
+        pts = np.atleast_2d(np.asarray(points_m, dtype=np.float64))[:, :2]
+        return inside_convex(pts, self.corners_m)
+
+    def contains(self, point_m: ArrayLike) -> bool:
+        """Whether the ground point ``(x, y)`` lies in the core (lower sides included)."""
+        return bool(self.inside(np.asarray(point_m, dtype=float)[:2])[0])
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (the patch table of ``results.json``)."""
         return {
             "index": self.index,
             "core_m": [float(v) for v in self.core_m],
+            "outline_m": self.corners_m.tolist(),
             "centre_m": [float(v) for v in self.centre_m[:2]],
             "n_pulses": int(self.pulses.size),
             "n_samples": int(self.n_samples),
@@ -219,9 +285,9 @@ class PatchPlan:
     Attributes
     ----------
     patches : tuple of Patch
-        The patches, row by row (``y``, then ``x``).
+        The patches, row by row along the look (cross range, then ground range).
     region_m : (float, float, float, float)
-        The region ``(x0, y0, x1, y1)`` the cores tile (m).
+        The region's bounding box ``(x0, y0, x1, y1)`` along ``x`` and ``y`` (m).
     patch_size_m : float
         Core side ``P`` used (m).
     unambiguous_m : (4, 2) ndarray
@@ -230,6 +296,17 @@ class PatchPlan:
         A mover's largest range migration (m) and Doppler spread (Hz) in the speed range.
     single : bool
         The region is today's single analysis (no re-referencing needed).
+    region_polygon_m : (n, 2) ndarray or None
+        The region the cores cover, on the ground (m); None: the box ``region_m``.
+    declared_area_m : (k, 2) ndarray or None
+        The image area the data declare (m), where the region is it (the default).
+    declared_outside_m2 : float
+        Area of the declared image area outside the unambiguous scene (m²), not analysed.
+    range_direction : (2,) ndarray or None
+        Ground range direction ``e_r`` at the aperture centre (the cores' first side).
+    region_source : str
+        Where the region comes from: ``"declared"`` (the data's image area within the
+        unambiguous scene), ``"unambiguous scene"`` (nothing declared) or ``"given"``.
     """
 
     patches: tuple[Patch, ...]
@@ -239,11 +316,78 @@ class PatchPlan:
     range_margin_m: float
     doppler_margin_hz: float
     single: bool
+    region_polygon_m: NDArray[np.float64] | None = None
+    declared_area_m: NDArray[np.float64] | None = None
+    declared_outside_m2: float = 0.0
+    range_direction: NDArray[np.float64] | None = None
+    region_source: str = "given"
+
+    @property
+    def region(self) -> dict[str, Any]:
+        """The region as the plan states it (JSON-ready): its source, polygon and frame."""
+        return {
+            "source": self.region_source,
+            "frame": "ground x, y of the scene frame (m)",
+            "polygon_m": self.region_polygon.tolist(),
+            "declared_m": (
+                None if self.declared_area_m is None else np.asarray(self.declared_area_m).tolist()
+            ),
+        }
+
+    @property
+    def unambiguous_scene(self) -> dict[str, Any]:
+        """The data's unambiguous scene (JSON-ready): corners, area, the look's range axis."""
+        return {
+            "corners_m": np.asarray(self.unambiguous_m).tolist(),
+            "area_m2": abs(polygon_area(self.unambiguous_m)),
+            "range_direction": (
+                None if self.range_direction is None else np.asarray(self.range_direction).tolist()
+            ),
+        }
+
+    @property
+    def outside(self) -> dict[str, float] | None:
+        """What of the declared image area falls outside the unambiguous scene (m², share).
+
+        None where the region is not a declared area.
+        """
+        if self.declared_area_m is None:
+            return None
+        return {"area_m2": float(self.declared_outside_m2), "share": self.declared_outside_share}
+
+    @property
+    def region_polygon(self) -> NDArray[np.float64]:
+        """The region's polygon on the ground ``(n, 2)`` (m)."""
+        if self.region_polygon_m is not None:
+            return np.asarray(self.region_polygon_m, dtype=np.float64)
+        x0, y0, x1, y1 = self.region_m
+        return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=np.float64)
+
+    @property
+    def declared_outside_share(self) -> float:
+        """Share of the declared image area outside the unambiguous scene (0 to 1)."""
+        if self.declared_area_m is None:
+            return 0.0
+        whole = abs(polygon_area(self.declared_area_m))
+        return float(self.declared_outside_m2 / whole) if whole > 0 else 0.0
+
+    @property
+    def extent_m(self) -> tuple[float, float, float, float]:
+        """Bounding box ``(x0, y0, x1, y1)`` of the region and every core (m): the mosaic's."""
+        pts = np.vstack([self.region_polygon, *(p.corners_m for p in self.patches)])
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary of the plan and its patch table."""
         return {
             "region_m": [float(v) for v in self.region_m],
+            "region_polygon_m": self.region_polygon.tolist(),
+            "declared_area_m": (
+                None if self.declared_area_m is None else np.asarray(self.declared_area_m).tolist()
+            ),
+            "declared_outside_m2": float(self.declared_outside_m2),
+            "declared_outside_share": self.declared_outside_share,
             "patch_size_m": float(self.patch_size_m),
             "unambiguous_scene_m": self.unambiguous_m.tolist(),
             "range_margin_m": float(self.range_margin_m),
@@ -286,13 +430,6 @@ def _moving_delays(positions: NDArray, s: NDArray, point: NDArray, velocities: N
 def _velocities(speed: float) -> NDArray:
     phi = 2 * np.pi * np.arange(_N_DIRECTIONS) / _N_DIRECTIONS
     return speed * np.stack([np.cos(phi), np.sin(phi)], axis=1)
-
-
-def _square_points(core: tuple[float, float, float, float], z: float) -> NDArray:
-    """Corners, edge midpoints and centre of a rectangle, lifted to height ``z``."""
-    x0, y0, x1, y1 = core
-    xs, ys = np.meshgrid([x0, 0.5 * (x0 + x1), x1], [y0, 0.5 * (y0 + y1), y1])
-    return _lift(np.stack([xs.ravel(), ys.ravel()], axis=1), z)
 
 
 def unambiguous_scene(source: PulseBlocks) -> NDArray[np.float64]:
@@ -392,19 +529,28 @@ def plan_patches(
     options: CollectionOptions | None = None,
     *,
     region_m: ArrayLike | None = None,
+    region_frame: str = "ground",
 ) -> PatchPlan:
-    """Cut ``region_m`` (default: the data's unambiguous scene) into patches.
+    """Cut a region (default: the data's declared image area) into patches.
 
     Parameters
     ----------
     source : PulseBlocks
-        The data's axes (radar, reference point, trajectory).
+        The data's axes (radar, reference point, trajectory) and, in its metadata, the
+        image area it declares (:func:`~sarmotion.core.blocks.declared_area`).
     options : CollectionOptions, optional
         Core side, movers' speed, filter attenuation.
-    region_m : (4,) array_like, optional
-        ``(x0, y0, x1, y1)`` in scene metres, ``x0 < x1``, ``y0 < y1``; it must lie in
-        the data's unambiguous scene. Default: the largest such box
-        (:func:`inscribed_box` of :func:`unambiguous_scene`).
+    region_m : array_like, optional
+        With ``region_frame="ground"``: ``(x0, y0, x1, y1)`` in scene metres, ``x0 < x1``,
+        ``y0 < y1``, or a polygon ``(n, 2)`` of ground ``x, y`` (m). With
+        ``region_frame="look"``: ``(a0, b0, a1, b1)``, ``a0 < a1``, ``b0 < b1``, in ground
+        range ``a`` (along ``e_r``, towards the antenna) and cross range ``b`` (``e_c``,
+        ``e_r`` turned a quarter counter-clockwise) about the reference point at the
+        aperture centre (m). It must lie in the data's unambiguous scene. Default: the
+        declared image area within the unambiguous scene, or the whole unambiguous scene
+        where none is declared (module notes).
+    region_frame : {"ground", "look"}
+        The frame of ``region_m``.
 
     Returns
     -------
@@ -413,8 +559,10 @@ def plan_patches(
     Raises
     ------
     RegionError
-        The region leaves the unambiguous scene, or the core side is below a
-        resolution cell.
+        The region leaves the unambiguous scene, is narrower than a core, or the
+        declared image area is degenerate or wholly outside the unambiguous scene; the
+        core side is below ``MIN_CORE_CELLS`` resolution cells, or the plan needs more
+        than ``MAX_PATCHES`` patches.
     """
     opts = options or CollectionOptions()
     radar = source.radar
@@ -422,14 +570,14 @@ def plan_patches(
     pos, s = traj.positions_m, traj.slow_times_s
     e_r, e_c, z = _frame(source)
     amb = unambiguous_scene(source)
-    u_r = np.stack([amb @ e_r, amb @ e_c], axis=1)  # corners in (range, cross) coordinates
-    lo_rc, hi_rc = u_r.min(axis=0), u_r.max(axis=0)
-    tol = 1e-6
+    rho = np.asarray(source.reference_point_m[:2], dtype=np.float64)
+    to_look = np.stack([e_r, e_c], axis=1)  # ground offset @ to_look: (range, cross)
     # resolution cells: slant range c / 2B on the ground, cross range lambda L / 2a
     geom = look_geometry(traj, source.reference_point_m)
     cell_r = radar.range_resolution_m / math.cos(geom.elevation_rad)
     cell_c = radar.wavelength_m * geom.range_m / (2.0 * traj.aperture_length_m)
     cell = max(cell_r, cell_c)
+    least = MIN_CORE_CELLS * cell
 
     analysed = _analysed_pulses(source, opts.analysis.sub_aperture_deg)
     if opts.patch_size_m is not None:
@@ -437,43 +585,80 @@ def plan_patches(
     else:
         m1 = _migration_per_m(source, e_c, z, analysed)
         size = 2.0 * MIGRATION_CELLS * radar.range_resolution_m / max(m1, 1e-12)
-    if size < cell:
-        raise RegionError(f"patch size {size:g} m is smaller than a resolution cell ({cell:.3g} m)")
+    if size < least:
+        raise RegionError(
+            f"patch size {size:g} m is below {MIN_CORE_CELLS:g} resolution cells "
+            f"({least:.3g} m; a resolution cell is {cell:.3g} m)"
+        )
 
-    default_region = region_m is None
-    if default_region:
-        x0, y0, x1, y1 = inscribed_box(amb)
-    else:
-        r = np.asarray(region_m, dtype=np.float64).reshape(-1)
-        if r.shape != (4,) or not np.all(np.isfinite(r)):
-            raise RegionError(f"region must be 4 finite numbers X0 Y0 X1 Y1 (m), got {region_m}")
-        x0, y0, x1, y1 = (float(v) for v in r)
-        if not (x1 > x0 and y1 > y0):
-            raise RegionError(f"region must have X0 < X1 and Y0 < Y1, got {tuple(r)}")
-        corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-        rc = np.stack([corners @ e_r, corners @ e_c], axis=1)
-        if np.any(rc < lo_rc - tol) or np.any(rc > hi_rc + tol):
-            raise RegionError(
-                f"region ({x0:g}, {y0:g}, {x1:g}, {y1:g}) m leaves the data's unambiguous "
-                f"scene, a rectangle turned to the look direction with corners "
-                + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb)
-                + " m"
-            )
-    width, height = x1 - x0, y1 - y0
-    single = default_region and TRUSTED_SHARE * max(width, height) <= size
+    explicit = region_m is not None
+    region, declared, outside = _region(source, amb, to_look, region_m, region_frame)
+    kind = "given" if explicit else ("declared" if declared is not None else "unambiguous scene")
+    what = {"given": "region", "declared": "the declared image area"}.get(kind, f"the {kind}")
+    ab = (region - rho) @ to_look
+    lo, hi = ab.min(axis=0), ab.max(axis=0)
+    extent = hi - lo
+    if float(extent.min()) < least * (1.0 - 1e-9):
+        raise RegionError(
+            f"{what} is {extent[0]:.3g} m x {extent[1]:.3g} m in range and cross range, "
+            f"narrower than the least patch core ({MIN_CORE_CELLS:g} resolution cells, "
+            f"{least:.3g} m)"
+        )
+    if declared is not None and outside > 0.0:
+        log.info(
+            "the declared image area: %.4g m^2 (%.1f %%) outside the data's unambiguous "
+            "scene, not analysed",
+            outside,
+            100.0 * outside / abs(polygon_area(declared)),
+        )
+    single = (not explicit) and TRUSTED_SHARE * float(extent.max()) <= size
+    if single and declared is not None:  # today's analysis images its square: it must hold it
+        side = opts.analysis.image_size_m or _single_image_m(source, geom.elevation_rad)
+        single = bool(np.all(np.abs(region - rho) <= 0.5 * side * (1.0 + 1e-9)))
     if single:
-        n_x = n_y = 1
+        n_a = n_b = 1
     else:
-        n_x, n_y = max(1, math.ceil(width / size - 1e-9)), max(1, math.ceil(height / size - 1e-9))
+        n_a = max(1, math.ceil(extent[0] / size - 1e-9))
+        n_b = max(1, math.ceil(extent[1] / size - 1e-9))
+        least_count = abs(polygon_area(region)) / size**2
+        if least_count > MAX_PATCHES:
+            raise RegionError(
+                f"{what} needs at least {math.ceil(least_count)} patches of patch size "
+                f"{size:g} m, more than the {MAX_PATCHES} a plan may hold (a larger "
+                "patch size, or a smaller region)"
+            )
+    a_edges = np.linspace(lo[0], hi[0], n_a + 1)
+    b_edges = np.linspace(lo[1], hi[1], n_b + 1)
 
-    # movers' margins, common to all patches (module notes)
+    def ground(a: float, b: float) -> NDArray[np.float64]:
+        return rho + a * e_r + b * e_c
+
+    cores = []
+    for ib in range(n_b):
+        for ia in range(n_a):
+            a0, a1, b0, b1 = a_edges[ia], a_edges[ia + 1], b_edges[ib], b_edges[ib + 1]
+            outline = np.array([ground(a0, b0), ground(a1, b0), ground(a1, b1), ground(a0, b1)])
+            if not single:
+                overlap = abs(polygon_area(clip_convex(region, outline)))
+                if not overlap > 1e-9 * (a1 - a0) * (b1 - b0):
+                    continue  # no part of the region in this core
+            cores.append(outline)
+    if len(cores) > MAX_PATCHES:
+        raise RegionError(
+            f"{what} needs {len(cores)} patches of patch size {size:g} m, more than the "
+            f"{MAX_PATCHES} a plan may hold (a larger patch size, or a smaller region)"
+        )
+
+    # movers' margins, common to all patches (module notes): at the tiled rectangle's corners
     vel = _velocities(opts.speed_mps)
     f_lo = radar.carrier_hz - 0.5 * radar.bandwidth_hz
     f_hi = radar.carrier_hz + 0.5 * radar.bandwidth_hz
     j0 = int(np.argmin(np.abs(s)))
     margin_t = 0.0
     margin_d = 0.0
-    for x in _lift(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]), z):
+    rect = ((lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1]))
+    tiled = np.array([ground(a, b) for a, b in rect])
+    for x in _lift(tiled, z):
         still = travel_time(pos, x)
         moving = _moving_delays(pos, s, x, vel) - still[None, :]
         margin_t = max(margin_t, float(np.max(np.abs(moving))))
@@ -486,66 +671,159 @@ def plan_patches(
     dt = radar.sample_interval_s
 
     patches = []
-    xs = np.linspace(x0, x1, n_x + 1)
-    ys = np.linspace(y0, y1, n_y + 1)
-    for iy in range(n_y):
-        for ix in range(n_x):
-            core = (float(xs[ix]), float(ys[iy]), float(xs[ix + 1]), float(ys[iy + 1]))
-            pts = _square_points(core, z)
-            rc = np.stack([pts[:, :2] @ e_r, pts[:, :2] @ e_c], axis=1)
-            if default_region and (
-                np.all(rc[:, 0] < lo_rc[0] - tol)
-                or np.all(rc[:, 0] > hi_rc[0] + tol)
-                or np.all(rc[:, 1] < lo_rc[1] - tol)
-                or np.all(rc[:, 1] > hi_rc[1] + tol)
-            ):
-                continue  # a corner of the bounding box outside the unambiguous scene
-            centre = pts[4].copy()
-            rel = _delays(pos, pts) - travel_time(pos, centre)[None, :]
-            half_t = float(np.max(np.abs(rel))) + margin_t + guard_t
-            n_samples = _window_samples(half_t, dt, radar.n_samples)
-            rate = np.gradient(rel, s, axis=1)
-            core_band = float(max(np.max(np.abs(f_lo * rate)), np.max(np.abs(f_hi * rate))))
-            passband = core_band + margin_d
-            need = (1.0 + BAND_GUARD) * 2.0 * passband
-            up, q = slow_time_ratio(prf, need)
-            corners = _lift(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]), z)
-            if up > 1 and aliased_doppler_hz(
-                pos, s, centre, corners, vel, (f_lo, f_hi)
-            ) >= prf - passband:
-                # a mover of the speed range is aliased in the data: whole pulses only
-                up, q = 1, max(1, int(math.floor(prf / need)))
-            if single:
-                up, q, n_samples = 1, 1, radar.n_samples
-            taps = _design(passband, prf, opts.stopband_db, up=up)
-            pulses = _output_pulses(source.n_pulses, q, taps.size, up=up)
-            if pulses.size < 2:
-                raise RegionError(
-                    f"patch {len(patches)} keeps {pulses.size} pulse(s) after its "
-                    f"{taps.size}-tap slow-time filter: the aperture is too short"
-                )
-            patches.append(
-                Patch(
-                    index=len(patches),
-                    core_m=core,
-                    centre_m=centre if not single else source.reference_point_m.copy(),
-                    n_samples=n_samples,
-                    decimation=q,
-                    interpolation=up,
-                    passband_hz=passband,
-                    taps=taps,
-                    pulses=pulses,
-                )
+    for outline in cores:
+        pts = _outline_points(outline, z)
+        centre = pts[4].copy()
+        rel = _delays(pos, pts) - travel_time(pos, centre)[None, :]
+        half_t = float(np.max(np.abs(rel))) + margin_t + guard_t
+        n_samples = _window_samples(half_t, dt, radar.n_samples)
+        rate = np.gradient(rel, s, axis=1)
+        core_band = float(max(np.max(np.abs(f_lo * rate)), np.max(np.abs(f_hi * rate))))
+        passband = core_band + margin_d
+        need = (1.0 + BAND_GUARD) * 2.0 * passband
+        up, q = slow_time_ratio(prf, need)
+        if up > 1 and aliased_doppler_hz(
+            pos, s, centre, _lift(tiled, z), vel, (f_lo, f_hi)
+        ) >= prf - passband:
+            # a mover of the speed range is aliased in the data: whole pulses only
+            up, q = 1, max(1, int(math.floor(prf / need)))
+        if single:
+            up, q, n_samples = 1, 1, radar.n_samples
+        taps = _design(passband, prf, opts.stopband_db, up=up)
+        pulses = _output_pulses(source.n_pulses, q, taps.size, up=up)
+        if pulses.size < 2:
+            raise RegionError(
+                f"patch {len(patches)} keeps {pulses.size} pulse(s) after its "
+                f"{taps.size}-tap slow-time filter: the aperture is too short"
             )
+        lo_xy, hi_xy = outline.min(axis=0), outline.max(axis=0)
+        patches.append(
+            Patch(
+                index=len(patches),
+                core_m=(float(lo_xy[0]), float(lo_xy[1]), float(hi_xy[0]), float(hi_xy[1])),
+                outline_m=outline,
+                centre_m=centre if not single else source.reference_point_m.copy(),
+                n_samples=n_samples,
+                decimation=q,
+                interpolation=up,
+                passband_hz=passband,
+                taps=taps,
+                pulses=pulses,
+            )
+        )
+    box_lo, box_hi = region.min(axis=0), region.max(axis=0)
     return PatchPlan(
         patches=tuple(patches),
-        region_m=(float(x0), float(y0), float(x1), float(y1)),
+        region_m=(float(box_lo[0]), float(box_lo[1]), float(box_hi[0]), float(box_hi[1])),
+        region_polygon_m=region,
+        declared_area_m=declared,
+        declared_outside_m2=float(outside),
         patch_size_m=float(size),
         unambiguous_m=amb,
+        range_direction=np.asarray(e_r, dtype=np.float64),
+        region_source=kind,
         range_margin_m=0.5 * C * margin_t,
         doppler_margin_hz=margin_d,
         single=bool(single),
     )
+
+
+def _single_image_m(source: PulseBlocks, elevation_rad: float) -> float:
+    """Side of today's single analysis's image (m): ``default_scene_size_m``'s rule."""
+    span = 0.5 * C / source.radar.frequency_step_hz
+    return float(min(100.0, TRUSTED_SHARE * span / math.cos(elevation_rad)))
+
+
+def _region(
+    source: PulseBlocks,
+    amb: NDArray[np.float64],
+    to_look: NDArray[np.float64],
+    region_m: ArrayLike | None,
+    frame: str,
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, float]:
+    """The region's polygon (ground, m), the declared area (or None) and its part outside.
+
+    An explicit region must lie in the unambiguous scene ``amb``; the declared image
+    area is clipped to it, the area cut off returned (m²).
+    """
+    rho = np.asarray(source.reference_point_m[:2], dtype=np.float64)
+    if region_m is not None:
+        if frame not in ("ground", "look"):
+            raise RegionError(f"region frame must be 'ground' or 'look', got {frame!r}")
+        poly = _explicit_region(region_m, frame, rho, to_look)
+        ab = (poly - rho) @ to_look
+        amb_ab = (amb - rho) @ to_look
+        lo, hi = amb_ab.min(axis=0), amb_ab.max(axis=0)
+        tol = 1e-6
+        if np.any(ab < lo - tol) or np.any(ab > hi + tol):
+            raise RegionError(
+                "region ("
+                + ", ".join(f"({x:g}, {y:g})" for x, y in poly)
+                + ") m leaves the data's unambiguous scene, a rectangle turned to the look "
+                "direction with corners "
+                + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb)
+                + " m"
+            )
+        return poly, None, 0.0
+    try:
+        area = declared_area(source)
+    except (TypeError, ValueError):
+        raise RegionError("the declared image area is not a list of (x, y) vertices") from None
+    if area is None:
+        return amb.copy(), None, 0.0
+    problem = polygon_problem(area)
+    if problem is not None:
+        raise RegionError(f"the declared image area: {problem}")
+    whole = abs(polygon_area(area))
+    inside = clip_convex(area, amb)
+    kept = abs(polygon_area(inside))
+    if not kept > 1e-9 * whole:
+        raise RegionError(
+            "the declared image area ("
+            + ", ".join(f"({x:.1f}, {y:.1f})" for x, y in area)
+            + ") m lies outside the data's unambiguous scene, a rectangle turned to the "
+            "look direction with corners "
+            + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb)
+            + " m"
+        )
+    return inside, area, max(0.0, whole - kept)
+
+
+def _explicit_region(
+    region_m: ArrayLike, frame: str, rho: NDArray[np.float64], to_look: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``region_m`` as a ground polygon (m): a box in its frame, or a ground polygon."""
+    try:
+        r = np.asarray(region_m, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise RegionError(f"region must be numbers, got {region_m!r}") from None
+    if r.ndim == 2 and frame == "ground":
+        problem = polygon_problem(r)
+        if problem is not None:
+            raise RegionError(f"region: {problem}")
+        return r.copy()
+    r = r.reshape(-1)
+    names = "X0 Y0 X1 Y1" if frame == "ground" else "A0 B0 A1 B1"
+    if r.shape != (4,) or not np.all(np.isfinite(r)):
+        raise RegionError(f"region must be 4 finite numbers {names} (m), got {region_m}")
+    x0, y0, x1, y1 = (float(v) for v in r)
+    if not (x1 > x0 and y1 > y0):
+        a, b = names.split()[:2]
+        raise RegionError(
+            f"region must have {a} < {names.split()[2]} and {b} < {names.split()[3]}, "
+            f"got {tuple(r)}"
+        )
+    box = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    if frame == "ground":
+        return box
+    return rho + box @ to_look.T
+
+
+def _outline_points(outline: NDArray[np.float64], z: float) -> NDArray:
+    """Corners, side midpoints and centre (index 4) of a parallelogram, at height ``z``."""
+    o, u, v = outline[0], outline[1] - outline[0], outline[3] - outline[0]
+    pts = [o + a * u + b * v for b in (0.0, 0.5, 1.0) for a in (0.0, 0.5, 1.0)]
+    return _lift(np.array(pts), z)
 
 
 def _window_samples(half_s: float, dt: float, n_max: int) -> int:

@@ -242,10 +242,9 @@ def core_stationary_speed(trajectory: Trajectory, patch: Patch) -> float:
 
 
 def _core_corners(patch: Patch) -> list[NDArray[np.float64]]:
-    """The four corners of the patch's core, at the centre's height (m)."""
-    x0, y0, x1, y1 = patch.core_m
+    """The four corners of the patch's core (turned to the look), at the centre's height (m)."""
     z = float(patch.centre_m[2])
-    return [np.array([x, y, z]) for x in (x0, x1) for y in (y0, y1)]
+    return [np.array([x, y, z]) for x, y in patch.corners_m]
 
 
 def in_band(traces: Traces, patch: Patch) -> Callable[[PointFit], bool]:
@@ -344,7 +343,12 @@ def analyze_patch(
     gx, gy = img.grid.x_m, img.grid.y_m
     okx = np.ones(gx.size, bool) if single else (gx >= x0) & (gx < x1)
     oky = np.ones(gy.size, bool) if single else (gy >= y0) & (gy < y1)
-    image = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=mag[np.ix_(oky, okx)].astype(np.float32))
+    cut = mag[np.ix_(oky, okx)].astype(np.float32)
+    if not single:  # the core is turned to the look: its box's pixels outside it are not its
+        xx, yy = np.meshgrid(gx[okx], gy[oky])
+        own = patch.inside(np.stack([xx.ravel(), yy.ravel()], axis=1)).reshape(cut.shape)
+        cut[~own] = 0.0
+    image = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=cut)
     if mosaic_m is not None:
         image = coarsen(image, (mosaic_m[0], mosaic_m[1]), mosaic_m[2])
     opts = result.options
@@ -464,6 +468,7 @@ def analyze_collection(
     options: CollectionOptions | None = None,
     *,
     region_m: ArrayLike | None = None,
+    region_frame: str = "ground",
     plan: PatchPlan | None = None,
     scheduler: str | Any | None = None,
     n_workers: int | None = None,
@@ -480,8 +485,9 @@ def analyze_collection(
         The data (in-memory traces are served by :class:`~sarmotion.core.blocks.TracesBlocks`).
     options : CollectionOptions, optional
         Patch sizing, movers' speed, slow-time filter, block size, analysis options.
-    region_m : (4,) array_like, optional
-        ``(x0, y0, x1, y1)`` (m); default the data's unambiguous scene.
+    region_m, region_frame
+        The region and its frame, as for :func:`~sarmotion.collection.plan_patches`;
+        default the data's declared image area, else its unambiguous scene.
     plan : PatchPlan, optional
         A plan already made by :func:`plan_patches` (then ``region_m`` is ignored).
     scheduler, n_workers, processes
@@ -502,7 +508,8 @@ def analyze_collection(
     src = TracesBlocks(source) if isinstance(source, Traces) else source
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    plan = plan if plan is not None else plan_patches(src, opts, region_m=region_m)
+    if plan is None:
+        plan = plan_patches(src, opts, region_m=region_m, region_frame=region_frame)
     timings["plan"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     results: dict[int, PatchResult] = {}
@@ -517,8 +524,8 @@ def analyze_collection(
         canvas = None
     else:
         spacing = _mosaic_spacing(plan, opts)
-        canvas = mosaic_grid(plan.region_m, spacing)
-        origin = (plan.region_m[0], plan.region_m[1], spacing)
+        canvas = mosaic_grid(plan.extent_m, spacing)
+        origin = (plan.extent_m[0], plan.extent_m[1], spacing)
         run_opts = dataclasses.replace(
             opts, analysis=patch_false_alarm(opts.analysis, len(plan.patches))
         )
@@ -691,7 +698,7 @@ def _ready(pending: Any) -> list[Any]:
 
 def _mosaic_spacing(plan: PatchPlan, opts: CollectionOptions) -> float:
     """The mosaic's pixel (m): the analysis's, or coarser to keep ``MOSAIC_MAX_PIXELS``."""
-    x0, y0, x1, y1 = plan.region_m
+    x0, y0, x1, y1 = plan.extent_m
     return max(opts.analysis.spacing_m, max(x1 - x0, y1 - y0) / MOSAIC_MAX_PIXELS)
 
 

@@ -24,6 +24,15 @@ Geometry
     of a vector is the mid-point of ``TxPos`` and ``RcvPos`` (one antenna, the
     start-stop model of sarmotion), its slow time ``TxTime``, re-centred so that
     ``s = 0`` is half-way between the first and last selected vectors.
+Image area
+    ``SceneCoordinates/ImageArea`` (its polygon, else the ``X1Y1``/``X2Y2`` rectangle),
+    in the image-area frame (IARP, ``uIAX``, ``uIAY``): the scene frame's ``x``, ``y``
+    for a planar surface; for an HAE surface along ``uIAXLL``, ``uIAYLL`` in the east and
+    north. It is the declared scene, ``metadata["image_area_m"]`` (``(n, 2)`` ground
+    ``x, y``, m; :func:`~sarmotion.core.blocks.declared_area`), which the collection
+    analyses by default. A polygon of fewer than 3 distinct vertices, no area, or crossing
+    sides is refused. A file written by sarmotion with no area declared (its stored
+    parameter ``sarmotion.image_area`` is ``"none"``) declares none.
 Reference point
     ``SRPPos``. When it moves between the selected vectors the phase history is
     re-referenced exactly to one point (the SRP of the middle selected vector, or
@@ -60,9 +69,13 @@ the two-way travel time to the reference point, velocities by finite differences
 ``SRPPos`` = the reference point, ``FX1``/``FX2`` = the pulse band ``carrier +- B/2``
 (the sampled span for a Gaussian pulse), ``TOA1``/``TOA2`` = the fast-time window
 ``+-0.4 / SCSS`` (a 1.25 oversampling), ``aFRR1 = aFRR2 = 0`` (no chirp rate is known),
-``SIGNAL = 1``. The exact radar parameters and the traces' metadata go in
-``ProductInfo/Parameter`` elements named ``sarmotion.radar`` and ``sarmotion.metadata``
-(JSON), which :func:`read_cphd` restores. The file passes sarkit's consistency checker
+``SIGNAL = 1``. ``SceneCoordinates/ImageArea``: the declared image area
+(``image_area_m``, or the traces' ``metadata["image_area_m"]``; its bounding rectangle as
+``X1Y1``/``X2Y2``), else a square about the reference point of the TOA window's range
+half-width, marked undeclared. The exact radar parameters, the traces' metadata and
+whether an image area is declared go in ``ProductInfo/Parameter`` elements named
+``sarmotion.radar``, ``sarmotion.metadata`` and ``sarmotion.image_area`` (JSON), which
+:func:`read_cphd` restores. The file passes sarkit's consistency checker
 (``cphdcheck FILE --thorough``) without errors or warnings.
 
 Writing in blocks (:func:`write_cphd_blocks`, :class:`CphdWriter`)
@@ -98,7 +111,8 @@ from .._limits import over_budget, phase_history_bytes
 from .._validation import geodetic_origin, integer
 from .._version import __version__
 from ..core import Acquisition, C, Radar, Traces, Trajectory, as_point, delay_phase
-from ..core.blocks import PulseBlocks
+from ..core.blocks import IMAGE_AREA_KEY, PulseBlocks
+from ..core.polygon import polygon_area, polygon_problem
 from ..core.spectral import to_fast_time, to_frequency
 from .errors import DataError
 from .native import _to_json
@@ -598,6 +612,54 @@ def read_cphd(
     )
 
 
+def _image_area(xml: Any, path: Path) -> NDArray[np.float64]:
+    """``SceneCoordinates/ImageArea`` on the ground of the scene frame, ``(n, 2)`` (m).
+
+    The polygon (its vertices in ``index`` order) where given, else the rectangle of
+    ``X1Y1`` and ``X2Y2``. Image-area coordinates are along ``uIAX``, ``uIAY`` from the
+    IARP: for a planar reference surface the scene frame's own ``x``, ``y``; for an HAE
+    surface the directions of ``uIAXLL``, ``uIAYLL`` (latitude and longitude increments)
+    in the east and north of the scene frame. A polygon of fewer than 3 distinct
+    vertices, of no area or whose sides cross, is refused (:class:`DataError`).
+    """
+    area = xml.find("./{*}SceneCoordinates/{*}ImageArea")
+    where = "SceneCoordinates/ImageArea"
+    if area is None:
+        raise DataError(f"{path}: not a usable CPHD file: no XML element {where}")
+    vertices = area.findall("./{*}Polygon/{*}Vertex")
+    if vertices:
+        order = []
+        for k, v in enumerate(vertices):
+            try:
+                index = int(v.get("index", k + 1))
+            except ValueError:
+                raise DataError(
+                    f"{path}: {where}/Polygon: a vertex index is not an integer"
+                ) from None
+            order.append((index, _number(v, "X", path), _number(v, "Y", path)))
+        xy = np.array([(x, y) for _, x, y in sorted(order)], dtype=np.float64)
+    else:
+        x1, y1 = _number(area, "X1Y1/X", path), _number(area, "X1Y1/Y", path)
+        x2, y2 = _number(area, "X2Y2/X", path), _number(area, "X2Y2/Y", path)
+        xy = np.array([[x1, y1], [x2, y1], [x2, y2], [x1, y2]], dtype=np.float64)
+    hae = xml.find("./{*}SceneCoordinates/{*}ReferenceSurface/{*}HAE")
+    if hae is not None:
+        lat = np.deg2rad(_number(xml, "SceneCoordinates/IARP/LLH/Lat", path))
+        axes = []
+        for name in ("uIAXLL", "uIAYLL"):
+            east = _number(hae, f"{name}/Lon", path) * np.cos(lat)
+            north = _number(hae, f"{name}/Lat", path)
+            norm = float(np.hypot(east, north))
+            if not norm > 0.0:
+                raise DataError(f"{path}: SceneCoordinates/ReferenceSurface/HAE/{name} is zero")
+            axes.append([east / norm, north / norm])
+        xy = xy @ np.array(axes)
+    problem = polygon_problem(xy)
+    if problem is not None:
+        raise DataError(f"{path}: {where}: {problem}")
+    return xy
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _Prepared:
     """A CPHD channel opened and checked, all but its signal read."""
@@ -653,6 +715,10 @@ def _prepare(
     trajectory, rho_o, delays = _geometry(pvps, frame, reference_point_m, f"{p}: channel {ch}")
     metadata = dict(stored.get("metadata") or {"source": "cphd"})
     metadata["cphd"] = _provenance(xml, p, ch, (start, stop), n_vectors, frame_name, pvps)
+    if stored.get("image_area") == "none":  # written by sarmotion with no area declared
+        metadata.pop(IMAGE_AREA_KEY, None)
+    else:
+        metadata[IMAGE_AREA_KEY] = _image_area(xml, p).tolist()
     return _Prepared(
         reader=reader,
         channel=ch,
@@ -802,6 +868,7 @@ class _Layout:
     frame: _Frame
     origin_llh: NDArray[np.float64]  # (lat_deg, lon_deg, hae_m) of the IARP
     srp_local: NDArray[np.float64]  # (3,) scene frame
+    image_area_m: NDArray[np.float64] | None  # (n, 2) declared image area, or None
     pvps: NDArray[Any]
     band_hz: tuple[float, float]  # FX1, FX2
     toa_s: tuple[float, float]  # TOA1, TOA2
@@ -826,7 +893,9 @@ def _pvp_dtype() -> np.dtype[Any]:
     )
 
 
-def _layout(traces: Traces, origin_llh: NDArray[np.float64]) -> _Layout:
+def _layout(
+    traces: Traces, origin_llh: NDArray[np.float64], image_area_m: ArrayLike | None = None
+) -> _Layout:
     """PVPs of the traces: start-stop antenna, fixed SRP, one frequency grid."""
     radar = traces.radar
     frame = _enu_frame(origin_llh)
@@ -855,6 +924,7 @@ def _layout(traces: Traces, origin_llh: NDArray[np.float64]) -> _Layout:
         frame=frame,
         origin_llh=origin_llh,
         srp_local=traces.reference_point_m,
+        image_area_m=_area_to_write(image_area_m),
         pvps=pvps,
         band_hz=band,
         toa_s=(-half, half),
@@ -862,16 +932,55 @@ def _layout(traces: Traces, origin_llh: NDArray[np.float64]) -> _Layout:
     )
 
 
+def _area_to_write(image_area_m: ArrayLike | None) -> NDArray[np.float64] | None:
+    """A declared image area ``(n, 2)`` checked, clockwise seen from above (CPHD's order)."""
+    if image_area_m is None:
+        return None
+    problem = polygon_problem(image_area_m)
+    if problem is not None:
+        raise DataError(f"image_area_m: {problem}")
+    xy = np.asarray(image_area_m, dtype=np.float64)
+    return xy[::-1].copy() if polygon_area(xy) > 0 else xy.copy()
+
+
+def _mark_area(header: dict[str, Any], lay: _Layout) -> None:
+    """Store whether the image area is declared (``sarmotion.image_area``): a file written
+    with none declared holds the square of the TOA window, which is not the scene's."""
+    header["parameters"]["image_area"] = json.dumps(
+        "declared" if lay.image_area_m is not None else "none"
+    )
+
+
+def _declared(image_area_m: ArrayLike | None, metadata: Any) -> ArrayLike | None:
+    """The image area to write: the one given, else the metadata's (``image_area_m``)."""
+    if image_area_m is not None:
+        return image_area_m
+    meta = metadata if isinstance(metadata, dict) else {}
+    return meta.get(IMAGE_AREA_KEY)
+
+
 def _scene_coordinates(lay: _Layout) -> dict[str, Any]:
-    """IARP at the frame origin, the tangent plane, an image area around the SRP."""
-    half = 0.5 * C * lay.toa_s[1]  # range half-width of the saved TOA window (m)
-    x1, y1 = lay.srp_local[:2] - half
-    x2, y2 = lay.srp_local[:2] + half
-    corners = np.array([[x1, y1], [x1, y2], [x2, y2], [x2, y1]])  # clockwise seen from above
-    ground = np.column_stack([corners, np.zeros(4)])
+    """IARP at the frame origin, the tangent plane, the image area.
+
+    The declared image area where one is given (its bounding rectangle as ``X1Y1``,
+    ``X2Y2`` and the corner points), else a square around the SRP of the saved TOA
+    window's range half-width.
+    """
+    if lay.image_area_m is not None:
+        corners = lay.image_area_m
+        x1, y1 = corners.min(axis=0)
+        x2, y2 = corners.max(axis=0)
+    else:
+        half = 0.5 * C * lay.toa_s[1]  # range half-width of the saved TOA window (m)
+        x1, y1 = lay.srp_local[:2] - half
+        x2, y2 = lay.srp_local[:2] + half
+        corners = np.array([[x1, y1], [x1, y2], [x2, y2], [x2, y1]])  # clockwise from above
+    box = np.array([[x1, y1], [x1, y2], [x2, y2], [x2, y1]])
+    ground = np.column_stack([box, np.zeros(4)])
     iacp = skwgs84.cartesian_to_geodetic(lay.frame.to_ecf(ground))[:, :2]
     spacing = 0.5 * lay.resolution_m
-    n = int(np.ceil((x2 - x1) / spacing))
+    n = max(1, int(np.ceil((x2 - x1) / spacing)))
+    n_y = max(1, int(np.ceil((y2 - y1) / spacing)))
     extent = {"FirstLine": 0, "NumLines": n, "LineSpacing": spacing}
     return {
         "EarthModel": "WGS_84",
@@ -882,7 +991,7 @@ def _scene_coordinates(lay: _Layout) -> dict[str, Any]:
         "ImageGrid": {
             "IARPLocation": [-x1 / spacing - 0.5, -y1 / spacing - 0.5],  # (line, sample)
             "IAXExtent": extent,
-            "IAYExtent": {"SampleSpacing": spacing, "FirstSample": 0, "NumSamples": n},
+            "IAYExtent": {"SampleSpacing": spacing, "FirstSample": 0, "NumSamples": n_y},
         },
     }
 
@@ -1049,6 +1158,7 @@ def write_cphd(
     classification: str = "UNCLASSIFIED",
     release_info: str = "UNRESTRICTED",
     overwrite: bool = True,
+    image_area_m: ArrayLike | None = None,
 ) -> Path:
     """Write traces as a CPHD 1.1.0 file (one FX-domain channel, CF8 samples).
 
@@ -1069,6 +1179,11 @@ def write_cphd(
         ``CollectionID/Classification`` and ``ReleaseInfo`` (also in the file header).
     overwrite : bool
         Replace an existing file (default); if False, raise FileExistsError.
+    image_area_m : (n, 2) array_like, optional
+        The image area the file declares (``SceneCoordinates/ImageArea``): a simple
+        polygon on the ground of the scene frame (m). Default the traces'
+        ``metadata["image_area_m"]`` where present, else a square about the reference
+        point of the saved fast-time window's range half-width.
 
     Returns
     -------
@@ -1095,7 +1210,8 @@ def write_cphd(
     header = _header(
         traces.radar, traces.metadata, target, collection_start, classification, release_info
     )
-    lay = _layout(traces, llh)
+    lay = _layout(traces, llh, _declared(image_area_m, traces.metadata))
+    _mark_area(header, lay)
     meta = skcphd.Metadata(xmltree=_xml(traces, lay, header))
     signal = np.ascontiguousarray(traces.phase_history().astype(np.complex64))
     with staged_paths([target], overwrite=overwrite) as (tmp,):
@@ -1128,8 +1244,8 @@ class CphdWriter:
         every vector to be written.
     metadata : dict, optional
         Provenance stored with the file (JSON-serialisable), as ``Traces.metadata``.
-    origin_llh, collection_start, classification, release_info, overwrite
-        As for :func:`write_cphd`.
+    origin_llh, collection_start, classification, release_info, overwrite, image_area_m
+        As for :func:`write_cphd` (``image_area_m`` defaults to ``metadata``'s).
 
     Examples
     --------
@@ -1149,6 +1265,7 @@ class CphdWriter:
         classification: str = "UNCLASSIFIED",
         release_info: str = "UNRESTRICTED",
         overwrite: bool = True,
+        image_area_m: ArrayLike | None = None,
     ) -> None:
         self.path = Path(path)
         self.acquisition = Acquisition(
@@ -1166,7 +1283,10 @@ class CphdWriter:
             classification,
             release_info,
         )
-        self._lay = _layout(self.acquisition, _origin(origin_llh))
+        self._lay = _layout(
+            self.acquisition, _origin(origin_llh), _declared(image_area_m, metadata)
+        )
+        _mark_area(header, self._lay)
         self._meta = skcphd.Metadata(xmltree=_xml(self.acquisition, self._lay, header))
         self._overwrite = bool(overwrite)
         self._stack: ExitStack | None = None

@@ -43,6 +43,9 @@ def _clip_line(p: np.ndarray, d: np.ndarray, box: tuple[float, float, float, flo
 def mosaic_figure(result: CollectionResult) -> Figure:
     """Mosaic (dB re its peak), patch cores, movers and their families clipped to the region.
 
+    Drawn on the ground ``x``, ``y``: each core's true outline (a square turned to the
+    look) and the region's (dashed), over the bounding box of both.
+
     An arrow shows the radar's look direction on the ground at the aperture centre
     (``-result.range_direction``, :func:`~sarmotion.report.plotting.draw_look_arrow`).
     """
@@ -52,19 +55,15 @@ def mosaic_figure(result: CollectionResult) -> Figure:
     peak = float(img.max()) if img.size else 0.0
     db = 20 * np.log10(np.maximum(img, 1e-12 * max(peak, 1e-300)) / max(peak, 1e-300))
     ax.imshow(db, origin="lower", extent=result.mosaic_extent_m, cmap="gray", vmin=-40, vmax=0)
-    for p in result.plan.patches:
-        x0, y0, x1, y1 = p.core_m
-        ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:cyan", lw=0.6)
-        ax.text(
-            0.5 * (x0 + x1),
-            0.5 * (y0 + y1),
-            str(p.index),
-            color="tab:cyan",
-            fontsize=7,
-            ha="center",
-            va="center",
-        )
-    region = result.plan.region_m
+    for p in result.plan.patches:  # each core's true outline, turned to the look
+        q = np.vstack([p.corners_m, p.corners_m[:1]])
+        ax.plot(q[:, 0], q[:, 1], color="tab:cyan", lw=0.6)
+        c = p.corners_m.mean(axis=0)
+        ax.text(c[0], c[1], str(p.index), color="tab:cyan", fontsize=7, ha="center", va="center")
+    outline = result.plan.region_polygon
+    q = np.vstack([outline, outline[:1]])
+    ax.plot(q[:, 0], q[:, 1], color="tab:orange", lw=1.0, ls="--")
+    region = result.plan.extent_m
     for k, (m, _) in enumerate(result.movers):
         family = m.document.get("cross_range_family", {}).get("position_per_m", (0.0, 0.0))
         fam = np.asarray(family, float)
