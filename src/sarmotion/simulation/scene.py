@@ -37,9 +37,12 @@ tables nest at most :data:`MAX_NESTING` deep, checked on the text before it is p
 Physical bounds, the readers' own (:mod:`sarmotion.core.constants`), so that a scene
 simulates to traces the readers accept: the platform speed within ``SPEED_RANGE_MPS``;
 every antenna position above the reference point, within ``RANGE_ENVELOPE_M`` of it and
-seeing it at least ``MIN_GRAZING_DEG`` up; the carrier within ``CARRIER_RANGE_HZ``; a
-target's amplitude within :data:`AMPLITUDE_RANGE` and its ground speed at most the
-platform speeds' upper bound.
+seeing it at least ``MIN_GRAZING_DEG`` up, moving at least :data:`MIN_STEP_OF_RANGE` of
+its range between pulses (``aperture_deg`` and ``centre_azimuth_deg`` within one turn);
+the carrier within ``CARRIER_RANGE_HZ``; a target's amplitude within
+:data:`AMPLITUDE_RANGE` and its ground speed at most the platform speeds' upper bound.
+What the scene's values cannot show (the phase history's dynamic range) the
+``simulate`` command checks on the traces before it writes them.
 
 Aliasing (:func:`check_aliasing`): every target, a mover at each of its positions along
 its path over the acquisition, lies inside the unambiguous scene of the radar and the
@@ -98,6 +101,10 @@ MAX_SCENE_FILE_BYTES = 16 * 2**20
 #: Deepest nesting of tables and arrays in a scene file, the file's own table counted:
 #: twice the schema's deepest (4: the file, ``targets``, a target, its ``position_m``).
 MAX_NESTING = 8
+#: Least distance the antenna moves between pulses, as a share of its range: float64
+#: holds a position to 1e-16 of the range, so steps of 1e-9 of it are uniform to 1e-7, as
+#: the readers' track rule needs (a rail SAR 10 m away may step by 10 nm).
+MIN_STEP_OF_RANGE = 1e-9
 #: A target's amplitude ``|sigma|`` (dimensionless): its power ``|sigma|^2`` stays a
 #: normal float32 number, eight decades above the smallest (1.2e-38), so a GOTCHA file
 #: (complex64) holds it and the pulse's spectral tails; and the power summed over the
@@ -291,6 +298,12 @@ class Scene:
                 f"{source}: radar.carrier_hz must be within {lo:g} to {hi:g} Hz (the radio "
                 f"spectrum from HF to its upper edge), got {radar.carrier_hz:g}"
             )
+        lowest = radar.carrier_hz - (radar.n_samples // 2) * radar.frequency_step_hz
+        if not lowest > 0.0:
+            raise SceneError(
+                f"{source}: radar: the lowest sampled frequency, carrier_hz - (n_samples // 2) "
+                f"x frequency_step_hz = {lowest:.6g} Hz, must be positive"
+            )
 
         raw_targets = raw.get("targets", [])
         if not isinstance(raw_targets, list) or not raw_targets:
@@ -305,6 +318,14 @@ class Scene:
             if "position_m" not in t:
                 raise SceneError(f"{source}: {where}.position_m is missing")
             pos = _vector(t["position_m"], source, f"{where}.position_m", 3)
+            reach = RANGE_ENVELOPE_M[1]
+            with np.errstate(over="ignore"):
+                offset = float(np.max(np.abs(pos[:2] - ref[:2])))
+            if not offset <= reach:
+                raise SceneError(
+                    f"{source}: {where}.position_m must lie within {reach:g} m of the reference "
+                    f"point (the readers' range envelope), got {_short(t['position_m'])}"
+                )
             vel = _vector(t.get("velocity_mps", [0.0, 0.0]), source, f"{where}.velocity_mps", 2)
             speed = float(np.hypot(vel[0], vel[1]))
             if speed > SPEED_RANGE_MPS[1]:
@@ -540,8 +561,37 @@ def _check_trajectory_values(traj: dict[str, Any], source: str) -> None:
     for key in _POSITIVE_KEYS[kind]:
         if key in traj and not traj[key] > 0.0:
             raise SceneError(f"{source}: trajectory.{key} must be > 0, got {traj[key]:g}")
+    for key in ("aperture_deg", "centre_azimuth_deg"):
+        if key in traj and not abs(traj[key]) <= 360.0:
+            raise SceneError(
+                f"{source}: trajectory.{key} must be within -360 to 360 deg (one turn of the "
+                f"circle), got {traj[key]:g}"
+            )
     if "n_pulses" in traj and traj["n_pulses"] < 2:
         raise SceneError(f"{source}: trajectory.n_pulses must be >= 2, got {traj['n_pulses']}")
+    if kind == "circular" and "n_pulses" in traj:
+        with np.errstate(over="ignore"):
+            turn = np.float64(traj["n_pulses"]) / np.float64(
+                traj.get("pulses_per_deg", GOTCHA_PULSES_PER_DEG)
+            )
+        if not turn <= 360.0:
+            raise SceneError(
+                f"{source}: trajectory: n_pulses / pulses_per_deg = {float(turn):.6g} deg must be "
+                "within one turn of the circle (360 deg)"
+            )
+    reach = RANGE_ENVELOPE_M[1]
+    sizes = {"altitude_m": reach, "ground_radius_m": reach, "aperture_m": 2.0 * reach}
+    for key, most in sizes.items():
+        if key in traj and not traj[key] <= most:
+            raise SceneError(
+                f"{source}: trajectory.{key} must be at most {most:g} m (the readers' range "
+                f"envelope: antennas within {reach:g} m of the scene), got {traj[key]:g}"
+            )
+    if "centre_m" in traj and not max(abs(v) for v in traj["centre_m"]) <= reach:
+        raise SceneError(
+            f"{source}: trajectory.centre_m must lie within {reach:g} m of the scene (the "
+            f"readers' range envelope), got {_short(traj['centre_m'])}"
+        )
     if "speed_mps" in traj:
         lo, hi = SPEED_RANGE_MPS
         if not lo <= traj["speed_mps"] <= hi:
@@ -575,6 +625,15 @@ def _check_geometry(
         raise SceneError(
             f"{source}: the antenna at pulse {j} is {dist[j]:.6g} m from the reference point; "
             f"the readers accept {lo:g} to {hi:g} m ({keys}, reference_point_m)"
+        )
+    step = np.linalg.norm(np.diff(trajectory.positions_m, axis=0), axis=1)
+    least = MIN_STEP_OF_RANGE * float(np.max(dist))
+    if not float(np.min(step)) >= least:
+        spacing = "pulses_per_deg" if kind == "circular" else "pulse_spacing_m"
+        raise SceneError(
+            f"{source}: the antenna moves {float(np.min(step)):.3g} m between pulses, less than "
+            f"{MIN_STEP_OF_RANGE:g} of its range ({least:.3g} m: positions held to float64 "
+            f"could not tell the pulses apart) (trajectory.{spacing})"
         )
     bad = np.flatnonzero(~(grazing >= MIN_GRAZING_DEG))
     if bad.size:
@@ -702,6 +761,11 @@ def check_aliasing(
     jc = int(np.argmin(np.abs(s)))
     d = pos[jc] - rho_o
     ground = float(np.hypot(d[0], d[1]))
+    if not ground > 0.0:
+        raise SceneError(
+            f"{source}: the antenna at the aperture centre (pulse {jc}) is straight above the "
+            "reference point: the look has no ground range (trajectory, reference_point_m)"
+        )
     cos_psi = ground / float(np.linalg.norm(d))
     e_r = np.array([d[0], d[1], 0.0]) / ground
     e_c = np.array([-e_r[1], e_r[0], 0.0])
