@@ -156,10 +156,14 @@ def _identity(address: str, timeout_s: float) -> dict[str, Any]:
     timeout still waits on such a peer without end).
     """
     import asyncio
-    import concurrent.futures
+    import queue
+    import socket
+    import threading
 
     from distributed import Security
     from distributed.comm import connect
+
+    host, _, port = address.split("://", 1)[1].rpartition(":")
 
     async def ask() -> dict[str, Any]:
         kwargs = Security().get_connection_args("client")
@@ -170,20 +174,26 @@ def _identity(address: str, timeout_s: float) -> dict[str, Any]:
         finally:
             comm.abort()
 
-    def run() -> dict[str, Any]:
-        return asyncio.run(asyncio.wait_for(ask(), timeout_s))
+    answers: queue.Queue[tuple[bool, Any]] = queue.Queue()
 
-    import socket
+    def probe() -> None:
+        try:
+            # a refused or unroutable connection is said at once (Dask's connect retries
+            # it); the name's lookup is under the deadline too
+            with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+                pass
+            answers.put((True, asyncio.run(asyncio.wait_for(ask(), timeout_s))))
+        except BaseException as exc:  # handed to the caller
+            answers.put((False, exc))
 
-    host, _, port = address.split("://", 1)[1].rpartition(":")
-    # a refused or unroutable connection is said at once (Dask's connect retries it)
-    with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
-        pass
-    pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="sarmotion-probe")
+    # a daemon thread: one that never returns (a lookup that hangs) holds nothing up
+    threading.Thread(target=probe, name="sarmotion-scheduler-probe", daemon=True).start()
     try:
-        reply = pool.submit(run).result(timeout=timeout_s + 1.0)
-    finally:
-        pool.shutdown(wait=False, cancel_futures=True)
+        ok, reply = answers.get(timeout=timeout_s + 1.0)
+    except queue.Empty:
+        raise TimeoutError(f"no answer in {timeout_s:g} s") from None
+    if not ok:
+        raise reply
     if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
         raise OSError("the peer is not a Dask scheduler")
     return reply
