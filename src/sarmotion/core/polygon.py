@@ -15,6 +15,9 @@ __all__ = ["polygon_area", "polygon_problem", "clip_convex", "inside_polygon", "
 
 #: Most vertices whose sides are tested pairwise for crossings (the test is quadratic).
 MAX_CROSSING_TEST = 256
+#: Shift of a parallelogram's sides in :func:`inside_convex`, as a fraction of a side
+#: (1e-9: a micrometre on a kilometre, far above float64 rounding, far below a pixel).
+SIDE_SHIFT = 1e-9
 
 
 def polygon_area(xy: ArrayLike) -> float:
@@ -121,8 +124,11 @@ def inside_convex(points: ArrayLike, quad: ArrayLike) -> NDArray[np.bool_]:
     """Whether points ``(m, 2)`` lie in a parallelogram ``(4, 2)``, lower sides included.
 
     ``quad`` is ``o, o + u, o + u + v, o + v``: a point ``o + a u + b v`` is inside for
-    ``0 <= a < 1`` and ``0 <= b < 1``, so parallelograms that tile the plane by shared
-    sides hold each point once.
+    ``-e <= a < 1 - e`` and the same for ``b``, so parallelograms that tile the plane by
+    shared sides hold each point once. The shift ``e = SIDE_SHIFT`` moves the sides off
+    the shared lines themselves: a point on one (a target placed on a border) has ``a``
+    within rounding of 0 in one tile and of 1 in the next, and would otherwise fall in
+    neither when those roundings go the wrong way.
     """
     pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
     q = np.asarray(quad, dtype=np.float64)
@@ -130,4 +136,5 @@ def inside_convex(points: ArrayLike, quad: ArrayLike) -> NDArray[np.bool_]:
     d = pts[:, :2] - o
     a = d @ u / float(u @ u)
     b = d @ v / float(v @ v)
-    return (a >= 0.0) & (a < 1.0) & (b >= 0.0) & (b < 1.0)
+    lo, hi = -SIDE_SHIFT, 1.0 - SIDE_SHIFT
+    return (a >= lo) & (a < hi) & (b >= lo) & (b < hi)
