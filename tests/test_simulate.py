@@ -155,3 +155,28 @@ def test_every_builtin_scene_simulates_to_a_file_the_reader_accepts(tmp_path, na
     assert run(["simulate", name, "--out", str(tmp_path / "t.h5")]) == 0
     traces = load_traces(tmp_path / "t.h5")
     np.testing.assert_allclose(traces.data, simulate(load_scene(name)).traces.data, atol=1e-12)
+
+
+@pytest.mark.parametrize("command", ["simulate", "analyze", "image"])
+def test_every_command_refuses_a_scene_that_aliases_before_any_work(tmp_path, capsys, command):
+    from sarmotion.cli.main import run
+
+    scene = tmp_path / "wide.toml"
+    scene.write_text(ALIASING)
+    out = tmp_path / ("o.h5" if command == "simulate" else "o")
+    capsys.readouterr()
+    assert run([command, str(scene), "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    # analyze and image say what they read first (one status line), then the refusal
+    assert len(lines) == (1 if command == "simulate" else 2), lines
+    err = lines[-1]
+    assert err.startswith("sarmotion: error: "), lines
+    for words in (
+        "targets[2] at (-110, 0) m",
+        "radar.frequency_step_hz <=",
+        "radar.n_samples >=",
+        "m of ground range",
+        "--lenient",
+    ):
+        assert words in err, (words, err)
+    assert not out.exists()
