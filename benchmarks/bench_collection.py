@@ -30,6 +30,8 @@ each patch keeps, and the movers. ``--base-src DIR`` runs each also with the pac
 ``DIR`` (a ``git worktree`` of an earlier commit's ``src``) first in the sys.path,
 alternated with today's in the same run. Rows go to ``bench_collection_rates.json``
 (added to, by side, factor and code) and the table ``bench_collection_rates.md``.
+``--profile-pulses 1300 650 325 --sizes 400 --rate-factors 4`` times one patch's stages
+at those pulse counts (``patch_profile``) and fits each stage's exponent in the pulses.
 
 Scene of side ``L`` (m), seeded: 0.5 stationary unit points per 1000 m^2 drawn uniformly
 in the ``L x L`` square, 3 movers of ground speed 5-15 m/s (random direction, unit
@@ -635,11 +637,11 @@ def patch_profile(
     """One patch's analysis at several pulse counts: its stage timings and their exponent.
 
     The scene's pulse rate is sized for ``rate_factor`` times the side; the patch holding
-    the first mover is resampled to each count of ``pulses`` (the ratio ``p / q`` of
-    ``resample.slow_time_ratio`` for that many pulses over the aperture, the same pass
-    band and filter rule), and analysed as a collection's patch is
-    (:func:`~sarmotion.collection.run.analyze_patch`, the command's defaults), on the
-    threads the process has.
+    the first mover keeps every ``q``-th pulse, ``q = max(1, floor(n_pulses / n))`` for
+    each count ``n`` of ``pulses`` (integer decimations: exact for its aliased movers;
+    the same pass band and filter rule), and is analysed as a collection's patch is
+    (:func:`~sarmotion.collection.run.analyze_patch`, the command's defaults, after one
+    untimed run), on the threads the process has.
     """
     import dataclasses
     import sys
@@ -648,7 +650,7 @@ def patch_profile(
         sys.path.insert(0, src)
     from sarmotion.collection import CollectionOptions, extract_patches, plan_patches
     from sarmotion.collection.plan import BAND_GUARD
-    from sarmotion.collection.resample import design, output_grid, slow_time_ratio
+    from sarmotion.collection.resample import design, output_grid
     from sarmotion.collection.run import analyze_patch
     from sarmotion.core.blocks import TracesBlocks
 
@@ -657,12 +659,10 @@ def patch_profile(
     plan = plan_patches(source)
     patch = next(p for p in plan.patches if p.contains(movers[0].position_m))
     prf = 1.0 / traces.trajectory.pulse_interval_s
-    span = float(np.ptp(traces.trajectory.slow_times_s))
     opts = CollectionOptions().analysis
     rows = []
     for n in pulses:
-        rate = max(n / span, 2.0 * (1.0 + BAND_GUARD) * patch.passband_hz)
-        up, down = slow_time_ratio(prf, rate)
+        up, down = 1, max(1, traces.n_pulses // n)
         taps = design(up, patch.passband_hz, prf, 60.0, guard=BAND_GUARD)
         this = dataclasses.replace(
             patch,
