@@ -309,6 +309,7 @@ class Scene:
         if not isinstance(raw_targets, list) or not raw_targets:
             raise SceneError(f"{source}: targets must be a non-empty array of tables")
         _check_size(traj, radar, len(raw_targets), source)
+        _check_turn(traj, source)
         targets = []
         for i, t in enumerate(raw_targets):
             where = f"targets[{i}]"
@@ -569,16 +570,6 @@ def _check_trajectory_values(traj: dict[str, Any], source: str) -> None:
             )
     if "n_pulses" in traj and traj["n_pulses"] < 2:
         raise SceneError(f"{source}: trajectory.n_pulses must be >= 2, got {traj['n_pulses']}")
-    if kind == "circular" and "n_pulses" in traj:
-        with np.errstate(over="ignore"):
-            turn = np.float64(traj["n_pulses"]) / np.float64(
-                traj.get("pulses_per_deg", GOTCHA_PULSES_PER_DEG)
-            )
-        if not turn <= 360.0:
-            raise SceneError(
-                f"{source}: trajectory: n_pulses / pulses_per_deg = {float(turn):.6g} deg must be "
-                "within one turn of the circle (360 deg)"
-            )
     reach = RANGE_ENVELOPE_M[1]
     sizes = {"altitude_m": reach, "ground_radius_m": reach, "aperture_m": 2.0 * reach}
     for key, most in sizes.items():
@@ -598,6 +589,20 @@ def _check_trajectory_values(traj: dict[str, Any], source: str) -> None:
             raise SceneError(
                 f"{source}: trajectory.speed_mps must be within {lo:g} to {hi:g} m/s (from a "
                 f"rail SAR to a satellite in low orbit), got {traj['speed_mps']:g}"
+            )
+
+
+def _check_turn(traj: dict[str, Any], source: str) -> None:
+    """A circle's pulses, ``n_pulses`` at ``pulses_per_deg``, span at most one turn."""
+    if traj["kind"] == "circular" and "n_pulses" in traj:
+        with np.errstate(over="ignore"):
+            turn = np.float64(traj["n_pulses"]) / np.float64(
+                traj.get("pulses_per_deg", GOTCHA_PULSES_PER_DEG)
+            )
+        if not turn <= 360.0:
+            raise SceneError(
+                f"{source}: trajectory: n_pulses / pulses_per_deg = {float(turn):.6g} deg must be "
+                "within one turn of the circle (360 deg)"
             )
 
 
