@@ -32,6 +32,7 @@ from .common import (
     method_option,
     noise_options,
     out_option,
+    say,
     scheduler_callback,
     speed_option,
     workers_callback,
@@ -342,6 +343,7 @@ def analyze(
             collection_options=copts.to_dict(),
         )
 
+    say(ctx, f"analyze: reading {', '.join(Path(i).name for i in inputs)}")
     run_collection(
         inputs,
         out,

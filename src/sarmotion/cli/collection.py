@@ -21,7 +21,7 @@ from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_j
 from ..io.staging import claimed
 from ..report.collection import write_collection_report
 from .autofocus import ReadOptions
-from .common import InputError, Progress, check_out
+from .common import InputError, Progress, check_out, say
 from .describe import document_lines, stationary_note
 from .main import elapsed_s
 
@@ -171,3 +171,26 @@ def echo_document(out: Path, doc: dict[str, Any], analysis_s: float) -> None:
     )
     for line in document_lines(doc):
         click.echo(line)
+
+
+def _say_plan(plan: Any, source: Any, n_workers: int | None, scheduler: str | None) -> None:
+    """The plan in one line (stderr, not under ``-q``): data, patches, workers."""
+    x0, y0, x1, y1 = plan.region_m
+    data = f"{source.n_pulses} pulses x {source.radar.n_samples} samples"
+    if plan.single and len(plan.patches) == 1:
+        what = f"one analysis of {x1 - x0:.0f} x {y1 - y0:.0f} m"
+    else:
+        where = (
+            f"on {scheduler}"
+            if scheduler
+            else (
+                "in this process"
+                if n_workers == 0
+                else f"on {n_workers or 'one per core'} worker(s)"
+            )
+        )
+        what = (
+            f"{len(plan.patches)} patches of {plan.patch_size_m:.0f} m over "
+            f"{x1 - x0:.0f} x {y1 - y0:.0f} m, {where}"
+        )
+    say(click.get_current_context(silent=True), f"analyze: {data}: {what}")

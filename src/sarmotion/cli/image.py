@@ -28,6 +28,7 @@ from .common import (
     lenient_option,
     origin_callback,
     out_option,
+    say,
     speed_option,
     square_grid,
 )
@@ -197,6 +198,11 @@ def image(
         grid = square_grid(size_m, spacing_m, centre)
     else:
         grid = extent_grid(grid_extent, spacing_m)
+    say(
+        ctx,
+        f"image: {_names(inputs)} -> {grid.shape[1]} x {grid.shape[0]} pixels at "
+        f"{spacing_m:g} m, {method} backprojection on the {device.upper()}",
+    )
     traces, _, focus = read_focused(
         inputs,
         autofocus=autofocus,
@@ -291,11 +297,15 @@ def image(
 IMAGE_DPI = 100
 
 
+def _names(inputs) -> str:
+    """The inputs' file names, or their count when the names are long."""
+    names = ", ".join(Path(i).name for i in inputs)
+    return names if len(names) <= 50 else f"{len(inputs)} inputs"
+
+
 def _title(inputs, grid, velocity, dynamic_range_db: float) -> str:
     """image.png's title: what was imaged, the extent, the pixels, the scale."""
-    names = ", ".join(Path(i).name for i in inputs)
-    if len(names) > 50:
-        names = f"{len(inputs)} inputs"
+    names = _names(inputs)
     ny, nx = grid.shape
     x, y = grid.x_m, grid.y_m
     spacing = float(x[1] - x[0]) if nx > 1 else float(y[1] - y[0]) if ny > 1 else 0.0
