@@ -19,6 +19,8 @@ from ..separation import SeparationOptions
 from .autofocus import ReadOptions, autofocus_options
 from .collection import COLLECTION_OUTPUTS, echo_document, run_collection
 from .common import (
+    MAX_GROUND_SPEED_MPS,
+    SCHEDULER_LIMITS,
     InputError,
     Progress,
     as_flags,
@@ -237,16 +239,15 @@ def _write_sicd_images(result, stage: Path) -> None:
     default=15.0,
     show_default=True,
     callback=max_speed_callback,
-    help="Patches: largest ground speed of a mover (m/s, at most 343: the speed of sound) "
-    "their margins are sized for.",
+    help=f"Patches: largest ground speed of a mover (m/s, at most {MAX_GROUND_SPEED_MPS:g}: the "
+    "speed of sound) their margins are sized for.",
 )
 @click.option(
     "--scheduler",
     default=None,
     callback=scheduler_callback,
     help="Patches: address of a Dask scheduler (tcp://host:8786, or tls://host:8786 with the "
-    "certificates of Dask's configuration); default a local cluster. It must answer within "
-    "5 s and have a worker within 5 s more, else the command stops before any work.",
+    f"certificates of Dask's configuration); default a local cluster. {SCHEDULER_LIMITS}",
 )
 @click.option(
     "--workers",

@@ -40,6 +40,7 @@ __all__ = [
     "method_option",
     "noise_options",
     "ORIGIN_RULE",
+    "SCHEDULER_LIMITS",
     "origin_callback",
     "out_option",
     "scheduler_callback",
@@ -377,6 +378,19 @@ def check_workers_flag(n_workers: int | None) -> int | None:
 def workers_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
     """Click callback of ``--workers`` (:func:`check_workers_flag`)."""
     return check_workers_flag(value)
+
+
+def _scheduler_limits() -> str:
+    from .._cluster import CONNECT_TIMEOUT_S, WORKER_WAIT_S
+
+    return (
+        f"It must answer within {CONNECT_TIMEOUT_S:g} s and have a worker within "
+        f"{WORKER_WAIT_S:g} s more, else the command stops before any work."
+    )
+
+
+#: The limits a ``--scheduler`` is held to, for the commands' help (from their constants).
+SCHEDULER_LIMITS = _scheduler_limits()
 
 
 def scheduler_callback(ctx: click.Context, param: click.Parameter, value: Any) -> Any:

@@ -19,6 +19,7 @@ from ..tracking import TrackingOptions, sub_aperture_slices
 from ..tracking import track as run_tracking
 from ..tracking.sub_apertures import check_sub_apertures
 from .common import (
+    SCHEDULER_LIMITS,
     InputError,
     Progress,
     as_flags,
@@ -78,8 +79,7 @@ OUTPUTS = ("tracks.json", "tracks.png", "report.html")
     callback=scheduler_callback,
     help="Address of a Dask scheduler (tcp://host:8786, or tls://host:8786 with the "
     "certificates of Dask's configuration); default a local cluster that only this "
-    "process can use. It must answer within 5 s and have a worker within 5 s more, else "
-    "the command stops before any work.",
+    f"process can use. {SCHEDULER_LIMITS}",
 )
 @click.option(
     "--dashboard",
