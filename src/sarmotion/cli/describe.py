@@ -16,7 +16,14 @@ from typing import Any
 
 from ..core.text import fixed as _num
 
-__all__ = ["document_lines", "mover_lines", "not_estimated_lines", "range_speed_words"]
+__all__ = [
+    "document_lines",
+    "mover_lines",
+    "not_estimated_lines",
+    "range_speed_words",
+    "region_lines",
+    "stationary_note",
+]
 
 
 def _pair(p: Sequence[float], digits: int = 2) -> str:
@@ -102,7 +109,7 @@ def document_lines(doc: dict[str, Any]) -> list[str]:
     """
     patches = _patches(doc)
     several = len(patches) > 1
-    lines = []
+    lines = region_lines(doc)
     for k, m in enumerate(doc["movers"]):
         if several:
             centre = patches[m["patch"]]["centre_m"]
@@ -117,6 +124,28 @@ def document_lines(doc: dict[str, Any]) -> list[str]:
             f"{doc['missed_movers']} missed"
         )
     return lines
+
+
+def region_lines(doc: dict[str, Any]) -> list[str]:
+    """The analysed region, its patches, the data's unambiguous scene and what lies outside."""
+    plan = doc.get("plan") or {}
+    region = doc.get("region_m")
+    if not plan or region is None:
+        return []
+    n = len(_patches(doc))
+    text = f"  region ({', '.join(_num(v, 1) for v in region)}) m (x0, y0, x1, y1): " + (
+        "one patch" if n == 1 else f"{n} patches"
+    )
+    scene = plan.get("unambiguous_scene")
+    if isinstance(scene, dict) and scene.get("area_m2") is not None:
+        text += f"; the data's unambiguous scene {scene['area_m2']:.4g} m^2"
+    outside = plan.get("outside")
+    if isinstance(outside, dict) and outside.get("area_m2"):
+        text += (
+            f"; {outside['area_m2']:.4g} m^2 ({100.0 * outside.get('share', 0.0):.1f} %) of "
+            "the declared area outside it, not analysed"
+        )
+    return [text]
 
 
 def stationary_note(doc: dict[str, Any]) -> str:

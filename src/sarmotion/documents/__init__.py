@@ -3,8 +3,9 @@
 One module per document, each a function from result objects to JSON-ready data (lists,
 floats, strings) and the schema name it carries:
 
-* :mod:`~sarmotion.documents.results` -- ``sarmotion.results/2``, an analysis
-  (:func:`sarmotion.pipeline.analyze`);
+* :mod:`~sarmotion.documents.results` -- ``sarmotion.results/3``, an analysis of any size
+  (:func:`sarmotion.pipeline.analyze`, one patch; :func:`sarmotion.collection.analyze_collection`,
+  several merged);
 * :mod:`~sarmotion.documents.tracks` -- ``sarmotion.tracks/1``, the movers followed across
   sub-apertures (:func:`sarmotion.tracking.track`);
 * :mod:`~sarmotion.documents.separation` -- ``sarmotion.separation/1``, a separation;
@@ -12,6 +13,9 @@ floats, strings) and the schema name it carries:
   image;
 * :mod:`~sarmotion.documents.roads` -- GeoJSON road centre lines, read into
   :class:`sarmotion.tracking.Road`.
+
+Each carries ``$schema``, the ``$id`` of its JSON Schema, shipped in the package and read
+by :func:`~sarmotion.documents.schema.load_schema` (:mod:`~sarmotion.documents.schema`).
 
 This layer sits above :mod:`sarmotion.pipeline` and :mod:`sarmotion.tracking`, whose
 results it describes; :func:`sarmotion.io.write_json` writes a document to a file.
@@ -22,8 +26,9 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .peaks import PEAKS_SCHEMA, peaks_document
-    from .results import RESULTS_SCHEMA, results_document
+    from .results import RESULTS_SCHEMA, collection_document, results_document
     from .roads import read_roads
+    from .schema import load_schema, validate
     from .separation import SEPARATION_SCHEMA, separation_document
     from .tracks import TRACKS_SCHEMA, tracks_document
 
@@ -37,6 +42,9 @@ _LAZY = {
     "peaks_document": ".peaks",
     "read_roads": ".roads",
     "results_document": ".results",
+    "collection_document": ".results",
+    "load_schema": ".schema",
+    "validate": ".schema",
     "separation_document": ".separation",
     "tracks_document": ".tracks",
 }
@@ -46,11 +54,14 @@ __all__ = [
     "RESULTS_SCHEMA",
     "SEPARATION_SCHEMA",
     "TRACKS_SCHEMA",
+    "collection_document",
+    "load_schema",
     "peaks_document",
     "read_roads",
     "results_document",
     "separation_document",
     "tracks_document",
+    "validate",
 ]
 
 

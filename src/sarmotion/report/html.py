@@ -1,10 +1,11 @@
 """The self-contained HTML report of an analysis, from its results document alone.
 
 :func:`write_html` reads the ``sarmotion.results`` document (the dict written as, or
-loaded from, results.json; versions 1 and 2) and the report's figures, saves each figure
-as a PNG in the output directory and writes ``report.html`` with the same PNGs embedded
-as base64 data URIs, so the HTML file can be mailed or archived alone. The figures are
-made from the analysis itself by :mod:`sarmotion.report.analysis_figures`, whose
+loaded from, results.json; versions 1 to 3, of one patch or several) and the report's
+figures, saves each figure as a PNG in the output directory and writes ``report.html``
+with the same PNGs embedded as base64 data URIs, so the HTML file can be mailed or
+archived alone. The figures are made from the analysis itself by
+:mod:`sarmotion.report.analysis_figures`, whose
 :func:`~sarmotion.report.analysis_figures.write_report` is the one call from an
 :class:`~sarmotion.pipeline.AnalysisResult` to a report (also importable from here).
 
@@ -122,7 +123,7 @@ def write_html(
     Parameters
     ----------
     document : dict
-        The results document (``sarmotion.results/2`` or ``/1``, e.g. loaded from
+        The results document (``sarmotion.results/3``, ``/2`` or ``/1``, e.g. loaded from
         results.json), with ``truth`` for simulated inputs: every number and table of the
         page comes from it.
     directory : path
@@ -222,10 +223,45 @@ def _patches_html(doc: dict[str, Any]) -> str:
         f"region {_fmt(doc.get('region_m'), 1)} (x0, y0, x1, y1, m). A mover's range, "
         "family and speeds are measured from its kept patch's centre.</p>"
     )
-    outside = plan.get("outside")
-    if outside:
-        text += f'<p class="note">Outside the unambiguous scene: {html.escape(str(outside))}</p>'
     return text + _html_table(head, rows, escape_head=False)
+
+
+def _region_rows(doc: dict[str, Any]) -> list[list[str]]:
+    """The analysed region, its patches and what of a declared area lies outside the data."""
+    plan = doc.get("plan")
+    if not plan:
+        return []
+    n = len(plan.get("patches") or [])
+    region = plan.get("region") or {}
+    source = f" ({html.escape(str(region['source']))})" if region.get("source") else ""
+    rows = [
+        [
+            "analysed region (m)",
+            f"{_fmt(doc.get('region_m'), 1)} (x0, y0, x1, y1){source}; "
+            + ("one patch" if n == 1 else f"{n} patches"),
+        ]
+    ]
+    scene = plan.get("unambiguous_scene")
+    if isinstance(scene, dict) and scene.get("area_m2") is not None:
+        corners = scene.get("corners_m") or []
+        rows.append(
+            [
+                "data's unambiguous scene",
+                f"{scene['area_m2']:.4g} m&sup2;, corners "
+                + ", ".join(_fmt(list(c), 1) for c in corners)
+                + " (m)",
+            ]
+        )
+    outside = plan.get("outside")
+    if isinstance(outside, dict) and "area_m2" in outside:
+        rows.append(
+            [
+                "declared area outside the unambiguous scene",
+                f"{outside['area_m2']:.4g} m&sup2; ({100.0 * outside.get('share', 0.0):.1f} %), "
+                "not analysed",
+            ]
+        )
+    return rows
 
 
 def _autofocus_figure(focus: dict[str, Any]) -> tuple[str, str, Figure, str]:
@@ -444,7 +480,9 @@ def _family_note(doc: dict[str, Any]) -> str:
         "the reference cross range is placed on the data-consistent family near it, "
         "shifted in cross range by about L &delta;u / (V &minus; u_t). &ldquo;Truth to "
         "family&rdquo; is the error of the family member at the truth's cross-range "
-        "offset: what the data can resolve.</p>"
+        "offset: what the data can resolve. The standard errors in the table above are "
+        "conditional on the listed member's cross range, so an error along the family "
+        "may be many of them; the range-speed span across the scene bounds it.</p>"
     )
 
 
@@ -505,12 +543,18 @@ def _stationary_html(doc: dict[str, Any]) -> str:
             f'<p class="note">{sidelobes} local maxima of the stationary image that a brighter '
             "target's sidelobes explain are not listed.</p>"
         )
-    text += (
-        f'<p class="note">{len(doc["stationary"])} listed; '
-        f"{doc.get('stationary_dropped', 0)} beyond the cap not listed, {sidelobes} dropped "
-        f"as a brighter target's sidelobes, {doc.get('stationary_mover_images_dropped', 0)} "
-        "dropped as lying on a mover's echo (its smear over the stationary image).</p>"
-    )
+    counts = [
+        (doc.get("stationary_dropped", 0), "beyond the cap"),
+        (sidelobes, "dropped as a brighter target's sidelobes"),
+        (
+            doc.get("stationary_mover_images_dropped", 0),
+            "dropped as lying on a mover's echo (its smear over the stationary image)",
+        ),
+    ]
+    said = [f"{n} {why}" for n, why in counts if n]
+    if said:  # the same account for every size, as on the console
+        text += f'<p class="note">Not listed: {", ".join(said)}.</p>'
+
     if doc.get("point_quality"):
         text += _quality_html(doc["point_quality"])
     return text
@@ -575,6 +619,7 @@ def _acquisition_html(doc: dict[str, Any], inputs: Sequence[str]) -> str:
         ["separation method", html.escape(doc["method"])],
         ["range-speed resolution (m/s)", _fmt(doc["range_speed_resolution_mps"], 3)],
     ]
+    acq += _region_rows(doc)
     if doc.get("detection"):
         det = doc["detection"]
         acq.append(
