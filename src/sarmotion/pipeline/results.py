@@ -337,9 +337,11 @@ class AnalysisResult:
 
         The acquisition and the frame; each mover's range offset, range speed and
         cross-range speed with their standard errors (Cramér–Rao bound at the measured
-        SNR, :class:`~sarmotion.motion.PointBound`) and its detection statistic against
-        the threshold; the stationary targets; what is known of the movers' cross-range
-        positions; the time the stages took.
+        SNR, :class:`~sarmotion.motion.PointBound`, conditional on the mover sitting at
+        the reference cross range), the range speed's span over its cross-range family
+        across the stationary image (every member fits the data as well) and its
+        detection statistic against the threshold; the stationary targets; what is known
+        of the movers' cross-range positions; the time the stages took.
 
         Frame: ground coordinates ``(x, y)`` (m) of the scene; the range direction is
         ``b``, the ground projection of ``m_o`` (from the reference point towards the
