@@ -36,7 +36,7 @@ from sarmotion.cli.main import run
 from sarmotion.io import load_traces
 
 SEED = 45
-N_MUTANTS = 240
+N_MUTANTS = 200
 
 BASE = """schema = "sarmotion.scene/1"
 name = "fuzz"

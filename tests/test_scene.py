@@ -227,7 +227,7 @@ def test_lenient_warns_where_the_target_aliases_to(tmp_path, caplog):
     ],
 )
 def test_deep_nesting_is_refused_in_one_line(tmp_path, text):
-    with pytest.raises(SceneError, match=r"nest more than 8 deep") as info:
+    with pytest.raises(SceneError, match=r"more than 8 deep") as info:
         Scene.from_file(_write(tmp_path, text))
     assert "\n" not in str(info.value)
 

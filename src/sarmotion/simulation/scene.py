@@ -471,10 +471,15 @@ def _check_size(spec: dict[str, Any], radar: Radar, n_targets: int, source: str)
 
 
 #: What opens or closes a level of nesting in TOML text, and what to skip over: strings
-#: (multi-line first, escapes in basic strings) and comments.
+#: (multi-line first, escapes in basic strings) and comments; and chains of dotted key
+#: segments (bare or quoted), each dot a level of tables (a float or a time has one dot).
+#: A bare word is one token (possessive), so that the scan is linear in the text.
+_SEGMENT = r"""(?:[A-Za-z0-9_-]++|"(?:[^"\\\n]|\\.)*"|'[^'\n]*')"""
+_SEGMENTS = re.compile(_SEGMENT)
 _TOKENS = re.compile(
     r'"""(?:[^"\\]|\\.|"(?!""))*"{3,5}'  # multi-line basic string
     r"|'''(?:[^']|'(?!''))*'{3,5}"  # multi-line literal string
+    rf"|(?P<chain>{_SEGMENT}(?:[ \t]*\.[ \t]*{_SEGMENT})*)"  # a key, dotted or not, a word
     r'|"(?:[^"\\\n]|\\.)*"'  # basic string
     r"|'[^'\n]*'"  # literal string
     r"|#[^\n]*"  # comment
@@ -493,7 +498,17 @@ def _parse_toml(text: str, source: str) -> dict[str, Any]:
     where = 0
     for match in _TOKENS.finditer(text):
         token = match.group()
-        if token in "[{":
+        if match.group("chain") is not None:
+            # a dotted key of n segments nests n tables (the parser's work grows as n^2)
+            segments = len(_SEGMENTS.findall(token))
+            if segments + 1 > MAX_NESTING:
+                line = text.count("\n", 0, match.start()) + 1
+                raise SceneError(
+                    f"{source}: line {line}: a dotted key nests {segments} tables, more than "
+                    f"{MAX_NESTING} deep (the file's own table counted; a scene file needs at "
+                    "most 4)"
+                )
+        elif token in "[{":
             depth += 1
             if depth > deepest:
                 deepest, where = depth, match.start()
