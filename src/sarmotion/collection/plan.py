@@ -112,10 +112,11 @@ _N_DIRECTIONS = 16
 #: core, and its image (the core) holds a target's main lobe and first sidelobes (3 cells)
 #: only about its centre.
 MIN_CORE_CELLS = 8.0
-#: Most patches a plan holds. A patch costs seconds (its traces extracted, imaged,
-#: separated and searched; 0.5 to 3 s on one core in ``benchmarks/look_azimuth.py``), so
-#: 256 patches are minutes to an hour of a workstation; more is a core far below the
-#: side the data need (a typo, or a scene to analyse region by region).
+#: Most patches a plan holds. A patch costs tens of seconds (its traces extracted,
+#: imaged, separated and searched: 4 patches of a 100 m scene took 82 to 114 s in
+#: ``benchmarks/look_azimuth.py`` on a shared 2-core machine), so 256 patches are hours;
+#: more is a core far below the side the data need (a typo), or a scene to analyse
+#: region by region.
 MAX_PATCHES = 256
 
 log = logging.getLogger(__name__)
