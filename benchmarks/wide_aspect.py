@@ -428,6 +428,7 @@ def markdown(summary: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--draws", type=int, default=5)
+    parser.add_argument("--first", type=int, default=0, help="index of the first draw")
     parser.add_argument("--apertures", type=float, nargs="+", default=[4.0, 10.0, 30.0])
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results"))
     parser.add_argument(
@@ -457,7 +458,7 @@ def main(argv: list[str] | None = None) -> int:
     for ap in args.apertures:
         key = f"{ap:g}"
         draws[key] = []
-        for k in range(args.draws):
+        for k in range(args.first, args.first + args.draws):
             run = run_geometric if args.geometric else run_draw
             rec = run(ap, int(1000 * ap) + k)
             draws[key].append(rec)
