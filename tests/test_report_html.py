@@ -207,3 +207,15 @@ def test_mover_images_keep_legible_legends_for_any_number_of_movers(scene1_repor
         smallest_text_pt(fig), dpi=png.info["dpi"][0], width_px=png.width, column_px=COLUMN_PX
     )
     assert shown >= 8.0 - 0.01, (n, png.size, shown)
+
+
+def test_timings_list_each_stages_parts_under_it_and_the_total_last():
+    from sarmotion.report.html import _stage_order
+
+    timings = {"a": 1.0, "movers": 3.0, "total": 4.0, "movers.fit": 2.0, "movers.x": 0.5}
+    rows = _stage_order(timings)
+    names = [k.strip("\u2003") for k, _ in rows]
+    assert names == ["a", "movers", "fit", "x", "total"]
+    assert [v for _, v in rows] == [1.0, 3.0, 2.0, 0.5, 4.0]
+    # the stages (not their parts) add up to the total
+    assert sum(v for k, v in rows if not k.startswith("\u2003") and k != "total") == 4.0

@@ -166,8 +166,19 @@ def write_html(
         body = "".join(sections.get(name, [])) or f'<p class="note">{_absent(name, doc)}</p>'
         parts.append(section(name, body))
     parts.append(section("Stationary targets", _stationary_html(doc)))
-    timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in doc["timings_s"].items()]
-    parts.append(section("Timings", _html_table(["stage", "wall-clock (s)"], timing_rows)))
+    timing_rows = [[html.escape(k), _fmt(v, 2)] for k, v in _stage_order(doc["timings_s"])]
+    parts.append(
+        section(
+            "Timings",
+            _html_table(["stage", "wall-clock (s)"], timing_rows)
+            + (
+                '<p class="note">Indented: the parts of the stage above them, not added to '
+                "the total.</p>"
+                if any("." in k for k in doc["timings_s"])
+                else ""
+            ),
+        )
+    )
     path = out / "report.html"
     found = (
         f"{len(doc['movers'])} mover(s){_beyond(doc)}, {len(doc['stationary'])} "
@@ -175,6 +186,25 @@ def write_html(
     )
     path.write_text(page(title, header_line(found), parts), encoding="utf-8")
     return path
+
+
+def _stage_order(timings: dict[str, float]) -> list[tuple[str, float]]:
+    """The stages in their order, each one's parts (``stage.part``) under it, ``total`` last.
+
+    A part is shown indented (an em space before its name): it is inside its stage's time.
+    """
+    stages = [k for k in timings if "." not in k and k != "total"]
+    rows: list[tuple[str, float]] = []
+    for k in stages:
+        rows.append((k, timings[k]))
+        rows += [
+            ("\u2003" + p.split(".", 1)[1], timings[p]) for p in timings if p.startswith(k + ".")
+        ]
+    placed = {k for k in stages} | {p for p in timings if p.split(".", 1)[0] in stages}
+    rows += [(k, v) for k, v in timings.items() if k not in placed and k != "total"]
+    if "total" in timings:
+        rows.append(("total", timings["total"]))
+    return rows
 
 
 def _patches(doc: dict[str, Any]) -> list[dict[str, Any]]:
