@@ -3,7 +3,8 @@
 The schemas are package data (``sarmotion/documents/schemas``); each written document
 names its schema (``$schema``, the schema's ``$id``). One analysis and one of several
 patches write the same ``sarmotion.results/3`` document, console and report sections (the
-patches' adding the mosaic and the patch table).
+patches' adding the mosaic and the patch table). The tests that run the command line are
+in the slow tier (``python -m pytest -m slow``).
 """
 
 from __future__ import annotations
@@ -82,6 +83,7 @@ def test_the_schemas_are_package_data_and_valid_draft_2020_12():
         assert set(schema["required"]) >= {"$schema", "schema"}
 
 
+@pytest.mark.slow  # runs the command line (about two minutes on two cores)
 def test_every_written_json_document_validates(written):
     out, _ = written
     found = sorted(p for d in out.values() for p in Path(d).glob("*.json"))
@@ -99,6 +101,7 @@ def test_every_written_json_document_validates(written):
         assert validate(doc) == [], path
 
 
+@pytest.mark.slow  # runs the command line (about two minutes on two cores)
 def test_a_document_off_its_schema_fails(written):
     out, _ = written
     doc = json.loads((out["patches"] / "results.json").read_text())
@@ -118,6 +121,7 @@ def _sections(page: str) -> list[str]:
     return re.findall(r"<section><h2>([^<]+)</h2>", page)
 
 
+@pytest.mark.slow  # runs the command line (about two minutes on two cores)
 def test_one_patch_and_several_write_one_schema_one_report_one_console(written):
     out, consoles = written
     one = json.loads((out["single"] / "results.json").read_text())
@@ -153,6 +157,7 @@ def test_one_patch_and_several_write_one_schema_one_report_one_console(written):
         assert "cross range not determined by the data" in text
 
 
+@pytest.mark.slow  # runs the command line (about two minutes on two cores)
 def test_the_range_speed_span_is_the_familys_across_the_scene(written):
     """The span's ends are the range speeds ``u . m_o`` of the family's end members."""
     out, _ = written
@@ -184,6 +189,7 @@ def injected():
     return sim, stationary, analyze(sim.traces, AnalysisOptions(trajectory=False))
 
 
+@pytest.mark.slow  # runs the command line (about two minutes on two cores)
 def test_the_range_speed_span_holds_the_truth_the_standard_error_does_not(injected):
     """The mover sits 15 m off the reference cross range: its range speed there is many
     standard errors from the truth (the error is conditional on the reference cross
@@ -203,6 +209,7 @@ def test_the_range_speed_span_holds_the_truth_the_standard_error_does_not(inject
     assert "conditional on that cross range" in text
 
 
+@pytest.mark.slow  # runs the command line (about two minutes on two cores)
 def test_one_smear_rule_drops_the_movers_echo_and_keeps_every_true_point(injected):
     """drop_smear on one analysis: what it drops lies off every true stationary point
     (farther than a few resolution cells), and every true point stays listed."""
