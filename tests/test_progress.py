@@ -82,17 +82,18 @@ def test_quiet_leaves_only_the_summary(tmp_path):
     assert len(lines) == 1 and lines[0].startswith("wrote "), lines
 
 
-def test_piped_progress_is_lines_with_the_plan_first(tmp_path):
+def test_piped_the_plan_comes_first_and_progress_is_lines(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "sarmotion", "analyze", "scene1", "--no-trajectory",
          "--out", str(tmp_path / "a")],
         env=ENV, capture_output=True, text=True, timeout=600,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
-    err = proc.stderr.splitlines()
-    assert err[0] == "analyze: reading scene1"
-    assert re.fullmatch(r"analyze: 117 pulses x \d+ samples: one analysis of .*", err[1]), err
-    lines = [ln for ln in err[2:] if not ln.startswith(("WARNING", "INFO"))]
+    out = proc.stdout.splitlines()
+    assert out[0] == "analyze: reading scene1"
+    assert re.fullmatch(r"analyze: 117 pulses x \d+ samples: one analysis of .*", out[1]), out
+    assert out[2].startswith("wrote ")
+    lines = [ln for ln in proc.stderr.splitlines() if not ln.startswith(("WARNING", "INFO"))]
     assert lines and all(re.fullmatch(r"[^:]+: \d+/\d+ \(\d+ %\), \d+\.\d s", ln) for ln in lines)
     assert "\r" not in proc.stderr  # no bar drawn into a file
 
@@ -141,8 +142,8 @@ def test_pga_says_what_it_found(tmp_path, capsys):
     assert (
         run(["image", "scene1", "--autofocus", "pga", "--size", "20", "--out", str(tmp_path)]) == 0
     )
-    err = capsys.readouterr().err
-    line = next(ln for ln in err.splitlines() if ln.startswith("autofocus: phase error"))
+    out = capsys.readouterr().out
+    line = next(ln for ln in out.splitlines() if ln.startswith("autofocus: phase error"))
     assert re.search(
         r"RMS [\d.e-]+ rad over the aperture; \d+ iteration\(s\), (not )?converged", line
     )

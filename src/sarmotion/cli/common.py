@@ -206,10 +206,14 @@ def _columns(stream: Any) -> int:
 
 
 def say(ctx: click.Context | None, text: str) -> None:
-    """Tell the user what the command is about to do (stderr), unless ``-q``."""
+    """Tell the user what the command is about to do, unless ``-q``.
+
+    On standard output, with the command's summary (as ``track`` prints its plan):
+    standard error holds progress and, on bad input, the one line of the error.
+    """
     quiet = ctx is not None and bool((ctx.find_root().obj or {}).get("quiet"))
     if not quiet:
-        click.echo(text, err=True)
+        click.echo(text)
 
 
 def out_option(help_text: str, **kwargs: Any) -> Callable[[Callable[..., Any]], Any]:

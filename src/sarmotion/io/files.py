@@ -110,8 +110,8 @@ def file_kind(paths: PathLike | Sequence[PathLike]) -> tuple[FileKind, list[str]
     (kind,) = kinds
     assert kind is not None
     if kind != "gotcha" and len(files) != 1:
-        what = "native traces (.h5)" if kind == "native" else "CPHD (.cphd)"
-        raise DataError(f"give one {what} file at a time")
+        what = "native traces file (.h5)" if kind == "native" else "CPHD file (.cphd)"
+        raise DataError(f"give one {what} at a time")
     return kind, files
 
 

@@ -164,9 +164,10 @@ def check_coherent_sum(
 def check_signal(
     path: Path | str, field: str, phase_history: NDArray[np.complexfloating], *, lenient: bool
 ) -> None:
-    """Not all zero or beyond :data:`MAX_COHERENT_SUM`, not constant, within the dynamic range.
+    """Not all zero, not constant, within the dynamic range and :data:`MAX_COHERENT_SUM`.
 
-    The first two are refused even leniently.
+    All-zero data and a sum beyond :data:`MAX_COHERENT_SUM` are refused even leniently;
+    the dynamic range is checked first, so that one outlier is refused by its place.
 
     An all-zero phase history holds no echo (a never-written array, a fill value): every
     image of it is empty. A constant one (every sample equal to float32 rounding) is a
@@ -176,9 +177,9 @@ def check_signal(
     magnitudes = np.abs(phase_history)
     if phase_history.size == 0 or not np.any(magnitudes):
         raise DataError(f"{path}: {field}: every sample is zero (no echo to image or analyse)")
-    check_coherent_sum(path, field, phase_history)
     first = phase_history.reshape(-1)[0]
-    spread = float(np.max(np.abs(phase_history - first)))
+    with np.errstate(over="ignore", invalid="ignore"):  # data near the float range
+        spread = float(np.max(np.abs(phase_history - first)))
     if spread <= _CONSTANT_TOL * float(magnitudes.max()):
         violation(
             f"{path}: {field}: every sample equals {complex(first):.6g} (rule: a phase "
@@ -186,7 +187,8 @@ def check_signal(
             "relative is a fill value)",
             lenient=lenient,
         )
-    check_dynamic_range(path, field, magnitudes, lenient=lenient)
+    check_dynamic_range(path, field, magnitudes, lenient=lenient)  # names the sample
+    check_coherent_sum(path, field, phase_history)
 
 
 def check_speed(
