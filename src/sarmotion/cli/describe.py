@@ -136,6 +136,10 @@ def region_lines(doc: dict[str, Any]) -> list[str]:
     text = f"  region ({', '.join(_num(v, 1) for v in region)}) m (x0, y0, x1, y1): " + (
         "one patch" if n == 1 else f"{n} patches"
     )
+    extent = doc.get("scene_extent_m")
+    if n == 1 and extent:  # one analysis images its own square (options.analysis.image_size_m)
+        x0, x1, y0, y1 = extent
+        text += f", imaged ({', '.join(_num(v, 1) for v in (x0, y0, x1, y1))}) m"
     scene = plan.get("unambiguous_scene")
     if isinstance(scene, dict) and scene.get("area_m2") is not None:
         text += f"; the data's unambiguous scene {scene['area_m2']:.4g} m^2"

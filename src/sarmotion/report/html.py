@@ -271,6 +271,10 @@ def _region_rows(doc: dict[str, Any]) -> list[list[str]]:
             + ("one patch" if n == 1 else f"{n} patches"),
         ]
     ]
+    extent = doc.get("scene_extent_m")
+    if n == 1 and extent:  # one analysis images its own square (options image_size_m)
+        x0, x1, y0, y1 = extent
+        rows.append(["imaged (m)", f"{_fmt([x0, y0, x1, y1], 1)} (x0, y0, x1, y1)"])
     scene = plan.get("unambiguous_scene")
     if isinstance(scene, dict) and scene.get("area_m2") is not None:
         corners = scene.get("corners_m") or []
