@@ -18,7 +18,13 @@ import numpy as np
 import pytest
 
 from sarmotion.cli.main import EXIT_BAD_INPUT, run
-from sarmotion.collection import CollectionOptions, RegionError, plan_patches, unambiguous_scene
+from sarmotion.collection import (
+    CollectionOptions,
+    RegionError,
+    inscribed_box,
+    plan_patches,
+    unambiguous_scene,
+)
 from sarmotion.collection.plan import MAX_PATCHES, MIN_CORE_CELLS
 from sarmotion.core import Acquisition, C, Radar, Trajectory
 from sarmotion.core.blocks import TracesBlocks, declared_area
@@ -29,6 +35,7 @@ from sarmotion.core.polygon import (
     polygon_area,
     polygon_problem,
 )
+from sarmotion.imaging import default_scene_size_m
 from sarmotion.io import DataError, open_cphd_blocks, write_cphd_blocks
 from sarmotion.simulation import CollectionScene
 
@@ -36,12 +43,14 @@ HALF_M = 50.0
 SQUARE = np.array([[-HALF_M, -HALF_M], [HALF_M, -HALF_M], [HALF_M, HALF_M], [-HALF_M, HALF_M]])
 
 
-def oblique(side_m: float, azimuth_deg: float, oversample: float = 1.6) -> Acquisition:
+def oblique(
+    side_m: float, azimuth_deg: float, oversample: float = 1.6, cross: float | None = None
+) -> Acquisition:
     """A 2-degree X-band arc at 10 km ground range centred on ``azimuth_deg``.
 
-    The range window and the pulse rate are sized for ``oversample`` times the scene's
-    side in slant range and cross range (the sampling rules of
-    :func:`~sarmotion.simulation.collection_acquisition`).
+    The range window is sized for ``oversample`` times the scene's side in slant range,
+    the pulse rate for ``cross`` (default ``oversample``) times it in cross range (the
+    sampling rules of :func:`~sarmotion.simulation.collection_acquisition`).
     """
     ground, height, aperture = 10e3, 4e3, 2.0
     cos_el = ground / math.hypot(ground, height)
@@ -51,7 +60,7 @@ def oblique(side_m: float, azimuth_deg: float, oversample: float = 1.6) -> Acqui
     radar = Radar(
         carrier_hz=carrier, bandwidth_hz=band, n_samples=math.ceil(band / df), frequency_step_hz=df
     )
-    per_rad = cos_el * 2.0 * oversample * side_m / radar.wavelength_m
+    per_rad = cos_el * 2.0 * (cross or oversample) * side_m / radar.wavelength_m
     count = math.ceil(np.deg2rad(aperture) * per_rad)
     traj = Trajectory.circular(
         altitude_m=height,
@@ -67,7 +76,9 @@ def oblique(side_m: float, azimuth_deg: float, oversample: float = 1.6) -> Acqui
 
 @pytest.fixture(scope="module", params=[25.0, 40.0, 60.0])
 def cphd(request, tmp_path_factory) -> Path:
-    acq = oblique(2 * HALF_M, request.param)
+    # an unambiguous scene of about 310 m x 170 m, as in the file of the report that
+    # found the old default (the largest x/y box inside it) a strip
+    acq = oblique(2 * HALF_M, request.param, oversample=3.1, cross=1.7)
     scene = CollectionScene(acquisition=acq, stationary=(), movers=())
     path = tmp_path_factory.mktemp("oblique") / "scene.cphd"
     write_cphd_blocks(path, scene, block_pulses=128, image_area_m=SQUARE)
@@ -106,6 +117,28 @@ def test_cores_cover_the_declared_area_at_an_oblique_look(cphd):
         assert abs(u @ e_r) == pytest.approx(np.linalg.norm(u), rel=1e-9)
         assert abs(v @ e_r) <= 1e-9 * np.linalg.norm(v)
         assert max(np.linalg.norm(u), np.linalg.norm(v)) <= plan.patch_size_m * (1 + 1e-9)
+
+
+def test_the_largest_xy_box_left_the_declared_corners_out_where_the_cores_do_not():
+    """At 25 degrees off x, an unambiguous scene of about 310 m x 170 m: the largest box
+    along x and y inside it (the former default) is a strip that misses part of the
+    declared +-50 m square; the cores hold all of it."""
+    acq = oblique(2 * HALF_M, 25.0, oversample=3.1, cross=1.7)
+    src = CollectionScene(
+        acquisition=acq, stationary=(), movers=(), metadata={"image_area_m": SQUARE.tolist()}
+    )
+    points = np.random.default_rng(9).uniform(-HALF_M, HALF_M, size=(20_000, 2))
+    x0, y0, x1, y1 = inscribed_box(unambiguous_scene(src))
+    in_box = (points[:, 0] >= x0) & (points[:, 0] < x1) & (points[:, 1] >= y0) & (points[:, 1] < y1)
+    assert np.mean(in_box) < 0.9
+    # one patch by default: today's analysis, whose image (a square about the reference
+    # point, 0.6 of the ground-range window and at most 100 m) holds the declared square
+    assert plan_patches(src, CollectionOptions()).single
+    assert 0.5 * default_scene_size_m(src.traces()) >= HALF_M
+    # cut into patches, the cores hold every point of it once
+    plan = plan_patches(src, CollectionOptions(patch_size_m=40.0))
+    held = np.sum([p.inside(points) for p in plan.patches], axis=0)
+    assert len(plan.patches) > 1 and np.all(held == 1)
 
 
 def test_a_look_frame_region_is_the_box_along_the_look():
