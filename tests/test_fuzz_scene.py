@@ -194,6 +194,8 @@ def test_the_base_scene_simulates(tmp_path):
 
 
 def test_mutated_scene_files_exit_0_or_2_in_one_line_leaving_nothing(tmp_path, capsys):
+    import sarmotion.cli.simulate  # noqa: F401  (the command's imports, outside the time limit)
+
     counts = {0: 0, 2: 0}
     for k, text in enumerate(mutants(SEED, N_MUTANTS)):
         path = tmp_path / f"m{k}.toml"
