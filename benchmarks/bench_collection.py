@@ -637,7 +637,7 @@ def patch_profile(
     """One patch's analysis at several pulse counts: its stage timings and their exponent.
 
     The scene's pulse rate is sized for ``rate_factor`` times the side; the patch holding
-    the first mover keeps every ``q``-th pulse, ``q = max(1, floor(n_pulses / n))`` for
+    the first mover keeps every ``q``-th pulse, ``q = max(1, round(n_pulses / n))`` for
     each count ``n`` of ``pulses`` (integer decimations: exact for its aliased movers;
     the same pass band and filter rule), and is analysed as a collection's patch is
     (:func:`~sarmotion.collection.run.analyze_patch`, the command's defaults, after one
@@ -662,7 +662,7 @@ def patch_profile(
     opts = CollectionOptions().analysis
     rows = []
     for n in pulses:
-        up, down = 1, max(1, traces.n_pulses // n)
+        up, down = 1, max(1, round(traces.n_pulses / n))
         taps = design(up, patch.passband_hz, prf, 60.0, guard=BAND_GUARD)
         this = dataclasses.replace(
             patch,
