@@ -25,10 +25,10 @@ def attach(
     Parameters
     ----------
     package : str
-        The package's ``__name__``.
+        The ``__name__`` of the package (or module) that offers the names.
     names : mapping of str to str
-        Each public name and the module (relative to ``package``, e.g. ``".pipeline"``)
-        that defines it.
+        Each public name and the module that defines it, relative to the package (for a
+        module, to the package it is in), e.g. ``".pipeline"``.
     eager : tuple of str
         Public names the package defines itself (listed by ``dir()`` with ``names``).
 
@@ -43,7 +43,9 @@ def attach(
 
     def __getattr__(name: str) -> object:
         if name in table:
-            value = getattr(import_module(table[name], package), name)
+            module = sys.modules[package]
+            anchor = module.__package__ or package  # a module's names: its package's modules
+            value = getattr(import_module(table[name], anchor), name)
             setattr(sys.modules[package], name, value)
             return value
         raise AttributeError(f"module {package!r} has no attribute {name!r}")

@@ -21,8 +21,9 @@ This layer sits above :mod:`sarmotion.pipeline` and :mod:`sarmotion.tracking`, w
 results it describes; :func:`sarmotion.io.write_json` writes a document to a file.
 """
 
-from importlib import import_module
 from typing import TYPE_CHECKING
+
+from .._lazy import attach
 
 if TYPE_CHECKING:
     from .peaks import PEAKS_SCHEMA, peaks_document
@@ -64,14 +65,4 @@ __all__ = [
     "validate",
 ]
 
-
-def __getattr__(name: str) -> object:
-    if name in _LAZY:
-        value = getattr(import_module(_LAZY[name], __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = attach(__name__, _LAZY)

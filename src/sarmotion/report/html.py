@@ -19,13 +19,13 @@ import base64
 import html
 import io
 from collections.abc import Sequence
-from importlib import import_module
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 from matplotlib.figure import Figure
 
+from .._lazy import attach
 from .page import figure as _figure_html
 from .page import header_line, page, section
 from .page import table as _html_table
@@ -43,10 +43,7 @@ _FROM_ANALYSIS = (
 )
 
 
-def __getattr__(name: str) -> object:
-    if name in _FROM_ANALYSIS:
-        return getattr(import_module(".analysis_figures", __package__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = attach(__name__, dict.fromkeys(_FROM_ANALYSIS, ".analysis_figures"))[0]
 
 
 class ReportFigure(NamedTuple):
