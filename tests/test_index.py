@@ -36,6 +36,8 @@ WHOLE_PACKAGE = (
     "test_index.py",  # this index
     "test_layering.py",  # the imports between the layers
     "test_readme.py",  # the README's commands, as a user runs them
+    "test_docs.py",  # the documentation site: tutorials, API reference, build
+    "test_tiers.py",  # the fast and slow test tiers
     "test_signatures.py",  # the parameters of every function
 )
 

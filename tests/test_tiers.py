@@ -37,3 +37,24 @@ def test_fast_tier_is_the_default():
     config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
     addopts = config["tool"]["pytest"]["ini_options"]["addopts"]
     assert "-m 'not slow'" in addopts, addopts
+
+
+def test_every_module_imports_in_a_fresh_interpreter():
+    """The fast tier reaches every module: at the least, each one imports on its own.
+
+    The CUDA kernels' modules run only in the slow tier (under numba's CUDA simulator);
+    here they, and every other module, must at least import without a GPU.
+    """
+    import pkgutil
+    import subprocess
+    import sys
+
+    import sarmotion
+
+    names = sorted(m.name for m in pkgutil.walk_packages(sarmotion.__path__, "sarmotion."))
+    assert len(names) > 50, names
+    script = "import importlib, sys\nfor n in sys.argv[1:]:\n    importlib.import_module(n)\n"
+    proc = subprocess.run(
+        [sys.executable, "-c", script, *names], capture_output=True, text=True, timeout=600
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
