@@ -1,8 +1,17 @@
 """Where is the mover? Positions fixed by wide-aspect data, tracks per mover: seeded draws.
 
-Regenerate (about half an hour on a loaded 2-core machine with the defaults)::
+Regenerate (runs of an aperture each, joined; a 10 degree draw took 2-9 minutes on a
+loaded 2-core machine, a 4 degree one 1-3, a geometric draw seconds)::
 
-    python benchmarks/wide_aspect.py --draws 5 --out benchmarks/results
+    python benchmarks/wide_aspect.py --draws 5 --apertures 4 --name p4 --out /tmp/w
+    python benchmarks/wide_aspect.py --draws 5 --apertures 10 --name p10 --out /tmp/w
+    python benchmarks/wide_aspect.py --join /tmp/w/p4.json /tmp/w/p10.json
+    python benchmarks/wide_aspect.py --geometric --draws 10 --apertures 4 10 30 \
+        --name wide_aspect_geometric
+
+A 30 degree pass through the whole chain is out of this machine's reach: at GOTCHA's
+speed its movers are at most 0.75 m/s (below), and one draw of two such movers gave no
+track in 470 s (the analysis did not detect them); 90 degrees (160 s of flight) neither.
 
 Each draw is a simulated circular pass of GOTCHA's geometry (ground radius 7.1 km,
 altitude 7.3 km, 70 m/s, 117 pulses per degree; X band at 9.6 GHz with GOTCHA's 640 MHz
