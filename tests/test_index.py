@@ -44,7 +44,8 @@ WHOLE_PACKAGE = (
 #: Each module and the test files that test it.
 INDEX: dict[str, tuple[str, ...]] = {
     "__main__": ("test_cli_hardening.py", "test_input_limits.py"),
-    "_cluster": ("test_scheduler_security.py",),
+    "_cluster": ("test_scheduler_security.py", "test_fuzz_options.py"),
+    "_lazy": ("test_sources.py",),
     "_limits": ("test_input_limits.py", "test_io_blocks.py"),
     "_validation": ("test_imaging.py", "test_analysis.py"),
     "_version": ("test_io_native.py", "test_io_cphd.py"),
@@ -59,7 +60,13 @@ INDEX: dict[str, tuple[str, ...]] = {
     ),  # fmt: skip
     "cli.autofocus": ("test_cli_autofocus.py",),
     "cli.collection": ("test_collection_run.py", "test_collection_cphd.py"),
-    "cli.common": ("test_cli_hardening.py", "test_outputs.py"),
+    "cli.common": (
+        "test_cli_hardening.py",
+        "test_outputs.py",
+        "test_cli_surfaces.py",
+        "test_fuzz_options.py",
+        "test_progress.py",
+    ),
     "cli.describe": ("test_results_known.py",),
     "cli.convert": ("test_cli_cphd.py", "test_cli_autofocus.py", "test_outputs.py"),
     "cli.image": ("test_cli.py", "test_cli_autofocus.py", "test_cuda_sim.py", "test_io_sicd.py"),
@@ -77,7 +84,12 @@ INDEX: dict[str, tuple[str, ...]] = {
         "test_collection_sidelobes.py",
         "test_collection_doppler.py",
     ),
-    "collection.plan": ("test_collection.py", "test_collection_run.py"),
+    "collection.plan": (
+        "test_collection.py",
+        "test_collection_run.py",
+        "test_collection_region.py",
+    ),
+    "collection.resample": ("test_collection_resample.py",),
     "collection.run": (
         "test_collection_run.py",
         "test_collection_dead_zone.py",
@@ -89,6 +101,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "core.blocks": ("test_collection.py", "test_collection_run.py"),
     "core.constants": ("test_geometry.py", "test_signals.py"),
     "core.geometry": ("test_geometry.py", "test_acquisition.py"),
+    "core.polygon": ("test_collection_region.py",),
     "core.progress": ("test_imaging.py", "test_fast_imaging.py"),
     "core.radar": ("test_signals.py", "test_simulate.py"),
     "core.spectral": ("test_spectral_fast.py", "test_simulate.py"),
@@ -154,6 +167,7 @@ INDEX: dict[str, tuple[str, ...]] = {
         "test_collection_cphd.py",
     ),
     "io.errors": ("test_errors.py", "test_input_limits.py"),
+    "io.files": ("test_sources.py",),
     "io.gotcha": ("test_io_gotcha.py", "test_fuzz_gotcha.py", "test_inject_gotcha.py"),
     "io.jsonfile": ("test_analysis.py", "test_track.py"),
     "io.matv5": ("test_io_gotcha.py", "test_errors.py"),
@@ -201,7 +215,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "pipeline.family": ("test_results_known.py",),
     "pipeline.results": ("test_analysis.py", "test_errors.py", "test_api.py"),
     "pipeline.stages": ("test_analysis.py", "test_errors.py"),
-    "pipeline.truth": ("test_analysis.py",),
+    "pipeline.truth": ("test_analysis.py", "test_truth_matching.py"),
     # report
     "report.analysis": ("test_api.py",),
     "report.analysis_figures": ("test_results_known.py", "test_report_style.py"),
@@ -230,13 +244,15 @@ INDEX: dict[str, tuple[str, ...]] = {
     "simulation.collection": ("test_collection_cphd.py",),
     "simulation.forward": ("test_simulate.py", "test_signals.py"),
     "simulation.paths": ("test_paths.py", "test_acceleration.py", "test_turns.py"),
-    "simulation.scene": ("test_scene.py",),
+    "simulation.scene": ("test_scene.py", "test_fuzz_scene.py"),
+    "sources": ("test_sources.py",),
     "simulation.signals": ("test_signals.py",),
     # tracking
     "tracking.roads": ("test_track.py", "test_road_misses.py"),
     "tracking.scale": ("test_track.py", "test_scheduler_security.py"),
     "tracking.sub_apertures": ("test_track.py",),
     "tracking.track": ("test_track.py",),
+    "tracking.wide_aspect": ("test_wide_aspect.py",),
     "tracking.tracker": ("test_track.py", "test_turns.py"),
     "tracking.turns": ("test_turns.py",),
 }
