@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
 import sarmotion
+from sarmotion._lazy import attach
 from sarmotion.io import DataError, file_kind, open_blocks, read_files, read_native, save_traces
 from sarmotion.io.gotcha import write_gotcha
+from sarmotion.sources import open_source, read_source
 
 
 def _all_pulses(source) -> np.ndarray:
@@ -72,3 +76,26 @@ def test_the_namespace_lists_public_names_only():
     assert not [n for n in names if n in ("TYPE_CHECKING", "import_module", "annotations")]
     assert not [n for n in names if n.startswith("_") and n != "__version__"]
     assert set(names) == set(sarmotion.__all__)
+
+
+def test_read_source_keeps_a_scenes_truth_and_files_have_none(tmp_path):
+    traces, sim = read_source("hyperbola")
+    assert sim is not None and sim.traces is traces
+    save_traces(tmp_path / "t.h5", traces)
+    again, none = read_source([tmp_path / "t.h5"])
+    assert none is None and again.n_pulses == traces.n_pulses
+    assert open_source(tmp_path / "t.h5").n_pulses == traces.n_pulses
+
+
+def test_attach_imports_a_name_once_and_lists_only_public_names(monkeypatch):
+    import types
+
+    module = types.ModuleType("sarmotion_lazy_probe")
+    module.__package__ = "sarmotion"
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    getattr_, dir_ = attach(module.__name__, {"read_source": ".sources"}, eager=("x",))
+    assert dir_() == ["read_source", "x"]
+    assert getattr_("read_source") is read_source
+    assert module.read_source is read_source  # cached in the namespace
+    with pytest.raises(AttributeError, match="no attribute 'missing'"):
+        getattr_("missing")
