@@ -224,3 +224,24 @@ def test_one_mover_one_track_on_a_simulated_pass():
     x, cov = fit.at(0.0)
     e = x[:2] - mover.position_m[:2]
     assert np.sqrt(e @ np.linalg.solve(cov[:2, :2], e)) <= 4.0
+
+
+@pytest.mark.parametrize(("aperture_deg", "fixed_expected"), [(30.0, True), (4.0, False)])
+def test_the_fit_in_the_tracks_document_and_on_the_console(aperture_deg, fixed_expected):
+    """The document's ``fit`` validates against the shipped schema and says fixed or family."""
+    import jsonschema
+
+    from sarmotion.cli.track import fit_line
+    from sarmotion.documents.schema import load_schema
+    from sarmotion.documents.tracks import _fit
+
+    looks = _looks(aperture_deg, MOVER, np.random.default_rng(5))
+    fit = fit_track(looks, prior_std_m=PRIOR_STD_M)
+    entry = _fit(fit)
+    schema = load_schema("sarmotion.tracks/1")["properties"]["tracks"]["items"]["properties"]["fit"]
+    jsonschema.validate(entry, schema)
+    assert entry["fixed"] is fixed_expected
+    np.testing.assert_allclose(entry["position_m"], fit.state[:2])
+    line = fit_line(entry)
+    assert line.startswith("position fixed by" if fixed_expected else "position not fixed by")
+    assert _fit(None) is None

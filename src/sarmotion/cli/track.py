@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -259,6 +260,26 @@ def track(
             )
         )
         click.echo("    " + turn_line(t))
+        if t.get("fit"):
+            click.echo("    " + fit_line(t["fit"]))
         missed = [s["road_missed"] for s in t["states"] if s.get("road_missed")]
         if missed:
             click.echo(f"    {len(missed)} detection(s) on no road; the first: {missed[0]}")
+
+
+def fit_line(fit: dict[str, Any]) -> str:
+    """The track's fit over its looks in words: a fixed position, or the family it leaves."""
+    (x, y), (ux, uy) = fit["position_m"], fit["velocity_mps"]
+    looks = f"{fit['n_looks']} looks over {fixed(fit['aspect_deg'], 2)} deg of aspect"
+    if fit["fixed"]:
+        return (
+            f"position fixed by {looks}: ({fixed(x, 2)}, {fixed(y, 2)}) m +- "
+            f"{fit['position_std_m']:.2g} m at s = {fixed(fit['time_s'])} s, velocity "
+            f"({fixed(ux, 2)}, {fixed(uy, 2)}) m/s"
+        )
+    dx, dy = fit["family"]["position_per_m"]
+    return (
+        f"position not fixed by {looks}: on the family through ({fixed(x, 2)}, {fixed(y, 2)}) m "
+        f"along ({fixed(dx, 3)}, {fixed(dy, 3)}) (standard deviation {fit['position_std_m']:.2g} m "
+        "along it, the scene's prior)"
+    )

@@ -6,6 +6,10 @@
      "sub_apertures": [{"index", "time_s", "first_pulse", "stop_pulse", "look_direction",
                         "n_detections", "seconds"}],
      "tracks": [{"id": 1, "n_detections": 7,
+                 "fit": {"time_s", "position_m", "velocity_mps", "covariance",
+                         "position_std_m", "fixed", "chi2", "dof", "n_looks",
+                         "aspect_deg", "prior_std_m", "error_factors",
+                         "family": {"position_per_m", "velocity_per_m"}} or null,
                  "turn": {"flagged", "statistic", "threshold", "dof", "false_alarm",
                           "n_pairs", "apparent_turn_rate_deg_s", "apparent_turn_rate_std_deg_s"},
                  "states": [{"time_s", "sub_aperture", "position_m": [x, y],
@@ -80,6 +84,7 @@ def tracks_document(result: TrackingResult) -> dict[str, Any]:
                     "id": t.id,
                     "n_detections": t.n_detections,
                     "turn": _turn(t.turn),
+                    "fit": _fit(t.fit),
                     "states": [_state(s, result) for s in t.states],
                 }
                 for t in result.tracks
@@ -89,6 +94,30 @@ def tracks_document(result: TrackingResult) -> dict[str, Any]:
             "timings_s": dict(result.timings_s),
         },
     )
+
+
+def _fit(fit: Any) -> dict[str, Any] | None:
+    """The track's uniform motion fitted over all its looks (``tracking.PositionFit``)."""
+    if fit is None:
+        return None
+    return {
+        "time_s": float(fit.time_s),
+        "position_m": [float(v) for v in fit.state[:2]],
+        "velocity_mps": [float(v) for v in fit.state[2:]],
+        "covariance": np.asarray(fit.covariance, dtype=float).tolist(),
+        "position_std_m": fit.position_std_m,
+        "fixed": bool(fit.fixed),
+        "chi2": float(fit.chi2),
+        "dof": int(fit.dof),
+        "n_looks": int(fit.n_looks),
+        "aspect_deg": float(fit.aspect_deg),
+        "prior_std_m": float(fit.prior_std_m),
+        "error_factors": [float(v) for v in fit.error_factors],
+        "family": {
+            "position_per_m": [float(v) for v in fit.family_position_per_m],
+            "velocity_per_m": [float(v) for v in fit.family_velocity_per_m],
+        },
+    }
 
 
 def _turn(turn: TurnTest | None) -> dict[str, Any] | None:
