@@ -92,10 +92,11 @@ def test_piped_the_plan_comes_first_and_progress_is_lines(tmp_path):
     out = proc.stdout.splitlines()
     assert out[0] == "analyze: reading scene1"
     assert re.fullmatch(r"analyze: 117 pulses x \d+ samples: one analysis of .*", out[1]), out
-    assert out[2].startswith("wrote ")
-    lines = [ln for ln in proc.stderr.splitlines() if not ln.startswith(("WARNING", "INFO"))]
+    summary = next(k for k, ln in enumerate(out) if ln.startswith("wrote "))
+    lines = out[2:summary]  # the progress, with the output it leads to
     assert lines and all(re.fullmatch(r"[^:]+: \d+/\d+ \(\d+ %\), \d+\.\d s", ln) for ln in lines)
-    assert "\r" not in proc.stderr  # no bar drawn into a file
+    assert "\r" not in proc.stdout  # no bar drawn into a file
+    assert proc.stderr == ""  # standard error is left to errors and logs
 
 
 class _Tty:

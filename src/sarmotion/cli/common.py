@@ -115,24 +115,31 @@ LINE_INTERVAL_S = 1.0
 class Progress:
     """Progress of the library's ``progress(stage, done, total)`` calls, for a person.
 
-    On a terminal, a tqdm bar per stage with its ETA (a new bar whenever the stage
-    changes); elsewhere (output piped to a file or a program), a line at each tenth of
-    a stage's work, ``"backprojection: 3/8 (38 %), 2.1 s"``, at most one every
-    :data:`LINE_INTERVAL_S` but always the stage's last (a short stage says only when
-    it ended). Nothing when disabled (``-q``).
+    On a terminal, a tqdm bar per stage with its ETA on standard error (a new bar whenever
+    the stage changes); elsewhere (output piped to a file or a program), on standard
+    output with the plan and the summary, a line at each tenth of a stage's work,
+    ``"backprojection: 3/8 (38 %), 2.1 s"``, at most one every :data:`LINE_INTERVAL_S`
+    but always the stage's last (a short stage says only when it ended). Nothing when
+    disabled (``-q``).
 
     Parameters
     ----------
     enabled : bool
         Report progress at all (False under ``-q``).
     stream : file, optional
-        Where to write; default ``sys.stderr``.
+        Where to write (bars if it is a terminal, else lines); default: bars on
+        ``sys.stderr`` when it is a terminal, else lines on ``sys.stdout``. Standard error
+        is left to errors and logs, so a refused input is one line there.
     """
 
     def __init__(self, *, enabled: bool = True, stream: Any = None) -> None:
         self.enabled = enabled
-        self.stream = sys.stderr if stream is None else stream
-        self.bars = enabled and _isatty(self.stream)
+        if stream is None:  # bars on a terminal's stderr; lines with the output, on stdout
+            self.bars = enabled and _isatty(sys.stderr)
+            self.stream = sys.stderr if self.bars else sys.stdout
+        else:
+            self.bars = enabled and _isatty(stream)
+            self.stream = stream
         self.stage = ""
         self._bar: Any = None
         self._tenth = -1
