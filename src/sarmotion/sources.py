@@ -17,7 +17,7 @@ from pathlib import Path
 from .core.blocks import PulseBlocks, TracesBlocks
 from .core.traces import Traces
 from .io import DataError, open_blocks, read_files
-from .io.files import SUFFIXES
+from .io.files import SUFFIXES, as_path_list
 from .simulation import Simulation, builtin_scene_names, load_scene, simulate
 
 __all__ = ["is_scene_reference", "open_source", "read_source"]
@@ -29,12 +29,6 @@ def is_scene_reference(text: PathLike) -> bool:
     """True for a built-in scene name or a path ending in ``.toml``."""
     text = os.fspath(text)
     return text in builtin_scene_names() or text.lower().endswith(".toml")
-
-
-def _as_list(inputs: PathLike | Sequence[PathLike]) -> list[str]:
-    if isinstance(inputs, (str, os.PathLike)):
-        return [os.fspath(inputs)]
-    return [os.fspath(p) for p in inputs]
 
 
 def _check_files(inputs: list[str]) -> None:
@@ -96,7 +90,7 @@ def read_source(
     DataError
         Missing or unreadable inputs, or a mix of kinds.
     """
-    paths = _as_list(inputs)
+    paths = as_path_list(inputs)
     if not paths:
         raise DataError("no INPUT given")
     if len(paths) == 1 and is_scene_reference(paths[0]):
@@ -137,7 +131,7 @@ def open_source(
         ``radar``, ``reference_point_m``, ``trajectory``, ``n_pulses``, ``metadata`` and
         ``blocks(block_pulses)``.
     """
-    paths = _as_list(inputs)
+    paths = as_path_list(inputs)
     if len(paths) == 1 and is_scene_reference(paths[0]):
         traces, _ = read_source(paths, snr_db=snr_db, seed=seed)
         return TracesBlocks(traces)

@@ -9,10 +9,7 @@ channel). The help texts of the commands' inputs and frame are here.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
-from ..core.traces import Traces
-from ..simulation import Simulation, builtin_scene_names
+from ..simulation import builtin_scene_names
 from ..sources import is_scene_reference, read_source
 
 __all__ = ["FRAME_HELP", "INPUTS_HELP", "LABELS_HELP", "is_scene_reference", "read_inputs"]
@@ -42,58 +39,5 @@ LABELS_HELP = (
     "the paper (Borcea, Callaghan & Papanicolaou) by their LaTeX labels."
 )
 
-
-def read_inputs(
-    inputs: Sequence[str],
-    *,
-    speed_mps: float = 70.0,
-    autofocus: bool = False,
-    snr_db: float | None = None,
-    seed: int = 0,
-    lenient: bool = False,
-    channel: str | None = None,
-    vectors: tuple[int, int] | None = None,
-) -> tuple[Traces, Simulation | None]:
-    """Read ``inputs`` as one acquisition.
-
-    Parameters
-    ----------
-    inputs : sequence of str
-        One scene name or ``.toml``; or one native ``.h5``; or one or more GOTCHA ``.mat``
-        or directories of them; or one CPHD ``.cphd`` (files are read by
-        :func:`sarmotion.io.read_files`).
-    speed_mps : float
-        GOTCHA: platform speed that sets slow time (m/s).
-    autofocus : bool
-        GOTCHA: apply the files' autofocus corrections.
-    snr_db : float, optional
-        Scenes: add white noise at this SNR (dB).
-    seed : int
-        Scenes: noise seed.
-    lenient : bool
-        Files: log a broken plausibility rule as a warning instead of refusing the file.
-    channel : str, optional
-        CPHD: channel identifier; default the file's reference channel.
-    vectors : (int, int), optional
-        CPHD: vectors ``start:stop`` to read (0-based, ``stop`` excluded); default all.
-
-    Returns
-    -------
-    (Traces, Simulation or None)
-        The traces, and the simulation (with its truth) for a scene.
-
-    Raises
-    ------
-    DataError
-        Missing or unreadable inputs, or a mix of kinds.
-    """
-    return read_source(
-        inputs,
-        speed_mps=speed_mps,
-        autofocus=autofocus,
-        snr_db=snr_db,
-        seed=seed,
-        lenient=lenient,
-        channel=channel,
-        vectors=vectors,
-    )
+#: A command's inputs read as one acquisition: :func:`sarmotion.sources.read_source`.
+read_inputs = read_source

@@ -27,7 +27,14 @@ from .errors import DataError
 from .gotcha import read_gotcha
 from .native import load_traces, open_native_blocks
 
-__all__ = ["FileKind", "expand_directories", "file_kind", "open_blocks", "read_files"]
+__all__ = [
+    "FileKind",
+    "as_path_list",
+    "expand_directories",
+    "file_kind",
+    "open_blocks",
+    "read_files",
+]
 
 FileKind = Literal["native", "gotcha", "cphd"]
 
@@ -42,7 +49,8 @@ SUFFIXES: dict[str, FileKind] = {
 }
 
 
-def _as_list(paths: PathLike | Sequence[PathLike]) -> list[str]:
+def as_path_list(paths: PathLike | Sequence[PathLike]) -> list[str]:
+    """One path or a sequence of paths as a list of strings."""
     if isinstance(paths, (str, os.PathLike)):
         return [os.fspath(paths)]
     return [os.fspath(p) for p in paths]
@@ -60,7 +68,7 @@ def expand_directories(paths: PathLike | Sequence[PathLike]) -> list[str]:
         A directory that holds no ``.mat`` file.
     """
     out: list[str] = []
-    for p in _as_list(paths):
+    for p in as_path_list(paths):
         path = Path(p)
         if path.is_dir():
             files = sorted(str(f) for f in path.glob("*.mat") if f.is_file())
@@ -94,7 +102,7 @@ def file_kind(paths: PathLike | Sequence[PathLike]) -> tuple[FileKind, list[str]
         No path, a missing path, a mix of kinds, several native or CPHD files, or an
         unknown suffix.
     """
-    given = _as_list(paths)
+    given = as_path_list(paths)
     if not given:
         raise DataError("no input file given")
     for p in given:
@@ -113,6 +121,11 @@ def file_kind(paths: PathLike | Sequence[PathLike]) -> tuple[FileKind, list[str]
         what = "native traces file (.h5)" if kind == "native" else "CPHD file (.cphd)"
         raise DataError(f"give one {what} at a time")
     return kind, files
+
+
+def _cphd_only(channel: str | None, vectors: tuple[int, int] | None) -> None:
+    if channel is not None or vectors is not None:
+        raise DataError("channel and vectors apply to a CPHD (.cphd) file only")
 
 
 def read_files(
@@ -153,8 +166,8 @@ def read_files(
         file that is not CPHD.
     """
     kind, files = file_kind(paths)
-    if kind != "cphd" and (channel is not None or vectors is not None):
-        raise DataError("channel and vectors apply to a CPHD (.cphd) file only")
+    if kind != "cphd":
+        _cphd_only(channel, vectors)
     if kind == "native":
         return load_traces(files[0], lenient=lenient)
     if kind == "gotcha":
@@ -187,10 +200,16 @@ def open_blocks(
     kind, files = file_kind(paths)
     if kind == "cphd":
         return open_cphd_blocks(files[0], channel=channel, vectors=vectors, lenient=lenient)
-    if channel is not None or vectors is not None:
-        raise DataError("channel and vectors apply to a CPHD (.cphd) file only")
     if kind == "native":
+        _cphd_only(channel, vectors)
         return open_native_blocks(files[0], lenient=lenient)
     return TracesBlocks(
-        read_gotcha(files, speed_mps=speed_mps, autofocus=autofocus, lenient=lenient)
+        read_files(
+            files,
+            lenient=lenient,
+            speed_mps=speed_mps,
+            autofocus=autofocus,
+            channel=channel,
+            vectors=vectors,
+        )
     )
