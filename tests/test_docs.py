@@ -103,7 +103,9 @@ def test_site_builds_with_every_public_function(tmp_path: Path):
         for name, obj in _public_functions(module_name):
             module = sys.modules[module_name]
             shown = {f"{obj.__module__}.{obj.__qualname__}"} | {
-                f"{module_name}.{other}" for other in module.__all__ if getattr(module, other) is obj
+                f"{module_name}.{other}"
+                for other in module.__all__
+                if getattr(module, other) is obj
             }
             if not shown & anchors:
                 missing.append(f"{module_name}.{name}")

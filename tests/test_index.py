@@ -11,6 +11,11 @@ The index is checked against the code, from the source (:mod:`ast`, nothing impo
 - every module is listed, and every key is a module;
 - every listed file exists, and every test file is listed (under a module, or in
   :data:`WHOLE_PACKAGE` when its subject is the package as a whole);
+- the tests are laid out as the package: a test file of ``tests/<subpackage>/`` is
+  listed under a module of ``sarmotion.<subpackage>``, a file of ``tests/`` itself under a
+  top-level module (``sources``, ``errors``, ...) or in :data:`WHOLE_PACKAGE`, so a
+  module's tests are found by its path; file names are unique across the folders (the
+  index and ``conftest.py``'s slow lists name files by their names);
 - every listed file reaches its module: the file imports the module, or a module whose
   own imports (transitively, package ``__init__`` files included) lead to it. A file that
   runs the command line (it imports ``cli.main`` or runs ``python -m sarmotion``) also
@@ -92,6 +97,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "collection.resample": ("test_collection_resample.py",),
     "collection.run": (
         "test_collection_run.py",
+        "test_collection_cphd.py",
         "test_collection_dead_zone.py",
         "test_collection_doppler.py",
     ),
@@ -375,7 +381,7 @@ def _runs_module(tree: ast.AST) -> bool:
 @cache
 def _reached(test_file: str) -> frozenset[str]:
     """Every module a test file reaches (module docstring)."""
-    tree = ast.parse((TESTS / test_file).read_text())
+    tree = ast.parse(_test_files()[test_file].read_text())
     start = {m for m in _imports(tree) for m in (m, *_parents(m)) if m}
     if _runs_module(tree):
         start.add("__main__")
@@ -399,6 +405,11 @@ def _reached(test_file: str) -> frozenset[str]:
     return frozenset(seen)
 
 
+def _test_files() -> dict[str, Path]:
+    """Every test file by its name: ``tests/test_*.py`` and ``tests/<subpackage>/test_*.py``."""
+    return {p.name: p for p in sorted(TESTS.rglob("test_*.py"))}
+
+
 # ------------------------------------------------------------------------- the tests
 def test_every_module_is_indexed():
     modules = set(_modules())
@@ -408,9 +419,31 @@ def test_every_module_is_indexed():
 
 def test_every_listed_file_exists_and_every_test_file_is_listed():
     listed = {f for files in INDEX.values() for f in files} | set(WHOLE_PACKAGE)
-    assert sorted(f for f in listed if not (TESTS / f).is_file()) == []
-    assert sorted({p.name for p in TESTS.glob("test_*.py")} - listed) == []
+    files = _test_files()
+    assert sorted(f for f in listed if f not in files) == []
+    assert sorted(set(files) - listed) == []
     assert all(files for files in INDEX.values())
+
+
+def test_test_file_names_are_unique():
+    names = [p.name for p in TESTS.rglob("test_*.py")]
+    assert sorted({n for n in names if names.count(n) > 1}) == []
+
+
+def test_tests_are_laid_out_as_the_package():
+    subjects: dict[str, set[str]] = defaultdict(set)
+    for module, files in INDEX.items():
+        for name in files:
+            subjects[name].add(module.split(".")[0] if "." in module else "")
+    misplaced = []
+    for name, path in _test_files().items():
+        folder = path.parent.relative_to(TESTS).as_posix()
+        folder = "" if folder == "." else folder
+        if folder == "" and name in WHOLE_PACKAGE:
+            continue
+        if folder not in subjects[name] or (folder and not (SRC / folder).is_dir()):
+            misplaced.append(f"{path.relative_to(TESTS)}: subjects {sorted(subjects[name])}")
+    assert misplaced == []
 
 
 @pytest.mark.parametrize("module", sorted(INDEX))

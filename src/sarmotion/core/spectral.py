@@ -89,7 +89,7 @@ def delay_phase(delays_s: ArrayLike, frequencies_hz: ArrayLike) -> NDArray[np.co
 # t = 4 c - k, k = rint(4 c), |t| <= 1/2, and exp(2i pi c) = i^k exp(i pi t / 2) with
 # minimax polynomials for cos and sin of pi t / 2 (error < 1e-14, exact at t = 0; np.exp
 # of the reduced phase agrees to 1e-14). Compiled and vectorised, it avoids numpy's complex
-# exp, which made delay_phase the largest single cost of analyze (tests/test_spectral_fast.py
+# exp, which made delay_phase the largest single cost of analyze (tests/core/test_spectral_fast.py
 # checks the values; the profile is in docs/notes/motion.md).
 _S = (1.57079632679489, -0.6459640975043288, 0.07969262615641214, -0.0046817525994714984,
       0.00016042930460199835, -3.5564543255214174e-06)  # fmt: skip

@@ -40,7 +40,7 @@ error relative to the signal's power is
 -87.6 dB at ``upsample = 6`` (4: -73.5; 5: -81.3; 8: -97.6). The errors of the pulses are
 uncorrelated across pixels, so an image of a distributed scene has the same signal-to-
 error ratio against :func:`~sarmotion.imaging.exact_sum.exact_sum` (the same sum without
-interpolation); ``tests/test_backprojection_accuracy.py`` holds the kernels to
+interpolation); ``tests/imaging/test_backprojection_accuracy.py`` holds the kernels to
 ``accuracy_db(upsample) - 3 dB`` (:func:`accuracy_db`) on GOTCHA and on simulated points.
 
 Kernels. ``"numpy"`` is a plain vectorised reference (one pulse at a time, float64

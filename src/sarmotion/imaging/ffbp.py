@@ -111,7 +111,7 @@ sub-image's grid would stop the tree. ``info["budget_db"]`` is the
 image's own ``-10 log10 (E_f + e'_u + e'_v)``, ``info["taps"]`` the taps by depth. Real
 sub-images do not fill their planned band evenly (it is the union over the sub-aperture's
 pulses and the whole region, the band edges reached only at its corners), so images lie
-above the budget; ``tests/test_ffbp_accuracy.py`` holds FFBP to :data:`TARGET_DB` and to
+above the budget; ``tests/imaging/test_ffbp_accuracy.py`` holds FFBP to :data:`TARGET_DB` and to
 its budget less the margin against the exact sum on simulated points at 0, 30 and 45
 degree looks and on GOTCHA, and holds the formulas to the measured error of flat-band
 signals. Float32 sums (``~1e-7`` relative) lie far below. Columns whose pixels no pulse's
@@ -850,8 +850,8 @@ def _reach_v(plans) -> float:
     row through taps of up to 0.63, so the row is computed exactly (:func:`ffbp_values`).
     Deeper stages are not counted: there a step sits in a sub-image of ``2^-d`` of the
     pulses (depth ``d >= 2``), a fraction of the pixel's power, and its interpolation error
-    is left to the budget's margin (``tests/test_ffbp_accuracy.py`` and
-    ``tests/test_fast_imaging.py`` hold images whose window ends lie inside them to
+    is left to the budget's margin (``tests/imaging/test_ffbp_accuracy.py`` and
+    ``tests/imaging/test_fast_imaging.py`` hold images whose window ends lie inside them to
     :data:`TARGET_DB`); counting every stage's reach would compute several times as many
     pixels exactly.
     """

@@ -52,7 +52,7 @@ Plausibility
     read, and the bytes the read will take (from ``NumVectors``, ``NumSamples`` and the
     sample format, which must fill the file's blocks exactly) before anything is read.
     A corrupted PVP that passes them changes the differential range of the scene by
-    less than a quarter cycle (``tests/test_fuzz_cphd.py``).
+    less than a quarter cycle (``tests/io/test_fuzz_cphd.py``).
 Not modelled
     ``TDTropoSRP`` and ``TDIonoSRP`` (the data are taken as referenced to the geometric
     TOA of the SRP), antenna patterns, noise levels and support arrays.

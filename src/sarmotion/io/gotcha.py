@@ -86,14 +86,14 @@ Phase reference
     with the exact ``r0``, whose float32 rounding is noise, while the rounding of the
     positions cancels between ``|r - rho|`` and ``|r|`` for pixels near the centre. The
     kept reference focuses better (lower entropy, higher reflector peaks;
-    ``tests/test_io_gotcha.py::test_kept_r0_reference_focuses_better_than_re_referenced``,
+    ``tests/io/test_io_gotcha.py::test_kept_r0_reference_focuses_better_than_re_referenced``,
     figures in ``docs/notes/gotcha.md``).
 Autofocus sign
     AFRL's MATLAB convention: the reference range becomes ``r0 + r_correct`` and the
     phase history is multiplied by ``exp(+1j ph_correct)``; here that is
     ``P *= exp(+1j ph_correct) exp(-1j 4 pi f / c r_correct)``: flipping either sign
     defocuses the reflectors, and this sign focuses best of the four
-    (``tests/test_io_gotcha.py::test_autofocus_sign``). On pass 1 the correction does
+    (``tests/io/test_io_gotcha.py::test_autofocus_sign``). On pass 1 the correction does
     *not* sharpen the uncorrected image and it moves the image by a fraction of a metre
     (``r_correct`` is a range offset plus a linear phase trend), hence the default False
     (figures in ``docs/notes/gotcha.md``).
@@ -792,7 +792,7 @@ def write_gotcha(
 
     float32 positions: a write and read moves the positions by at most half a float32
     step (0.24 mm at 7 km), yet backprojected point targets keep their peak position and
-    value (``tests/test_io_gotcha.py::test_round_trip_simulated_scene``): the rounding is
+    value (``tests/io/test_io_gotcha.py::test_round_trip_simulated_scene``): the rounding is
     common to ``|r - rho|`` and ``|r|`` and cancels in the differential range. float32
     positions are thus kept, as in the originals, for compatibility with GOTCHA tools.
     """

@@ -194,7 +194,7 @@ def check_hdf5_terminates(path: PathLike, *, timeout_s: float | None = None) -> 
 
     Some corruptions of an HDF5 file make the HDF5 library loop forever or crash inside
     a single call (byte-flipped copies of a traces file do, reading a root attribute:
-    ``tests/test_fuzz_native.py``, counts in ``docs/notes/readers.md``), which no Python
+    ``tests/io/test_fuzz_native.py``, counts in ``docs/notes/readers.md``), which no Python
     code of the reading process can interrupt. The child process reads the whole file, through hard
     links only and 16 MB at a time, skipping datasets stored outside the file (which the
     reader refuses) and those beyond the memory limit or 64 times the file's size (fill

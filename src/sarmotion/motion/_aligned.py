@@ -386,7 +386,7 @@ def _shifted_sum_abs_max(table, shifts, out):
     ``x_j(m + p/P + w/P)`` is ``(1 - w) table[j, p, m] + w table[j, p + 1, m]``
     (``0 <= w < 1``), indices circular in ``m``; single precision throughout (sums of a
     few hundred moduli: rounding ~1e-5 of ``g`` at most, far below the interpolation's
-    1.2e-3 bound; ``tests/test_aligned_fast.py`` checks it against float64). Trials
+    1.2e-3 bound; ``tests/motion/test_aligned_fast.py`` checks it against float64). Trials
     over the threads when there are at least :data:`_MIN_PARALLEL_TRIALS`.
     """
     if shifts.shape[0] >= _MIN_PARALLEL_TRIALS:

@@ -47,7 +47,7 @@ from the data, a few rounds (the alternating maximisation of the joint likelihoo
 
 On real clutter the global search finds the cross-range speed where ``g_perp``
 (``eq:OBJ2``) can land on a side maximum, and in white noise the fit reaches the
-Cramér–Rao bound (``tests/test_movers_detection.py``; figures in ``docs/notes/motion.md``).
+Cramér–Rao bound (``tests/motion/test_movers_detection.py``; figures in ``docs/notes/motion.md``).
 Positions in m, speeds in m/s, geometry in float64.
 """
 
@@ -391,7 +391,7 @@ def _local_fit(
     not on the main lobe's concave part (the likelihood is indefinite there) the
     gradient can lead along a ridge to a lower maximum metres per second away in
     cross-range speed, while the simplex's exploratory steps find the lobe the tight
-    Nelder-Mead finds, in a fraction of its evaluations (``tests/test_likelihood_fit.py``;
+    Nelder-Mead finds, in a fraction of its evaluations (``tests/motion/test_likelihood_fit.py``;
     figures in ``docs/notes/motion.md``).
     """
     geom = traces.geometry

@@ -53,7 +53,7 @@ improves the range location and the fit of the estimated trajectory to the trace
 while the ``u_perp`` component alone may move farther from the truth: the round lands
 on the family point of the (noisy) range speed, whose ``u_perp`` differs from the truth
 by about 0.1 m/s per metre along the family. Further rounds change nothing.
-``tests/test_velocity.py`` asserts these on Scene 1; the figures are in
+``tests/motion/test_velocity.py`` asserts these on Scene 1; the figures are in
 ``docs/notes/motion.md``.
 """
 

@@ -190,7 +190,7 @@ def rpca(
     With ``tol >= 1e-5`` the full SVDs run in single precision: its rounding, ~1e-7
     relative, stays two orders below the stopping tolerance, so the iterates and ``S``
     agree with the double-precision run to about a hundredth of the tolerance
-    (``tests/test_rpca.py::test_single_precision_svds_keep_the_decomposition``;
+    (``tests/separation/test_rpca.py::test_single_precision_svds_keep_the_decomposition``;
     figures in ``docs/notes/rpca.md``). The partial SVDs stay in
     double precision; smaller tolerances keep double precision.
     """

@@ -31,7 +31,7 @@ whatever the two eigenvalues (``1 / sigma_i`` when ``sigma_i`` is large, ``sigma
     ||D_tau(A)_Gram - D_tau(A)|| <~ m eps sigma_max^2 / tau,
 
 relative to ``sigma_max`` that is ``m eps sigma_max / tau``: the condition number is
-not squared where it matters (``tests/test_rpca_stacked.py`` holds the route to this
+not squared where it matters (``tests/separation/test_rpca_stacked.py`` holds the route to this
 bound on matrices with singular values clustered at ``tau``). The Gram route is used for
 a window while::
 

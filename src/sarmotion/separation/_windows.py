@@ -185,7 +185,7 @@ def choose_window(
     the whole matrix), on column blocks of rank 2-3 with 5 % spikes (returns 64-128,
     where windowed RPCA recovers ``S``), and on the built-in ``example1``, ``example2``
     and ``scene1`` simulations with and without noise (returns 64, at or next to the
-    window of least error in ``S``; ``tests/test_rpca.py``, errors per window in
+    window of least error in ``S``; ``tests/separation/test_rpca.py``, errors per window in
     ``docs/notes/rpca.md``). A window length predicted
     from the scene geometry (the paper's rank analysis) can be passed to
     :func:`windowed_rpca` instead.

@@ -37,8 +37,8 @@ def default_method(traces: Traces) -> str:
     ``combined`` models the stationary scene as a set of points, which a simulated scene
     is; measured clutter is distributed, not a set of points, and robust PCA leaves the
     movers' ``g`` peaks far higher above the floor there, in a fraction of the time
-    (figures in ``docs/notes/separation.md``, from ``tests/test_separation.py`` and
-    ``tests/test_separation_gotcha.py``).
+    (figures in ``docs/notes/separation.md``, from ``tests/separation/test_separation.py`` and
+    ``tests/separation/test_separation_gotcha.py``).
     """
     return "combined" if traces.metadata.get("source") == "simulation" else "rpca"
 

@@ -36,7 +36,7 @@ Of the end rows considered (forward differences only; alternated differences wit
 last difference repeated in the filter's frame or in the frame of ``rho_o``, or
 extrapolated in the frame of ``rho_o``), the last keeps the stationary residue lowest and
 the movers' energy highest on every pulse, on Scene 1 and on seeded random scenes with
-its movers (``tests/test_transforms.py``; the table in ``docs/notes/separation.md``).
+its movers (``tests/separation/test_transforms.py``; the table in ``docs/notes/separation.md``).
 What remains is the end of the aperture, not the filter: ``N`` composed
 differences on ``n`` pulses have only ``n - N`` complete stencils, and no choice of end
 rows makes the others exact.

@@ -4,7 +4,7 @@
 (checked against a dense search on the circle and the Newton step inside it);
 ``newton_ascent`` must reach the maximum of a smooth function from inside its concave
 region, and stay put where no step gains. The matched filter's Newton fit is compared
-with a tight Nelder-Mead on the same ``|I|`` in ``tests/test_likelihood_fit.py``.
+with a tight Nelder-Mead on the same ``|I|`` in ``tests/motion/test_likelihood_fit.py``.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from sarmotion.tracking import TrackingOptions, track, turn_test
 # Detections of a GOTCHA degree every 1.76 s, sub-apertures not overlapping; velocity
 # covariances of the order of a strong mover's bound: range speed 1e-3, cross-range
 # speed 0.05 m/s (look along x). Family tangent: cross range y, 0.007 (m/s)/m of range
-# speed per metre (the GOTCHA family, tests/test_track.py).
+# speed per metre (the GOTCHA family, tests/tracking/test_track.py).
 N, DT = 5, 1.76
 COV = np.diag([1e-3**2, 0.05**2])
 FAMILY = (np.tile([0.0, 1.0], (N, 1)), np.tile([-0.007, 0.0], (N, 1)))

@@ -22,7 +22,7 @@ from sarmotion.simulation import PointTarget, simulate_phase_history
 
 jsonschema = pytest.importorskip("jsonschema")
 
-#: The two-patch scene of tests/test_collection_run.py: six stationary points, one mover.
+#: The two-patch scene of tests/collection/test_collection_run.py: six stationary points, one mover.
 REGION = ("-60", "-25", "60", "25")
 STATIONARY = [(-40.0, -10.0), (-25.0, 12.0), (-8.0, -18.0), (20.0, 8.0), (35.0, -12.0)]
 MOVER = PointTarget(position_m=(2.0, 4.0), velocity_mps=(-6.0, 7.0), reflectivity=0.8j)

@@ -25,7 +25,7 @@ from sarmotion.collection import (
     plan_patches,
     unambiguous_scene,
 )
-from sarmotion.collection.plan import MAX_PATCHES, MIN_CORE_CELLS
+from sarmotion.collection.plan import MAX_PATCHES
 from sarmotion.core import Acquisition, C, Radar, Trajectory
 from sarmotion.core.blocks import TracesBlocks, declared_area
 from sarmotion.core.polygon import (
@@ -226,8 +226,10 @@ def test_the_reader_refuses_a_degenerate_polygon():
         (["--region", "0", "0", "0.01", "0.01"], "narrower than the least patch core"),
         (["--patch-size", "2"], "resolution cells"),
         (["--patch-size", "5"], "a plan may hold"),
-        (["--region", "-20", "-10", "20", "10", "--region-frame", "look", "--patch-size", "3"],
-         "resolution cells"),
+        (
+            ["--region", "-20", "-10", "20", "10", "--region-frame", "look", "--patch-size", "3"],
+            "resolution cells",
+        ),
     ],
 )
 def test_a_region_below_a_core_or_too_many_patches_is_refused(

@@ -163,8 +163,8 @@ def _skeleton(text: str) -> list[str]:
 def test_analysis_track_and_collection_reports_share_one_page_style(geometry, tmp_path):
     """One stylesheet, one header (title, then version, time, what was found), the body
     in sections; figures captioned alike."""
-    from sarmotion.documents.results import collection_document
     from sarmotion.core.blocks import TracesBlocks
+    from sarmotion.documents.results import collection_document
     from sarmotion.report.analysis_figures import write_report
     from sarmotion.report.collection import write_collection_report
     from sarmotion.report.page import CSS

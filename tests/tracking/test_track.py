@@ -422,7 +422,7 @@ def _track_subprocess(tmp_path, *flags):
     import sys
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     tmp = tmp_path / "tmp"
     tmp.mkdir(exist_ok=True)
     env = {**os.environ, "PYTHONPATH": str(root / "src"), "TMPDIR": str(tmp)}

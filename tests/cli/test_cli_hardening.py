@@ -19,7 +19,7 @@ import scipy.io
 from gotcha_files import small_struct
 from sarmotion.cli.main import EXIT_BAD_INPUT, EXIT_TERMINATED, run
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _snapshot(path: Path) -> dict[str, bytes | None]:

@@ -9,7 +9,6 @@ import pytest
 from scipy.signal import upfirdn
 
 from sarmotion.collection import CollectionOptions, extract_patches, plan_patches
-from sarmotion.collection.extract import PatchBuilder
 from sarmotion.collection.plan import BAND_GUARD, Patch
 from sarmotion.collection.resample import (
     MAX_DENOMINATOR,
@@ -185,7 +184,7 @@ def test_a_patch_keeps_the_pulses_its_band_needs_and_its_movers_at_the_speed_bou
     above, where the integer rule gives ``F / 2`` (1.25 R). A point and movers at the speed
     bound whose Doppler centre is the core's come out as their traces simulated on the
     patch's resampled pulses, within the filter's bound plus the fast-time window's
-    (``tests/test_collection.py``'s rule), their whole Doppler spread in the kept band."""
+    (``tests/collection/test_collection.py``'s rule), their whole Doppler spread in the kept band."""
     speed = 0.5
     opts = CollectionOptions(patch_size_m=40.0, max_speed_mps=speed, stopband_db=60.0)
     region = (-40.0, -40.0, 40.0, 40.0)
@@ -244,9 +243,12 @@ def test_a_mover_aliased_in_the_data_keeps_whole_pulses():
 
     x0, y0, x1, y1 = plan.region_m
     corners = np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]])
-    assert aliased_doppler_hz(
-        traj.positions_m, traj.slow_times_s, patch.centre_m, corners, _velocities(10.0), f
-    ) >= prf - patch.passband_hz
+    assert (
+        aliased_doppler_hz(
+            traj.positions_m, traj.slow_times_s, patch.centre_m, corners, _velocities(10.0), f
+        )
+        >= prf - patch.passband_hz
+    )
     # blind speed: ground range speed whose Doppler at the carrier is F (x is ground range)
     cx, cy = patch.centre_m[:2]
     unit = PointTarget(position_m=(cx, cy), velocity_mps=(1.0, 0.0))

@@ -31,7 +31,7 @@ import scipy.io
 from gotcha_files import small_struct
 from sarmotion.cli.main import EXIT_BAD_INPUT, run
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: Longest a refusal may take (s), start-up of the command included.
 REFUSAL_S = 10.0
 

@@ -277,7 +277,10 @@ def _banding() -> dict:
 # ================================================================== the tests (pytest)
 def _simulate_in_subprocess(tmp_path: Path, gotcha_dir: Path | None) -> dict:
     out = tmp_path / "cuda_sim.json"
-    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    # The script imports ``conftest`` from the tests' root, as pytest does.
+    tests = str(Path(__file__).resolve().parents[1])
+    path = os.pathsep.join(p for p in (tests, os.environ.get("PYTHONPATH")) if p)
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=path)
     args = [sys.executable, __file__, str(out)] + ([str(gotcha_dir)] if gotcha_dir else [])
     proc = subprocess.run(args, env=env, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -25,7 +25,7 @@ from sarmotion.simulation import load_scene, simulate
 
 jsonschema = pytest.importorskip("jsonschema")
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCHEMA = load_schema(RESULTS_SCHEMA)
 
 

@@ -20,14 +20,14 @@ from pathlib import Path
 import matplotlib.image
 import numpy as np
 import pytest
+from test_outputs import _holder, _one_line_refusal
 
 from gotcha_files import save_struct, small_struct
 from sarmotion.cli.main import run
 from sarmotion.io import load_image, read_gotcha
 from sarmotion.simulation import builtin_scene_names, load_scene, simulate
-from test_outputs import _holder, _one_line_refusal
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 #: A number printed as minus zero: "-0.00" not followed by another digit.
 NEGATIVE_ZERO = re.compile(r"-0\.0+(?![0-9])")

@@ -353,7 +353,7 @@ def test_ffbp_matches_exact_backprojection(azimuth_deg):
     assert fast.metadata["kernel_variant"] == "ffbp"
     assert fast.metadata["ffbp"]["levels"] >= 3  # a real factorisation, not exact in disguise
     # The accuracy the defaults are chosen for (ffbp.TARGET_DB; the budget's derivation and
-    # the test against the exact sum: tests/test_ffbp_accuracy.py).
+    # the test against the exact sum: tests/imaging/test_ffbp_accuracy.py).
     assert _ser_db(exact, fast.values) >= ffbp.TARGET_DB
     # The points are where exact backprojection puts them.
     assert fast.peak()[:2] == pytest.approx(backproject(tr, grid).peak()[:2], abs=1e-9)

@@ -13,7 +13,7 @@ the fewest taps whose budget reaches ``TARGET_DB + BUDGET_MARGIN_DB``. Here:
 - FFBP images of simulated points at 0, 30 and 45 degree looks and of GOTCHA (its own
   look, and turned by 45 degrees) reach ``TARGET_DB`` against the exact sum
   (:func:`~sarmotion.imaging.exact_sum.exact_sum`, which is ``point_response`` inside the
-  fast-time window, ``tests/test_backprojection_accuracy.py``) on every pixel, and their
+  fast-time window, ``tests/imaging/test_backprojection_accuracy.py``) on every pixel, and their
   own budget within its margin. The oblique looks run the rotated path at a size where the
   time model would run exact backprojection (the accuracy does not depend on that choice).
 """

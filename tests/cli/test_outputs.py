@@ -29,7 +29,7 @@ from sarmotion.io import (
 )
 from sarmotion.io.gotcha import written_by_sarmotion
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 STAGING = ROOT / "src" / "sarmotion" / "io" / "staging.py"
 
 

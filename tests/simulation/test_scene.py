@@ -177,7 +177,8 @@ def test_cross_range_extent_bounds_a_target_on_the_circle(tmp_path, share):
     # the density it names fits the target (same aperture, more pulses)
     Scene.from_file(
         _write(
-            tmp_path, _scene_text([((0.0, y), None)], trajectory=f"pulses_per_deg = {float(ppd * 1.001)!r}")
+            tmp_path,
+            _scene_text([((0.0, y), None)], trajectory=f"pulses_per_deg = {float(ppd * 1.001)!r}"),
         )
     )
 

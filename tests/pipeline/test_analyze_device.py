@@ -5,7 +5,7 @@ the device the options name. Here, without a GPU: the options carry the device t
 image (the GPU path stood in for by a recorder that runs the CPU's sum, so the results
 must be the CPU's exactly); the command line refuses ``--device cuda`` in one line, exit
 2, writing nothing; and, under numba's CUDA simulator in a subprocess, a tiny analysis
-with ``device="cuda"`` finds the CPU's movers (``tests/test_cuda_sim.py`` holds the GPU
+with ``device="cuda"`` finds the CPU's movers (``tests/imaging/test_cuda_sim.py`` holds the GPU
 kernel itself to the exact sum).
 """
 

@@ -2,7 +2,7 @@
 
 Seeds 7300+ are used nowhere else; nothing here was tuned on these draws (the refit was
 chosen on seed 11 of benchmarks/movers_accuracy.py). Errors are taken on the truth's
-cross-range family at the fit's cross-range coordinate (tests/test_movers_detection.py).
+cross-range family at the fit's cross-range coordinate (tests/motion/test_movers_detection.py).
 """
 
 import numpy as np

@@ -33,7 +33,7 @@ from sarmotion.simulation import (
     simulate_phase_history,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 SIDE_M = 150.0
 SEED = 31
