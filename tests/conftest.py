@@ -90,6 +90,7 @@ SLOW_TESTS: frozenset[str] = frozenset(
         "test_collection_doppler.py::test_the_stationary_list_is_the_scene_not_noise_nor_the_movers_image",
         "test_collection_resample.py::test_a_mover_aliased_in_the_data_keeps_whole_pulses",
         "test_collection_resample.py::test_a_patch_keeps_the_pulses_its_band_needs_and_its_movers_at_the_speed_bound",
+        "test_collection_run.py::test_a_scheduler_given_by_its_address_gives_the_same_answers",
         "test_collection_run.py::test_command_line_collection_outputs",
         "test_collection_run.py::test_distributed_process_workers_give_the_same_answers",
         "test_collection_run.py::test_patches_in_process_give_the_same_answers_and_mosaic",

@@ -114,6 +114,37 @@ def test_distributed_process_workers_give_the_same_answers(scene, default_result
     )
 
 
+@pytest.mark.filterwarnings("ignore:Port .* is already in use")
+def test_a_scheduler_given_by_its_address_gives_the_same_answers(scene, default_result, tmp_path):
+    """``--scheduler tcp://...``: a client of our own, not the process's default one.
+
+    The cluster here has no client of its own (as a scheduler started with ``dask
+    scheduler`` has none in this process): the collection must not reach for Dask's
+    default client anywhere.
+    """
+    import dask
+    from distributed import LocalCluster
+
+    with (
+        dask.config.set({"temporary-directory": str(tmp_path)}),
+        LocalCluster(
+            n_workers=2,
+            threads_per_worker=1,
+            processes=False,
+            protocol="tcp://",
+            host="127.0.0.1",
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        ) as cluster,
+    ):
+        res = analyze_collection(
+            scene, OPTIONS, region_m=REGION, scheduler=cluster.scheduler_address
+        )
+    assert [p for _, p in res.movers] == [p for _, p in default_result.movers]
+    for (a, _), (b, _) in zip(res.movers, default_result.movers, strict=True):
+        assert np.allclose(a.velocity_mps, b.velocity_mps, atol=1e-6)
+
+
 def test_patches_in_process_give_the_same_answers_and_mosaic(scene, default_result):
     """``n_workers=0`` (no Dask, BLAS on one thread) against the local cluster."""
     res = analyze_collection(scene, OPTIONS, region_m=REGION, n_workers=0)

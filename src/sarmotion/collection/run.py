@@ -622,7 +622,7 @@ def _run(
             client = scheduler
             threads = None
         log.info("patches on %s", client)
-        pending = as_completed()
+        pending = as_completed(loop=client.loop)  # not the default client: ours
         futures: set[Any] = set()
         try:
             for group in _groups(plan, memory_mb):
