@@ -74,8 +74,11 @@ def _members(aperture_deg: float, position: tuple, velocity: tuple):
     return out
 
 
-def _looks(aperture_deg: float, mover: PointTarget, rng, *, index_offset: int = 0):
-    """One detection per sub-aperture of a degree (module notes) as a look measurement."""
+def _looks(aperture_deg: float, mover: PointTarget, rng, *, index_offset: int = 0, std=BOUND_STD):
+    """One detection per sub-aperture of a degree (module notes) as a look measurement.
+
+    ``std``: the standard deviations of its errors and bound (default ``BOUND_STD``).
+    """
     traces = _pass(aperture_deg)
     members = _members(
         aperture_deg, tuple(np.asarray(mover.position_m)[:2]), tuple(mover.velocity_mps)
@@ -83,7 +86,7 @@ def _looks(aperture_deg: float, mover: PointTarget, rng, *, index_offset: int = 
     out = []
     for k, (sl, t_c, sub_traces, cells, p, v, a, b) in enumerate(members):
         geom = sub_traces.geometry
-        e = rng.standard_normal(3) * BOUND_STD
+        e = rng.standard_normal(3) * std
         b_r, b_p = ground_velocity(1.0, 0.0, geom), ground_velocity(0.0, 1.0, geom)
         p = p + e[0] * cells.range_direction
         v = v + e[1] * b_r + e[2] * b_p
@@ -96,7 +99,7 @@ def _looks(aperture_deg: float, mover: PointTarget, rng, *, index_offset: int = 
             family_velocity_per_m=b,
             peak_db=0.0,
             traces=None,
-            bound_cov=np.diag(BOUND_STD**2),
+            bound_cov=np.diag(np.asarray(std) ** 2),
         )
         sub = SubApertureDetections(
             index=k + index_offset,
@@ -179,6 +182,29 @@ def test_four_degrees_leave_the_family():
     a = looks[len(looks) // 2].detection.family_position_per_m
     cosine = abs(fit.family_position_per_m @ a) / np.linalg.norm(a)
     assert cosine > 0.99
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_range_accelerations_alone_do_not_fix_the_position(seed):
+    """4 degrees, cross-range speeds to 5e-4 m/s: a family, its spread the ranges' and rates'.
+
+    Such range accelerations would make the full fit's standard deviation 1.3-2.4 m
+    (module notes); the ranges and range rates leave the position on the family. The
+    same detections over 30 degrees fix it, within 4 of its standard deviations.
+    """
+    std = np.array([5e-3, 1e-4, 5e-4])
+    mover = PointTarget(position_m=[-8.0, 5.0], velocity_mps=[3.0, -4.0])
+    looks = _looks(4.0, mover, np.random.default_rng(seed), std=std)
+    fit = fit_track(looks, prior_std_m=PRIOR_STD_M)
+    assert not fit.fixed
+    assert fit.position_std_m > 0.5 * PRIOR_STD_M  # the prior's, not a point's
+    a = looks[len(looks) // 2].detection.family_position_per_m
+    assert abs(fit.family_position_per_m @ a) / np.linalg.norm(a) > 0.99
+    wide = fit_track(_looks(30.0, mover, np.random.default_rng(seed), std=std),
+                     prior_std_m=PRIOR_STD_M)  # fmt: skip
+    x, cov = wide.at(0.0)
+    e = x[:2] - mover.position_m[:2]
+    assert wide.fixed and np.sqrt(e @ np.linalg.solve(cov[:2, :2], e)) <= 4.0
 
 
 def test_one_mover_cut_in_pieces_is_one_track_two_movers_are_two():

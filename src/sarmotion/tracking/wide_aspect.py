@@ -57,8 +57,26 @@ Jacobian ``A`` at the solution, prior included.
 **Fixed or not.** The data fix the position when they, not the prior, carry it: when the
 prior holds at most :data:`PRIOR_SHARE` (1 %) of the position's information in every
 direction, i.e. the largest standard deviation of the position is at most
-``sqrt(PRIOR_SHARE) sigma_f`` (a tenth of ``sigma_f``). Otherwise the fit reports the
-family, as a single sub-aperture does.
+``sqrt(PRIOR_SHARE) sigma_f`` (a tenth of ``sigma_f``). That standard deviation is taken
+from the looks' ranges and range rates alone, their range accelerations marginalised
+(each look's ``(R, R')`` block of its covariance, the scene prior included). A
+sub-aperture's ``R''`` is the measurement its estimator gets least right, and not at
+random: through the whole chain at 4 degrees, 20 dB (``benchmarks/wide_aspect.py``) its
+a posteriori factors were 1.1-742 (median 11) against 1-232 (median 5) for ``R`` and
+1-37 (median 3) for ``R'``, and on a simulated 10 degree pass its errors shared a sign
+(``benchmarks/wide_aspect.py``): a systematic error, which the white-error covariance
+counts as information. It is also where a mover's own range acceleration ``alpha``
+enters whole (one sub-aperture cannot tell ``alpha`` from a cross-range speed ``alpha L
+/ (2 (V - u_t))`` away, 73 s x ``alpha`` on GOTCHA,
+:mod:`sarmotion.motion.acceleration`). Over a few degrees the looks' ``R''`` can carry
+the position alone: with detection errors of 5 mm, 1e-4 m/s and 5e-4 m/s (ground range,
+range speed, cross-range speed), 4 degrees gave standard deviations of 1.3-2.4 m that
+the ranges and range rates alone leave at 24-30 m; over tens of degrees the families'
+ranges and range rates cross at the mover. When the ranges and range rates do not fix
+it, the fit reports the family, as a single sub-aperture does, with their covariance:
+the family they leave, and its spread. Every fix assumes uniform motion: a constant
+acceleration left free with a prior spread of 1e-4 m/s^2 widens the position's standard
+deviation to 1.5-1.8 m at 10 and at 30 degrees (from 0.03-0.9 m).
 
 **One track per vehicle.** A uniform mover's range speed turns with the look: what
 changes between the sub-apertures of a wide pass is expected. Two tracks of one uniform
@@ -312,7 +330,9 @@ class PositionFit:
     prior_std_m : float
         ``sigma_f``, the scene prior's standard deviation in each axis (m).
     fixed : bool
-        Whether the data fix the position (module notes).
+        Whether the data fix the position (module notes): the position's largest
+        standard deviation from the looks' ranges and range rates alone is at most
+        ``sqrt(PRIOR_SHARE) prior_std_m``. When not, :attr:`covariance` is that one.
     family_position_per_m, family_velocity_per_m : (2,) ndarray
         The direction in which the position is least known and the velocity's change
         along it (m/m, (m/s)/m): the track's family when it is not fixed.
@@ -485,11 +505,14 @@ def _fit_once(
     cov = np.linalg.pinv(info)
     cov = 0.5 * (cov + cov.T)
     chi2 = float(np.sum(data_residual(x) ** 2))
+    geometry = _geometry_covariance(looks, x, t0, height_m, factors, prior_std_m)
+    fixed = bool(np.linalg.eigvalsh(geometry[:2, :2])[-1] <= PRIOR_SHARE * prior_std_m**2)
+    if not fixed:  # the family the ranges and range rates leave, with its spread
+        cov = geometry
     w, v = np.linalg.eigh(cov[:2, :2])
     worst = v[:, -1]
     # velocity change along the worst position direction (regression in the covariance)
     along = cov[2:, :2] @ worst / max(float(worst @ cov[:2, :2] @ worst), 1e-300)
-    fixed = bool(w[-1] <= PRIOR_SHARE * prior_std_m**2)
     return PositionFit(
         time_s=t0,
         state=x,
@@ -504,6 +527,36 @@ def _fit_once(
         family_velocity_per_m=along,
         error_factors=np.array(factors, dtype=np.float64),
     )
+
+
+def _geometry_covariance(
+    looks: Sequence[LookMeasurement],
+    x: NDArray[np.float64],
+    t0: float,
+    height_m: float,
+    factors: NDArray[np.float64],
+    prior_std_m: float,
+) -> NDArray[np.float64]:
+    """Covariance of the state from the looks' ranges and range rates alone (notes).
+
+    The range accelerations are marginalised (each look's ``(R, R')`` block of its
+    covariance); the scene prior is included. ``(4, 4)``, linearised at ``x``.
+    """
+    info = np.zeros((4, 4))
+    info[:2, :2] = np.eye(2) / prior_std_m**2
+    steps = np.array([1e-3, 1e-3, 1e-4, 1e-4])  # m, m, m/s, m/s: central differences
+    for m in looks:
+        dt = m.time_s - t0
+
+        def h(s: NDArray[np.float64], dt: float = dt, m: LookMeasurement = m):
+            return range_history(s[:2] + dt * s[2:], s[2:], m.antenna, height_m)[:2]
+
+        jac = np.column_stack([(h(x + e) - h(x - e)) / (2.0 * e[k]) for k, e in
+                               enumerate(np.diag(steps))])  # fmt: skip
+        c = (m.covariance * np.outer(factors, factors))[:2, :2]
+        info += jac.T @ np.linalg.solve(c, jac)
+    cov = np.linalg.pinv(info)
+    return 0.5 * (cov + cov.T)
 
 
 def _aspect_deg(looks: Sequence[LookMeasurement]) -> float:
