@@ -83,6 +83,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "cli.simulate": ("test_cli.py", "test_outputs.py"),
     "cli.track": ("test_track.py", "test_cli_help.py"),
     # collection
+    "collection.analysis": ("test_collection_analysis.py", "test_api.py"),
     "collection.extract": ("test_collection.py",),
     "collection.merge": (
         "test_collection.py",

@@ -1,5 +1,7 @@
 """The Python API after ``analyze``: a short repr, a summary, ``save`` and ``save_report``.
 
+The analysis of a scene of one patch (``sarmotion.analyze(...).single_result``).
+
 ``sarmotion.save`` writes what ``sarmotion analyze --out`` writes (the command calls it);
 ``sarmotion.save_report`` the report alone. Printing a result is a line, not the arrays
 behind it; the summary says what the data fix (range offset and speeds, with their
@@ -26,8 +28,9 @@ NEGATIVE_ZERO = re.compile(r"-0\.0+(?![0-9])")
 @pytest.fixture(scope="module")
 def scene1():
     sim = sarmotion.simulate(sarmotion.load_scene("scene1"))
-    result = sarmotion.analyze(sim.traces, sarmotion.AnalysisOptions(trajectory=False))
-    return sim, result
+    collection = sarmotion.analyze(sim.traces, sarmotion.AnalysisOptions(trajectory=False))
+    assert len(collection.plan.patches) == 1  # Scene 1 is one patch: the analysis itself
+    return sim, collection.single_result
 
 
 def test_repr_is_a_line_with_the_counts_and_the_time(scene1):

@@ -107,6 +107,34 @@ def run_analyze(
     with Progress(enabled=progress) as bar:
         # one smear rule for every size: a mover's echo is not listed as stationary points
         result = drop_smear(run_analysis(traces, options, progress=bar))
+    save_single(
+        result,
+        out,
+        inputs,
+        sim=sim,
+        focus=focus,
+        sicd=sicd,
+        plan=plan,
+        collection_options=collection_options,
+    )
+
+
+def save_single(
+    result: Any,
+    out: Path,
+    inputs: Sequence[str],
+    *,
+    sim: Any = None,
+    focus: Any = None,
+    sicd: bool = False,
+    plan: Any = None,
+    collection_options: dict[str, Any] | None = None,
+) -> None:
+    """Write one analysis (``result``, an AnalysisResult) into ``out`` and say what it found.
+
+    ``sim`` and ``focus``: the simulation of a scene and the autofocus result, for the
+    document; ``plan`` and ``collection_options``: the plan of one patch and its options.
+    """
     doc = save(
         result,
         out,
@@ -331,16 +359,15 @@ def analyze(
             analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
         )
 
-    def single(read: tuple[Any, Any, Any], plan: Any) -> None:
-        run_analyze(
-            inputs,
+    def single(result: Any, sim: Any, focus: Any) -> None:
+        save_single(
+            result.single_result,
             out,
-            options,
-            progress=ctx.obj["progress"],
-            force=force,
+            inputs,
+            sim=sim,
+            focus=focus,
             sicd=sicd,
-            read=read,
-            plan=plan,
+            plan=result.plan,
             collection_options=copts.to_dict(),
         )
 

@@ -1,4 +1,4 @@
-"""``sarmotion analyze`` on a scene of any size: patches when the scene needs more than one."""
+"""``sarmotion analyze`` on a scene of any size: the library plans and analyses, this writes."""
 
 from __future__ import annotations
 
@@ -9,23 +9,19 @@ from typing import Any
 
 import click
 
-from ..collection import (
-    CollectionOptions,
-    RegionError,
-    analyze_collection,
-    plan_patches,
-)
+from ..collection import CollectionOptions, RegionError, analyze_source
 from ..core.blocks import TracesBlocks
 from ..documents.results import collection_document, describe_patch
-from ..io import open_cphd_blocks, open_native_blocks, staged_directory, write_json
+from ..io import staged_directory, write_json
 from ..io.staging import claimed
 from ..report.collection import write_collection_report
+from ..sources import is_scene_reference, open_source
 from .autofocus import ReadOptions
-from .common import InputError, Progress, check_out, say
+from .common import InputError, Progress, as_flags, check_out, say
 from .describe import document_lines, stationary_note
 from .main import elapsed_s
 
-__all__ = ["COLLECTION_OUTPUTS", "run_collection"]
+__all__ = ["COLLECTION_OUTPUTS", "open_inputs", "run_collection", "write_collection"]
 
 #: What the collection path writes into --out.
 COLLECTION_OUTPUTS = (
@@ -47,17 +43,19 @@ def _quiet_dask() -> None:
             logging.getLogger(name).setLevel(logging.WARNING)
 
 
-def _block_source(inputs: Sequence[str], lenient: bool) -> Any:
-    """A block reader for one CPHD or native traces file, else None."""
-    if len(inputs) != 1:
-        return None
-    path = Path(inputs[0])
-    suffix = path.suffix.lower()
-    if not path.exists() or suffix not in (".cphd", ".h5", ".hdf5"):
-        return None
-    if suffix == ".cphd":
-        return open_cphd_blocks(path, lenient=lenient)
-    return open_native_blocks(path, lenient=lenient)
+def open_inputs(inputs: Sequence[str], reading: ReadOptions) -> tuple[Any, Any, Any]:
+    """``(source, simulation, autofocus result)`` of ``inputs``, opened for the analysis.
+
+    Through :func:`sarmotion.sources.open_source`, which tells the kinds apart: a CPHD or
+    native file is read block by block. A scene is simulated (its truth kept) and an
+    input to be focused is read whole first (:meth:`ReadOptions.read`).
+    """
+    if reading.autofocus or (len(inputs) == 1 and is_scene_reference(inputs[0])):
+        traces, sim, focus = reading.read(inputs)
+        return TracesBlocks(traces), sim, focus
+    with as_flags(speed_mps="--speed"):
+        source = open_source(inputs, lenient=reading.lenient, speed_mps=reading.speed_mps)
+    return source, None, None
 
 
 def run_collection(
@@ -75,68 +73,92 @@ def run_collection(
     force: bool = False,
     refuse_patches: str | None = None,
 ) -> None:
-    """Plan the patches of ``inputs``; one patch: ``single(read, plan)``; else the collection.
+    """Analyse ``inputs`` (:func:`~sarmotion.collection.analyze_source`) and write ``out``.
 
-    ``single`` is the analysis of the inputs already read (``read = (traces, simulation,
-    autofocus result)``) as the one patch of ``plan``; it writes its own outputs, with
-    options of its own (the patches' are ``copts.analysis``). Either way the output is
+    The library plans the patches and analyses one or many; here the plan is said (and
+    refused with ``refuse_patches``, its ``{n}`` the patches, when it is more than one
+    patch or a region is given) and the result written: a region of one patch, no
+    ``region`` given, by ``single(result, simulation, autofocus result)`` (the one
+    analysis's outputs); else the merged document, the report and the mosaic. Either way
     one ``sarmotion.results/3`` document, one report and one console account.
     ``reading``: how the inputs are read, as for :func:`~sarmotion.cli.analyze.run_analyze`.
     """
     reading = ReadOptions() if reading is None else reading
     if n_workers is not None and n_workers < 0:
         raise InputError(f"--workers must be >= 0, got {n_workers}")
+    source, sim, focus = open_inputs(inputs, reading)
+    whole = {"single": False}
 
-    def read() -> tuple[Any, Any, Any]:
-        return reading.read(inputs)
+    def on_plan(plan: Any, src: Any) -> None:
+        if plan.declared_outside_m2 > 0.0:
+            click.echo(
+                f"the declared image area: {plan.declared_outside_m2:.4g} m^2 "
+                f"({100.0 * plan.declared_outside_share:.1f} %) outside the data's "
+                "unambiguous scene, not analysed"
+            )
+        _say_plan(plan, src, n_workers, scheduler)
+        whole["single"] = plan.single and region is None
+        if refuse_patches and not whole["single"]:
+            # an option the patches cannot honour: refused from the plan, before any analysis
+            raise InputError(refuse_patches.format(n=len(plan.patches)))
+        if plan.single and scheduler is not None:
+            logging.getLogger(__name__).info(
+                "one patch: analysed in this process (--scheduler is used for patches)"
+            )
+        if not plan.single:
+            _quiet_dask()
 
-    # a CPHD or native traces file is read block by block (unless autofocus needs it all)
-    source: Any = _block_source(inputs, reading.lenient) if not reading.autofocus else None
-    read_first = None if source is not None else read()
-    if source is None:
-        source = TracesBlocks(read_first[0])
-    try:
-        plan = plan_patches(source, copts, region_m=region, region_frame=region_frame)
-    except RegionError as exc:
-        text = str(exc).replace("patch size", "--patch-size").replace("region", "--region", 1)
-        raise InputError(text) from None
-    if plan.declared_outside_m2 > 0.0:
-        click.echo(
-            f"the declared image area: {plan.declared_outside_m2:.4g} m^2 "
-            f"({100.0 * plan.declared_outside_share:.1f} %) outside the data's unambiguous "
-            "scene, not analysed"
-        )
-    _say_plan(plan, source, n_workers, scheduler)
-    if refuse_patches and not (plan.single and region is None):
-        # an option the patches cannot honour: refused from the plan, before any analysis
-        raise InputError(refuse_patches.format(n=len(plan.patches)))
-    if plan.single and region is None and scheduler is not None:
-        logging.getLogger(__name__).info(
-            "one patch: analysed in this process (--scheduler is used for patches)"
-        )
-    if plan.single and region is None:
-        single(read_first if read_first is not None else read(), plan)
+    with Progress(enabled=progress) as bar:
+
+        def said(stage: str, done: int, total: int) -> None:
+            if not (whole["single"] and stage == "patches"):  # one analysis: no patch count
+                bar(stage, done, total)
+
+        try:
+            result = analyze_source(
+                source,
+                copts,
+                region_m=region,
+                region_frame=region_frame,
+                scheduler=scheduler,
+                n_workers=n_workers,
+                describe=describe_patch,
+                progress=said,
+                on_plan=on_plan,
+            )
+        except RegionError as exc:
+            text = str(exc).replace("patch size", "--patch-size").replace("region", "--region", 1)
+            raise InputError(text) from None
+    if whole["single"]:
+        single(result, sim, focus)
         return
-    focus = read_first[2] if read_first is not None else None
-    sim = read_first[1] if read_first is not None else None
+    write_collection(
+        result,
+        out,
+        inputs,
+        scene=sim.scene if sim is not None else None,
+        autofocus=focus,
+        force=force,
+    )
+
+
+def write_collection(
+    result: Any,
+    out: Path,
+    inputs: Sequence[str],
+    *,
+    scene: Any = None,
+    autofocus: Any = None,
+    force: bool = False,
+) -> None:
+    """``out``/results.json, report.html and mosaic.png of a collection, and the console."""
     if claimed(out) is None:  # the analyze command claims it before reading
         check_out(out, force=force, names=COLLECTION_OUTPUTS)
-    _quiet_dask()
-    with Progress(enabled=progress) as bar:
-        result = analyze_collection(
-            source,
-            copts,
-            plan=plan,
-            scheduler=scheduler,
-            n_workers=n_workers,
-            describe=describe_patch,
-            progress=bar,
-        )
-    doc = collection_document(result, source, scene=sim.scene if sim is not None else None)
+    doc = collection_document(result, scene=scene)
     doc["inputs"] = list(inputs)
-    if focus is not None:
-        doc["autofocus"] = focus.to_dict()
-    images = "movers.png" if len(plan.patches) > 1 else None
+    if autofocus is not None:
+        doc["autofocus"] = autofocus.to_dict()
+    images = "movers.png" if len(result.plan.patches) > 1 else None
     for m, im in zip(doc["movers"], _images(result), strict=True):
         m["image"] = images if im else m.get("image")
     with staged_directory(out) as stage:

@@ -7,12 +7,16 @@
 - :mod:`~sarmotion.collection.merge` — one mover per range history, stationary targets
   de-duplicated, the stationary mosaic;
 - :mod:`~sarmotion.collection.run` — :func:`analyze_collection`: the patches as tasks
-  (Dask or in process) and their merged result.
+  (Dask or in process) and their merged result;
+- :mod:`~sarmotion.collection.analysis` — :func:`analyze_source`: any source planned,
+  analysed and merged, one patch or many as its region needs, with one smear rule
+  (what :func:`sarmotion.analyze` and ``sarmotion analyze`` run).
 
 Its document is the analysis's, ``sarmotion.results/3``
 (:func:`sarmotion.documents.results.collection_document`).
 """
 
+from .analysis import analyze_source, collection_options
 from .extract import PatchBuilder, extract_patches, patch_radar
 from .merge import (
     MoverRecord,
@@ -39,6 +43,8 @@ __all__ = [
     "PatchResult",
     "StationaryRecord",
     "analyze_collection",
+    "analyze_source",
+    "collection_options",
     "analyze_patch",
     "drop_smear",
     "drop_sidelobes",

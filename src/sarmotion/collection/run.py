@@ -169,6 +169,9 @@ class CollectionResult:
         Wall-clock time of the stages ("plan", "patches", "merge", "total") (s).
     single_result : AnalysisResult or None
         The whole analysis when the region is one patch (today's analysis, unchanged).
+    source : PulseBlocks or None
+        The data analysed, when the caller kept them
+        (:func:`~sarmotion.collection.analysis.analyze_source` does): the document's axes.
     """
 
     plan: PatchPlan
@@ -184,6 +187,7 @@ class CollectionResult:
     stationary_sidelobes: int = 0
     stationary_mover_images: int = 0
     range_direction: NDArray[np.float64] | None = None
+    source: PulseBlocks | None = field(default=None, repr=False, compare=False)
 
 
 # ------------------------------------------------------------------ one patch
@@ -279,6 +283,7 @@ def analyze_patch(
     single: bool = False,
     describe: Callable[[AnalysisResult], list[dict[str, Any]]] | None = None,
     mosaic_m: tuple[float, float, float] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> tuple[PatchResult, AnalysisResult]:
     """Analyse one patch's traces with :func:`~sarmotion.pipeline.analyze` and slim it.
 
@@ -301,6 +306,8 @@ def analyze_patch(
     mosaic_m : (x0, y0, spacing), optional
         The mosaic's origin and pixel (m): the core image is reduced to its pixels
         (:func:`~sarmotion.collection.merge.coarsen`); default the analysis's pixels.
+    progress : callable, optional
+        ``progress(stage, done, total)`` of the analysis's stages.
 
     Returns
     -------
@@ -308,7 +315,7 @@ def analyze_patch(
     """
     keep = None if single else in_band(traces, patch)
     opts = _patch_options(patch, options, single, traces.trajectory)
-    result = analyze(traces, opts, keep=keep)
+    result = analyze(traces, opts, keep=keep, progress=progress)
     if single:  # the merge drops a collection's smear (one smear rule for every size)
         result = drop_smear(result)
     entries = describe(result) if describe is not None else [{} for _ in result.movers]
@@ -517,7 +524,12 @@ def analyze_collection(
     if plan.single:
         traces = src.traces if isinstance(src, TracesBlocks) else _read_all(src, opts.block_pulses)
         slim, single_result = analyze_patch(
-            traces, plan.patches[0], opts.analysis, single=True, describe=describe
+            traces,
+            plan.patches[0],
+            opts.analysis,
+            single=True,
+            describe=describe,
+            progress=progress,
         )
         results[0] = slim
         report(progress, "patches", 1, 1)

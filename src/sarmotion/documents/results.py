@@ -174,7 +174,7 @@ def results_document(
 
 def collection_document(
     result: CollectionResult,
-    source: PulseBlocks,
+    source: PulseBlocks | None = None,
     *,
     scene: Any = None,
 ) -> dict[str, Any]:
@@ -191,8 +191,9 @@ def collection_document(
     ----------
     result : CollectionResult
         The merged analysis (:func:`sarmotion.collection.analyze_collection`).
-    source : PulseBlocks
-        The data it was made from (their axes).
+    source : PulseBlocks, optional
+        The data it was made from (their axes); default those the result kept
+        (``result.source``, :func:`sarmotion.analyze`).
     scene : Scene, optional
         The simulated scene of the data: adds ``truth``, per-mover ``errors``,
         ``false_movers`` and ``missed_movers`` (the movers matched on their families as
@@ -200,6 +201,7 @@ def collection_document(
         patch's geometry).
     """
     copts = result.options.to_dict()
+    source = result.source if source is None else source
     if result.single_result is not None:
         single = result.single_result
         truth = compare_with_truth(single, scene) if scene is not None else None
@@ -209,6 +211,8 @@ def collection_document(
             **{f"collection.{k}": float(v) for k, v in result.timings_s.items()},
         }
         return doc
+    if source is None:
+        raise TypeError("collection_document: a result of several patches needs its source")
     acq = Acquisition(
         trajectory=source.trajectory, radar=source.radar, reference_point_m=source.reference_point_m
     )

@@ -73,7 +73,14 @@ def analyze(
 ) -> AnalysisResult:
     """Separate, estimate and image the stationary and moving targets of ``traces``.
 
-    See the module docstring for the stages.
+    See the module docstring for the stages. This is the analysis of one patch's traces,
+    the stage below :func:`sarmotion.analyze`
+    (:func:`sarmotion.collection.analyze_source`), which plans the patches, runs this on
+    each and merges them, and applies the smear rule on every path: a listed stationary
+    point on a found mover's echo (within two range cells and two Doppler cells of it at
+    some pulse of the analysed aperture) is that mover's smear, dropped and counted in
+    ``stationary_mover_images``. Here the listing is the stationary image's, before that
+    rule (:func:`sarmotion.collection.drop_smear` applies it to this result).
 
     Parameters
     ----------
