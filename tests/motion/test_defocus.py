@@ -91,6 +91,47 @@ def test_local_peaks_are_the_maxima_of_the_filtered_bank(shape):
         np.testing.assert_array_equal(_local_peaks(maps, cols, k, rows, js), want)
 
 
+@pytest.mark.parametrize("n, guard", [(64, 4), (16, 7), (8, 5)])
+def test_compiled_guarded_mean_is_the_cumulative_sums_bit_for_bit(n, guard):
+    # The screen's cell-averaged interference: the compiled form repeats the reference's
+    # float32 running sums and its float64 differences in the same order (windows that
+    # wrap around either end, and a guard wider than the row).
+    from sarmotion.motion.defocus import _guarded_mean, _guarded_mean_f32
+
+    rng = np.random.default_rng(n + guard)
+    power = (rng.exponential(size=(5, n)) * 10.0 ** rng.uniform(-3, 3, (5, n))).astype(np.float32)
+    cols = np.array([0, 1, guard, n // 2, n - 2, n - 1])
+    out = np.empty((5, cols.size))
+    _guarded_mean_f32(power, cols, guard, out)
+    np.testing.assert_array_equal(out, _guarded_mean(power, cols, guard))
+    if 2 * guard + 1 >= n:
+        return  # no cell beyond the guard: the reference's value is not a mean
+    # and it is the mean beyond the guard (up to float32's running-sum rounding)
+    j = int(cols[3])
+    keep = np.abs((np.arange(n) - j + n // 2) % n - n // 2) > guard
+    want = power[:, keep].astype(np.float64).sum(axis=1) / max(n - (2 * guard + 1), 1)
+    np.testing.assert_allclose(out[:, 3], want, rtol=1e-5)
+
+
+def test_bank_power_is_each_hypothesis_transform():
+    # The scan's transforms (spectrum held in FFT order, searched rows only, slow time on
+    # the last axis, in place) against the hypothesis' definition: |X|^2 to float32.
+    from sarmotion.motion.defocus import _Bank, _hypothesis_power, hypothesis_delays_s
+
+    tr, _, _ = _scene(1, 12.0)
+    sub = _central(tr)
+    rows = np.flatnonzero(np.abs(sub.fast_times_s) <= 2 * 30.0 / 3e8)
+    n_dop = 4 * sub.n_pulses
+    bank = _Bank(sub, rows, n_dop)
+    spectrum = to_frequency(sub.data)
+    for w in (0.0, 4.0, -9.0):
+        delays = hypothesis_delays_s(sub, w)
+        got = np.empty((rows.size, n_dop), dtype=np.float32)
+        bank.power(delays, out=got)
+        _, want = _hypothesis_power(sub, spectrum, delays, rows, n_dop)
+        np.testing.assert_allclose(got, want.T, rtol=2e-7, atol=2e-7 * float(want.max()))
+
+
 def test_scan_places_the_mover_in_its_cell():
     tr, _, mover = _scene(1, 12.0)
     sub = _central(tr)

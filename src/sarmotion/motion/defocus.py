@@ -61,7 +61,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+import scipy.fft as sfft
 from numpy.typing import NDArray
 
 from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_frequency
@@ -158,7 +160,10 @@ class DefocusScan:
 def _guarded_mean(power: NDArray, cols: NDArray[np.int64], guard: int) -> NDArray[np.float64]:
     """Mean of ``power`` (rows, n) along each row beyond ``+-guard`` cells of each of ``cols``.
 
-    Circular in the second axis (Doppler); shape ``(rows, cols.size)``.
+    Circular in the second axis (Doppler); shape ``(rows, cols.size)``. For the bank's
+    float32 maps the compiled :func:`_guarded_mean_f32` gives the same values bit for bit
+    (a row's running sum in float32, as ``np.cumsum`` forms it, read only at the columns
+    asked for); this form is the reference it is tested against.
     """
     n = power.shape[1]
     c = np.concatenate([np.zeros((power.shape[0], 1)), np.cumsum(power, axis=1)], axis=1)
@@ -171,6 +176,43 @@ def _guarded_mean(power: NDArray, cols: NDArray[np.int64], guard: int) -> NDArra
         b = np.clip(hi + shift, 0, n)
         inside += c[:, b] - c[:, a]
     return (total - inside) / max(n - (2 * guard + 1), 1)
+
+
+@numba.njit(nogil=True, cache=True)
+def _guarded_mean_f32(power, cols, guard, out):  # pragma: no cover - compiled
+    """:func:`_guarded_mean` of float32 ``power`` into ``out`` (rows, cols.size), float64.
+
+    The same arithmetic in the same order: each row's running sum accumulated in float32
+    (``np.cumsum``'s), its values taken to float64, the window's three circular pieces
+    added to zero in turn, ``(total - inside) / max(n - (2 guard + 1), 1)``.
+    """
+    n_rows, n = power.shape
+    run = np.empty(n + 1, dtype=np.float64)
+    denom = np.float64(max(n - (2 * guard + 1), 1))
+    for r in range(n_rows):
+        acc = np.float32(0.0)
+        run[0] = 0.0
+        for i in range(n):
+            acc = np.float32(acc + power[r, i])
+            run[i + 1] = np.float64(acc)
+        total = run[n]
+        for q in range(cols.size):
+            inside = 0.0
+            for shift in (-n, 0, n):
+                a = min(max(cols[q] - guard + shift, 0), n)
+                b = min(max(cols[q] + guard + 1 + shift, 0), n)
+                inside += run[b] - run[a]
+            out[r, q] = (total - inside) / denom
+
+
+@numba.njit(nogil=True, cache=True)
+def _power_f32(values, out):  # pragma: no cover - compiled
+    """``out = |values|^2`` in float32, ``re^2 + im^2`` formed in float64."""
+    n_rows, n = values.shape
+    for r in range(n_rows):
+        for i in range(n):
+            z = values[r, i]
+            out[r, i] = np.float32(z.real * z.real + z.imag * z.imag)
 
 
 def _local_peaks(
@@ -276,6 +318,41 @@ def _hypothesis_power(
     return u_w, np.abs(values) ** 2
 
 
+class _Bank:
+    """The bank's transforms of one set of traces: ``|X|^2`` of a hypothesis, (rows, n_dop).
+
+    The same values as :func:`_hypothesis_power` (to float32's rounding of ``|X|^2``,
+    formed as ``re^2 + im^2`` rather than ``|X|`` squared), in the screen's layout
+    and with less work per hypothesis: the data's spectrum is held in the transforms'
+    own order (``ifftshift``, once), so a hypothesis needs no reordering copies of the
+    whole array; only the searched fast-time rows are kept after the inverse transform;
+    and the slow-time transform runs along the last axis of the rows (contiguous), its
+    power written straight into the bank's map.
+    """
+
+    def __init__(self, traces: Traces, rows: NDArray[np.int64], n_dop: int) -> None:
+        m = traces.n_samples
+        # to_frequency(x) = fftshift(fft(ifftshift(x))): its ifftshift is fft(ifftshift(x))
+        self.spectrum = np.fft.fft(np.fft.ifftshift(np.asarray(traces.data), axes=-1), axis=-1)
+        self.frequencies_hz = np.fft.ifftshift(traces.frequencies_hz)
+        # to_fast_time(y)[:, r] = ifft(ifftshift(y))[:, (r - m // 2) % m] (fftshift's roll)
+        self.rows = (np.asarray(rows) - m // 2) % m
+        self.n_pulses = traces.n_pulses
+        # the slow-time transform's input, zero-padded to n_dop (pulses first, then zeros)
+        self._padded = np.zeros((len(rows), n_dop), dtype=np.complex128)
+
+    def power(self, delays_s: NDArray, *, out: NDArray[np.float32]) -> None:
+        """``|X|^2`` of the hypothesis of ``delays_s`` into ``out`` (rows, n_dop)."""
+        shifted = self.spectrum * delay_phase(delays_s, self.frequencies_hz)
+        aligned = np.fft.ifft(shifted, axis=-1)[:, self.rows]
+        padded = self._padded
+        padded[:, : self.n_pulses] = aligned.T
+        padded[:, self.n_pulses :] = 0.0
+        # scipy's pocketfft, in place: numpy's values, bit for bit, in two thirds the time
+        values = sfft.fft(padded, axis=-1, overwrite_x=True)
+        _power_f32(values, out)
+
+
 def defocus_scan(
     traces: Traces,
     *,
@@ -322,15 +399,15 @@ def defocus_scan(
     doppler = np.fft.fftfreq(n_dop, d=1.0 / prf)
     t = traces.fast_times_s
     rows = np.flatnonzero(np.abs(t) <= half_span_s)
-    spectrum = to_frequency(traces.data)
+    bank = _Bank(traces, rows, n_dop)
     u_w = np.empty(speeds.size)
     maps = np.empty((speeds.size, rows.size, n_dop), dtype=np.float32)
     smears = np.empty((speeds.size, n_dop), dtype=np.float64)
     still = hypothesis_delays_s(traces, 0.0)  # hypothesis 0: the stationary point
     for k, w in enumerate(speeds):
         delays = hypothesis_delays_s(traces, w)
-        u_w[k], power = _hypothesis_power(traces, spectrum, delays, rows, n_dop)
-        maps[k] = power.T
+        u_w[k] = _hypothesis_rate(traces, delays)
+        bank.power(delays, out=maps[k])
         smears[k] = _smear(traces, delays, still, n_dop)
     # the Doppler of each cell in each hypothesis, as an apparent range speed
     speed_of = u_w[:, None] - _doppler_speeds(traces, n_dop)[None, :]
@@ -366,7 +443,9 @@ def defocus_scan(
         mk = maps[k][:, cols]
         # the interference of a cell: the noise, or the mean power of its range bin over
         # the Doppler cells beyond its guard if larger (cell-averaging, module notes)
-        floor = np.maximum(noise[k], _guarded_mean(maps[k], cols, guard))
+        mean = np.empty((rows.size, cols.size))
+        _guarded_mean_f32(maps[k], cols, guard, mean)
+        floor = np.maximum(noise[k], mean)
         over = np.nonzero((mk >= level * floor) & searched[k][cols][None, :])
         peak = _local_peaks(maps, cols, int(k), over[0], over[1])
         for r, j in zip(over[0][peak], over[1][peak], strict=True):
