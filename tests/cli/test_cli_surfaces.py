@@ -379,12 +379,12 @@ def test_a_failed_allocation_is_one_line_naming_max_memory(gotcha, tmp_path, cap
 
 # ------------------------------------------------------------------ accepted but wrong
 def test_sicd_on_patches_is_refused_before_the_analysis(cphd, tmp_path, capsys, monkeypatch):
-    import sarmotion.cli.collection as collection
+    import sarmotion.collection.analysis as analysis
 
     def never(*args, **kwargs):
         raise AssertionError("the patches were analysed")
 
-    monkeypatch.setattr(collection, "analyze_collection", never)
+    monkeypatch.setattr(analysis, "analyze_collection", never)
     out = tmp_path / "out"
     _refused(["analyze", str(cphd), "--out", str(out), "--sicd"], capsys, "--sicd", out)
     _refused(
