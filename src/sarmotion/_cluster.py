@@ -14,7 +14,7 @@ import shutil
 import stat
 import tempfile
 from collections.abc import Iterator
-from contextlib import ExitStack, contextmanager, nullcontext
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -305,27 +305,109 @@ def remove_stale_scratch(directory: str | os.PathLike[str] | None = None) -> lis
     return removed
 
 
-@contextmanager
-def _sigint_ignored() -> Iterator[None]:
-    """SIGINT ignored by this process while the block runs (in the main thread only).
+#: The loggers of Dask's cluster in this process (the scheduler, the nannies, the client
+#: and their event loop), silenced once a Ctrl-C stops the command: the cancelled tasks
+#: and closed connections of the cluster's shutdown are not the user's news.
+_CLUSTER_LOGGERS = ("distributed", "tornado", "asyncio")
 
-    A disposition of SIG_IGN is inherited by the processes started meanwhile, through
-    ``exec`` too, and Python leaves an inherited SIG_IGN in place: worker processes
-    started in the block never take the terminal's Ctrl-C (sent to the whole foreground
-    process group) as their own, and stop only when their cluster stops them. A Ctrl-C
-    while the block runs (the workers' start, a few seconds) is not seen.
+
+class _SigintGuard:
+    """What a Ctrl-C does while a local cluster is up (:func:`local_cluster`).
+
+    - :meth:`installed`: Python's default SIGINT handler is replaced (in the main thread,
+      and only where it is the one in place) by one that first disables
+      :data:`_CLUSTER_LOGGERS` and every one of their descendants, then raises
+      ``KeyboardInterrupt``: the cluster then closes without a line of its own, and the
+      command says once that it was interrupted. The handler and the loggers' state come
+      back when the block ends.
+    - :meth:`held`: SIGINT is blocked in this thread while the block runs. A signal mask
+      is per thread; the threads this thread starts inherit it, and through ``fork`` and
+      ``exec`` the processes they start (Python leaves an inherited mask in place). A
+      local cluster's event-loop thread, started in the block, and every worker process
+      it spawns, then and later (a restarted worker too), therefore never take the
+      terminal's Ctrl-C (sent to the whole foreground process group) as their own; they
+      stop when their cluster stops them. A Ctrl-C meanwhile (taken by another thread of
+      this process, or pending until the mask is restored) is held, not lost: it is
+      raised as ``KeyboardInterrupt`` when the block ends.
     """
-    import signal
-    import threading
 
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    def __init__(self) -> None:
+        self.silenced: list[tuple[logging.Logger, bool]] = []
+        self.holding = False
+        self.pending = False
+        self.active = False
+
+    def _silence(self) -> None:
+        if self.silenced:
+            return
+        names = [
+            n
+            for n in list(logging.root.manager.loggerDict)
+            if any(n == p or n.startswith(p + ".") for p in _CLUSTER_LOGGERS)
+        ]
+        for name in sorted(set(names) | set(_CLUSTER_LOGGERS)):
+            logger = logging.getLogger(name)
+            self.silenced.append((logger, logger.disabled))
+            logger.disabled = True
+
+    def _handler(self, signum: int, frame: Any) -> None:
+        self._silence()
+        if self.holding:
+            self.pending = True
+            return
+        raise KeyboardInterrupt
+
+    @contextmanager
+    def installed(self) -> Iterator[None]:
+        """The handler in place while the block runs (class notes)."""
+        import signal
+        import threading
+
+        self.active = (
+            threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        )
+        if self.active:
+            signal.signal(signal.SIGINT, self._handler)
+        try:
+            yield
+        finally:
+            if self.active:
+                signal.signal(signal.SIGINT, signal.default_int_handler)
+            for logger, disabled in self.silenced:
+                logger.disabled = disabled
+            self.silenced.clear()
+
+    @contextmanager
+    def held(self) -> Iterator[None]:
+        """SIGINT blocked in this thread, and a Ctrl-C held, while the block runs."""
+        import signal
+
+        blocks = hasattr(signal, "pthread_sigmask")
+        previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT}) if blocks else None
+        self.holding = self.active
+        try:
+            yield
+        finally:
+            if blocks:
+                signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+            self.holding = False
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
+
+
+async def _started(cluster: Any) -> None:
+    """Wait until ``cluster`` has started the workers of its specification.
+
+    The wait is shielded: cancelled (by a Ctrl-C in :func:`distributed.utils.sync`), it
+    stops waiting but leaves the start to finish, so that every worker started is one
+    the cluster knows and closes (a start cancelled midway would leave its workers out
+    of the cluster's list, to be killed at exit instead).
+    """
+    import asyncio
+
+    await asyncio.shield(cluster._correct_state())
 
 
 @contextmanager
@@ -347,9 +429,10 @@ def local_cluster(
       ``dask-scratch-space`` in the system's temporary directory).
     - The workers' log level is this process's level of the ``distributed`` logger
       (the command line sets it from ``-v``).
-    - Worker processes ignore SIGINT (:func:`_sigint_ignored`): a Ctrl-C at the terminal
-      interrupts this process, which stops its cluster, and not each worker with a
-      traceback of its own.
+    - Worker processes never take SIGINT (:class:`_SigintGuard`): a Ctrl-C at the
+      terminal, at any moment (the workers' start included), interrupts this process
+      alone, which closes its client, then its workers, then its scheduler, with Dask's
+      loggers silenced, and not each worker with a traceback of its own.
     - The scratch directory's name holds this process's PID; the scratch directories of
       processes that died without removing theirs (SIGKILL) are removed first
       (:func:`remove_stale_scratch`).
@@ -387,11 +470,24 @@ def local_cluster(
             )
         )
         level = logging.getLogger("distributed").getEffectiveLevel()
-        with _sigint_ignored() if processes else nullcontext():
-            # worker processes started now inherit an ignored SIGINT (module notes)
+        guard = _SigintGuard()
+        stack.enter_context(guard.installed())
+        if processes:
+            # multiprocessing starts its resource tracker with the first process it
+            # spawns and then unblocks SIGINT in the spawning thread (CPython's
+            # resource_tracker, bpo-33613): started here first, it leaves that thread's
+            # mask, and so the workers', as _SigintGuard.held sets it
+            from multiprocessing import resource_tracker
+
+            resource_tracker.ensure_running()
+        with guard.held():
+            # the cluster's event-loop thread, started now, and the worker processes it
+            # spawns inherit a blocked SIGINT (_SigintGuard); the scheduler alone here
+            # (a second or less), so that a Ctrl-C held meanwhile is raised as soon as
+            # the cluster is on the stack that closes it
             cluster = stack.enter_context(
                 LocalCluster(
-                    n_workers=n_workers,
+                    n_workers=0 if processes else n_workers,
                     threads_per_worker=1,
                     processes=processes,
                     **({"host": "127.0.0.1", "protocol": "tls://"} if processes else {}),
@@ -403,4 +499,7 @@ def local_cluster(
                     silence_logs=level,
                 )
             )
+        if processes:  # the workers' start (seconds), which a Ctrl-C interrupts
+            cluster.scale(n_workers)
+            cluster.sync(_started, cluster)
         yield cluster

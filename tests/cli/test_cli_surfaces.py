@@ -528,22 +528,46 @@ def test_scratch_of_a_killed_run_is_removed_at_the_next_start(tmp_path):
             system.rmdir()
 
 
+def _worker_processes(pid):
+    """The worker processes (multiprocessing's spawned children) of process ``pid``."""
+    import psutil
+
+    try:
+        children = psutil.Process(pid).children(recursive=True)
+    except psutil.NoSuchProcess:
+        return []
+    found = []
+    for child in children:
+        try:
+            if "spawn_main" in " ".join(child.cmdline()):
+                found.append(child)
+        except psutil.Error:
+            continue
+    return found
+
+
 @pytest.mark.slow
-@pytest.mark.xfail(
-    reason="worker processes still log Dask's failed heartbeat (a traceback) when their "
-    "scheduler closes first on Ctrl-C; the main process says 'sarmotion: aborted' alone",
-    strict=False,
-)
-def test_ctrl_c_on_worker_processes_is_one_line(tmp_path):
-    """The terminal's Ctrl-C (SIGINT to the whole process group) while processes work."""
+@pytest.mark.parametrize("verbosity", ["-q", "-v"])
+@pytest.mark.parametrize("moment", ["start", "work"])
+def test_ctrl_c_on_worker_processes_is_one_line(tmp_path, moment, verbosity):
+    """The terminal's Ctrl-C (SIGINT to the whole process group) on worker processes.
+
+    ``start``: as soon as the first worker process exists, while the workers start
+    (importing Dask takes them seconds); ``work``: six seconds later, while they analyse
+    the 12 sub-apertures (the run takes 15 s or more on 2 cores, the workers' start 3 s of
+    it). Either way: exit 130, ``sarmotion: aborted`` once and last, no traceback, no
+    blank line, no output, and no worker process or scratch directory left.
+    """
+    import psutil
+
     out = tmp_path / "out"
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
-    cmd = [sys.executable, "-m", "sarmotion", "-v", "track", "hyperbola", "--out", str(out)]
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "TMPDIR": str(tmp_path)}
+    cmd = [sys.executable, "-m", "sarmotion", verbosity, "track", "hyperbola", "--out", str(out)]
     cmd += ["--size", "20", "--processes", "--workers", "2", "--sub-aperture", "0.5"]
     proc = subprocess.Popen(
         cmd,
         env=env,
-        stdout=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
         cwd=tmp_path,
@@ -551,13 +575,15 @@ def test_ctrl_c_on_worker_processes_is_one_line(tmp_path):
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
-        lines = []
-        for line in proc.stderr:  # -v: the cluster is up once the patches are submitted
-            lines.append(line)
-            if "sub-apertures on" in line:
-                break
-        assert proc.poll() is None, "".join(lines)
-        time.sleep(1.0)
+        deadline = time.monotonic() + 120.0
+        while not (workers := _worker_processes(proc.pid)) and time.monotonic() < deadline:
+            assert proc.poll() is None, proc.communicate()[1]
+            time.sleep(0.02)
+        assert workers, "no worker process started within 120 s"
+        if moment == "work":
+            time.sleep(6.0)
+        assert proc.poll() is None, proc.communicate()[1]
+        workers = _worker_processes(proc.pid)
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=60)
     finally:
@@ -566,5 +592,16 @@ def test_ctrl_c_on_worker_processes_is_one_line(tmp_path):
             proc.wait()
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
-    assert err.strip().splitlines()[-1] == "sarmotion: aborted", err
+    lines = err.splitlines()
+    assert lines[-1] == "sarmotion: aborted", err
+    assert lines.count("sarmotion: aborted") == 1, err
+    assert "" not in lines, err
+    if verbosity == "-q":
+        assert err == "sarmotion: aborted\n"
+    else:  # Dask's lines of the workers' orderly close, at most (no warning, no error)
+        assert not [x for x in lines if "WARNING" in x or "ERROR" in x], err
     assert not out.exists()
+    assert not list(tmp_path.glob(".out*"))
+    assert not list(tmp_path.glob("sarmotion-dask-*"))
+    alive = [w for w in workers if w.is_running() and w.status() != psutil.STATUS_ZOMBIE]
+    assert alive == [], [w.pid for w in alive]

@@ -201,20 +201,25 @@ def track(
         f"overlap {overlap:g}), {size:.4g} m images, {where}"
     )
     uses_dask = scheduler is not None or n_workers != 0
-    with (
-        Progress(enabled=ctx.obj["progress"]) as bar,
-        dask_logging() if uses_dask else contextlib.nullcontext(),
-    ):
-        result = run_tracking(
-            traces,
-            options,
-            roads=roads,
-            scheduler=client,
-            n_workers=n_workers,
-            processes=not threads,
-            dashboard_address=dashboard_address,
-            progress=bar,
-        )
+    try:
+        with (
+            Progress(enabled=ctx.obj["progress"]) as bar,
+            dask_logging() if uses_dask else contextlib.nullcontext(),
+        ):
+            result = run_tracking(
+                traces,
+                options,
+                roads=roads,
+                scheduler=client,
+                n_workers=n_workers,
+                processes=not threads,
+                dashboard_address=dashboard_address,
+                progress=bar,
+            )
+    except KeyboardInterrupt:
+        # Ctrl-C once the cluster has closed: "sarmotion: aborted" alone (click would
+        # print an empty line before it for a KeyboardInterrupt)
+        raise click.Abort() from None
     doc = tracks_document(result)
     doc["inputs"] = list(inputs)
     with staged_directory(out) as stage:
