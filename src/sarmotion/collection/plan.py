@@ -63,6 +63,32 @@ cover the region at any look azimuth, each point of it in one core
 patch carries its core's true outline; its image is the box along ``x`` and ``y`` that
 holds it, the pixels outside the core not its own.
 
+**Halo.** A patch's traces hold more of the ground than its core: in range, every
+point whose echo falls in the fast-time window; in cross range, every point whose
+Doppler the slow-time band passes, up to the filter's stop band ``(1 + 2 guard)
+f_pass`` (every Doppler of the data's pulse rate where there is no filter), within the
+unambiguous scene. ``Patch.halo_m`` is the side of the square along ``x`` and ``y``
+about the patch's centre that holds that rectangle (the window's and band's half-widths
+over the delay's and Doppler's smallest gradients over the pulses). A separation that
+models the stationary scene from the preliminary image (``combined``, ``annihilation``)
+takes out only the targets that image holds: the patch's image is its halo
+(:func:`~sarmotion.collection.run.analyze_patch`), so that a stationary target near the
+core, in the window but off the core's box, does not stay in the moving part and lift
+the floor of every mover's ``g(u)`` statistic (measured at 1.3-1.5 dB on the look-azimuth
+benchmark, ``benchmarks/results/look_azimuth.md``); only the core's targets are listed.
+
+**False-alarm share.** The collection's false-alarm rate ``alpha`` is the probability of
+a false mover anywhere in it. Patch ``p``'s ``g(u)`` test finds a null candidate
+somewhere in the data it holds (its halo ``H_p``, the rectangle above, in ground range
+and cross range) and reports it only where its band keeps the fit
+(:func:`~sarmotion.collection.run.in_band`: the core's range span and ``ECHO_CELLS``
+range cells, Doppler within the pass band; the box ``K_p``). With the null candidate as
+likely anywhere in ``H_p``, ``alpha_p = alpha min(1, |H_p| / sum_q |K_q|)``
+(``Patch.false_alarm_share``) bounds the collection's rate by ``sum_p alpha_p |K_p| /
+|H_p| <= alpha``. Patches holding disjoint data share ``alpha`` about as ``alpha / N``;
+patches holding the same data (a small scene, no slow-time filter) each test near
+``alpha``, as one analysis of those data does.
+
 **Bounds.** A core side below ``MIN_CORE_CELLS`` = 8 resolution cells is refused: the
 fast-time guard either side of a core is ``PULSE_GUARD`` = 8 compressed-pulse lengths,
 so a narrower core makes each patch more guard than core. A region narrower than that
@@ -79,7 +105,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -138,7 +164,8 @@ class CollectionOptions:
     ----------
     analysis : AnalysisOptions
         Options of each patch's analysis (:func:`~sarmotion.pipeline.analyze`).
-        ``image_size_m`` is set per patch to its core; ``max_stationary`` is per patch.
+        ``image_size_m`` is set per patch to its halo (module notes; its core's box
+        for robust PCA); ``max_stationary`` is per patch.
     patch_size_m : float or None
         Core side ``P`` (m); ``None``: from the data (module notes).
     max_speed_mps : float
@@ -218,6 +245,13 @@ class Patch:
     pulses : (n_out,) ndarray of int
         Where its output pulses sit, on that grid (input pulse ``j`` at ``j p``; the input
         pulses themselves when ``p = 1``), each with the filter's full support.
+    halo_m : float or None
+        Side (m) of the square along ``x`` and ``y`` about ``centre_m`` that holds the
+        ground whose stationary echoes its traces hold (its *halo*: the fast-time window
+        in range, the slow-time band up to the filter's stop band in cross range, within
+        the unambiguous scene; module notes). None: the core's box.
+    false_alarm_share : float
+        Its share of the collection's false-alarm rate, in (0, 1] (module notes).
     """
 
     index: int
@@ -230,6 +264,8 @@ class Patch:
     taps: NDArray[np.float64]
     pulses: NDArray[np.int64]
     outline_m: NDArray[np.float64] | None = None
+    halo_m: float | None = None
+    false_alarm_share: float = 1.0
 
     @property
     def pulse_positions(self) -> NDArray[np.float64]:
@@ -674,7 +710,17 @@ def plan_patches(
     prf = 1.0 / traj.pulse_interval_s
     dt = radar.sample_interval_s
 
+    # halo and keep rectangles in the look frame (module notes): the gradients of the
+    # delay along e_r and of the Doppler along e_c at the reference point, every pulse
+    grad = _delays(pos, _lift(np.stack([rho, rho + e_r, rho + e_c]), z))
+    delay_per_m = np.abs(grad[1] - grad[0])  # s per m of ground range, (n_pulses,)
+    doppler_per_m = np.abs(np.gradient(grad[2] - grad[0], s)) * radar.carrier_hz  # Hz per m
+    amb_ab = (amb - rho) @ to_look
+    amb_lo, amb_hi = amb_ab.min(axis=0), amb_ab.max(axis=0)
+    from .merge import ECHO_CELLS
+
     patches = []
+    rects = []
     for outline in cores:
         pts = _outline_points(outline, z)
         centre = pts[4].copy()
@@ -686,9 +732,11 @@ def plan_patches(
         passband = core_band + margin_d
         need = (1.0 + BAND_GUARD) * 2.0 * passband
         up, q = slow_time_ratio(prf, need)
-        if up > 1 and aliased_doppler_hz(
-            pos, s, centre, _lift(tiled, z), vel, (f_lo, f_hi)
-        ) >= prf - passband:
+        if (
+            up > 1
+            and aliased_doppler_hz(pos, s, centre, _lift(tiled, z), vel, (f_lo, f_hi))
+            >= prf - passband
+        ):
             # a mover of the speed range is aliased in the data: whole pulses only
             up, q = 1, max(1, int(math.floor(prf / need)))
         if single:
@@ -701,6 +749,34 @@ def plan_patches(
                 f"{taps.size}-tap slow-time filter: the aperture is too short"
             )
         lo_xy, hi_xy = outline.min(axis=0), outline.max(axis=0)
+        core_ab = (outline - rho) @ to_look
+        mid, half_core = core_ab.mean(axis=0), 0.5 * (core_ab.max(axis=0) - core_ab.min(axis=0))
+        # the data the traces hold: the window in range; in cross range the band up to the
+        # filter's stop band (every Doppler of the data's pulse rate without a filter)
+        edge = prf / 2.0 if taps.size == 1 else min(prf / 2.0, (1.0 + 2.0 * BAND_GUARD) * passband)
+        halo_half = np.array(
+            [
+                0.5 * n_samples * dt / float(np.min(delay_per_m)),
+                edge / float(np.min(doppler_per_m)),
+            ]
+        )
+        # what it reports (run.in_band): the core's range span and ECHO_CELLS range cells,
+        # Doppler within the pass band
+        keep_half = np.array(
+            [
+                half_core[0] + ECHO_CELLS * cell_r,
+                min(passband, prf / 2.0) / float(np.min(doppler_per_m)),
+            ]
+        )
+        halo = _clip_box(mid - halo_half, mid + halo_half, amb_lo, amb_hi)
+        keep = _clip_box(mid - keep_half, mid + keep_half, *halo)
+        rects.append((halo, keep))
+        corners_ab = np.array(
+            [[a, b] for a in (halo[0][0], halo[1][0]) for b in (halo[0][1], halo[1][1])]
+        )
+        offsets = corners_ab @ to_look.T - (centre[:2] - rho)
+        halo_side = max(float(hi_xy[0] - lo_xy[0]), float(hi_xy[1] - lo_xy[1]))
+        halo_side = max(halo_side, 2.0 * float(np.max(np.abs(offsets))))
         patches.append(
             Patch(
                 index=len(patches),
@@ -713,8 +789,15 @@ def plan_patches(
                 passband_hz=passband,
                 taps=taps,
                 pulses=pulses,
+                halo_m=None if single else halo_side,
             )
         )
+    if len(patches) > 1:  # each patch's share of the false-alarm rate (module notes)
+        kept = sum(_box_area(k) for _, k in rects)
+        patches = [
+            replace(p, false_alarm_share=min(1.0, _box_area(h) / kept))
+            for p, (h, _) in zip(patches, rects, strict=True)
+        ]
     box_lo, box_hi = region.min(axis=0), region.max(axis=0)
     return PatchPlan(
         patches=tuple(patches),
@@ -730,6 +813,18 @@ def plan_patches(
         doppler_margin_hz=margin_d,
         single=bool(single),
     )
+
+
+def _clip_box(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], lo2: NDArray, hi2: NDArray
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The box ``[lo, hi]`` cut to ``[lo2, hi2]`` (empty sides kept at zero length)."""
+    a, b = np.maximum(lo, lo2), np.minimum(hi, hi2)
+    return a, np.maximum(a, b)
+
+
+def _box_area(box: tuple[NDArray[np.float64], NDArray[np.float64]]) -> float:
+    return float(np.prod(box[1] - box[0]))
 
 
 def _single_image_m(source: PulseBlocks, elevation_rad: float) -> float:
@@ -764,9 +859,7 @@ def _region(
                 "region ("
                 + ", ".join(f"({x:g}, {y:g})" for x, y in poly)
                 + ") m leaves the data's unambiguous scene, a rectangle turned to the look "
-                "direction with corners "
-                + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb)
-                + " m"
+                "direction with corners " + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb) + " m"
             )
         return poly, None, 0.0
     try:
@@ -786,9 +879,7 @@ def _region(
             "the declared image area ("
             + ", ".join(f"({x:.1f}, {y:.1f})" for x, y in area)
             + ") m lies outside the data's unambiguous scene, a rectangle turned to the "
-            "look direction with corners "
-            + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb)
-            + " m"
+            "look direction with corners " + ", ".join(f"({a:.1f}, {b:.1f})" for a, b in amb) + " m"
         )
     return inside, area, max(0.0, whole - kept)
 

@@ -3,11 +3,12 @@
 :func:`analyze_collection` reads the data block by block into the traces of a group of
 patches (:func:`~sarmotion.collection.extract.extract_patches`; a group is as many
 patches as fit in ``memory_mb``), submits each patch as a task running
-:func:`~sarmotion.pipeline.analyze` on its traces (its image: the core; only the movers
-whose echoes its band passes estimated beyond a first fit,
-:func:`in_band`), and gathers the results as they complete. Then one mover per range
-history, stationary targets de-duplicated and their sidelobes dropped, and the
-stationary mosaic (:mod:`~sarmotion.collection.merge`).
+:func:`~sarmotion.pipeline.analyze` on its traces (its image: its halo, the ground its
+traces hold, its stationary targets listed on the core; its share of the false-alarm
+rate, :mod:`~sarmotion.collection.plan` notes; only the movers whose echoes its band
+passes estimated beyond a first fit, :func:`in_band`), and gathers the results as
+they complete. Then one mover per range history, stationary targets de-duplicated and
+their sidelobes dropped, and the stationary mosaic (:mod:`~sarmotion.collection.merge`).
 
 Memory: a block's phase history, one group's traces (at most ``memory_mb``; each
 patch's are let go once analysed), one patch's analysis per task in flight, the mosaic
@@ -54,6 +55,7 @@ from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
 from ..motion import PointFit
 from ..pipeline import AnalysisOptions, AnalysisResult, NotEstimated, analyze
+from ..separation import default_method
 from .extract import extract_patches
 from .merge import (
     ECHO_CELLS,
@@ -192,23 +194,39 @@ class CollectionResult:
 
 # ------------------------------------------------------------------ one patch
 def _patch_options(
-    patch: Patch, options: AnalysisOptions, single: bool, trajectory: Trajectory | None = None
+    patch: Patch,
+    options: AnalysisOptions,
+    single: bool,
+    trajectory: Trajectory | None = None,
+    *,
+    halo: bool = True,
 ) -> AnalysisOptions:
-    """The analysis options of ``patch``: its image is its core (unless one patch or given).
+    """The analysis options of ``patch`` (unless one patch): its image, speeds and rate.
 
-    With ``trajectory`` (the patch's pulses) and no ``stationary_speed_mps`` given, the
-    range speeds ``g(u)`` leaves untested are those of the core's own stationary points
-    (:func:`core_stationary_speed`), not an image's generic band (two range-speed
-    resolutions, or ``V (P / sqrt 2) / R``): a mover of slow range rate that mimics a
-    stationary point of one core is tested by the next patch, whose reference is two
-    core bands away and whose pass band reaches it (:mod:`~sarmotion.collection.merge`
-    notes).
+    - **Image**: where no ``image_size_m`` is given, the square that holds the patch's
+      halo (``patch.halo_m``: the ground whose stationary echoes its traces hold) when
+      ``halo`` (a separation that models the stationary scene from the preliminary
+      image, ``combined`` or ``annihilation``), else the core's box. A stationary
+      target inside the window and band but outside the image is no candidate of such a
+      separation: its whole echo stays in ``S`` and lifts the local floor of ``g(u)``
+      (by 1.3-1.5 dB at 4 m/s for the unit points of ``benchmarks/look_azimuth.py``),
+      where the whole-trace analysis, whose image holds it, takes it out. Only the
+      core's targets are listed and pasted (:func:`analyze_patch`).
+    - **Stationary band**: with ``trajectory`` (the patch's pulses) and no
+      ``stationary_speed_mps`` given, the range speeds ``g(u)`` leaves untested are
+      those of the core's own stationary points (:func:`core_stationary_speed`), not an
+      image's generic band (two range-speed resolutions, or ``V (P / sqrt 2) / R``): a
+      mover of slow range rate that mimics a stationary point of one core is tested by
+      the next patch, whose reference is two core bands away and whose pass band
+      reaches it (:mod:`~sarmotion.collection.merge` notes).
+    - **False-alarm rate**: its share of the collection's (:func:`patch_false_alarm`).
     """
     if single:
         return options
-    out = options
+    out = patch_false_alarm(options, patch)
     if options.image_size_m is None:
-        out = dataclasses.replace(out, image_size_m=patch.size_m)
+        size = patch.halo_m if halo and patch.halo_m is not None else patch.size_m
+        out = dataclasses.replace(out, image_size_m=max(size, patch.size_m))
     if trajectory is not None and options.stationary_speed_mps is None:
         out = dataclasses.replace(
             out, stationary_speed_mps=core_stationary_speed(trajectory, patch)
@@ -216,20 +234,29 @@ def _patch_options(
     return out
 
 
-def patch_false_alarm(options: AnalysisOptions, n_patches: int) -> AnalysisOptions:
-    """The options each of ``n_patches`` patches is analysed with: the false-alarm rate shared.
+def patch_false_alarm(options: AnalysisOptions, patch: Patch) -> AnalysisOptions:
+    """The options ``patch`` is tested with: its share of the collection's false-alarm rate.
 
-    ``options.false_alarm_rate`` is the collection's: the probability of a false mover
-    anywhere in it. Each patch tests its candidates at ``alpha / n_patches`` (the union
-    bound over the patches; a mover's echo tested by two overlapping patches only makes
-    it conservative), which raises the ``g(u)`` threshold by the null tail's scale times
-    ``ln n_patches`` (:func:`~sarmotion.motion.threshold_db`). One patch: unchanged.
+    ``options.false_alarm_rate`` ``alpha`` is the collection's: the probability of a
+    false mover anywhere in it. A patch's ``g(u)`` test at ``alpha_p`` finds a null
+    candidate somewhere in the data its traces hold (its halo ``H_p``, in ground range
+    and cross range); it reports it only where its fit lies in the patch's band
+    (:func:`in_band`: its keep box ``K_p``). With the null candidate as likely anywhere
+    in ``H_p``, the patch reports a false mover with probability at most ``alpha_p
+    |K_p| / |H_p|``; ``alpha_p = alpha min(1, |H_p| / sum_q |K_q|)``
+    (``patch.false_alarm_share``, :func:`~sarmotion.collection.plan_patches`) makes the
+    sum over the patches at most ``alpha`` (the union bound over the patches' reports,
+    a keep box shared by two patches counted twice). Patches that hold disjoint data
+    test at ``alpha |K_p| / sum |K_q|``, about ``alpha / n``; patches that hold the same
+    data (a small scene, every Doppler kept) test each at ``alpha``, as the whole-trace
+    analysis of those data does. The ``g(u)`` threshold rises by the null tail's scale
+    times ``ln(1 / share)`` (:func:`~sarmotion.motion.threshold_db`). A share of 1 (one
+    patch): unchanged.
     """
-    if n_patches <= 1:
+    share = float(patch.false_alarm_share)
+    if share >= 1.0:
         return options
-    return dataclasses.replace(
-        options, false_alarm_rate=options.false_alarm_rate / float(n_patches)
-    )
+    return dataclasses.replace(options, false_alarm_rate=options.false_alarm_rate * share)
 
 
 def core_stationary_speed(trajectory: Trajectory, patch: Patch) -> float:
@@ -314,7 +341,8 @@ def analyze_patch(
     (PatchResult, AnalysisResult)
     """
     keep = None if single else in_band(traces, patch)
-    opts = _patch_options(patch, options, single, traces.trajectory)
+    method = options.separation.method or default_method(traces)
+    opts = _patch_options(patch, options, single, traces.trajectory, halo=method != "rpca")
     result = analyze(traces, opts, keep=keep, progress=progress)
     if single:  # the merge drops a collection's smear (one smear rule for every size)
         result = drop_smear(result)
@@ -538,15 +566,12 @@ def analyze_collection(
         spacing = _mosaic_spacing(plan, opts)
         canvas = mosaic_grid(plan.extent_m, spacing)
         origin = (plan.extent_m[0], plan.extent_m[1], spacing)
-        run_opts = dataclasses.replace(
-            opts, analysis=patch_false_alarm(opts.analysis, len(plan.patches))
-        )
         # closing: an exception here (Ctrl-C) stops the cluster before it leaves the call
         with closing(
             _run(
                 src,
                 plan,
-                run_opts,
+                opts,
                 scheduler,
                 n_workers,
                 processes,
