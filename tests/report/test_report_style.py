@@ -205,6 +205,33 @@ def _tracking_result(*, on_road: bool):
     return made(on_road)
 
 
+def test_track_report_timings_give_the_total_first_and_the_summed_analysis_as_worker_time(
+    tmp_path,
+):
+    """Analyses summed over parallel workers (111.54 s) exceed the wall-clock total (62.80 s):
+    the total comes first, the sum is labelled worker time and not a part of the total,
+    and the wall-clock rows after the total add up to no more than it."""
+    from sarmotion.report.tracks import timing_rows, write_tracks_report
+
+    tracking = dataclasses.replace(
+        _tracking_result(on_road=False), timings_s={"analysis": 111.54, "total": 62.80}
+    )
+    document = {"tracks": [], "sub_apertures": [{}] * 12}
+    text = write_tracks_report(tracking, tmp_path, document=document)[1].read_text()
+    timings = re.search(r"<h2>Timings</h2>(.*?)</section>", text, re.S)[1]
+    assert "<th>time</th><th>s</th><th>what it counts</th>" in timings
+    rows = re.findall(r"<tr><td>(.*?)</td><td>(.*?)</td><td>(.*?)</td></tr>", timings)
+    assert [r[:2] for r in rows] == [("total", "62.80"), ("analysis (worker time)", "111.54")]
+    assert "wall-clock" in rows[0][2]
+    assert "12 sub-apertures" in rows[1][2] and "summed" in rows[1][2]
+    assert "not a part of the total" in rows[1][2] and "1.8 x the total" in rows[1][2]
+    # any further stage is wall-clock time within the total
+    rows = timing_rows({"total": 10.0, "analysis": 8.0, "association": 1.5, "mean": 0.5}, 3)
+    assert rows[0][0] == "total" and "0.8 x the total" in rows[1][2]
+    parts = [float(r[1]) for r in rows[1:] if "worker time" not in r[0]]
+    assert parts == [1.5, 0.5] and sum(parts) <= float(rows[0][1])
+
+
 @pytest.mark.parametrize("on_road", [False, True])
 def test_track_map_ellipses_are_filled_with_a_solid_edge_and_named(on_road):
     """Each 1-sigma ellipse: a translucent fill, an opaque edge of 1.2 pt or more in the

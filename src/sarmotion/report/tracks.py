@@ -29,7 +29,13 @@ from ..tracking import TrackingResult
 from .page import figure, header_line, page, section, table
 from .plotting import LEGEND_PT, draw_look_arrow
 
-__all__ = ["sigma_ellipse", "tracks_figure", "turn_line", "write_tracks_report"]
+__all__ = [
+    "sigma_ellipse",
+    "timing_rows",
+    "tracks_figure",
+    "turn_line",
+    "write_tracks_report",
+]
 
 _COLOURS = ("tab:red", "tab:cyan", "tab:green", "tab:orange", "tab:purple", "tab:pink")
 
@@ -195,6 +201,60 @@ def turn_line(track: dict[str, Any]) -> str:
     )
 
 
+def timing_rows(timings_s: dict[str, float], n_sub_apertures: int) -> list[list[str]]:
+    """The rows of the tracks report's timings (HTML cells): the wall-clock total first.
+
+    ``timings_s`` is :attr:`~sarmotion.tracking.TrackingResult.timings_s`: ``"total"``,
+    the wall-clock time of the tracking call, and ``"analysis"``, the sub-apertures'
+    analysis times added up. The sub-apertures are analysed in parallel on the workers,
+    so that sum is worker time, not a part of the total: it exceeds the total whenever
+    the workers overlap. Its row says so, with the sum over the total (the mean number
+    of sub-apertures analysed at once, when above 1). Any other stage follows as
+    wall-clock time.
+
+    Parameters
+    ----------
+    timings_s : dict of str to float
+        Seconds by stage.
+    n_sub_apertures : int
+        Sub-apertures analysed.
+
+    Returns
+    -------
+    list of [str, str, str]
+        Name, seconds and what it counts, per row.
+    """
+    rows = []
+    total = timings_s.get("total")
+    if total is not None:
+        rows.append(
+            [
+                "total",
+                f"{total:.2f}",
+                "wall-clock time of the tracking: the sub-apertures analysed on the workers, "
+                "their detections associated into tracks, the stationary images averaged",
+            ]
+        )
+    for key, value in timings_s.items():
+        if key == "total":
+            continue
+        if key == "analysis":
+            ratio = f"; {value / total:.2g} x the total" if total else ""
+            rows.append(
+                [
+                    "analysis (worker time)",
+                    f"{value:.2f}",
+                    f"each of the {n_sub_apertures} sub-apertures' analysis time on its "
+                    "worker, summed: analyses on several workers run at once, so the sum "
+                    "is not a part of the total and exceeds it when they overlap"
+                    f"{ratio} (the mean number analysed at once, when above 1)",
+                ]
+            )
+        else:
+            rows.append([html.escape(key), f"{value:.2f}", "wall-clock time"])
+    return rows
+
+
 def write_tracks_report(
     result: TrackingResult,
     directory: str | Path,
@@ -232,7 +292,7 @@ def write_tracks_report(
         "its family (the data of a few degrees do not fix it): see "
         "<code>cross_range_family</code> in tracks.json.</p>"
     )
-    timings = [[html.escape(k), f"{v:.2f}"] for k, v in result.timings_s.items()]
+    timings = timing_rows(result.timings_s, n_sub)
     parts = [
         section("Tracks", figure(uri, caption) + note),
         section(
@@ -247,7 +307,7 @@ def write_tracks_report(
             "States",
             table(_HEAD, rows) if rows else "<p>No track: no mover was followed.</p>",
         ),
-        section("Timings", table(["stage", "wall-clock (s)"], timings)),
+        section("Timings", table(["time", "s", "what it counts"], timings)),
     ]
     page_path = d / "report.html"
     page_path.write_text(page(title, header_line(found), parts), encoding="utf-8")
