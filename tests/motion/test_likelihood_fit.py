@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from sarmotion.core import cross_range_speed, ground_velocity, range_speed
+from sarmotion.core import C, cross_range_speed, ground_velocity, range_speed
 from sarmotion.imaging import resolution
 from sarmotion.motion.likelihood import MatchedFilter, _local_fit
 from sarmotion.simulation import random_scene, simulate
@@ -58,3 +58,39 @@ def test_local_fit_reaches_the_nelder_mead_maximum(seed):
     assert abs(fit_ur - (ur + ref.x[1])) < 1e-5
     assert abs(fit_up - (up + ref.x[2])) < 1e-3
     assert abs(value) >= -ref.fun * (1 - 1e-9)
+
+
+def test_responses_on_the_planes_are_the_row_sums_and_the_direct_sum():
+    # I(theta) for one point (row sums, no planes built), for a batch (which builds the
+    # frequency-major planes) and after them (the planes again), against the direct
+    # sum of P W exp(2i pi f dtau) over pulses and frequencies: the same to 1e-13 of
+    # sum |P W| / sum W^2, the largest |I| the data allow.
+    sim = simulate(random_scene(n_stationary=3, movers=[((2.0, -3.0), (4.0, 6.0))], rng=7))
+    tr = sim.traces
+    rng = np.random.default_rng(7)
+    pos = np.column_stack([rng.uniform(-5, 5, (4, 2)), np.zeros(4)])
+    vel = rng.uniform(-8, 8, (4, 2))
+    mf = MatchedFilter(tr)
+    single = np.array([mf.responses(p[None], v[None])[0] for p, v in zip(pos, vel, strict=True)])
+    assert mf._planes is None
+    batch = mf.responses(pos, vel)
+    assert mf._planes is not None
+    again = mf.responses(pos[:1], vel[:1])
+    w = tr.radar.spectral_weights()
+    weighted = tr.phase_history() * w[None, :]
+    direct = []
+    for p, v in zip(pos, vel, strict=True):
+        where = p[None, :] + tr.slow_times_s[:, None] * np.r_[v, 0.0][None, :]
+        dtau = (
+            2.0
+            * (
+                np.linalg.norm(tr.positions_m - where, axis=1)
+                - np.linalg.norm(tr.positions_m - tr.reference_point_m, axis=1)
+            )
+            / C
+        )
+        phase = np.exp(2j * np.pi * np.outer(dtau, tr.frequencies_hz))
+        direct.append(np.sum(weighted * phase) / np.sum(w**2))
+    scale = np.sum(np.abs(weighted)) / np.sum(w**2)
+    for got in (single, batch, np.r_[again, batch[1:]]):
+        np.testing.assert_allclose(got, direct, rtol=0, atol=1e-13 * scale)

@@ -150,12 +150,21 @@ class MatchedFilter:
         self.ref_range = np.linalg.norm(self.antenna - traces.reference_point_m, axis=1)
         self._planes: FrequencyPlanes | None = None
 
-    def response_derivatives(self) -> ResponseDerivatives:
-        """``|I|^2`` with its gradient and Hessian in linear parameters (Newton fits)."""
+    def planes(self) -> FrequencyPlanes:
+        """The weighted phase history stored frequency-major, built on first use.
+
+        Building it costs about two row sums over the data; each sum on it then costs
+        0.4 of :func:`~sarmotion.core.spectral.phased_row_sums` (0.65 against 1.55 ms on
+        1187 x 406 traces), so a search of many evaluations builds it first.
+        """
         if self._planes is None:
             self._planes = FrequencyPlanes(self.weighted)
+        return self._planes
+
+    def response_derivatives(self) -> ResponseDerivatives:
+        """``|I|^2`` with its gradient and Hessian in linear parameters (Newton fits)."""
         return ResponseDerivatives(
-            self._planes,
+            self.planes(),
             self.antenna,
             2.0 * self.ref_range / C,
             float(self.freq[0]),
@@ -172,7 +181,9 @@ class MatchedFilter:
         advancing by a fixed rotation (:func:`sarmotion.core.spectral.phased_row_sums`,
         re-seeded exactly every 32 bins): the same values as forming
         ``exp(2i pi f dtau)`` to ~1e-14 of ``sum |P W|`` (tested against that direct
-        form), without a complex exponential per term.
+        form), without a complex exponential per term. Once :meth:`planes` is built
+        (or for two or more points, which build it) the sums run on it, the rows in
+        SIMD lanes: the same sums to ~1e-16 of ``sum |P W|``.
 
         Returns
         -------
@@ -185,6 +196,7 @@ class MatchedFilter:
         out = np.empty(pos.shape[0], dtype=np.complex128)
         step = max(1, _CHUNK // self.weighted.size)
         f0 = float(self.freq[0])
+        planes = self.planes() if self._planes is not None or pos.shape[0] > 1 else None
         for i0 in range(0, pos.shape[0], step):
             where = (
                 pos[i0 : i0 + step, None, :] + self.slow[None, :, None] * v3[i0 : i0 + step, None]
@@ -192,7 +204,10 @@ class MatchedFilter:
             rng = np.linalg.norm(self.antenna[None] - where, axis=2)
             delays = np.ascontiguousarray(2.0 * (rng - self.ref_range[None]) / C)
             for i, d in enumerate(delays):
-                out[i0 + i] = phased_row_sums(self.weighted, d, f0, self.freq_step).sum()
+                if planes is not None:
+                    out[i0 + i] = planes.sums(d, f0, self.freq_step).sum()
+                else:
+                    out[i0 + i] = phased_row_sums(self.weighted, d, f0, self.freq_step).sum()
         return out / self.norm
 
 
@@ -408,6 +423,7 @@ def _local_fit(
         p, v = unpack(q)
         return -float(abs(mf.responses(p[None], v[None])[0]))
 
+    mf.planes()  # the simplex's evaluations and the ascent's run on it
     q0 = np.zeros(3)
     start = cost(q0)
     res = minimize(
