@@ -4,6 +4,7 @@ Run with::
 
     pytest benchmarks/bench_backprojection.py --benchmark-only
     python benchmarks/bench_backprojection.py          # the FastSAR comparison table only
+    python benchmarks/bench_backprojection.py 1024 2048 --exact-only --rounds 5  # see --help
 
 (``--benchmark-only`` overrides the ``--benchmark-skip`` of the project configuration;
 ``--benchmark-enable`` does not.)
@@ -318,8 +319,18 @@ def _fastsar_formers(fastsar, traces, grid: ImageGrid, backend: str = "cpu"):
     return exact, factorised
 
 
-def compare_with_fastsar(traces, n: int, rounds: int) -> dict:
-    """One row of the comparison (module docstring): rates, SER against the exact sum, load."""
+#: The imagers of ``--exact-only``: the exact formers alone.
+EXACT_IMAGERS = ("sarmotion exact", "sarmotion exact, new data", "FastSAR exact (cubic)")
+
+
+def compare_with_fastsar(traces, n: int, rounds: int, imagers_kept=None) -> dict:
+    """One row of the comparison (module docstring): rates, SER against the exact sum, load.
+
+    ``imagers_kept``: the names of the imagers to run (default all). Besides the wall-clock
+    rates, ``pixel_pulses_per_cpu_second_median`` divides the work by each call's CPU time
+    (the process, all threads): on a machine shared with other jobs the wall clock counts
+    their time too.
+    """
     import fastsar
 
     numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
@@ -348,17 +359,25 @@ def compare_with_fastsar(traces, n: int, rounds: int) -> dict:
         "FastSAR exact (cubic)": lambda: np.asarray(fs_exact(P)).T * scale,
         "FastSAR factorised": lambda: np.asarray(fs_factorised(P)).T * scale,
     }
+    if imagers_kept is not None:
+        imagers = {name: f for name, f in imagers.items() if name in imagers_kept}
     load = [os.getloadavg()[0]]
     ser = {name: _ser_vs_exact(traces, grid, f()) for name, f in imagers.items()}  # + warm-up
     times: dict[str, list[float]] = {name: [] for name in imagers}
+    cpu: dict[str, list[float]] = {name: [] for name in imagers}
     for _ in range(rounds):  # alternating: every imager once per round
         for name, f in imagers.items():
-            t0 = time.perf_counter()
-            f()
-            times[name].append(time.perf_counter() - t0)
+            wall, cpu_s = _timed(f)
+            times[name].append(wall)
+            cpu[name].append(cpu_s)
     load.append(os.getloadavg()[0])
     work = n * n * traces.n_pulses
     rates = {name: work / float(np.median(t)) for name, t in times.items()}
+    cpu_rates = {name: work / float(np.median(t)) for name, t in cpu.items()}
+
+    def ratio(a: str, b: str, r: dict = rates) -> float:
+        return r[a] / r[b] if a in r and b in r else math.nan
+
     return {
         "grid": f"{n}x{n}",
         "spacing_m": FASTSAR_EXTENT_M / n,
@@ -367,13 +386,19 @@ def compare_with_fastsar(traces, n: int, rounds: int) -> dict:
         "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
         "ser_db_vs_exact_sum": ser,
         "pixel_pulses_per_second_median": rates,
-        "exact_speed_ratio": rates["sarmotion exact"] / rates["FastSAR exact (cubic)"],
-        "ffbp_speed_ratio": rates["sarmotion FFBP"] / rates["FastSAR factorised"],
-        "exact_new_data_speed_ratio": rates["sarmotion exact, new data"]
-        / rates["FastSAR exact (cubic)"],
-        "ffbp_new_data_speed_ratio": rates["sarmotion FFBP, new data"]
-        / rates["FastSAR factorised"],
-        "ffbp_cold_speed_ratio": rates["sarmotion FFBP, cold"] / rates["FastSAR factorised"],
+        "pixel_pulses_per_second_best": {n_: work / min(t) for n_, t in times.items()},
+        "pixel_pulses_per_cpu_second_median": cpu_rates,
+        "seconds": times,
+        "cpu_seconds": cpu,
+        "exact_speed_ratio": ratio("sarmotion exact", "FastSAR exact (cubic)"),
+        "ffbp_speed_ratio": ratio("sarmotion FFBP", "FastSAR factorised"),
+        "exact_new_data_speed_ratio": ratio("sarmotion exact, new data", "FastSAR exact (cubic)"),
+        "ffbp_new_data_speed_ratio": ratio("sarmotion FFBP, new data", "FastSAR factorised"),
+        "ffbp_cold_speed_ratio": ratio("sarmotion FFBP, cold", "FastSAR factorised"),
+        "exact_cpu_speed_ratio": ratio("sarmotion exact", "FastSAR exact (cubic)", cpu_rates),
+        "exact_new_data_cpu_speed_ratio": ratio(
+            "sarmotion exact, new data", "FastSAR exact (cubic)", cpu_rates
+        ),
         "load_average_1min": load,
     }
 
@@ -391,34 +416,112 @@ def test_against_fastsar(benchmark, traces, n):
 
 def _table(rows: list[dict]) -> str:
     names = list(rows[0]["ser_db_vs_exact_sum"])
-    head = "| imager | SER vs exact sum (dB) | pixel-pulses/s: " + " / ".join(
-        r["grid"] for r in rows
-    )
-    lines = [head + " |", "|---|---|---|"]
+    grids = " / ".join(r["grid"] for r in rows)
+    head = f"| imager | SER vs exact sum (dB) | pixel-pulses/s: {grids} | per CPU-second: {grids}"
+    lines = [head + " |", "|---|---|---|---|"]
     for name in names:
         sers = ", ".join(f"{r['ser_db_vs_exact_sum'][name]:.1f}" for r in rows)
         rates = " / ".join(f"{r['pixel_pulses_per_second_median'][name]:.2e}" for r in rows)
-        lines.append(f"| {name} | {sers} | {rates} |")
+        cpu = " / ".join(f"{r['pixel_pulses_per_cpu_second_median'][name]:.2e}" for r in rows)
+        lines.append(f"| {name} | {sers} | {rates} | {cpu} |")
     loads = "; ".join(
         f"{r['grid']}: {r['load_average_1min'][0]:.1f}-{r['load_average_1min'][1]:.1f}"
         for r in rows
     )
     ratios = "; ".join(
         f"{r['grid']}: exact {r['exact_speed_ratio']:.2f}x (new data "
-        f"{r['exact_new_data_speed_ratio']:.2f}x), FFBP {r['ffbp_speed_ratio']:.2f}x (new data "
-        f"{r['ffbp_new_data_speed_ratio']:.2f}x, cold {r['ffbp_cold_speed_ratio']:.2f}x)"
+        f"{r['exact_new_data_speed_ratio']:.2f}x)"
+        + ("" if math.isnan(r["ffbp_speed_ratio"]) else
+           f", FFBP {r['ffbp_speed_ratio']:.2f}x (new data "
+           f"{r['ffbp_new_data_speed_ratio']:.2f}x, cold {r['ffbp_cold_speed_ratio']:.2f}x)")
+        for r in rows
+    )  # fmt: skip
+    cpu_ratios = "; ".join(
+        f"{r['grid']}: exact {r['exact_cpu_speed_ratio']:.2f}x (new data "
+        f"{r['exact_new_data_cpu_speed_ratio']:.2f}x)"
         for r in rows
     )
-    return "\n".join(lines) + f"\n\nsarmotion / FastSAR: {ratios}\nload average: {loads}"
+    return "\n".join(lines) + (
+        f"\n\nsarmotion / FastSAR: {ratios}\nper CPU-second: {cpu_ratios}\nload average: {loads}"
+    )
+
+
+def flops_per_pixel_pulse(isa: str | None) -> dict[str, int]:
+    """Operations per pixel and pulse of the inner loop's IR (the unchecked window variant,
+    or the gathers' variant where ``isa`` is ``None``).
+
+    ``flops``: floating-point additions, subtractions and multiplications, a fused
+    multiply-add counted as two; ``fma``, ``add_mul`` the instructions behind them;
+    ``other``: the other vector instructions per lane (rounding, conversions, comparisons,
+    selects, sign flips, permutes), which take the same ports on most x86 CPUs.
+    """
+    from sarmotion.imaging import _simd
+
+    ir = _simd._build_ir(isa=isa, checked=isa is None)
+    body = ir[ir.index("px:") : ir.index("row.end:")]
+    vector = f"<{_simd.LANES} x "
+    count = {"fma": 0, "add_mul": 0, "other": 0}
+    for line in body.splitlines():
+        if "=" not in line or vector not in line:
+            continue
+        op = line.split("=", 1)[1].split()
+        if "@llvm.fmuladd" in line:
+            count["fma"] += 1
+        elif op[0] in ("fadd", "fsub", "fmul"):
+            count["add_mul"] += 1
+        elif op[0] not in ("load", "getelementptr", "phi", "bitcast", "extractelement",
+                           "insertelement"):  # fmt: skip
+            count["other"] += 1
+    count["flops"] = 2 * count["fma"] + count["add_mul"]
+    return count
+
+
+def _main(argv: list[str] | None = None) -> None:
+    import argparse
+    import importlib.util
+    import json
+    import sys
+
+    from sarmotion.imaging import _simd
+
+    parser = argparse.ArgumentParser(
+        description="sarmotion's imagers against FastSAR's (module docstring of "
+        "benchmarks/bench_backprojection.py): one table row per imager, medians of the "
+        "rounds, wall clock and per CPU-second. Emulate another x86 CPU with "
+        'NUMBA_CPU_NAME=haswell NUMBA_CPU_FEATURES="" (numba, and the inner loop\'s '
+        'instruction set with it) and FFBP_CPU_FLAGS="-O3 -march=haswell" (FastSAR).'
+    )
+    parser.add_argument("sizes", nargs="*", type=int, default=list(FASTSAR_SIZES),
+                        help="image sides in pixels (default: %(default)s)")  # fmt: skip
+    parser.add_argument("--rounds", type=int, default=None,
+                        help="rounds of each imager (default 15 up to 256, else 3)")  # fmt: skip
+    parser.add_argument("--exact-only", action="store_true",
+                        help="the exact formers alone: " + ", ".join(EXACT_IMAGERS))  # fmt: skip
+    parser.add_argument("--json", type=Path, default=None, help="also write the rows here")
+    args = parser.parse_args(argv)
+    if importlib.util.find_spec("fastsar") is None:
+        sys.exit("FastSAR is not installed (pip install 'sarmotion[bench]'): nothing to compare")
+    flops = flops_per_pixel_pulse(_simd.ISA)
+    sys.stdout.write(
+        f"numba target: {numba.config.CPU_NAME or 'host'}, features "
+        f"{'host' if numba.config.CPU_FEATURES is None else repr(numba.config.CPU_FEATURES)}"
+        f"; inner loop's table read: {_simd.ISA or 'gathers'}; FastSAR flags: "
+        f"{os.environ.get('FFBP_CPU_FLAGS', 'its default')}\n"
+        f"inner loop per pixel and pulse: {flops['flops']} flops ({flops['fma']} fused "
+        f"multiply-adds, {flops['add_mul']} adds and multiplies), {flops['other']} other "
+        "vector operations\n\n"
+    )
+    tr = _load_traces()
+    kept = EXACT_IMAGERS if args.exact_only else None
+    out = [
+        compare_with_fastsar(tr, n, rounds=args.rounds or (15 if n <= 256 else 3),
+                             imagers_kept=kept)
+        for n in args.sizes
+    ]  # fmt: skip
+    sys.stdout.write(_table(out) + "\n")
+    if args.json is not None:
+        args.json.write_text(json.dumps(out, indent=1))
 
 
 if __name__ == "__main__":
-    import importlib.util
-    import sys
-
-    if importlib.util.find_spec("fastsar") is None:
-        sys.exit("FastSAR is not installed (pip install 'sarmotion[bench]'): nothing to compare")
-    tr = _load_traces()
-    sizes = [int(a) for a in sys.argv[1:]] or list(FASTSAR_SIZES)
-    out = [compare_with_fastsar(tr, n, rounds=15 if n <= 256 else 3) for n in sizes]
-    sys.stdout.write(_table(out) + "\n")
+    _main()

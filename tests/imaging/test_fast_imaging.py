@@ -110,13 +110,108 @@ def test_float32_kernel_reads_the_table_by_windows_or_gathers(look_deg, spacing_
 
 
 def test_inner_loop_ir_with_and_without_windows():
-    # Every variant of the inner loop is valid IR (the window path needs AVX-512; CPUs
-    # without it compile the gathers alone); the unchecked window variant has no gathers.
-    for permute, checked in ((False, True), (True, True), (True, False)):
-        ir = _simd._build_ir(permute=permute, checked=checked)
+    # Every variant of the inner loop is valid IR (the window paths need AVX-512 or AVX2;
+    # other CPUs compile the gathers alone); the unchecked window variants have no gathers.
+    for isa, checked in ((None, True), ("avx512", True), ("avx512", False), ("avx2", True),
+                         ("avx2", False)):  # fmt: skip
+        ir = _simd._build_ir(isa=isa, checked=checked)
         llvm.parse_assembly(ir).verify()
-        assert ("vpermi2var" in ir) == permute
+        assert ("vpermi2var" in ir) == (isa == "avx512")
+        assert ("avx2.permps" in ir) == (isa == "avx2")
         assert ("@llvm.masked.gather" in ir.split("declare")[0]) == checked
+    with pytest.raises(ValueError, match="instruction set"):
+        _simd._build_ir(isa="sse2")
+
+
+# One pulse on one tile through tile_pulse, in a fresh interpreter whose numba compiles for
+# the CPU named in its environment; prints the instruction set chosen and writes the sums
+# (checked and unchecked variants) of seeded rows whose lanes span a given number of table
+# entries each, and the inner loop's assembly.
+_ONE_PULSE_SCRIPT = """
+import sys
+import numba
+import numpy as np
+from sarmotion.imaging import _simd
+
+@numba.njit
+def one(tab, nxv, nyv, txv, tyv, scalars, windowed):
+    acc_re = np.zeros(nyv.size * nxv.size, np.float32)
+    acc_im = np.zeros(nyv.size * nxv.size, np.float32)
+    f0, i0f, a1, a2, a3, a4, si, sq, hi = scalars
+    _simd.tile_pulse(nxv, nyv, txv, tyv, tab, 0, acc_re, acc_im, nxv.size, nyv.size, nxv.size,
+                     tab.shape[1] // 8, f0, i0f, a1, a2, a3, a4, si, sq, hi, windowed)
+    return acc_re + 1j * acc_im.astype(np.complex128)
+
+rng = np.random.default_rng(11)
+n_up = 2000
+tab = rng.standard_normal((1, 8 * (n_up + 2 + 32))).astype(np.float32)
+out = {}
+for per_lane in (0.05, -0.15, 0.3, 0.45, 1.0, 3.0):
+    nxv = (np.arange(4 * 16) * per_lane * 0.04).astype(np.float32)
+    nyv = (np.arange(8) * 0.04).astype(np.float32)
+    txv = rng.uniform(-2, 2, nxv.size).astype(np.float32)
+    tyv = rng.uniform(-2, 2, nyv.size).astype(np.float32)
+    s = np.array([0.3, 1000.0, 1.0, -1e-5, 0.0, 0.0, 25.0, 0.7, n_up], np.float32)
+    out[f"checked {per_lane}"] = one(tab, nxv, nyv, txv, tyv, s, False)
+    out[f"unchecked {per_lane}"] = one(tab, nxv, nyv, txv, tyv, s, True)
+np.savez(sys.argv[1], **out)
+asm = "".join(one.inspect_asm().values())
+open(sys.argv[2], "w").write(asm)
+print(_simd.ISA)
+"""
+
+
+def _one_pulse_in(tmp_path, name: str, cpu: str, features: str = "") -> tuple[str, dict, str]:
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CPU_NAME=cpu, NUMBA_CPU_FEATURES=features)
+    sums, asm = tmp_path / f"{name}.npz", tmp_path / f"{name}.s"
+    proc = subprocess.run([sys.executable, "-c", _ONE_PULSE_SCRIPT, str(sums), str(asm)],
+                          env=env, capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    with np.load(sums) as f:
+        return proc.stdout.strip(), dict(f), asm.read_text()
+
+
+def _function_asm(asm: str, name: str) -> str:
+    start = asm.index(name + ":")
+    return asm[start : asm.index(".Lfunc_end", start)]
+
+
+def test_avx2_window_read_matches_the_gathers():
+    # numba compiling for Haswell (AVX2, no AVX-512: NUMBA_CPU_NAME=haswell with the
+    # features LLVM gives it) reads the table by 8-entry windows and vpermps, with no
+    # 512-bit register; for AVX with FMA but no AVX2 (Sandy Bridge with FMA: the same
+    # fused products) it gathers alone. Both sum the same pieces with the same arithmetic
+    # (bit for bit here; one float32 rounding of the sums' scale allowed): the checked
+    # variants at every lane span (windows where they fit, gathers where not), the
+    # unchecked AVX2 variant where the window holds a step's lanes (up to 0.45 entries a
+    # lane: 3.2 entries over 8 lanes). Where it does not, the unchecked variant reads
+    # other entries and its sums move by the table's own scale.
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as d:
+        isa, avx2, asm = _one_pulse_in(Path(d), "haswell", "haswell")
+        generic_isa, generic, _ = _one_pulse_in(Path(d), "generic", "sandybridge", "+fma")
+    assert isa == "avx2" and generic_isa == "None"
+    for name in (_simd._function_name(LANES, "avx2", True),
+                 _simd._function_name(LANES, "avx2", False)):  # fmt: skip
+        body = _function_asm(asm, name)
+        assert "zmm" not in body and "vpermt2ps" not in body and "vpermi2ps" not in body
+        assert body.count("vpermps") + body.count("vpermd") == 16  # 8 planes, 2 halves
+        if name.endswith("windowed_avx2"):
+            assert "gather" not in body
+    for key, ref in generic.items():
+        scale = np.max(np.abs(ref))
+        assert scale > 0.1
+        error = np.max(np.abs(avx2[key] - ref))
+        if key.startswith("unchecked") and abs(float(key.split()[1])) > 0.45:
+            assert error > 0.1 * scale, key  # not a case the kernel runs
+        else:
+            assert error <= 2.0**-24 * scale, key
 
 
 @numba.njit
@@ -154,13 +249,20 @@ def test_the_unchecked_window_variant_sums_the_same_pieces():
 
 
 def _step_floors_fit_the_window(q: np.ndarray, hi: float) -> bool:
-    """Whether every LANES-pixel step of rows ``q`` (table positions) reads its window."""
+    """Whether every LANES-pixel step of rows ``q`` (table positions) reads its window.
+
+    Both windows: AVX-512's (``2 LANES`` entries from 4 below the smaller end lane's entry)
+    and AVX2's (per 8 lanes, 8 entries from 3 below the smaller of their end lanes' entries).
+    """
     ix = np.floor(q).astype(np.int64)
     if ix.min() < 1 or ix.max() >= hi:
         return False
-    steps = ix.reshape(ix.shape[0], -1, LANES)
-    mn = np.maximum(np.minimum(steps[..., 0], steps[..., -1]) - 4, 0)[..., None]
-    return bool(np.all((steps >= mn) & (steps < mn + 2 * LANES)))
+    fits = True
+    for width, margin, window in ((LANES, 4, 2 * LANES), (8, 3, 8)):
+        steps = ix.reshape(ix.shape[0], -1, width)
+        mn = np.maximum(np.minimum(steps[..., 0], steps[..., -1]) - margin, 0)[..., None]
+        fits &= bool(np.all((steps >= mn) & (steps < mn + window)))
+    return fits
 
 
 def test_the_unchecked_window_variant_is_chosen_only_where_every_step_fits():

@@ -16,21 +16,28 @@ float64 and reduced to ``[-2, 2)`` by the caller (:func:`tile_pulses`), so only 
 (a few quarter cycles) is float32. ``tab`` holds the pulse's cubic pieces
 (:class:`~sarmotion.imaging._bp_table.TraceTable`) in eight float32 planes (the real and
 imaginary parts of ``c0 .. c3``), so the lanes' entries of one plane arrive in one vector
-without de-interleaving: where they lie within a window of ``2 LANES`` entries (neighbouring
-pixels read neighbouring entries: the usual case, see
-:func:`~sarmotion.imaging._bp_kernels.lane_spans`), two vector loads and one two-source
-permute per plane (AVX-512, :data:`PERMUTE`); otherwise, and on other CPUs, one gather per
-plane. Positions outside ``[1, hi)`` read entry 0 (zero) with ``w = 0``. Where
-:func:`tile_pulses` has shown, for a whole pulse and tile, that every step's lanes lie in
-their window (:func:`lanes_in_window`), a second variant runs without the per-step check
-and without the gathers behind it.
+without de-interleaving. Where they lie within a window (neighbouring pixels read
+neighbouring entries: the usual case, see :func:`~sarmotion.imaging._bp_kernels.lane_spans`)
+the table is read without gathers, by the instruction set numba compiles for (:data:`ISA`):
+
+- AVX-512: a window of ``2 LANES`` entries, two vector loads and one two-source permute
+  (``vpermt2ps``) per plane;
+- AVX2: per 8 lanes a window of 8 entries, one load and one ``vpermps`` per plane (two per
+  plane and step: a step's 16 lanes are two 256-bit halves);
+
+otherwise, and on other CPUs, one gather per plane. Positions outside ``[1, hi)`` read
+entry 0 (zero) with ``w = 0``. Where :func:`tile_pulses` has shown, for a whole pulse and
+tile, that every step's lanes lie in their window (:func:`lanes_in_window`), a second
+variant runs without the per-step check and without the gathers behind it.
 ``exp(i pi T / 2)`` is ``i^k exp(i pi (T - k) / 2)``, ``k = rint(T)``, with minimax
 polynomials on ``|T - k| <= 1/2`` (sine: 3 terms, error 5.7e-7; cosine: 4 terms, 5.4e-8).
 
 Why IR and not a numba loop: numba's auto-vectoriser gives 8-lane loops with 64-bit-index
-gathers; this loop is written for 16 lanes and reads the table by windows. Without
-AVX-512 the IR is generic LLVM (vector types, ``llvm.masked.gather``): on a CPU without
-gathers or 512-bit registers LLVM splits or scalarises it, and the result is the same.
+gathers; this loop is written for 16 lanes and reads the table by windows. Without AVX-512
+or AVX2 the IR is generic LLVM (vector types, ``llvm.masked.gather``): on a CPU without
+gathers or wide registers LLVM splits or scalarises it, and the result is the same. (LLVM
+scalarises the gathers also on AVX2 CPUs whose gathers it deems slow, Haswell and AMD's
+Zen among them: there the windows matter most.)
 
 The function is linked into each numba function that calls :func:`tile_pulse` (weak ODR
 linkage, so copies merge) and is not inlined, so its ``prefer-vector-width`` attribute
@@ -40,6 +47,7 @@ holds.
 from __future__ import annotations
 
 import math
+import re
 
 import numba
 import numpy as np
@@ -58,31 +66,85 @@ _SIN = (1.5707885026931763, -0.6457120180130005, 0.07766739279031754)
 _COS = (1.0, -1.2336970567703247, 0.2535986304283142, -0.020408352836966515)
 
 
-def _has_avx512() -> bool:
-    """Whether numba compiles for a CPU with AVX-512F (``NUMBA_CPU_FEATURES`` if set)."""
+def _target() -> tuple[str, str]:
+    """The CPU name and feature string numba compiles for (as its JIT code generator)."""
+    from numba.core.codegen import get_host_cpu_features
+
+    name = numba.config.CPU_NAME or llvm.get_host_cpu_name()
     features = numba.config.CPU_FEATURES
     if features is None:
-        if numba.config.CPU_NAME not in (None, "host"):
-            return False  # a named target CPU without a feature list: assume the least
-        features = llvm.get_host_cpu_features().flatten()
-    return "+avx512f" in features.split(",")
+        features = get_host_cpu_features()
+    return name, features
 
 
-#: Whether the inner loop reads windows of the table with permutes (AVX-512) before
-#: falling back to gathers.
-PERMUTE = LANES == 16 and _has_avx512()
+def _target_isa() -> str | None:
+    """The table read numba's target supports: ``"avx512"``, ``"avx2"`` or ``None``.
+
+    Asked of LLVM itself, for the CPU name and features numba compiles for
+    (``NUMBA_CPU_NAME`` / ``NUMBA_CPU_FEATURES`` when set, else the host's): a 16-float add
+    lowered to one ``zmm`` instruction means AVX-512F, an 8-integer add to one ``ymm``
+    instruction AVX2. So ``NUMBA_CPU_NAME=haswell NUMBA_CPU_FEATURES=""`` (the features
+    LLVM knows for Haswell) selects the AVX2 read on any x86 host, while
+    ``NUMBA_CPU_NAME=haswell`` alone keeps the host's features, AVX-512 included.
+    """
+    name, features = _target()
+    if not llvm.get_process_triple().startswith(("x86_64", "i686", "i386")):
+        return None
+    llvm.initialize_native_target()
+    llvm.initialize_native_asmprinter()
+    probe = (
+        "define <16 x float> @f(<16 x float> %a, <16 x float> %b) #0 {\n"
+        "  %c = fadd <16 x float> %a, %b\n  ret <16 x float> %c\n}\n"
+        "define <8 x i32> @i(<8 x i32> %a, <8 x i32> %b) {\n"
+        "  %c = add <8 x i32> %a, %b\n  ret <8 x i32> %c\n}\n"
+        'attributes #0 = { "prefer-vector-width"="512" "min-legal-vector-width"="512" }\n'
+    )
+    try:
+        tm = llvm.Target.from_default_triple().create_target_machine(
+            cpu=name, features=features, opt=0
+        )
+        asm = tm.emit_assembly(llvm.parse_assembly(probe))
+    except RuntimeError:  # an unknown CPU name or feature: assume the least
+        return None
+    if re.search(r"vaddps\s+%zmm", asm):
+        return "avx512"
+    if re.search(r"vpaddd\s+%ymm", asm):
+        return "avx2"
+    return None
+
+
+#: The instruction set the inner loop reads the table's windows with: ``"avx512"`` (one
+#: two-source permute of 32 entries per plane), ``"avx2"`` (per 8 lanes, one load and one
+#: ``vpermps`` of 8 entries per plane) or ``None`` (gathers alone: generic IR).
+ISA = _target_isa() if LANES == 16 else None
+
+#: Whether the inner loop reads windows of the table with AVX-512 permutes.
+PERMUTE = ISA == "avx512"
+
+#: Entries of one AVX2 window (one ``vpermps``), and the lanes that share it.
+_AVX2_WINDOW = 8
+
+
+def _function_name(v: int, isa: str | None, checked: bool) -> str:
+    if not checked:
+        return f"sarmotion_bp_tile_pulse_v{v}_f32planes_windowed_{isa}"
+    return f"sarmotion_bp_tile_pulse_v{v}_f32planes{'_window_' + isa if isa else ''}"
+
 
 #: Change ``SIMD_VERSION`` in :mod:`._bp_kernels` and :mod:`._ffbp_kernels` with this IR
 #: (numba's cache of their kernels does not see this file).
-_NAME = f"sarmotion_bp_tile_pulse_v{LANES}_f32planes{'_window' if PERMUTE else ''}"
-#: The variant without the per-step window check (AVX-512 only), for a pulse whose lanes
-#: :func:`tile_pulses` has shown to lie in the window at every step.
-_NAME_WINDOWED = f"sarmotion_bp_tile_pulse_v{LANES}_f32planes_windowed"
+_NAME = _function_name(LANES, ISA, True)
+#: The variant without the per-step window check (AVX-512 and AVX2), for a pulse whose
+#: lanes :func:`tile_pulses` has shown to lie in the window at every step.
+_NAME_WINDOWED = _function_name(LANES, ISA, False)
 
 #: Most table entries the lanes of one step may span for the unchecked variant: the window
 #: starts 4 entries below the smaller end lane's entry and holds ``2 LANES``, so lanes
 #: within ``V`` entries of each other (their floors within ``V + 1``) lie inside it when
-#: ``V + 1 <= 4`` (below) and ``4 + V + 1 < 2 LANES`` (above).
+#: ``V + 1 <= 4`` (below) and ``4 + V + 1 < 2 LANES`` (above). The AVX2 read's window
+#: starts 3 entries below the smaller end lane's entry of each eight lanes and holds 8:
+#: eight lanes span 7 of a step's ``LANES - 1`` pixel intervals, so their floors lie within
+#: ``7 V / 15 + 1 < 3`` entries of each other, at most 2 below or above either end lane.
 WINDOW_SPAN = 3.0
 #: The table's planes, in order (:class:`~sarmotion.imaging._bp_table.TraceTable`).
 _PLANES = ("c0re", "c0im", "c1re", "c1im", "c2re", "c2im", "c3re", "c3im")
@@ -93,13 +155,19 @@ def _f32(x: float) -> str:
     return f"0x{int(np.array(np.float32(x), np.float64).view(np.uint64)):016X}"
 
 
-def _build_ir(v: int = LANES, permute: bool = False, checked: bool = True) -> str:
+def _build_ir(v: int = LANES, isa: str | None = None, checked: bool = True) -> str:
     """The inner loop's IR (one function).
 
-    With ``permute`` the table is read by windows and permutes; ``checked`` keeps each
-    step's check that its lanes lie in the window (else gathers), the other variant has
-    neither check nor gathers.
+    ``isa`` ``"avx512"``: the table read by windows of ``2 v`` entries with two-source
+    permutes; ``"avx2"``: by windows of 8 entries per 8 lanes with ``vpermps``; ``None``:
+    gathers alone. ``checked`` keeps each step's check that its lanes lie in their windows
+    (else gathers), the other variant (``isa`` set) has neither check nor gathers.
     """
+    if isa not in (None, "avx512", "avx2"):
+        raise ValueError(f"unknown instruction set {isa!r}")
+    if isa == "avx512" and v != 16 or isa == "avx2" and v not in (8, 16):
+        raise ValueError(f"{isa} windows need {'16' if isa == 'avx512' else '8 or 16'} lanes")
+    permute = isa is not None
     vf, vi, vp, vb = f"<{v} x float>", f"<{v} x i32>", f"<{v} x ptr>", f"<{v} x i1>"
     fma = f"@llvm.fmuladd.v{v}f32"
     lines: list[str] = []
@@ -114,7 +182,7 @@ def _build_ir(v: int = LANES, permute: bool = False, checked: bool = True) -> st
         return acc
 
     scalars = ["f0", "i0f", "a1", "a2", "a3", "a4", "si", "sq", "hi"]
-    name = _NAME if checked else _NAME_WINDOWED
+    name = _function_name(v, isa, checked)
     a(f"define weak_odr void @{name}(ptr noalias %nx, ptr noalias %ny, ptr noalias %tx,"
       " ptr noalias %ty, ptr noalias %tab,"
       " ptr noalias %acc_re, ptr noalias %acc_im, i64 %n, i64 %n_rows, i64 %stride, i64 %plane, "
@@ -164,39 +232,75 @@ def _build_ir(v: int = LANES, permute: bool = False, checked: bool = True) -> st
     a(f"  %ix = select {vb} %ok, {vi} %ix0, {vi} zeroinitializer")
     a(f"  %wk = select {vb} %ok, {vf} %w, {vf} zeroinitializer")
     gather = f"@llvm.masked.gather.v{v}f32.v{v}p0"
-    window = 2 * v  # entries a two-source permute reaches
-    if permute:
+    if isa == "avx512":
         # The lanes' entries within a window of 2 v entries (the usual case): two vector
         # loads and one two-source permute per plane, no gather. The window starts 4
         # entries before the smaller of the end lanes' entries (a row of pixels reads
         # monotone or nearly monotone entries), at entry 0 at the least.
-        a(f"  %ia = extractelement {vi} %ix, i64 0")
-        a(f"  %ib = extractelement {vi} %ix, i64 {v - 1}")
-        a("  %ab = icmp slt i32 %ia, %ib")
-        a("  %iab = select i1 %ab, i32 %ia, i32 %ib")
-        a("  %wlo = sub i32 %iab, 4")
-        a("  %mpos = icmp sgt i32 %wlo, 0")
-        a("  %mn = select i1 %mpos, i32 %wlo, i32 0")
-        a(f"  %mn.i = insertelement {vi} poison, i32 %mn, i64 0")
-        a(f"  %mn.v = shufflevector {vi} %mn.i, {vi} poison, {vi} zeroinitializer")
+        window = 2 * v  # entries a two-source permute reaches
+        groups = [(0, v, 4)]
+    elif isa == "avx2":
+        # Per 8 lanes a window of 8 entries, 3 before the smaller of those lanes' end
+        # entries: one load and one vpermps (within 8 entries) per plane and 8 lanes.
+        window = _AVX2_WINDOW
+        groups = [(g, g + window, 3) for g in range(0, v, window)]
+    if permute:
+        for g, (l0, l1, margin) in enumerate(groups):
+            a(f"  %ia{g} = extractelement {vi} %ix, i64 {l0}")
+            a(f"  %ib{g} = extractelement {vi} %ix, i64 {l1 - 1}")
+            a(f"  %ab{g} = icmp slt i32 %ia{g}, %ib{g}")
+            a(f"  %iab{g} = select i1 %ab{g}, i32 %ia{g}, i32 %ib{g}")
+            a(f"  %wlo{g} = sub i32 %iab{g}, {margin}")
+            a(f"  %mpos{g} = icmp sgt i32 %wlo{g}, 0")
+            a(f"  %mn{g} = select i1 %mpos{g}, i32 %wlo{g}, i32 0")
+        # every lane's window start, as a vector
+        if len(groups) == 1:
+            a(f"  %mn.i = insertelement {vi} poison, i32 %mn0, i64 0")
+            a(f"  %mn.v = shufflevector {vi} %mn.i, {vi} poison, {vi} zeroinitializer")
+        else:
+            a(f"  %mn.v.0 = insertelement {vi} poison, i32 %mn0, i64 0")
+            for g in range(1, len(groups)):
+                a(f"  %mn.v.{g} = insertelement {vi} %mn.v.{g - 1}, i32 %mn{g}, i64 {g}")
+            lanes = ", ".join(f"i32 {k // window}" for k in range(v))
+            a(f"  %mn.v = shufflevector {vi} %mn.v.{len(groups) - 1}, {vi} poison,"
+              f" <{v} x i32> <{lanes}>")  # fmt: skip
         a(f"  %rel = sub {vi} %ix, %mn.v")
         if checked:
             a(f"  %inw = icmp ult {vi} %rel, splat (i32 {window})")
             a(f"  %narrow = call i1 @llvm.vector.reduce.and.v{v}i1({vb} %inw)")
             a("  br i1 %narrow, label %win, label %gat")
             a("win:")
-        a("  %mn64 = sext i32 %mn to i64")
+        for g in range(len(groups)):
+            a(f"  %mn64.{g} = sext i32 %mn{g} to i64")
+        if isa == "avx2":
+            w8f, w8i = f"<{window} x float>", f"<{window} x i32>"
+            for g, (l0, l1, _) in enumerate(groups):
+                lanes = ", ".join(f"i32 {k}" for k in range(l0, l1))
+                a(f"  %rel{g} = shufflevector {vi} %rel, {vi} poison, {w8i} <{lanes}>")
         for p, name in enumerate(_PLANES):
-            a(f"  %w{name}.o = add i64 %mn64, %pl{p}")
-            a(f"  %w{name}.p0 = getelementptr inbounds float, ptr %tab, i64 %w{name}.o")
-            a(f"  %w{name}.p1 = getelementptr inbounds float, ptr %w{name}.p0, i64 {v}")
-            a(f"  %w{name}.0 = load {vf}, ptr %w{name}.p0, align 4")
-            a(f"  %w{name}.1 = load {vf}, ptr %w{name}.p1, align 4")
             target = f"%w{name}" if checked else f"%{name}"
-            a(
-                f"  {target} = call {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf} %w{name}.0,"
-                f" {vi} %rel, {vf} %w{name}.1)"
-            )
+            if isa == "avx512":
+                a(f"  %w{name}.o = add i64 %mn64.0, %pl{p}")
+                a(f"  %w{name}.p0 = getelementptr inbounds float, ptr %tab, i64 %w{name}.o")
+                a(f"  %w{name}.p1 = getelementptr inbounds float, ptr %w{name}.p0, i64 {v}")
+                a(f"  %w{name}.0 = load {vf}, ptr %w{name}.p0, align 4")
+                a(f"  %w{name}.1 = load {vf}, ptr %w{name}.p1, align 4")
+                a(
+                    f"  {target} = call {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf} %w{name}.0,"
+                    f" {vi} %rel, {vf} %w{name}.1)"
+                )
+                continue
+            for g in range(len(groups)):
+                out = target if len(groups) == 1 else f"%w{name}.{g}"
+                a(f"  %w{name}.o{g} = add i64 %mn64.{g}, %pl{p}")
+                a(f"  %w{name}.p{g} = getelementptr inbounds float, ptr %tab, i64 %w{name}.o{g}")
+                a(f"  %w{name}.l{g} = load {w8f}, ptr %w{name}.p{g}, align 4")
+                a(f"  {out} = call {w8f} @llvm.x86.avx2.permps({w8f} %w{name}.l{g},"
+                  f" {w8i} %rel{g})")  # fmt: skip
+            if len(groups) == 2:  # the two halves' vectors, concatenated
+                lanes = ", ".join(f"i32 {k}" for k in range(v))
+                a(f"  {target} = shufflevector {w8f} %w{name}.0, {w8f} %w{name}.1,"
+                  f" {vi} <{lanes}>")  # fmt: skip
         if checked:
             a("  br label %got")
             a("gat:")
@@ -267,16 +371,19 @@ def _build_ir(v: int = LANES, permute: bool = False, checked: bool = True) -> st
     a(f"declare {vf} {gather}({vp}, i32, {vb}, {vf})")
     if permute:
         a(f"declare i1 @llvm.vector.reduce.and.v{v}i1({vb})")
+    if isa == "avx512":
         a(f"declare {vf} @llvm.x86.avx512.vpermi2var.ps.512({vf}, {vi}, {vf})")
+    if isa == "avx2":
+        a("declare <8 x float> @llvm.x86.avx2.permps(<8 x float>, <8 x i32>)")
     width = 32 * v
     a(f'attributes #0 = {{ noinline nounwind "prefer-vector-width"="{width}" '
       f'"min-legal-vector-width"="{width}" }}')  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
-_IR = _build_ir(permute=PERMUTE)
-if PERMUTE:  # both variants in one module; the declarations once
-    _unchecked = _build_ir(permute=True, checked=False)
+_IR = _build_ir(LANES, isa=ISA)
+if ISA:  # both variants in one module; the declarations once
+    _unchecked = _build_ir(LANES, isa=ISA, checked=False)
     _IR += _unchecked[: _unchecked.index("\ndeclare ")] + "\n"
 llvm.parse_assembly(_IR).verify()  # fail at import, not inside a compilation
 
@@ -293,7 +400,7 @@ def tile_pulse(
     ``acc_im`` (float32, row ``r`` at ``r * stride``), ``plane`` the floats per plane of
     ``tab``; the nine scalars are float32. ``windowed`` (bool): every step's lanes are known
     to lie in its window (:data:`WINDOW_SPAN`), so the variant without the check runs
-    (AVX-512; elsewhere the flag changes nothing).
+    (AVX-512 and AVX2; elsewhere the flag changes nothing).
     """
     f = types.float32
     i = types.int64
@@ -316,7 +423,7 @@ def tile_pulse(
 
         ptrs = [data(0), data(1), data(2), data(3), data(4, args[5]), data(6), data(7)]
         call_args = ptrs + list(args[8:21])
-        if not PERMUTE:
+        if not ISA:
             builder.call(fn, call_args)
             return context.get_dummy_value()
         fn_windowed = cgutils.get_or_insert_function(builder.module, fnty, _NAME_WINDOWED)
