@@ -13,6 +13,7 @@ import logging
 import time
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -78,6 +79,26 @@ def aligned_constant_part(
     (n_pulses, n_samples) ndarray
         Phase history of the part (subtract it from ``spectrum`` to remove the target).
     """
+    row, phase = _constant_row(spectrum, point_m, acquisition, velocity_mps, half_window)
+    return row[None, :] * np.conj(phase)
+
+
+def _constant_row(
+    spectrum: ArrayLike,
+    point_m: ArrayLike,
+    acquisition: Acquisition,
+    velocity_mps: ArrayLike | None,
+    half_window: int | None,
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+    """``(row, phase)``: :func:`aligned_constant_part` is ``row[None, :] * conj(phase)``.
+
+    ``row`` (n_samples,) is the spectrum of the window's slow-time mean of the aligned
+    traces, the same for every pulse; ``phase`` (n_pulses, n_samples) is ``T_+``'s.
+    The slow-time mean of the aligned traces is the transform of the mean aligned
+    spectrum (the transform is linear), and the windowed mean is one trace: one
+    transform of length n_samples each way instead of two of the whole array (the
+    same values to rounding, ~1e-16 of the traces' moduli).
+    """
     traces = acquisition.acquisition if isinstance(acquisition, Traces) else acquisition
     P = np.asarray(spectrum)
     if P.shape != traces.shape:
@@ -89,15 +110,31 @@ def aligned_constant_part(
     phase = delay_phase(
         travel_time_delays(traces, point_m, velocity_mps=velocity_mps), traces.frequencies_hz
     )
-    # The slow-time mean of the aligned traces is the transform of the mean aligned
-    # spectrum (the transform is linear), and the windowed mean is one trace, the same
-    # for every pulse: one transform of length n_samples each way instead of two of
-    # the whole array (the same values to rounding, ~1e-16 of the traces' moduli).
-    mean = np.einsum("jk,jk->k", P, phase) / P.shape[0]
+    mean = _phased_column_mean(np.ascontiguousarray(P, dtype=np.complex128), phase)
     c = m // 2
     low = np.zeros(m, dtype=np.complex128)
     low[c - h : c + h + 1] = to_fast_time(mean)[c - h : c + h + 1]
-    return to_frequency(low)[None, :] * np.conj(phase)
+    return to_frequency(low), phase
+
+
+@numba.njit(nogil=True, cache=True)
+def _phased_column_mean(values, phase):  # pragma: no cover - compiled
+    """``mean_j values[j, k] phase[j, k]`` for each column ``k``, shape (n_samples,)."""
+    n, m = values.shape
+    acc = np.zeros(m, dtype=np.complex128)
+    for j in range(n):
+        for k in range(m):
+            acc[k] += values[j, k] * phase[j, k]
+    return acc / n
+
+
+@numba.njit(nogil=True, cache=True)
+def _subtract_unaligned(spectrum, row, phase):  # pragma: no cover - compiled
+    """``spectrum -= row[None, :] * conj(phase)`` in place (one pass, no temporaries)."""
+    n, m = spectrum.shape
+    for j in range(n):
+        for k in range(m):
+            spectrum[j, k] -= row[k] * np.conj(phase[j, k])
 
 
 # ------------------------------------------------------------------- combined
@@ -181,7 +218,8 @@ def separate_combined(
             f"half_window must be in [1, {traces.n_samples // 2 - 1}] samples, got {half_window}"
         )
 
-    spectrum = to_frequency(traces.data)  # residual, kept in the frequency domain
+    # residual, kept in the frequency domain (its own array: updated in place)
+    spectrum = np.ascontiguousarray(to_frequency(traces.data), dtype=np.complex128)
     used: list[NDArray[np.float64]] = []
     records: list[dict[str, Any]] = []
     locations = [c.copy() for c in cand]
@@ -191,10 +229,9 @@ def separate_combined(
             p, contrast, accepted = _test_location(
                 traces, spectrum, p0, contrast_db=contrast_db, refine=refine and sweep == 0
             )
-            if accepted:
-                spectrum = spectrum - aligned_constant_part(
-                    spectrum, p, acquisition=traces.acquisition, half_window=half_window
-                )
+            if accepted:  # spectrum - aligned_constant_part(...), in place
+                row, phase = _constant_row(spectrum, p, traces.acquisition, None, half_window)
+                _subtract_unaligned(spectrum, row, phase)
                 locations[i] = p
                 if sweep == 0:
                     used.append(p)
