@@ -161,6 +161,7 @@ SLOW_TESTS: frozenset[str] = frozenset(
         "test_results_known.py::test_console_gives_the_range_with_its_error_and_the_cross_range_as_unknown",
         "test_results_known.py::test_images_figure_draws_the_family_not_a_circle",
         "test_results_known.py::test_max_movers_0_lists_every_detection_and_never_says_none_passed",
+        "test_results_known.py::test_mover_and_trajectory_figures_draw_the_family_across_the_scene",
         "test_results_known.py::test_real_outputs_validate_against_the_schema",
         "test_results_known.py::test_results_say_cross_range_unknown_and_give_the_range_the_data_fix",
         "test_rpca_stacked.py::test_gram_threshold_is_singular_value_thresholding",

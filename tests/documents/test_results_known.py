@@ -185,6 +185,50 @@ def test_images_figure_draws_the_family_not_a_circle(scene1):
     assert not any(ln.get_marker() == "o" for ln in ax.get_lines())  # no circle on the movers
 
 
+def test_mover_and_trajectory_figures_draw_the_family_across_the_scene(scene1):
+    """Scene 1's movers (cross range not fixed by 1 degree): each mover's panel and the
+    trajectory figure hold a line through the family's members in the scene, from one
+    side of the scene to the other, and nothing that places the mover at one point."""
+    from sarmotion.documents import results_document
+    from sarmotion.pipeline import AnalysisOptions, analyze
+    from sarmotion.report.analysis_figures import movers_figure, trajectories_figure
+
+    result = analyze(scene1.traces, AnalysisOptions())
+    doc = results_document(result)
+    _, _, y0, y1 = doc["scene_extent_m"]
+    assert len(doc["movers"]) == 2 and all(m["trajectory"] for m in doc["movers"])
+    assert not any(m["cross_range_known"] for m in doc["movers"])
+    families = [
+        np.asarray(m["cross_range_family"]["in_scene"]["positions_m"]) for m in doc["movers"]
+    ]
+
+    def family_line(ax, k):
+        lines = [ln for ln in ax.get_lines() if ln.get_label().startswith(f"mover {k + 1}: family")]
+        assert len(lines) == 1, [ln.get_label() for ln in ax.get_lines()]
+        xy = np.c_[lines[0].get_xdata(), lines[0].get_ydata()]
+        np.testing.assert_allclose(xy, families[k])
+        assert min(xy[0, 1], xy[-1, 1]) == pytest.approx(y0, abs=1e-6)  # across the scene
+        assert max(xy[0, 1], xy[-1, 1]) == pytest.approx(y1, abs=1e-6)
+        assert lines[0].get_linestyle() == "--"
+
+    panels = movers_figure(result, document=doc).axes
+    for k in range(len(families)):
+        family_line(panels[k], k)
+        assert not [ln for ln in panels[k].get_lines() if ln.get_marker() == "o"]
+    ax = trajectories_figure(result, document=doc).axes[0]
+    for k in range(len(families)):
+        family_line(ax, k)
+        (at_zero,) = [
+            ln for ln in ax.get_lines() if ln.get_label().startswith(f"mover {k + 1}, s = 0")
+        ]
+        assert at_zero.get_label().endswith("(the member at the reference cross range)")
+    ax.figure.canvas.draw()  # the view holds every family from end to end
+    (xa, xb), (ya, yb) = ax.get_xlim(), ax.get_ylim()
+    for p in families:
+        assert xa <= p[:, 0].min() and p[:, 0].max() <= xb
+        assert ya <= p[:, 1].min() and p[:, 1].max() <= yb
+
+
 # ------------------------------------------------- the report reads the document alone
 def test_report_html_imports_neither_the_pipeline_nor_the_analysis():
     tree = ast.parse((ROOT / "src" / "sarmotion" / "report" / "html.py").read_text())

@@ -344,8 +344,24 @@ def mover_panels_figure(
     return fig
 
 
-def trajectories_figure(result: AnalysisResult, *, truth: dict[str, Any] | None = None) -> Figure:
-    """Trajectory error ``|rho^e(s) - rho(s)|`` (simulations), else the trajectories."""
+def trajectories_figure(
+    result: AnalysisResult,
+    *,
+    truth: dict[str, Any] | None = None,
+    document: dict[str, Any] | None = None,
+) -> Figure:
+    """Trajectory error ``|rho^e(s) - rho(s)|`` (simulations), else the trajectories.
+
+    Each trajectory is that of the member at the reference cross range. Without the
+    truth, a mover whose cross range the data do not fix (``cross_range_known`` false in
+    ``document``, the results document of ``result``) is drawn with its cross-range
+    family across the scene (:func:`draw_family`), where its trajectory may equally lie;
+    its trajectory's point at ``s = 0`` is labelled as that one member, not as a
+    position the data fix.
+    """
+    if truth is None and document is None:
+        document = results_document(result)
+    entries = (document or {}).get("movers") or []
     fig, ax = subplots(figsize=(6.0, 3.8))
     drawn = False
     for k, m in enumerate(result.movers):
@@ -362,8 +378,19 @@ def trajectories_figure(result: AnalysisResult, *, truth: dict[str, Any] | None 
             ax.plot(tj.slow_times_s, err, color=colour, label=f"estimate {k + 1} vs truth '{name}'")
             ax.set_ylabel("|rho_e(s) - rho(s)| (m)")
         else:
+            entry = entries[k] if k < len(entries) else None
+            family = entry is not None and not entry.get("cross_range_known")
             ax.plot(tj.positions_m[:, 0], tj.positions_m[:, 1], color=colour)
-            ax.plot(*tj.position_at_zero_m[:2], "o", color=colour, label=f"mover {k + 1}, s = 0")
+            ax.plot(
+                *tj.position_at_zero_m[:2],
+                "o",
+                color=colour,
+                ms=4 if family else 6,
+                label=f"mover {k + 1}, s = 0"
+                + (" (the member at the reference cross range)" if family else ""),
+            )
+            if family:
+                draw_family(ax, entry, colour, f"mover {k + 1}", marker=False)
             ax.set_xlabel("x (m)")
             ax.set_ylabel("y (m)")
         drawn = True
@@ -449,8 +476,13 @@ def analysis_figures(result: AnalysisResult, document: dict[str, Any]) -> list[R
                 "Trajectories",
                 "Phase-space trajectory estimate (sub-apertures, Wigner ridge), anchored at "
                 "the estimated position at s = 0 (the member at the reference cross range)"
-                + (": distance to the true trajectory (m)." if marks else "."),
-                trajectories_figure(result, truth=truth),
+                + (
+                    ": distance to the true trajectory (m)."
+                    if marks
+                    else "; dashed: each mover's cross-range family across the scene, "
+                    "where the data place its trajectory equally."
+                ),
+                trajectories_figure(result, truth=truth, document=document),
                 "trajectories.png",
             )
         )
