@@ -182,6 +182,25 @@ def _range_mismatch(trk, mover: PointTarget, traces, pulses: dict[int, slice]) -
     return float(np.mean(diffs)) if diffs else np.inf
 
 
+def _pairs_flagged(trk, pulses: dict[int, slice]) -> bool | None:
+    """The pairs' turn test (the rule before the looks', ``turns.turn_test``) of a track."""
+    from sarmotion.tracking.turns import turn_test
+
+    hits = [s for s in trk.states if s.detection is not None]
+    if len(hits) < 2 or any(s.detection.velocity_cov_m2ps2 is None for s in hits):
+        return None
+    res = turn_test(
+        [s.time_s for s in hits],
+        [(pulses[s.sub_aperture].start, pulses[s.sub_aperture].stop) for s in hits],
+        [s.detection.position_m for s in hits], [s.detection.velocity_mps for s in hits],
+        [s.detection.velocity_cov_m2ps2 for s in hits],
+        ([s.detection.family_position_per_m for s in hits],
+         [s.detection.family_velocity_per_m for s in hits]),
+        false_alarm=TURN_FALSE_ALARM,
+    )  # fmt: skip
+    return bool(res.flagged)
+
+
 def run_draw(aperture_deg: float, seed: int) -> dict:
     """One seeded pass, tracked and scored (module notes)."""
     scene, movers, duration = draw_scene(aperture_deg, seed)
@@ -208,6 +227,8 @@ def run_draw(aperture_deg: float, seed: int) -> dict:
             "n_tracks": len(mine),
             "n_detections": [t.n_detections for t in mine],
             "turn_flagged": [bool(t.turn.flagged) if t.turn else None for t in mine],
+            "turn_model": [t.turn.model if t.turn else None for t in mine],
+            "turn_flagged_pairs": [_pairs_flagged(t, pulses) for t in mine],
         }
         if mine:
             best = max(mine, key=lambda t: t.n_detections)
@@ -369,6 +390,156 @@ def run_geometric(aperture_deg: float, seed: int) -> dict:
     }
 
 
+#: A posteriori factors of the turn mode's errors over their bounds (range, range rate,
+#: range acceleration): the medians through the whole chain at 4 degrees (module notes).
+TURN_FACTORS = np.array([5.0, 3.0, 11.0])
+TURN_RATE_DEG_S = 3.0
+
+
+def _moving_looks(traces, motion, rng, overlap: float, factors) -> tuple[list, list, list]:
+    """Detections of a mover of ``motion(t) -> (p, u, a)`` over sub-apertures of a degree.
+
+    Made as in ``--geometric`` at the mover's state at each centre time, with errors of
+    :data:`GEOMETRIC_STD` correlated as overlapping windows' are (each window's error the
+    normalised sum of independent errors of the steps it spans: neighbours correlated
+    by ``overlap``), bounds ``factors`` times smaller, and the range component of the
+    mover's acceleration added to the measured ``R''``. Returns the look measurements,
+    the pulses and the detections.
+    """
+    import dataclasses
+
+    from sarmotion.core import ground_velocity
+    from sarmotion.imaging import resolution
+    from sarmotion.motion.aperture import family_direction, family_member
+    from sarmotion.tracking import Detection
+    from sarmotion.tracking.sub_apertures import sub_aperture_slices, sub_aperture_time_s
+    from sarmotion.tracking.wide_aspect import look_measurement
+
+    slices = sub_aperture_slices(traces, 1.0, overlap)
+    span = max(1, round(1.0 / (1.0 - overlap)))
+    steps = rng.standard_normal((len(slices) + span, 3))
+    bound = GEOMETRIC_STD / np.asarray(factors)
+    looks, pulses, dets = [], [], []
+    for k, sl in enumerate(slices):
+        sub_traces = traces.select_pulses(sl.start, sl.stop)
+        t_c = sub_aperture_time_s(traces, sl)
+        geom = sub_traces.geometry
+        cells = resolution(sub_traces)
+        p_c, u_c, a_c = motion(t_c)
+        p, v, _ = family_member(
+            sub_traces, np.r_[p_c, 0.0], u_c, -float(p_c @ cells.cross_range_direction)
+        )
+        e = steps[k : k + span].sum(axis=0) / np.sqrt(span) * GEOMETRIC_STD
+        p = p[:2] + e[0] * cells.range_direction
+        b_r, b_p = ground_velocity(1.0, 0.0, geom), ground_velocity(0.0, 1.0, geom)
+        v = v + e[1] * b_r + e[2] * b_p
+        a, b = family_direction(sub_traces, np.r_[p, 0.0], v)
+        row = (geom.tangent @ geom.projector)[:2]
+        speeds = np.column_stack([b_r, b_p])
+        det = Detection(
+            position_m=p, velocity_mps=v, range_speed_mps=float(v @ geom.m_o[:2]),
+            cross_range_speed_mps=float(v @ row), family_position_per_m=a,
+            family_velocity_per_m=b, peak_db=0.0, traces=None,
+            velocity_cov_m2ps2=speeds @ np.diag(bound[1:] ** 2) @ speeds.T,
+            bound_cov=np.diag(bound**2),
+        )  # fmt: skip
+        sub = _GeometricSub(
+            index=k, look_direction=np.asarray(geom.m_o, dtype=np.float64),
+            range_direction=np.asarray(cells.range_direction, dtype=np.float64),
+            cross_range_speed_row=row,
+        )  # fmt: skip
+        antenna = antenna_state(traces, sl, t_c)
+        look = look_measurement(sub, det, antenna, overlap=overlap)  # type: ignore[arg-type]
+        d = np.r_[p_c, 0.0] - antenna.position_m
+        z = look.z + np.array([0.0, 0.0, float(np.r_[a_c, 0.0] @ d) / float(np.linalg.norm(d))])
+        looks.append(dataclasses.replace(look, z=z))
+        pulses.append((sl.start, sl.stop))
+        dets.append((t_c, det))
+    return looks, pulses, dets
+
+
+def run_turns(aperture_deg: float, seed: int, overlap: float) -> dict:
+    """One seeded turn draw: a uniform mover and one turning at 3 deg/s, both tests."""
+    from sarmotion.tracking.turns import look_turn_test, turn_test
+
+    scene, _, _ = draw_scene(aperture_deg, seed)
+    rng = np.random.default_rng(seed + 11)
+    empty = Scene(
+        name="pass", targets=(), radar=scene.radar,
+        trajectory_spec={**scene.trajectory_spec, "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG},
+    )  # fmt: skip
+    traces = simulate(empty).traces
+    out = {"aperture_deg": aperture_deg, "seed": seed, "overlap": overlap, "tracks": []}
+    for rate in (0.0, TURN_RATE_DEG_S):
+        speed, heading = rng.uniform(1.0, 8.0), rng.uniform(0.0, 2.0 * np.pi)
+        p0 = rng.uniform(-HALF_SCENE_M, HALF_SCENE_M, 2)
+        w = np.radians(rate) * rng.choice([-1.0, 1.0])
+
+        def motion(t, p0=p0, speed=speed, heading=heading, w=w):
+            th = heading + w * t
+            u = speed * np.array([np.cos(th), np.sin(th)])
+            if w == 0.0:
+                return p0 + t * u, u, np.zeros(2)
+            p = p0 + speed / w * np.array([np.sin(th) - np.sin(heading),
+                                           np.cos(heading) - np.cos(th)])  # fmt: skip
+            return p, u, w * speed * np.array([-np.sin(th), np.cos(th)])
+
+        looks, pulses, dets = _moving_looks(traces, motion, rng, overlap, TURN_FACTORS)
+        start = time.perf_counter()
+        new = look_turn_test(looks, pulses, false_alarm=TURN_FALSE_ALARM,
+                             prior_std_m=IMAGE_M / 2.0)  # fmt: skip
+        seconds = time.perf_counter() - start
+        old = turn_test(
+            [t for t, _ in dets], pulses, [d.position_m for _, d in dets],
+            [d.velocity_mps for _, d in dets], [d.velocity_cov_m2ps2 for _, d in dets],
+            ([d.family_position_per_m for _, d in dets],
+             [d.family_velocity_per_m for _, d in dets]),
+            false_alarm=TURN_FALSE_ALARM,
+        )  # fmt: skip
+        out["tracks"].append(
+            {
+                "turn_rate_deg_s": float(np.degrees(w)),
+                "speed_mps": float(speed),
+                "flagged": bool(new.flagged) if new else None,
+                "statistic": new.statistic if new else None,
+                "threshold": new.threshold if new else None,
+                "n_looks": new.n_looks if new else 0,
+                "turn_rate_fit_deg_s": new.apparent_turn_rate_deg_s if new else None,
+                "turn_rate_fit_std_deg_s": new.apparent_turn_rate_std_deg_s if new else None,
+                "old_flagged": bool(old.flagged),
+                "old_statistic": old.statistic,
+                "old_threshold": old.threshold,
+                "seconds": seconds,
+            }
+        )
+    return out
+
+
+TURN_FALSE_ALARM = 0.01
+
+
+def summarise_turns(draws: list[dict]) -> dict:
+    """Flag rates of the two tests over uniform and turning tracks."""
+    tracks = [t for d in draws for t in d["tracks"]]
+    uni = [t for t in tracks if t["turn_rate_deg_s"] == 0.0]
+    turn = [t for t in tracks if t["turn_rate_deg_s"] != 0.0]
+    rate_z = [
+        abs(t["turn_rate_fit_deg_s"] - t["turn_rate_deg_s"]) / t["turn_rate_fit_std_deg_s"]
+        for t in turn
+        if t["turn_rate_fit_std_deg_s"]
+    ]
+    return {
+        "uniform_tracks": len(uni),
+        "uniform_flagged": sum(bool(t["flagged"]) for t in uni),
+        "uniform_flagged_old": sum(t["old_flagged"] for t in uni),
+        "turning_tracks": len(turn),
+        "turning_flagged": sum(bool(t["flagged"]) for t in turn),
+        "turning_flagged_old": sum(t["old_flagged"] for t in turn),
+        "turn_rate_within_3_std": sum(z <= 3.0 for z in rate_z),
+        "untested": sum(t["flagged"] is None for t in tracks),
+    }
+
+
 def summarise(draws: list[dict]) -> dict:
     """Per-aperture figures of the draws."""
     movers = [m for d in draws for m in d["movers"]]
@@ -404,6 +575,12 @@ def summarise(draws: list[dict]) -> dict:
             "position_std_m", [m for m in fitted if not m["fixed"]]
         ),
         "turn_flagged_tracks": int(sum(sum(bool(f) for f in m["turn_flagged"]) for m in movers)),
+        "turn_flagged_pairs_tracks": int(
+            sum(sum(bool(f) for f in m.get("turn_flagged_pairs", [])) for m in movers)
+        ),
+        "turn_tested_tracks": int(
+            sum(sum(f is not None for f in m["turn_flagged"]) for m in movers)
+        ),
         "seconds": float(sum(d["seconds"] for d in draws)),
     }  # fmt: skip
 
@@ -444,6 +621,12 @@ def main(argv: list[str] | None = None) -> int:
         "--geometric", action="store_true", help="detections made from the geometry (notes)"
     )
     parser.add_argument(
+        "--turns", action="store_true", help="the turn tests on uniform and turning movers"
+    )
+    parser.add_argument(
+        "--overlaps", type=float, nargs="+", default=[0.0, 0.5], help="with --turns"
+    )
+    parser.add_argument(
         "--name", default="wide_aspect", help="stem of the files written (default wide_aspect)"
     )
     parser.add_argument(
@@ -464,6 +647,8 @@ def main(argv: list[str] | None = None) -> int:
         (args.out / f"{args.name}.md").write_text(markdown(summary))
         print(markdown(summary))
         return 0
+    if args.turns:
+        return main_turns(args)
     for ap in args.apertures:
         key = f"{ap:g}"
         draws[key] = []
@@ -499,6 +684,46 @@ def main(argv: list[str] | None = None) -> int:
             (args.out / f"{args.name}.json").write_text(json.dumps(doc, indent=1) + "\n")
             (args.out / f"{args.name}.md").write_text(markdown(summary))
     print(markdown({a: summarise(d) for a, d in draws.items()}))
+    return 0
+
+
+def main_turns(args: argparse.Namespace) -> int:
+    """``--turns``: seeded draws per aperture and overlap, both tests (module notes)."""
+    draws: dict[str, list[dict]] = {}
+    for ap in args.apertures:
+        for overlap in args.overlaps:
+            key = f"{ap:g} deg, overlap {overlap:g}"
+            draws[key] = []
+            for k in range(args.first, args.first + args.draws):
+                rec = run_turns(ap, int(1000 * ap) + 500 + k, overlap)
+                draws[key].append(rec)
+                print(key, k, [(t["turn_rate_deg_s"] != 0.0, t["flagged"], t["old_flagged"])
+                               for t in rec["tracks"]], flush=True)  # fmt: skip
+    summary = {key: summarise_turns(d) for key, d in draws.items()}
+    summary["all"] = summarise_turns([r for d in draws.values() for r in d])
+    doc = {
+        "settings": {
+            "false_alarm": TURN_FALSE_ALARM, "turn_rate_deg_s": TURN_RATE_DEG_S,
+            "geometric_std": GEOMETRIC_STD.tolist(), "error_factors": TURN_FACTORS.tolist(),
+            "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG,
+        },
+        "summary": summary,
+        "draws": draws,
+    }  # fmt: skip
+    (args.out / f"{args.name}.json").write_text(json.dumps(doc, indent=1) + "\n")
+    rows = [
+        "| pass | uniform tracks | flagged (looks) | flagged (pairs, before) "
+        "| 3 deg/s turns | flagged (looks) | flagged (pairs, before) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for key, v in summary.items():
+        rows.append(
+            f"| {key} | {v['uniform_tracks']} | {v['uniform_flagged']} "
+            f"| {v['uniform_flagged_old']} | {v['turning_tracks']} | {v['turning_flagged']} "
+            f"| {v['turning_flagged_old']} |"
+        )
+    (args.out / f"{args.name}.md").write_text("\n".join(rows) + "\n")
+    print("\n".join(rows))
     return 0
 
 

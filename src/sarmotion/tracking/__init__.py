@@ -8,7 +8,8 @@
   the paper's first scenario: the track's prediction as the known position;
 - :mod:`~sarmotion.tracking.roads` — the member of a cross-range family on a road;
 - :mod:`~sarmotion.tracking.turns` — a turn as a change of velocity between
-  sub-apertures: the chi-square test and the turn rate;
+  sub-apertures: the chi-square test and the turn rate, and uniform motion against a
+  constant acceleration through the looks;
 - :mod:`~sarmotion.tracking.wide_aspect` — each detection as a measurement of the range
   history through its look, a track's position fixed where the look turns enough, and
   the tracks of one uniform mover joined;

@@ -51,7 +51,11 @@ each track the fit of its detections' range histories through their looks
 deviation and whether the data fix it, else the family), and first joins the tracks of
 one uniform mover (:func:`~sarmotion.tracking.wide_aspect.join_tracks`): the filter above
 takes each detection's velocity for the mover's, and on a wide pass a uniform mover's
-detections drift as the look turns, so the filter cuts it into several tracks.
+detections drift as the look turns, so the filter cuts it into several tracks. Each
+track's turn test is, where every detection has its bound and 3 of them come from
+sub-apertures that share no pulse, the comparison of uniform motion with a constant
+acceleration through the looks (:func:`~sarmotion.tracking.turns.look_turn_test`),
+else the pairs of velocities (:func:`~sarmotion.tracking.turns.turn_test`).
 
 Overlapping sub-apertures share pulses: their measurement errors are correlated, and
 the filter, which takes them as independent, is then overconfident in range and range
@@ -86,7 +90,7 @@ from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
 from .roads import Road, RoadFix, road_fix, road_misses
 from .sub_apertures import Detection, SubApertureDetections, check_overlap
-from .turns import TurnTest, turn_test
+from .turns import TurnTest, look_turn_test, turn_test
 from .wide_aspect import (
     PositionFit,
     antenna_state,
@@ -315,8 +319,8 @@ class Track:
     states : tuple of TrackState
         From the first to the last detection, in time order.
     turn : TurnTest or None
-        Whether its velocity changed between independent sub-apertures, and its turn
-        rate (:mod:`sarmotion.tracking.turns`); None when a detection lacks its
+        Whether its velocity changed between independent sub-apertures, through the
+        looks where it can (:mod:`sarmotion.tracking.turns`); None when a detection lacks its
         velocity's covariance.
     fit : PositionFit or None
         The uniform motion fitted to the range histories of all its detections through
@@ -528,12 +532,30 @@ class Tracker:
         return out
 
     def _turn(self, states: Sequence[GaussianState]) -> TurnTest | None:
-        """The turn test of a track's detections (:func:`~sarmotion.tracking.turns.turn_test`)."""
+        """The turn test of a track's detections (:mod:`~sarmotion.tracking.turns`).
+
+        Through the looks (:func:`~sarmotion.tracking.turns.look_turn_test`) where every
+        detection has its bound and 3 come from sub-apertures that share no pulse; else
+        the pairs of velocities (:func:`~sarmotion.tracking.turns.turn_test`).
+        """
         metas = [self._meta[id(s)] for s in states]
         hits = [
             m for s, m in zip(states, metas, strict=True)
             if isinstance(s, _stonesoup().Update) and m.detection is not None
         ]  # fmt: skip
+        looks = self._looks(states)
+        if looks:
+            prior = self._prior()
+            test = look_turn_test(
+                looks,
+                [(m.sub.pulses.start, m.sub.pulses.stop) for m in hits],
+                false_alarm=self.options.turn_false_alarm,
+                prior_std_m=prior["prior_std_m"],  # type: ignore[arg-type]
+                centre_m=prior["centre_m"],  # type: ignore[arg-type]
+                height_m=prior["height_m"],  # type: ignore[arg-type]
+            )
+            if test is not None:
+                return test
         if any(m.detection.velocity_cov_m2ps2 is None for m in hits):
             return None
         return turn_test(
