@@ -140,6 +140,8 @@ SLOW_TESTS: frozenset[str] = frozenset(
         "test_progress.py::test_image_on_a_terminal_says_its_plan_then_shows_a_bar",
         "test_progress.py::test_pga_says_what_it_found",
         "test_progress.py::test_quiet_leaves_only_the_summary",
+        "test_progress.py::test_a_long_command_says_its_plan_and_shows_a_bar_within_5_s",
+        "test_progress.py::test_quiet_long_commands_print_only_their_summary",
         "test_quality.py::test_hann_weighting_lowers_the_sidelobes",
         "test_rank.py::test_baseband_rank_matches_baseband_szego_at_large_n",
         "test_rank.py::test_predict_window_bounds_the_stationary_rank_in_each_window",
