@@ -31,7 +31,11 @@ each patch keeps, and the movers. ``--base-src DIR`` runs each also with the pac
 alternated with today's in the same run. Rows go to ``bench_collection_rates.json``
 (added to, by side, factor and code) and the table ``bench_collection_rates.md``.
 ``--profile-pulses 1300 650 325 --sizes 400 --rate-factors 4`` times one patch's stages
-at those pulse counts (``patch_profile``) and fits each stage's exponent in the pulses.
+at those pulse counts (``patch_profile``) and fits each stage's exponent in the pulses:
+``--profile-mover k`` the patch holding mover ``k``, ``--profile-cpu`` the stages in CPU
+seconds of the process, ``--cprofile PREFIX`` each run's ``cProfile`` statistics, and
+``--profile-compare BEFORE AFTER`` the table of two such runs' JSON, stage by stage
+(``results/bench_collection_profile.md``).
 
 Scene of side ``L`` (m), seeded: 0.5 stationary unit points per 1000 m^2 drawn uniformly
 in the ``L x L`` square, 3 movers of ground speed 5-15 m/s (random direction, unit
@@ -293,9 +297,7 @@ def run_patches(
         "input_samples": traces.n_samples,
         "prf_hz": 1.0 / traces.trajectory.pulse_interval_s,
         "pulses_kept": [int(p.pulses.size) for p in part.patches],
-        "ratio": [
-            [int(getattr(p, "interpolation", 1)), int(p.decimation)] for p in part.patches
-        ],
+        "ratio": [[int(getattr(p, "interpolation", 1)), int(p.decimation)] for p in part.patches],
         "patches": len(part.patches),
         "patch_size_m": plan.patch_size_m,
         "pulses_per_patch": [
@@ -327,9 +329,7 @@ def run_patches(
     }
 
 
-def _score_patches(
-    side_m: float, seed: int, parts: list[dict], rate_factor: float = GUARD
-) -> dict:
+def _score_patches(side_m: float, seed: int, parts: list[dict], rate_factor: float = GUARD) -> dict:
     """One run's answer from its pieces (module notes), scored."""
     from sarmotion.collection import MoverRecord, StationaryRecord
     from sarmotion.collection.merge import drop_sidelobes, merge_movers, merge_stationary
@@ -632,22 +632,39 @@ def _rate_md(rows: list[dict]) -> str:
 
 
 def patch_profile(
-    side_m: float, seed: int, rate_factor: float, pulses: list[int], src: str | None = None
+    side_m: float,
+    seed: int,
+    rate_factor: float,
+    pulses: list[int],
+    src: str | None = None,
+    mover: int = 0,
+    cprofile: str | None = None,
+    cpu_stages: bool = False,
 ) -> list[dict]:
     """One patch's analysis at several pulse counts: its stage timings and their exponent.
 
     The scene's pulse rate is sized for ``rate_factor`` times the side; the patch holding
-    the first mover keeps every ``q``-th pulse, ``q = max(1, round(n_pulses / n))`` for
-    each count ``n`` of ``pulses`` (integer decimations: exact for its aliased movers;
-    the same pass band and filter rule), and is analysed as a collection's patch is
-    (:func:`~sarmotion.collection.run.analyze_patch`, the command's defaults, after one
-    untimed run), on the threads the process has.
+    mover ``mover`` (0, 1 or 2) keeps every ``q``-th pulse, ``q = max(1, round(n_pulses /
+    n))`` for each count ``n`` of ``pulses`` (integer decimations: exact for its aliased
+    movers; the same pass band and filter rule), and is analysed as a collection's patch
+    is (:func:`~sarmotion.collection.run.analyze_patch`, the command's defaults, after one
+    untimed run), on the threads the process has. Each row keeps the patch's answers (its
+    movers with their bounds, its stationary targets) to compare two codes' on the same
+    data; ``cprofile``: a file prefix, each timed run's ``cProfile`` statistics written to
+    ``{cprofile}_{pulses}.prof``. With ``cpu_stages`` the stage times are the process's
+    CPU seconds (all its threads: the pipeline's timer reads ``time.process_time``), which
+    other jobs on a shared machine inflate far less than wall-clock time.
     """
     import dataclasses
     import sys
+    import types
 
     if src is not None:
         sys.path.insert(0, src)
+    if cpu_stages:
+        import sarmotion.pipeline._timing as timing
+
+        timing.time = types.SimpleNamespace(perf_counter=time.process_time)
     from sarmotion.collection import CollectionOptions, extract_patches, plan_patches
     from sarmotion.collection.plan import BAND_GUARD
     from sarmotion.collection.resample import design, output_grid
@@ -657,7 +674,7 @@ def patch_profile(
     traces, _, movers = make_scene(side_m, seed, rate_factor)
     source = TracesBlocks(traces)
     plan = plan_patches(source)
-    patch = next(p for p in plan.patches if p.contains(movers[0].position_m))
+    patch = next(p for p in plan.patches if p.contains(movers[mover].position_m))
     prf = 1.0 / traces.trajectory.pulse_interval_s
     opts = CollectionOptions().analysis
     rows = []
@@ -673,8 +690,18 @@ def patch_profile(
         )
         (tr,) = extract_patches(source, [this])
         analyze_patch(tr, this, opts)  # compiled and warmed
+        prof = None
+        if cprofile is not None:
+            import cProfile
+
+            prof = cProfile.Profile()
+            prof.enable()
         t0, c0 = time.perf_counter(), _cpu_s()
         res, _ = analyze_patch(tr, this, opts)
+        wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
+        if prof is not None:
+            prof.disable()
+            prof.dump_stats(f"{cprofile}_{tr.n_pulses}.prof")
         rows.append(
             {
                 "side_m": side_m,
@@ -682,9 +709,22 @@ def patch_profile(
                 "pulses": tr.n_pulses,
                 "samples": tr.n_samples,
                 "ratio": f"{up}/{down}",
-                "wall_s": time.perf_counter() - t0,
-                "cpu_s": _cpu_s() - c0,
+                "package": str(Path(sys.modules["sarmotion"].__file__).parent),
+                "stage_clock": "cpu" if cpu_stages else "wall",
+                "wall_s": wall,
+                "cpu_s": cpu,
                 "movers": len(res.movers),
+                "mover_answers": [
+                    {
+                        "position_m": m.position_m.tolist(),
+                        "velocity_mps": m.velocity_mps.tolist(),
+                        "sigma_range_m": m.sigma_range_m,
+                        "sigma_range_speed_mps": m.sigma_range_speed_mps,
+                        "snr_db": m.snr_db,
+                    }
+                    for m in res.movers
+                ],
+                "stationary": [[*t.position_m, t.level] for t in res.stationary],
                 "timings_s": res.timings_s,
             }
         )
@@ -703,9 +743,35 @@ def _profile_md(rows: list[dict]) -> str:
         t = np.array([r["timings_s"][k] for r in rows])
         ok = t > 1e-3
         slope = np.polyfit(np.log(n[ok]), np.log(t[ok]), 1)[0] if ok.sum() >= 2 else np.nan
-        out.append(
-            f"| {k} | " + " | ".join(f"{v:.2f}" for v in t) + f" | {slope:.2f} |"
-        )
+        out.append(f"| {k} | " + " | ".join(f"{v:.2f}" for v in t) + f" | {slope:.2f} |")
+    return head + "\n".join(out) + "\n"
+
+
+def _profile_compare_md(before: list[dict], after: list[dict]) -> str:
+    """Per-stage table of two codes' ``patch_profile`` rows (same pulses), with exponents."""
+    n = np.array([r["pulses"] for r in after], dtype=float)
+    stages = [k for k in after[0]["timings_s"] if all(k in r["timings_s"] for r in before + after)]
+
+    def slope(t: np.ndarray) -> float:
+        ok = t > 1e-3
+        return float(np.polyfit(np.log(n[ok]), np.log(t[ok]), 1)[0]) if ok.sum() >= 2 else np.nan
+
+    head = (
+        "| stage | "
+        + " | ".join(f"{int(v)} pulses before / after (s)" for v in n)
+        + " | exponent before / after |\n"
+    )
+    head += "|---|" + "---|" * (len(n) + 1) + "\n"
+    out = []
+    rows = [(k, [r["timings_s"][k] for r in before], [r["timings_s"][k] for r in after])
+            for k in stages]  # fmt: skip
+    rows.append(("process CPU", [r["cpu_s"] for r in before], [r["cpu_s"] for r in after]))
+    for k, tb, ta in rows:
+        tb, ta = np.array(tb), np.array(ta)
+        if max(tb.max(), ta.max()) < 5e-3:
+            continue
+        cells = " | ".join(f"{b:.2f} / {a:.2f}" for b, a in zip(tb, ta, strict=True))
+        out.append(f"| {k} | {cells} | {slope(tb):.2f} / {slope(ta):.2f} |")
     return head + "\n".join(out) + "\n"
 
 
@@ -749,11 +815,47 @@ def main() -> None:
         default=None,
         help="one patch's stage timings at these pulse counts (first size, first factor)",
     )
+    parser.add_argument(
+        "--profile-mover",
+        type=int,
+        default=0,
+        help="with --profile-pulses: the patch holding this mover (0, 1 or 2)",
+    )
+    parser.add_argument(
+        "--profile-cpu",
+        action="store_true",
+        help="with --profile-pulses: stage times in CPU seconds of the process",
+    )
+    parser.add_argument(
+        "--profile-compare",
+        nargs=2,
+        type=Path,
+        default=None,
+        metavar=("BEFORE", "AFTER"),
+        help="print the per-stage table of two --profile-pulses JSON files and exit",
+    )
+    parser.add_argument(
+        "--cprofile",
+        default=None,
+        help="with --profile-pulses: write each run's cProfile statistics to PREFIX_N.prof",
+    )
     args = parser.parse_args()
+    if args.profile_compare:
+        before, after = (json.loads(p.read_text()) for p in args.profile_compare)
+        print(_profile_compare_md(before, after))
+        return
     if args.profile_pulses:
         factor = args.rate_factors[0] if args.rate_factors else 3.0
         rows = _in_process(
-            patch_profile, args.sizes[0], args.seed, factor, args.profile_pulses, args.base_src
+            patch_profile,
+            args.sizes[0],
+            args.seed,
+            factor,
+            args.profile_pulses,
+            args.base_src,
+            args.profile_mover,
+            args.cprofile,
+            args.profile_cpu,
         )
         print(_profile_md(rows))
         if args.out is not None:
@@ -761,7 +863,6 @@ def main() -> None:
             (args.out / "bench_collection_profile.json").write_text(
                 json.dumps(rows, indent=2) + "\n"
             )
-            (args.out / "bench_collection_profile.md").write_text(_profile_md(rows))
         return
     if args.rate_factors:
         base = str(Path(args.base_src).resolve()) if args.base_src else None
