@@ -286,5 +286,5 @@ def fit_line(fit: dict[str, Any]) -> str:
     return (
         f"position not fixed by {looks}: on the family through ({fixed(x, 2)}, {fixed(y, 2)}) m "
         f"along ({fixed(dx, 3)}, {fixed(dy, 3)}) (standard deviation {fit['position_std_m']:.2g} m "
-        "along it, the scene's prior)"
+        "along it from the ranges and range rates, the scene's prior included)"
     )
