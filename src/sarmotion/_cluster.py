@@ -13,6 +13,7 @@ import re
 import shutil
 import stat
 import tempfile
+import threading
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
@@ -22,6 +23,7 @@ from .errors import InputError
 
 __all__ = [
     "CONNECT_TIMEOUT_S",
+    "INTERRUPTED",
     "MAX_WORKERS_PER_CORE",
     "SCHEDULER_SCHEMES",
     "SCRATCH_PREFIX",
@@ -29,12 +31,25 @@ __all__ = [
     "SchedulerError",
     "check_address",
     "check_workers",
+    "raise_if_interrupted",
     "connect_scheduler",
     "local_cluster",
     "remove_stale_scratch",
 ]
 
 log = logging.getLogger(__name__)
+
+#: Set by the command line's SIGINT handler as it raises ``KeyboardInterrupt``. Python
+#: swallows an exception raised while a garbage-collection callback runs (Dask installs
+#: one), so a Ctrl-C can be lost there; the loops that wait on a cluster's tasks look at
+#: this event between their waits (:func:`raise_if_interrupted`), so it is not.
+INTERRUPTED = threading.Event()
+
+
+def raise_if_interrupted() -> None:
+    """Raise ``KeyboardInterrupt`` if :data:`INTERRUPTED` is set (a Ctrl-C not yet acted on)."""
+    if INTERRUPTED.is_set():
+        raise KeyboardInterrupt
 
 
 #: Most local workers per core. Each analysis is CPU-bound, so more workers than cores

@@ -331,6 +331,7 @@ def test_ctrl_c_stops_every_worker(cphd, tmp_path):
     assert proc.returncode == 130, err
     # the command line's last word (above it, -v shows Dask's own log lines)
     assert err.strip().splitlines()[-1] == "sarmotion: aborted", err
+    assert err.rstrip().splitlines()[-2] != "", "a blank line before the message"
     assert not out.exists()
     assert not list(tmp_path.glob(".out*"))
     # a helper the workers started (such as multiprocessing's resource tracker) ends when

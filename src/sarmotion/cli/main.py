@@ -21,6 +21,7 @@ import textwrap
 import threading
 import time
 from collections.abc import Iterator, Sequence
+from typing import Any
 
 import click
 
@@ -51,17 +52,38 @@ def _on_sigterm(signum: int, frame: object) -> None:
     raise Terminated
 
 
+def _on_sigint(signum: int, frame: object) -> None:
+    from .._cluster import INTERRUPTED
+
+    INTERRUPTED.set()  # seen by the loops that wait on tasks, should this raise be lost
+    raise KeyboardInterrupt
+
+
 @contextlib.contextmanager
 def _sigterm_raises() -> Iterator[None]:
-    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only)."""
+    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only).
+
+    SIGINT raises ``KeyboardInterrupt`` as Python's own handler does, and also sets
+    ``_cluster.INTERRUPTED``, so that a Ctrl-C raised inside a callback that swallows it
+    is still acted on; where SIGINT is ignored (a command started in the background), it
+    stays ignored.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    from .._cluster import INTERRUPTED
+
+    INTERRUPTED.clear()
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    interrupt = signal.getsignal(signal.SIGINT)
+    if interrupt is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _on_sigint)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+        if interrupt is signal.default_int_handler:
+            signal.signal(signal.SIGINT, interrupt)
 
 
 # --------------------------------------------------------------------------- commands
@@ -115,6 +137,13 @@ class _LazyGroup(click.Group):
             _add_shared_options(command)
             self.add_command(command, cmd_name)
         return self.commands[cmd_name]
+
+    def invoke(self, ctx: click.Context) -> Any:
+        """Run the command; a Ctrl-C is click's ``Abort`` (one line, no blank line before it)."""
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            raise click.Abort() from None
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         """The command list with the sentences of :data:`COMMANDS` (no import)."""

@@ -40,6 +40,7 @@ import logging
 import math
 import os
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, closing
 from dataclasses import dataclass, field
@@ -641,7 +642,7 @@ def _run(
         return
     from distributed import Client, as_completed
 
-    from .._cluster import connect_scheduler, local_cluster
+    from .._cluster import connect_scheduler, local_cluster, raise_if_interrupted
 
     cores = os.cpu_count() or 1
     with ExitStack() as stack:
@@ -665,7 +666,8 @@ def _run(
             for group in _groups(plan, memory_mb):
                 traces = extract_patches(src, group, block_pulses=opts.block_pulses)
                 for patch, tr in zip(group, traces, strict=True):
-                    f = client.submit(
+                    f = _submit(
+                        client,
                         _task,
                         tr,
                         patch,
@@ -684,10 +686,14 @@ def _run(
                     done += 1
                     report(progress, "patches", done, total)
                     yield _collect(f, futures)
-            for f in pending:
-                done += 1
-                report(progress, "patches", done, total)
-                yield _collect(f, futures)
+            while not pending.is_empty():
+                # a short poll, not a blocking wait: a Ctrl-C lost in a callback of Dask's
+                # is seen here (``_cluster.INTERRUPTED``)
+                raise_if_interrupted()
+                for f in _ready(pending) or _wait():
+                    done += 1
+                    report(progress, "patches", done, total)
+                    yield _collect(f, futures)
         finally:
             client.cancel([f for f in futures if not f.done()])
 
@@ -728,9 +734,30 @@ def _collect(future: Any, futures: set[Any]) -> PatchResult:
     return result
 
 
+def _submit(client: Any, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """``client.submit(fn, *args, **kwargs)``, without Dask's warning on large arguments.
+
+    A patch's traces travel as its task's argument by design (the workers never open the
+    input), so Dask's advice to load large data on the workers does not apply.
+    """
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Sending large graph")
+        return client.submit(fn, *args, **kwargs)
+
+
 def _ready(pending: Any) -> list[Any]:
     """The futures of ``pending`` already finished (without waiting)."""
     return list(pending.next_batch(block=False)) if pending.has_ready() else []
+
+
+def _wait(poll_s: float = 0.1) -> list[Any]:
+    """Nothing, after ``poll_s`` seconds: the pause between two looks at the queue.
+
+    (``distributed.wait`` and a blocking ``as_completed`` wait on Dask's default client,
+    which a scheduler given by its address does not set, and without a timeout.)
+    """
+    time.sleep(poll_s)
+    return []
 
 
 def _mosaic_spacing(plan: PatchPlan, opts: CollectionOptions) -> float:
