@@ -6,6 +6,7 @@ in ``collection``); it imports Dask only when a cluster is started.
 
 from __future__ import annotations
 
+import contextlib
 import ipaddress
 import logging
 import os
@@ -33,7 +34,10 @@ __all__ = [
     "check_workers",
     "raise_if_interrupted",
     "connect_scheduler",
+    "local_client",
     "local_cluster",
+    "on_sigint",
+    "silence_cluster_loggers",
     "remove_stale_scratch",
 ]
 
@@ -50,6 +54,24 @@ def raise_if_interrupted() -> None:
     """Raise ``KeyboardInterrupt`` if :data:`INTERRUPTED` is set (a Ctrl-C not yet acted on)."""
     if INTERRUPTED.is_set():
         raise KeyboardInterrupt
+
+
+def on_sigint(signum: int, frame: Any) -> None:
+    """SIGINT handler: set :data:`INTERRUPTED`, then raise ``KeyboardInterrupt``.
+
+    Python's own handler only raises; a Ctrl-C raised inside a callback that swallows
+    it (Dask's garbage-collection callback) is then lost. With this one the loops that
+    wait on tasks still see it (:func:`raise_if_interrupted`).
+    """
+    INTERRUPTED.set()
+    raise KeyboardInterrupt
+
+
+def _raises_on_sigint(handler: Any) -> bool:
+    """Whether ``handler`` is Python's default SIGINT handler or :func:`on_sigint`."""
+    import signal
+
+    return handler is signal.default_int_handler or handler is on_sigint
 
 
 #: Most local workers per core. Each analysis is CPU-bound, so more workers than cores
@@ -326,15 +348,34 @@ def remove_stale_scratch(directory: str | os.PathLike[str] | None = None) -> lis
 _CLUSTER_LOGGERS = ("distributed", "tornado", "asyncio")
 
 
+def silence_cluster_loggers() -> list[tuple[logging.Logger, bool]]:
+    """Disable :data:`_CLUSTER_LOGGERS` and their descendants; return each one's former state.
+
+    Run in worker processes too (:func:`local_client`), where a peer or the client that
+    goes away mid-transfer makes Dask log a traceback.
+    """
+    names = [
+        n
+        for n in list(logging.root.manager.loggerDict)
+        if any(n == p or n.startswith(p + ".") for p in _CLUSTER_LOGGERS)
+    ]
+    silenced = []
+    for name in sorted(set(names) | set(_CLUSTER_LOGGERS)):
+        logger = logging.getLogger(name)
+        silenced.append((logger, logger.disabled))
+        logger.disabled = True
+    return silenced
+
+
 class _SigintGuard:
     """What a Ctrl-C does while a local cluster is up (:func:`local_cluster`).
 
-    - :meth:`installed`: Python's default SIGINT handler is replaced (in the main thread,
-      and only where it is the one in place) by one that first disables
-      :data:`_CLUSTER_LOGGERS` and every one of their descendants, then raises
-      ``KeyboardInterrupt``: the cluster then closes without a line of its own, and the
-      command says once that it was interrupted. The handler and the loggers' state come
-      back when the block ends.
+    - :meth:`installed`: Python's default SIGINT handler (or :func:`on_sigint`) is
+      replaced (in the main thread, and only where one of them is in place) by one that
+      first disables :data:`_CLUSTER_LOGGERS` and every one of their descendants, then
+      sets :data:`INTERRUPTED` and raises ``KeyboardInterrupt``: the cluster then closes
+      without a line of its own, and the command says once that it was interrupted. The
+      handler and the loggers' state come back when the block ends.
     - :meth:`held`: SIGINT is blocked in this thread while the block runs. A signal mask
       is per thread; the threads this thread starts inherit it, and through ``fork`` and
       ``exec`` the processes they start (Python leaves an inherited mask in place). A
@@ -353,23 +394,15 @@ class _SigintGuard:
         self.active = False
 
     def _silence(self) -> None:
-        if self.silenced:
-            return
-        names = [
-            n
-            for n in list(logging.root.manager.loggerDict)
-            if any(n == p or n.startswith(p + ".") for p in _CLUSTER_LOGGERS)
-        ]
-        for name in sorted(set(names) | set(_CLUSTER_LOGGERS)):
-            logger = logging.getLogger(name)
-            self.silenced.append((logger, logger.disabled))
-            logger.disabled = True
+        if not self.silenced:
+            self.silenced = silence_cluster_loggers()
 
     def _handler(self, signum: int, frame: Any) -> None:
         self._silence()
         if self.holding:
             self.pending = True
             return
+        INTERRUPTED.set()
         raise KeyboardInterrupt
 
     @contextmanager
@@ -378,9 +411,9 @@ class _SigintGuard:
         import signal
         import threading
 
-        self.active = (
-            threading.current_thread() is threading.main_thread()
-            and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        previous = signal.getsignal(signal.SIGINT)
+        self.active = threading.current_thread() is threading.main_thread() and _raises_on_sigint(
+            previous
         )
         if self.active:
             signal.signal(signal.SIGINT, self._handler)
@@ -388,7 +421,7 @@ class _SigintGuard:
             yield
         finally:
             if self.active:
-                signal.signal(signal.SIGINT, signal.default_int_handler)
+                signal.signal(signal.SIGINT, previous)
             for logger, disabled in self.silenced:
                 logger.disabled = disabled
             self.silenced.clear()
@@ -487,6 +520,8 @@ def local_cluster(
         level = logging.getLogger("distributed").getEffectiveLevel()
         guard = _SigintGuard()
         stack.enter_context(guard.installed())
+        started: list[Any] = []
+        stack.callback(_release_work_dirs, started)  # once the cluster is closed
         if processes:
             # multiprocessing starts its resource tracker with the first process it
             # spawns and then unblocks SIGINT in the spawning thread (CPython's
@@ -514,7 +549,58 @@ def local_cluster(
                     silence_logs=level,
                 )
             )
+            started.append(cluster)
         if processes:  # the workers' start (seconds), which a Ctrl-C interrupts
             cluster.scale(n_workers)
             cluster.sync(_started, cluster)
         yield cluster
+
+
+def _release_work_dirs(clusters: list[Any]) -> None:
+    """Remove the scratch directories the clusters' scheduler and thread workers hold.
+
+    Dask removes a server's directory (its ``_workdir``) when the server closes, or else
+    at interpreter exit; an interrupted close leaves it to the exit, when
+    :func:`local_cluster` has removed the whole scratch directory, and Dask then logs an
+    error for each one missing. Released here, before that removal, they are gone once.
+    """
+    for cluster in clusters:
+        servers = [getattr(cluster, "scheduler", None), *getattr(cluster, "workers", {}).values()]
+        for server in servers:
+            work_dir = getattr(server, "_workdir", None)
+            if work_dir is not None:
+                work_dir.release()  # a weakref.finalize: once only, however often called
+
+
+def _quiet_workers() -> None:
+    """Run on each worker of an interrupted :func:`local_client` (its loggers off)."""
+    silence_cluster_loggers()
+
+
+@contextmanager
+def local_client(
+    n_workers: int, *, processes: bool = False, dashboard_address: str | None = None
+) -> Iterator[Any]:
+    """A ``distributed.Client`` of its own :func:`local_cluster` (same parameters).
+
+    Worker processes have their Dask loggers silenced before the client closes, the
+    block ended by its end, a Ctrl-C or an error: the client's going away mid-transfer
+    (a result or a heartbeat) would otherwise have a worker log a traceback of its own
+    on the terminal, after the command's last line.
+    """
+    from distributed import Client
+
+    with (
+        local_cluster(
+            n_workers, processes=processes, dashboard_address=dashboard_address
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        try:
+            yield client
+        finally:
+            if processes:
+                with contextlib.suppress(Exception):  # a worker gone or stuck: not waited on
+                    client.sync(
+                        client._run, _quiet_workers, on_error="ignore", callback_timeout=5.0
+                    )

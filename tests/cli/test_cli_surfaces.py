@@ -554,9 +554,11 @@ def test_ctrl_c_on_worker_processes_is_one_line(tmp_path, moment, verbosity):
 
     ``start``: as soon as the first worker process exists, while the workers start
     (importing Dask takes them seconds); ``work``: six seconds later, while they analyse
-    the 12 sub-apertures (the run takes 15 s or more on 2 cores, the workers' start 3 s of
-    it). Either way: exit 130, ``sarmotion: aborted`` once and last, no traceback, no
-    blank line, no output, and no worker process or scratch directory left.
+    the 65 sub-apertures (10 s of tracking alone on a quiet 2-core machine, the workers'
+    start 3 s before it; with 12 sub-apertures of the rank-one separation the run could
+    end before the Ctrl-C). Either way: exit 130, ``sarmotion: aborted`` once and last,
+    no traceback, no blank line, no output, and no worker process or scratch directory
+    left.
     """
     import psutil
 
@@ -564,6 +566,7 @@ def test_ctrl_c_on_worker_processes_is_one_line(tmp_path, moment, verbosity):
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "TMPDIR": str(tmp_path)}
     cmd = [sys.executable, "-m", "sarmotion", verbosity, "track", "hyperbola", "--out", str(out)]
     cmd += ["--size", "20", "--processes", "--workers", "2", "--sub-aperture", "0.5"]
+    cmd += ["--overlap", "0.9", "--method", "rpca"]  # 65 sub-apertures: work outlasts 6 s
     proc = subprocess.Popen(
         cmd,
         env=env,

@@ -52,13 +52,6 @@ def _on_sigterm(signum: int, frame: object) -> None:
     raise Terminated
 
 
-def _on_sigint(signum: int, frame: object) -> None:
-    from .._cluster import INTERRUPTED
-
-    INTERRUPTED.set()  # seen by the loops that wait on tasks, should this raise be lost
-    raise KeyboardInterrupt
-
-
 @contextlib.contextmanager
 def _sigterm_raises() -> Iterator[None]:
     """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only).
@@ -71,13 +64,13 @@ def _sigterm_raises() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    from .._cluster import INTERRUPTED
+    from .._cluster import INTERRUPTED, on_sigint
 
     INTERRUPTED.clear()
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     interrupt = signal.getsignal(signal.SIGINT)
     if interrupt is signal.default_int_handler:
-        signal.signal(signal.SIGINT, _on_sigint)
+        signal.signal(signal.SIGINT, on_sigint)
     try:
         yield
     finally:

@@ -640,9 +640,9 @@ def _run(
         finally:
             limit.restore_original_limits()
         return
-    from distributed import Client, as_completed
+    from distributed import as_completed
 
-    from .._cluster import connect_scheduler, local_cluster, raise_if_interrupted
+    from .._cluster import connect_scheduler, local_client, raise_if_interrupted
 
     cores = os.cpu_count() or 1
     with ExitStack() as stack:
@@ -650,8 +650,7 @@ def _run(
             workers = cores if n_workers is None else int(n_workers)
             if workers < 1:
                 raise ValueError(f"n_workers must be >= 0, got {n_workers!r}")
-            cluster = stack.enter_context(local_cluster(workers, processes=processes))
-            client = stack.enter_context(Client(cluster))
+            client = stack.enter_context(local_client(workers, processes=processes))
             threads: int | None = max(1, cores // workers)
         elif isinstance(scheduler, str):  # within a timeout, with a worker (or refused)
             client = stack.enter_context(connect_scheduler(scheduler))

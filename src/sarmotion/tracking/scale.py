@@ -34,7 +34,13 @@ from collections.abc import Iterator, Sequence
 from contextlib import ExitStack, nullcontext
 from typing import Any
 
-from .._cluster import MAX_WORKERS_PER_CORE, check_workers, connect_scheduler, local_cluster
+from .._cluster import (
+    MAX_WORKERS_PER_CORE,
+    check_workers,
+    connect_scheduler,
+    local_client,
+    local_cluster,
+)
 from ..core import Traces
 from ..pipeline import AnalysisOptions
 from .sub_apertures import SubApertureDetections, analyze_sub_aperture, sub_aperture_time_s
@@ -122,17 +128,15 @@ def map_sub_apertures(
                 traces.select_pulses(sl.start, sl.stop), options, index=k, pulses=sl, time_s=t
             )
         return
-    from distributed import Client
 
     cores = os.cpu_count() or 1
     with ExitStack() as stack:
         if scheduler is None:
             workers = cores if n_workers is None else int(n_workers)
             check_workers(workers)
-            cluster = stack.enter_context(
-                local_cluster(workers, processes=processes, dashboard_address=dashboard_address)
+            client = stack.enter_context(
+                local_client(workers, processes=processes, dashboard_address=dashboard_address)
             )
-            client = stack.enter_context(Client(cluster))
             threads: int | None = max(1, cores // workers)
             numba_threads: int | None = None if processes else cores
             if not processes:  # BLAS's pool is per process: one limit for every thread
