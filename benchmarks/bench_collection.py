@@ -417,11 +417,12 @@ def threads_vs_processes(rounds: int = 2) -> list[dict]:
     import sys
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from test_collection_run import MOVER, STATIONARY
+
     from sarmotion.collection import CollectionOptions, analyze_collection
     from sarmotion.core import Radar, Traces, Trajectory, to_fast_time
     from sarmotion.pipeline import AnalysisOptions
     from sarmotion.simulation import PointTarget, simulate_phase_history
-    from test_collection_run import MOVER, STATIONARY
 
     traj, radar = Trajectory.circular(), Radar()
     targets = [PointTarget(position_m=p) for p in STATIONARY] + [MOVER]

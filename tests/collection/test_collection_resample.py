@@ -184,7 +184,8 @@ def test_a_patch_keeps_the_pulses_its_band_needs_and_its_movers_at_the_speed_bou
     above, where the integer rule gives ``F / 2`` (1.25 R). A point and movers at the speed
     bound whose Doppler centre is the core's come out as their traces simulated on the
     patch's resampled pulses, within the filter's bound plus the fast-time window's
-    (``tests/collection/test_collection.py``'s rule), their whole Doppler spread in the kept band."""
+    (``tests/collection/test_collection.py``'s rule), their whole Doppler spread in the
+    kept band."""
     speed = 0.5
     opts = CollectionOptions(patch_size_m=40.0, max_speed_mps=speed, stopband_db=60.0)
     region = (-40.0, -40.0, 40.0, 40.0)

@@ -944,8 +944,11 @@ def _area_to_write(image_area_m: ArrayLike | None) -> NDArray[np.float64] | None
 
 
 def _mark_area(header: dict[str, Any], lay: _Layout) -> None:
-    """Store whether the image area is declared (``sarmotion.image_area``): a file written
-    with none declared holds the square of the TOA window, which is not the scene's."""
+    """Store whether the image area is declared (``sarmotion.image_area``).
+
+    A file written with none declared holds the square of the TOA window, which is not
+    the scene's.
+    """
     header["parameters"]["image_area"] = json.dumps(
         "declared" if lay.image_area_m is not None else "none"
     )
@@ -1113,8 +1116,10 @@ def _core_name(meta: dict[str, Any], path: Path) -> str:
 
 
 def _origin(origin_llh: ArrayLike) -> NDArray[np.float64]:
-    """``origin_llh`` checked (:func:`~sarmotion._validation.geodetic_origin`), its
-    longitude wrapped to [-180, 180) degrees."""
+    """``origin_llh`` checked, its longitude wrapped to [-180, 180) degrees.
+
+    The check is :func:`~sarmotion._validation.geodetic_origin`'s.
+    """
     llh = geodetic_origin(origin_llh, "origin_llh").copy()
     llh[1] = (llh[1] + 180.0) % 360.0 - 180.0
     return llh
