@@ -29,7 +29,7 @@ from .grid import ImageGrid
 #: The version of :mod:`._simd`'s inner loop compiled into this module's kernels. numba's
 #: on-disk cache keys on this file's contents, not on :mod:`._simd`'s: change this line
 #: whenever the inner loop or its table layout changes, or a stale kernel is loaded.
-SIMD_VERSION = "hermite-float32-planes-window-8-avx2"
+SIMD_VERSION = "hermite-float32-planes-window-9-avx2-unmasked"
 
 #: Memory bound of the float64 tables held by the float64 kernel at once (bytes).
 _TABLE_BYTES = 128 * 2**20

@@ -32,7 +32,7 @@ from ._simd import LANES, tile_pulses
 #: The version of :mod:`._simd`'s inner loop compiled into this module's kernels. numba's
 #: on-disk cache keys on this file's contents, not on :mod:`._simd`'s: change this line
 #: whenever the inner loop or its table layout changes, or a stale kernel is loaded.
-SIMD_VERSION = "hermite-float32-planes-window-8-avx2"
+SIMD_VERSION = "hermite-float32-planes-window-9-avx2-unmasked"
 
 _FASTMATH = {"nnan", "ninf", "nsz", "arcp", "contract", "afn"}
 
