@@ -62,6 +62,23 @@ antenna at 30 pulses per degree. Each mover's detections are also cut into three
 pieces that must join into one track, and its middle piece set against the other
 mover's to see that they do not (:func:`sarmotion.tracking.wide_aspect.join_tracks`).
 
+``--turns`` measures the turn tests (:mod:`sarmotion.tracking.turns`) on the same
+seeded tracks, each draw a uniform mover and one turning at 3 deg/s (either sense),
+1-8 m/s, headings uniform, made as in ``--geometric`` at the mover's state at each
+sub-aperture's centre (the range component of its acceleration added to the measured
+range acceleration) for sub-apertures of a degree overlapping by ``--overlaps``: errors
+of :data:`GEOMETRIC_STD` correlated as overlapping windows' are (each window's error the
+normalised sum of the independent errors of the steps it spans), bounds
+:data:`TURN_FACTORS` times smaller (the medians of the a posteriori factors through the
+whole chain at 4 degrees: the clutter residue). Both the looks' test
+(:func:`~sarmotion.tracking.turns.look_turn_test`) and the pairs' test
+(:func:`~sarmotion.tracking.turns.turn_test`, the rule before) at ``p`` = 0.01; seeds
+``1000 a + 500 + k``. Through the whole chain (the default mode) each track's test is
+the tracker's, with the pairs' beside it (``turn_flagged_pairs``). Regenerate::
+
+    python benchmarks/wide_aspect.py --turns --draws 7 --apertures 4 10 20 30 40 \
+        --name wide_aspect_turns
+
 Writes ``<name>.json`` and ``<name>.md`` under ``--out`` (``--name``, default
 ``wide_aspect``); ``--join`` merges runs made aperture by aperture.
 """
