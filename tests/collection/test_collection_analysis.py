@@ -20,6 +20,7 @@ from sarmotion.cli.main import run
 from sarmotion.collection import CollectionOptions, analyze_source, collection_options
 from sarmotion.core import Radar
 from sarmotion.documents.results import RESULTS_SCHEMA, collection_document
+from sarmotion.documents.schema import validate
 from sarmotion.imaging import resolution
 from sarmotion.io import write_cphd_blocks
 from sarmotion.pipeline import AnalysisOptions
@@ -42,6 +43,15 @@ def _same_movers(doc: dict, cli: dict) -> None:
     np.testing.assert_allclose(np.array(a), np.array(b), rtol=0, atol=1e-6)
 
 
+def _saved_as_the_command_writes(result, out, cli_out) -> None:
+    """``sarmotion.save(result)`` writes the command's files and movers, a valid document."""
+    sarmotion.save(result, out)
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in cli_out.iterdir())
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["schema"] == RESULTS_SCHEMA and validate(doc) == []
+    _same_movers(doc, json.loads((cli_out / "results.json").read_text()))
+
+
 def _cli(inputs: list[str], out, *flags: str) -> dict:
     assert run(["analyze", *inputs, "--out", str(out), *flags]) == 0
     return json.loads((out / "results.json").read_text())
@@ -62,6 +72,7 @@ def test_a_scene_of_one_patch_gives_the_commands_movers_from_a_path_a_source_and
         assert doc["schema"] == RESULTS_SCHEMA and len(doc["plan"]["patches"]) == 1
         _same_movers(doc, cli)
         assert len(doc["stationary"]) == len(cli["stationary"]), name
+    _saved_as_the_command_writes(results["path"], tmp_path / "saved", tmp_path / "cli")
 
 
 @pytest.fixture(scope="module")
@@ -91,6 +102,7 @@ def test_a_cphd_of_several_patches_gives_the_commands_movers_from_a_path_a_sourc
         assert doc["schema"] == RESULTS_SCHEMA
         _same_movers(doc, cli)
         assert len(doc["stationary"]) == len(cli["stationary"]), name
+    _saved_as_the_command_writes(results["path"], tmp_path / "saved", tmp_path / "cli")
 
 
 @pytest.fixture(scope="module")

@@ -11,10 +11,9 @@ import click
 
 from ..collection import CollectionOptions, RegionError, analyze_source
 from ..core.blocks import TracesBlocks
-from ..documents.results import collection_document, describe_patch
-from ..io import staged_directory, write_json
+from ..documents.results import describe_patch
 from ..io.staging import claimed
-from ..report.collection import write_collection_report
+from ..report.analysis import COLLECTION_OUTPUTS, save_collection
 from ..sources import is_scene_reference, open_source
 from .autofocus import ReadOptions
 from .common import InputError, Progress, as_flags, check_out, say
@@ -22,16 +21,6 @@ from .describe import document_lines, stationary_note
 from .main import elapsed_s
 
 __all__ = ["COLLECTION_OUTPUTS", "open_inputs", "run_collection", "write_collection"]
-
-#: What the collection path writes into --out.
-COLLECTION_OUTPUTS = (
-    "results.json",
-    "report.html",
-    "mosaic.png",
-    "movers.png",
-    "trajectories.png",
-    "autofocus.png",
-)
 
 
 def _quiet_dask() -> None:
@@ -154,30 +143,15 @@ def write_collection(
     """``out``/results.json, report.html and mosaic.png of a collection, and the console."""
     if claimed(out) is None:  # the analyze command claims it before reading
         check_out(out, force=force, names=COLLECTION_OUTPUTS)
-    doc = collection_document(result, scene=scene)
-    doc["inputs"] = list(inputs)
-    if autofocus is not None:
-        doc["autofocus"] = autofocus.to_dict()
-    images = "movers.png" if len(result.plan.patches) > 1 else None
-    for m, im in zip(doc["movers"], _images(result), strict=True):
-        m["image"] = images if im else m.get("image")
-    with staged_directory(out) as stage:
-        write_json(stage / "results.json", doc)
-        write_collection_report(
-            result,
-            stage,
-            document=doc,
-            title=f"sarmotion analysis: {', '.join(Path(i).name for i in inputs)}",
-            inputs=inputs,
-        )
+    doc = save_collection(
+        result,
+        out,
+        force=force,
+        scene=scene,
+        inputs=inputs,
+        autofocus=None if autofocus is None else autofocus.to_dict(),
+    )
     echo_document(out, doc, result.timings_s["total"])
-
-
-def _images(result: Any) -> list[bool]:
-    """Whether each merged mover kept its image."""
-    from ..documents.results import collection_mover_images
-
-    return [im is not None for im in collection_mover_images(result)]
 
 
 def echo_document(out: Path, doc: dict[str, Any], analysis_s: float) -> None:

@@ -21,6 +21,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from ..collection import CollectionResult
 from ..documents.results import results_document
 from ..imaging.quality import point_quality
 from ..io import staged_directory, write_json
@@ -29,7 +30,15 @@ from ..pipeline import AnalysisResult, compare_with_truth
 from ..simulation import Scene
 from .analysis_figures import write_report
 
-__all__ = ["ANALYSIS_OUTPUTS", "REPORT_OUTPUTS", "analysis_document", "save", "save_report"]
+__all__ = [
+    "ANALYSIS_OUTPUTS",
+    "COLLECTION_OUTPUTS",
+    "REPORT_OUTPUTS",
+    "analysis_document",
+    "save",
+    "save_collection",
+    "save_report",
+]
 
 #: The report's files: the HTML page and the PNG of each figure it embeds.
 REPORT_OUTPUTS = (
@@ -45,6 +54,16 @@ REPORT_OUTPUTS = (
 #: Everything :func:`save` and ``sarmotion analyze`` may write into their directory
 #: (``stationary.nitf`` and ``mover-K.nitf`` only with the command's ``--sicd``).
 ANALYSIS_OUTPUTS = ("results.json", *REPORT_OUTPUTS, "stationary.nitf")
+
+#: What :func:`save_collection` (an analysis of several patches) writes into its directory.
+COLLECTION_OUTPUTS = (
+    "results.json",
+    "report.html",
+    "mosaic.png",
+    "movers.png",
+    "trajectories.png",
+    "autofocus.png",
+)
 
 #: Brightest stationary targets whose point-target quality the document and report list.
 QUALITY_TARGETS = 3
@@ -118,7 +137,7 @@ def _claimed_stage(directory: Path, *, force: bool, names: Sequence[str]) -> Ite
 
 
 def save(
-    result: AnalysisResult,
+    result: AnalysisResult | CollectionResult,
     directory: str | Path,
     *,
     force: bool = False,
@@ -137,8 +156,11 @@ def save(
 
     Parameters
     ----------
-    result : AnalysisResult
-        The analysis.
+    result : AnalysisResult or CollectionResult
+        The analysis: one patch's, or what :func:`sarmotion.analyze` returns. A
+        collection of one patch is written as its ``single_result`` with its plan and
+        options; one of several patches by :func:`save_collection` (``also`` must then
+        be None, ``plan`` and ``collection_options`` are the result's own).
     directory : path
         Output directory; created with its parents if missing.
     force : bool
@@ -171,6 +193,21 @@ def save(
         ``directory`` is a file, a link, holds an earlier output without ``force``, or
         another process is writing it (a ``ValueError``; one line).
     """
+    if isinstance(result, CollectionResult):
+        if result.single_result is None:
+            if also is not None:
+                raise ValueError("save: 'also' is for one patch's analysis, not a collection's")
+            return save_collection(
+                result,
+                directory,
+                force=force,
+                scene=scene,
+                inputs=inputs,
+                autofocus=autofocus,
+                title=title,
+            )
+        plan, collection_options = result.plan, result.options.to_dict()
+        result = result.single_result
     out = Path(directory)
     with _claimed_stage(out, force=force, names=ANALYSIS_OUTPUTS) as stage:
         doc = analysis_document(
@@ -185,6 +222,47 @@ def save(
         write_report(result, stage, document=doc, title=_title(title, inputs), inputs=inputs)
         if also is not None:
             also(stage)
+    return doc
+
+
+def save_collection(
+    result: CollectionResult,
+    directory: str | Path,
+    *,
+    force: bool = False,
+    scene: Scene | None = None,
+    inputs: Sequence[str] = (),
+    autofocus: dict[str, Any] | None = None,
+    title: str | None = None,
+) -> dict[str, Any]:
+    """Write ``directory``/results.json, report.html, mosaic.png and figures of a collection.
+
+    What ``sarmotion analyze --out DIRECTORY`` writes for an input cut into several
+    patches; the document is the same schema as one patch's (``sarmotion.results/3``).
+    Parameters as :func:`save`'s, ``force`` concerning :data:`COLLECTION_OUTPUTS`.
+
+    Returns
+    -------
+    dict
+        The document written to ``results.json``.
+    """
+    from ..documents.results import collection_document, collection_mover_images
+    from .collection import write_collection_report
+
+    doc = collection_document(result, scene=scene)
+    doc["inputs"] = list(inputs)
+    if autofocus is not None:
+        doc["autofocus"] = autofocus
+    images = "movers.png" if len(result.plan.patches) > 1 else None
+    kept = [im is not None for im in collection_mover_images(result)]
+    for m, im in zip(doc["movers"], kept, strict=True):
+        m["image"] = images if im else m.get("image")
+    out = Path(directory)
+    with _claimed_stage(out, force=force, names=COLLECTION_OUTPUTS) as stage:
+        write_json(stage / "results.json", doc)
+        write_collection_report(
+            result, stage, document=doc, title=_title(title, inputs), inputs=inputs
+        )
     return doc
 
 
