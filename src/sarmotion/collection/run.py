@@ -628,6 +628,7 @@ def _run(
     """Extract the patches group by group and analyse them; yield as they complete."""
     total = len(plan.patches)
     done = 0
+    report(progress, "patches", 0, total)  # the bar from the start, not the first patch
     if scheduler is None and n_workers == 0:
         from threadpoolctl import threadpool_limits
 
