@@ -1,9 +1,9 @@
 """Shared fixtures: small seeded scenes and the location of the GOTCHA data set.
 
 The test run writes nothing into the source tree: numba's on-disk cache (``cache=True``
-kernels) and Python's bytecode go under one directory in the system's temporary
-directory, set here before any test imports sarmotion (and so numba) and passed on, in
-the environment, to the commands the tests start. A ``NUMBA_CACHE_DIR`` or
+kernels) and Python's bytecode (where it is written) go under one directory in the
+system's temporary directory, set here before any test imports sarmotion (and so
+numba) and passed on, in the environment, to the commands the tests start. A ``NUMBA_CACHE_DIR`` or
 ``PYTHONPYCACHEPREFIX`` already set is kept. The directory persists between runs, so the
 kernels compile once, not once per run; numba keys its entries by the source file's full
 path and time stamp, so checkouts side by side do not share them.
@@ -22,9 +22,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 _CACHE = Path(tempfile.gettempdir()) / "sarmotion-test-cache"
 os.environ.setdefault("NUMBA_CACHE_DIR", str(_CACHE / "numba"))
-os.environ.setdefault("PYTHONPYCACHEPREFIX", str(_CACHE / "pycache"))
-if sys.pycache_prefix is None:
-    sys.pycache_prefix = os.environ["PYTHONPYCACHEPREFIX"]
+if not sys.flags.dont_write_bytecode:
+    # where no bytecode is written (PYTHONDONTWRITEBYTECODE) nothing reaches the tree, and
+    # a prefix would only hide the installed packages' bytecode from the commands the
+    # tests start: every module, numpy's and Dask's too, compiled at each start
+    os.environ.setdefault("PYTHONPYCACHEPREFIX", str(_CACHE / "pycache"))
+    if sys.pycache_prefix is None:
+        sys.pycache_prefix = os.environ["PYTHONPYCACHEPREFIX"]
 
 
 # The test tiers. ``python -m pytest`` runs the fast tier (pyproject.toml's addopts
