@@ -131,6 +131,12 @@ def draw_scene(aperture_deg: float, seed: int) -> tuple[Scene, list[PointTarget]
     ]
     look = np.array([7100.0, 0.0]) / RANGE_M  # ground part of m_o at the pass's centre
     band = SPEED_MPS * IMAGE_M / (2.0 * RANGE_M)  # stationary band's edge (module notes)
+    if top * float(np.linalg.norm(look)) <= 2.0 * band:  # else the draws below never end
+        raise ValueError(
+            f"{aperture_deg:g} degrees: no mover crosses at most {MAX_CROSSING_M:g} m "
+            f"({top:.2f} m/s) with a range speed beyond twice the stationary band "
+            f"({2.0 * band:.2f} m/s)"
+        )
     movers: list[PointTarget] = []
     times = np.linspace(-duration / 2.0, duration / 2.0, 21)
     for k in range(N_MOVERS):
@@ -479,12 +485,14 @@ def run_turns(aperture_deg: float, seed: int, overlap: float) -> dict:
     """One seeded turn draw: a uniform mover and one turning at 3 deg/s, both tests."""
     from sarmotion.tracking.turns import look_turn_test, turn_test
 
-    scene, _, _ = draw_scene(aperture_deg, seed)
     rng = np.random.default_rng(seed + 11)
     empty = Scene(
-        name="pass", targets=(), radar=scene.radar,
-        trajectory_spec={**scene.trajectory_spec, "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG},
-    )  # fmt: skip
+        name="pass", targets=(), radar=load_scene("scene1").radar,
+        trajectory_spec={
+            "kind": "circular", "aperture_deg": float(aperture_deg),
+            "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG, "speed_mps": SPEED_MPS,
+        },
+    )  # the pass alone: its movers are drawn below  # fmt: skip
     traces = simulate(empty).traces
     out = {"aperture_deg": aperture_deg, "seed": seed, "overlap": overlap, "tracks": []}
     for rate in (0.0, TURN_RATE_DEG_S):
