@@ -180,7 +180,11 @@ def score_movers(acq, truths, fits) -> tuple[int, list[dict], int]:
 
 
 def run_case(
-    side_m: float, azimuth_deg: float, oversample: float, clutter: int, seed: int,
+    side_m: float,
+    azimuth_deg: float,
+    oversample: float,
+    clutter: int,
+    seed: int,
     reference: bool = False,
 ) -> dict:
     """One case, in this process: simulate, write, analyse, score."""
@@ -281,6 +285,15 @@ def table(rows: list[dict]) -> str:
     return head + "\n".join(lines) + "\n"
 
 
+def write_table(path: Path, rows: list[dict]) -> None:
+    """Write ``rows``' table into ``path``, keeping the text after an earlier table."""
+    text = path.read_text() if path.exists() else ""
+    start = text.find("| side (m)")
+    end = text.find("\n\n", start) if start >= 0 else -1
+    rest = text[end:] if end >= 0 else "\n"
+    path.write_text(text[: max(start, 0)] + table(rows).rstrip("\n") + rest)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sides", type=float, nargs="+", default=[100.0])
@@ -324,7 +337,7 @@ def main() -> None:
             print(json.dumps(row), flush=True)
             rows = [r for r in rows if (r["side_m"], r["azimuth_deg"]) != (side, az)] + [row]
             store.write_text(json.dumps(rows, indent=1) + "\n")
-            (args.out / "look_azimuth.md").write_text(table(rows))
+            write_table(args.out / "look_azimuth.md", rows)
     print(table(rows))
 
 
