@@ -573,7 +573,11 @@ def _release_work_dirs(clusters: list[Any]) -> None:
 
 
 def _quiet_workers() -> None:
-    """Run on each worker of an interrupted :func:`local_client` (its loggers off)."""
+    """Run on each worker as :func:`local_client` ends: its Dask loggers off.
+
+    Returns nothing: ``client.run`` sends a function's result back, and the loggers'
+    former states (:func:`silence_cluster_loggers`) are of no use here.
+    """
     silence_cluster_loggers()
 
 
