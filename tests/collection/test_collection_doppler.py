@@ -5,7 +5,8 @@ range is much wider than the scene and a mover's range speed displaces its image
 about ``R / V`` metres per m/s, out of the scene. The default region (the whole
 unambiguous scene) finds it there, on its family; the patches beyond the scene list
 neither their noise nor the mover's image as stationary targets; a region limited to the
-scene does not see it (``analyze --help``).
+scene finds it through patches beyond the region that search for movers only
+(``analyze --help``).
 """
 
 from __future__ import annotations
@@ -78,7 +79,30 @@ def test_the_stationary_list_is_the_scene_not_noise_nor_the_movers_image(whole):
     assert whole.stationary_mover_images >= 1
 
 
-def test_a_region_limited_to_the_scene_does_not_see_the_mover(scene):
+def test_a_region_limited_to_the_scene_finds_the_mover_beyond_it(scene):
+    """The patches beyond the region, out to a mover's image shift, search for movers only.
+
+    The mover's image lands some 190 m off the 60 m region: a patch beyond the region
+    finds it on its family, and lists no stationary target nor mosaic pixel.
+    """
     region = (-HALF, -HALF, HALF, HALF)
     result = analyze_collection(scene, OPTIONS, region_m=region, n_workers=0)
-    assert len(result.movers) == 0
+    plan = result.plan
+    beyond = [p for p in plan.patches if p.movers_only]
+    assert beyond and len(beyond) < len(plan.patches)
+    # the image shift at the options' largest speed reaches past this mover's (190 m)
+    assert plan.image_shift_m > 190.0
+    for p in beyond:  # wholly outside the region
+        assert not np.any(p.inside(plan.region_polygon[:, :2] * (1 - 1e-6)))
+    assert len(result.movers) == 1
+    fit, patches = result.movers[0]
+    assert all(plan.patches[k].movers_only for k in patches)
+    err = family_errors(scene, fit, MOVER)
+    assert abs(err[0]) <= 3 * fit.sigma_range_m
+    assert abs(err[1]) <= 0.01 * range_speed_resolution(scene)
+    # nothing stationary from the patches beyond: the scene's four points, within a metre
+    assert {t.patch for t in result.stationary}.isdisjoint(p.index for p in beyond)
+    found = np.array([t.position_m for t in result.stationary])
+    assert len(found) == len(STATIONARY)
+    for p in STATIONARY:
+        assert np.min(np.hypot(*(found - p).T)) < 1.0

@@ -20,8 +20,13 @@ from sarmotion.pipeline import AnalysisOptions
 from sarmotion.simulation import PointTarget, simulate_phase_history
 
 REGION = (-60.0, -25.0, 60.0, 25.0)
+#: The region's two patches alone (``--no-search-beyond``): the patches beyond it that
+#: search for movers only are ``test_collection_doppler.py``'s.
 OPTIONS = CollectionOptions(
-    analysis=AnalysisOptions(trajectory=False), patch_size_m=60.0, max_speed_mps=15.0
+    analysis=AnalysisOptions(trajectory=False),
+    patch_size_m=60.0,
+    max_speed_mps=15.0,
+    search_beyond=False,
 )
 #: Stationary points, both cores; and a mover 2 m from the border x = 0 between them.
 STATIONARY = [
@@ -187,11 +192,13 @@ def test_command_line_collection_outputs(scene, tmp_path, capsys, suffix):
             "--workers",
             "0",
             "--no-trajectory",
+            "--no-search-beyond",
         ]
     )
     assert code == 0, capsys.readouterr().err
     doc = json.loads((out / "results.json").read_text())
     assert doc["schema"] == "sarmotion.results/3"
+    assert doc["options"]["search_beyond"] is False
     assert len(doc["plan"]["patches"]) == 2
     # the patches of a collection search their stationary band unless told not to
     assert doc["options"]["analysis"]["defocus_search"] is True
@@ -329,6 +336,7 @@ def test_candidates_beyond_max_movers_are_kept_in_the_document_and_said(scene, t
     out = tmp_path / "out"
     args = ["analyze", str(src), "--out", str(out), "--region", *map(str, REGION)]
     args += ["--patch-size", "60", "--workers", "0", "--no-trajectory", "--max-movers", "0"]
+    args += ["--no-search-beyond"]
     code = run([*args, "--no-defocus-search"])
     console = capsys.readouterr().out
     assert code == 0

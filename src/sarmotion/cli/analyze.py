@@ -239,8 +239,8 @@ def _write_sicd_images(result, stage: Path) -> None:
     "A scene larger than one patch is cut into overlapping patches, squares along the "
     "look's range and cross range. A mover is found "
     "where its Doppler places its image: its range speed shifts it in cross range "
-    "(about R/V metres per m/s), so a mover inside the region whose image lands outside "
-    "it is not seen, and one outside may be.",
+    "(about R/V metres per m/s), so patches beyond the region search for movers only "
+    "(--search-beyond); a mover outside the region may be found too.",
 )
 @click.option(
     "--region-frame",
@@ -269,6 +269,17 @@ def _write_sicd_images(result, stage: Path) -> None:
     callback=max_speed_callback,
     help=f"Patches: largest ground speed of a mover (m/s, at most {MAX_GROUND_SPEED_MPS:g}: the "
     "speed of sound) their margins are sized for.",
+)
+@click.option(
+    "--search-beyond/--no-search-beyond",
+    "search_beyond",
+    default=True,
+    show_default=True,
+    help="Patches: search for movers beyond the region too, out to the cross-range shift "
+    "of a mover's image at --max-speed (its range speed moves its image about R/V metres "
+    "per m/s), within the unambiguous scene. Those patches list no stationary target and "
+    "add nothing to the mosaic; --no-search-beyond tiles the region alone, faster, and "
+    "misses the movers whose images land outside it.",
 )
 @click.option(
     "--scheduler",
@@ -317,6 +328,7 @@ def analyze(
     region_frame: str,
     patch_size_m: float | None,
     max_speed_mps: float,
+    search_beyond: bool,
     scheduler: str | None,
     n_workers: int | None,
     device: str,
@@ -356,7 +368,10 @@ def analyze(
 
     with as_flags(patch_size_m="--patch-size", max_speed_mps="--max-speed"):
         copts = CollectionOptions(
-            analysis=options, patch_size_m=patch_size_m, max_speed_mps=max_speed_mps
+            analysis=options,
+            patch_size_m=patch_size_m,
+            max_speed_mps=max_speed_mps,
+            search_beyond=search_beyond,
         )
 
     def single(result: Any, sim: Any, focus: Any) -> None:

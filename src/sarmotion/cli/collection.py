@@ -185,8 +185,15 @@ def _say_plan(plan: Any, source: Any, n_workers: int | None, scheduler: str | No
                 else f"on {n_workers or 'one per core'} worker(s)"
             )
         )
+        beyond = sum(p.movers_only for p in plan.patches)
+        widened = (
+            f" ({beyond} beyond it for the movers' images, up to "
+            f"{plan.image_shift_m:.0f} m off in cross range)"
+            if beyond
+            else ""
+        )
         what = (
             f"{len(plan.patches)} patches of {plan.patch_size_m:.0f} m over "
-            f"{x1 - x0:.0f} x {y1 - y0:.0f} m, {where}"
+            f"{x1 - x0:.0f} x {y1 - y0:.0f} m{widened}, {where}"
         )
     say(click.get_current_context(silent=True), f"analyze: {data}: {what}")

@@ -110,6 +110,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import ConvexHull
 
 from .._validation import integer, positive
 from ..core.blocks import PulseBlocks, declared_area
@@ -180,6 +181,11 @@ class CollectionOptions:
         60 dB; its pass-band ripple is the same ``10^(-A/20)``.
     block_pulses : int
         Pulses read per block (>= 1). Default 256.
+    search_beyond : bool
+        Patches beyond the region, out to the cross-range shift of a mover's image at
+        ``max_speed_mps``, search for movers only (module notes). Default True; False:
+        the cores tile the region alone, and a mover whose image lands outside it is
+        not seen.
     """
 
     analysis: AnalysisOptions = field(default_factory=AnalysisOptions)
@@ -187,6 +193,7 @@ class CollectionOptions:
     max_speed_mps: float = 15.0
     stopband_db: float = 60.0
     block_pulses: int = 256
+    search_beyond: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.analysis, AnalysisOptions):
@@ -211,6 +218,7 @@ class CollectionOptions:
             "max_speed_mps": self.speed_mps,
             "stopband_db": self.stopband_db,
             "block_pulses": self.block_pulses,
+            "search_beyond": bool(self.search_beyond),
         }
 
 
@@ -252,6 +260,10 @@ class Patch:
         the unambiguous scene; module notes). None: the core's box.
     false_alarm_share : float
         Its share of the collection's false-alarm rate, in (0, 1] (module notes).
+    movers_only : bool
+        The core lies outside the region, in its widening for the movers' images
+        (module notes): the patch reports the movers whose echoes its band holds, and no
+        stationary target or mosaic pixel.
     """
 
     index: int
@@ -266,6 +278,7 @@ class Patch:
     outline_m: NDArray[np.float64] | None = None
     halo_m: float | None = None
     false_alarm_share: float = 1.0
+    movers_only: bool = False
 
     @property
     def pulse_positions(self) -> NDArray[np.float64]:
@@ -312,6 +325,7 @@ class Patch:
             "interpolation": int(self.interpolation),
             "passband_hz": float(self.passband_hz),
             "n_taps": int(self.taps.size),
+            "movers_only": bool(self.movers_only),
         }
 
 
@@ -344,6 +358,12 @@ class PatchPlan:
     region_source : str
         Where the region comes from: ``"declared"`` (the data's image area within the
         unambiguous scene), ``"unambiguous scene"`` (nothing declared) or ``"given"``.
+    search_polygon_m : (n, 2) ndarray or None
+        The ground the cores cover for the movers (m): the region widened in cross range
+        by ``image_shift_m`` within the unambiguous scene; None: the region.
+    image_shift_m : float
+        Largest cross-range shift of a mover's image from its position (m), at the
+        movers' largest ground speed (module notes).
     """
 
     patches: tuple[Patch, ...]
@@ -358,6 +378,8 @@ class PatchPlan:
     declared_outside_m2: float = 0.0
     range_direction: NDArray[np.float64] | None = None
     region_source: str = "given"
+    search_polygon_m: NDArray[np.float64] | None = None
+    image_shift_m: float = 0.0
 
     @property
     def region(self) -> dict[str, Any]:
@@ -409,9 +431,20 @@ class PatchPlan:
         return float(self.declared_outside_m2 / whole) if whole > 0 else 0.0
 
     @property
+    def search_polygon(self) -> NDArray[np.float64]:
+        """The ground searched for movers ``(n, 2)`` (m): the region and its widening."""
+        if self.search_polygon_m is not None:
+            return np.asarray(self.search_polygon_m, dtype=np.float64)
+        return self.region_polygon
+
+    @property
     def extent_m(self) -> tuple[float, float, float, float]:
-        """Bounding box ``(x0, y0, x1, y1)`` of the region and every core (m): the mosaic's."""
-        pts = np.vstack([self.region_polygon, *(p.corners_m for p in self.patches)])
+        """Bounding box ``(x0, y0, x1, y1)`` of the region and its cores (m): the mosaic's.
+
+        The cores searched for movers only (``Patch.movers_only``) are not in it.
+        """
+        cores = (p.corners_m for p in self.patches if not p.movers_only)
+        pts = np.vstack([self.region_polygon, *cores])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
 
@@ -425,6 +458,8 @@ class PatchPlan:
             ),
             "declared_outside_m2": float(self.declared_outside_m2),
             "declared_outside_share": self.declared_outside_share,
+            "search_polygon_m": self.search_polygon.tolist(),
+            "image_shift_m": float(self.image_shift_m),
             "patch_size_m": float(self.patch_size_m),
             "unambiguous_scene_m": self.unambiguous_m.tolist(),
             "range_margin_m": float(self.range_margin_m),
@@ -652,50 +687,20 @@ def plan_patches(
     if single and declared is not None:  # today's analysis images its square: it must hold it
         side = opts.analysis.image_size_m or _single_image_m(source, geom.elevation_rad)
         single = bool(np.all(np.abs(region - rho) <= 0.5 * side * (1.0 + 1e-9)))
-    if single:
-        n_a = n_b = 1
-    else:
-        n_a = max(1, math.ceil(extent[0] / size - 1e-9))
-        n_b = max(1, math.ceil(extent[1] / size - 1e-9))
-        least_count = abs(polygon_area(region)) / size**2
-        if least_count > MAX_PATCHES:
-            raise RegionError(
-                f"{what} needs at least {math.ceil(least_count)} patches of patch size "
-                f"{size:g} m, more than the {MAX_PATCHES} a plan may hold (a larger "
-                "patch size, or a smaller region)"
-            )
-    a_edges = np.linspace(lo[0], hi[0], n_a + 1)
-    b_edges = np.linspace(lo[1], hi[1], n_b + 1)
 
     def ground(a: float, b: float) -> NDArray[np.float64]:
         return rho + a * e_r + b * e_c
 
-    cores = []
-    for ib in range(n_b):
-        for ia in range(n_a):
-            a0, a1, b0, b1 = a_edges[ia], a_edges[ia + 1], b_edges[ib], b_edges[ib + 1]
-            outline = np.array([ground(a0, b0), ground(a1, b0), ground(a1, b1), ground(a0, b1)])
-            # to the nanometre: a look along x or y leaves no 1e-20 m of rounding in the
-            # corners (a core's box is then its core, exactly)
-            outline = np.round(outline, 9) + 0.0
-            if not single:
-                overlap = abs(polygon_area(clip_convex(region, outline)))
-                if not overlap > 1e-9 * (a1 - a0) * (b1 - b0):
-                    continue  # no part of the region in this core
-            cores.append(outline)
-    if len(cores) > MAX_PATCHES:
-        raise RegionError(
-            f"{what} needs {len(cores)} patches of patch size {size:g} m, more than the "
-            f"{MAX_PATCHES} a plan may hold (a larger patch size, or a smaller region)"
-        )
-
-    # movers' margins, common to all patches (module notes): at the tiled rectangle's corners
+    # movers' margins, common to all patches (module notes): at the region's rectangle's
+    # corners in the look frame; and the largest Doppler centre of a mover there, which
+    # shifts its image in cross range
     vel = _velocities(opts.speed_mps)
     f_lo = radar.carrier_hz - 0.5 * radar.bandwidth_hz
     f_hi = radar.carrier_hz + 0.5 * radar.bandwidth_hz
     j0 = int(np.argmin(np.abs(s)))
     margin_t = 0.0
     margin_d = 0.0
+    shift_hz = 0.0
     rect = ((lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1]))
     tiled = np.array([ground(a, b) for a, b in rect])
     for x in _lift(tiled, z):
@@ -706,22 +711,81 @@ def plan_patches(
         centre = radar.carrier_hz * rate[:, j0 : j0 + 1]
         spread = np.maximum(np.abs(f_lo * rate - centre), np.abs(f_hi * rate - centre))
         margin_d = max(margin_d, float(np.max(spread)))
-    guard_t = PULSE_GUARD / radar.bandwidth_hz
-    prf = 1.0 / traj.pulse_interval_s
-    dt = radar.sample_interval_s
+        shift_hz = max(shift_hz, float(np.max(np.abs(centre))))
 
-    # halo and keep rectangles in the look frame (module notes): the gradients of the
-    # delay along e_r and of the Doppler along e_c at the reference point, every pulse
+    # the gradients of the delay along e_r and of the Doppler along e_c at the reference
+    # point, every pulse: the halo and keep rectangles' sides, and the image shift
     grad = _delays(pos, _lift(np.stack([rho, rho + e_r, rho + e_c]), z))
     delay_per_m = np.abs(grad[1] - grad[0])  # s per m of ground range, (n_pulses,)
     doppler_per_m = np.abs(np.gradient(grad[2] - grad[0], s)) * radar.carrier_hz  # Hz per m
     amb_ab = (amb - rho) @ to_look
     amb_lo, amb_hi = amb_ab.min(axis=0), amb_ab.max(axis=0)
+
+    # the ground searched: the region widened in cross range by the image shift, within
+    # the unambiguous scene; a shift past either side of it wraps (by the pulse rate)
+    # onto the other, so then the scene's whole cross-range extent
+    image_shift = 0.0 if single else shift_hz / max(float(doppler_per_m[j0]), 1e-300)
+    if not opts.search_beyond:
+        image_shift = 0.0
+    search = region
+    t_lo, t_hi = lo.copy(), hi.copy()
+    if image_shift > 0.0:
+        reach = image_shift
+        if lo[1] - reach < amb_lo[1] or hi[1] + reach > amb_hi[1]:
+            reach = float(amb_hi[1] - amb_lo[1])
+        widened = np.vstack([region - reach * e_c, region + reach * e_c])
+        search = clip_convex(widened[ConvexHull(widened).vertices], amb)
+        t_lo[1] = max(lo[1] - reach, amb_lo[1])
+        t_hi[1] = min(hi[1] + reach, amb_hi[1])
+    if single:
+        n_a = n_b = 1
+    else:
+        t_extent = t_hi - t_lo
+        n_a = max(1, math.ceil(t_extent[0] / size - 1e-9))
+        n_b = max(1, math.ceil(t_extent[1] / size - 1e-9))
+        least_count = abs(polygon_area(search)) / size**2
+        if least_count > MAX_PATCHES:
+            raise RegionError(
+                f"{what} needs at least {math.ceil(least_count)} patches of patch size "
+                f"{size:g} m (with its widening of {image_shift:.0f} m either side in cross "
+                f"range for the movers' images), more than the {MAX_PATCHES} a plan may "
+                "hold (a larger patch size, a smaller region, or a lower max speed)"
+            )
+    a_edges = np.linspace(t_lo[0], t_hi[0], n_a + 1)
+    b_edges = np.linspace(t_lo[1], t_hi[1], n_b + 1)
+
+    cores = []
+    for ib in range(n_b):
+        for ia in range(n_a):
+            a0, a1, b0, b1 = a_edges[ia], a_edges[ia + 1], b_edges[ib], b_edges[ib + 1]
+            outline = np.array([ground(a0, b0), ground(a1, b0), ground(a1, b1), ground(a0, b1)])
+            # to the nanometre: a look along x or y leaves no 1e-20 m of rounding in the
+            # corners (a core's box is then its core, exactly)
+            outline = np.round(outline, 9) + 0.0
+            if not single:
+                tiny = 1e-9 * (a1 - a0) * (b1 - b0)
+                if not abs(polygon_area(clip_convex(search, outline))) > tiny:
+                    continue  # no part of the searched ground in this core
+                ours = abs(polygon_area(clip_convex(region, outline))) > tiny
+                cores.append((outline, not ours))
+            else:
+                cores.append((outline, False))
+    if len(cores) > MAX_PATCHES:
+        raise RegionError(
+            f"{what} needs {len(cores)} patches of patch size {size:g} m (with its "
+            f"widening of {image_shift:.0f} m either side in cross range for the movers' "
+            f"images), more than the {MAX_PATCHES} a plan may hold (a larger patch size, "
+            "a smaller region, or a lower max speed)"
+        )
+    guard_t = PULSE_GUARD / radar.bandwidth_hz
+    prf = 1.0 / traj.pulse_interval_s
+    dt = radar.sample_interval_s
+
     from .merge import ECHO_CELLS
 
     patches = []
     rects = []
-    for outline in cores:
+    for outline, movers_only in cores:
         pts = _outline_points(outline, z)
         centre = pts[4].copy()
         rel = _delays(pos, pts) - travel_time(pos, centre)[None, :]
@@ -790,6 +854,7 @@ def plan_patches(
                 taps=taps,
                 pulses=pulses,
                 halo_m=None if single else halo_side,
+                movers_only=movers_only,
             )
         )
     if len(patches) > 1:  # each patch's share of the false-alarm rate (module notes)
@@ -809,6 +874,8 @@ def plan_patches(
         unambiguous_m=amb,
         range_direction=np.asarray(e_r, dtype=np.float64),
         region_source=kind,
+        search_polygon_m=search,
+        image_shift_m=float(image_shift),
         range_margin_m=0.5 * C * margin_t,
         doppler_margin_hz=margin_d,
         single=bool(single),

@@ -367,7 +367,7 @@ def analyze_patch(
     peak = float(mag.max()) if mag.size else 0.0
     stationary = []
     for t in result.stationary:
-        if single or patch.contains(t.position_m):
+        if single or (not patch.movers_only and patch.contains(t.position_m)):
             stationary.append(
                 StationaryRecord(
                     patch=patch.index,
@@ -384,8 +384,10 @@ def analyze_patch(
         xx, yy = np.meshgrid(gx[okx], gy[oky])
         own = patch.inside(np.stack([xx.ravel(), yy.ravel()], axis=1)).reshape(cut.shape)
         cut[~own] = 0.0
-    image = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=cut)
-    if mosaic_m is not None:
+    image: PatchImage | None = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=cut)
+    if patch.movers_only:  # outside the region: searched for movers, not in the mosaic
+        image = None
+    elif mosaic_m is not None:
         image = coarsen(image, (mosaic_m[0], mosaic_m[1]), mosaic_m[2])
     opts = result.options
     slim = PatchResult(

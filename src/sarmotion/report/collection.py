@@ -40,11 +40,27 @@ def _clip_line(p: np.ndarray, d: np.ndarray, box: tuple[float, float, float, flo
     return p + lo * d, p + hi * d
 
 
+def _holding(
+    box: tuple[float, float, float, float], points: Sequence[np.ndarray]
+) -> tuple[float, float, float, float]:
+    """``box`` ``(x0, y0, x1, y1)`` widened to hold ``points`` with a 5 % margin (m)."""
+    if not points:
+        return box
+    p = np.vstack(points)
+    x0, y0 = min(box[0], float(p[:, 0].min())), min(box[1], float(p[:, 1].min()))
+    x1, y1 = max(box[2], float(p[:, 0].max())), max(box[3], float(p[:, 1].max()))
+    if (x0, y0, x1, y1) == tuple(box):
+        return box
+    pad = 0.05 * max(x1 - x0, y1 - y0)
+    return (x0 - pad, y0 - pad, x1 + pad, y1 + pad)
+
+
 def mosaic_figure(result: CollectionResult) -> Figure:
     """Mosaic (dB re its peak), patch cores, movers and their families clipped to the region.
 
     Drawn on the ground ``x``, ``y``: each core's true outline (a square turned to the
-    look) and the region's (dashed), over the bounding box of both.
+    look; dotted for a core beyond the region that searched for movers only) and the
+    region's (dashed), over the bounding box of the region, its cores and the movers.
 
     An arrow shows the radar's look direction on the ground at the aperture centre
     (``-result.range_direction``, :func:`~sarmotion.report.plotting.draw_look_arrow`).
@@ -57,13 +73,15 @@ def mosaic_figure(result: CollectionResult) -> Figure:
     ax.imshow(db, origin="lower", extent=result.mosaic_extent_m, cmap="gray", vmin=-40, vmax=0)
     for p in result.plan.patches:  # each core's true outline, turned to the look
         q = np.vstack([p.corners_m, p.corners_m[:1]])
-        ax.plot(q[:, 0], q[:, 1], color="tab:cyan", lw=0.6)
+        ax.plot(q[:, 0], q[:, 1], color="tab:cyan", lw=0.6, ls=":" if p.movers_only else "-")
         c = p.corners_m.mean(axis=0)
         ax.text(c[0], c[1], str(p.index), color="tab:cyan", fontsize=7, ha="center", va="center")
     outline = result.plan.region_polygon
     q = np.vstack([outline, outline[:1]])
     ax.plot(q[:, 0], q[:, 1], color="tab:orange", lw=1.0, ls="--")
-    region = result.plan.extent_m
+    # the region's cores, and the movers found beyond them (in a core that searched for
+    # movers only: its mover's image landed there)
+    region = _holding(result.plan.extent_m, [np.asarray(m.position_m[:2]) for m, _ in result.movers])
     for k, (m, _) in enumerate(result.movers):
         family = m.document.get("cross_range_family", {}).get("position_per_m", (0.0, 0.0))
         fam = np.asarray(family, float)
