@@ -38,8 +38,8 @@ Everything is derived from the data (:func:`plan_patches`):
 
 The patches' *extents* (core plus those margins) overlap by twice the margins, which
 exceed the largest displacement in range and the largest Doppler spread of a mover in
-the speed range: every mover lies wholly inside at least one patch. The cores tile the
-region without overlap.
+the speed range: every mover whose image lands on a core lies wholly inside at least
+one patch. The cores tile the searched ground (below) without overlap.
 
 **Region.** By default the image area the data declare
 (:func:`~sarmotion.core.blocks.declared_area`: a CPHD's ``SceneCoordinates/ImageArea``
@@ -54,10 +54,27 @@ not a simple polygon of positive area, is refused. A given region (``region_m``)
 box along ``x`` and ``y`` (or a ground polygon), or a box along the look's ground range
 and cross range (``region_frame="look"``); it must lie in the unambiguous scene.
 
+**Movers' images beyond the region.** A patch holds the echoes whose Doppler its band
+passes, so a mover is found in the patch where its Doppler centre places its image:
+shifted from its position in cross range by its Doppler centre ``f_o tau_x'(0)`` (the
+range rate's, ``2 u_r / lambda``) over the stationary Doppler per metre of cross range at
+the aperture centre, about ``R / V`` metres per m/s of range speed. A mover of the region
+whose image lands outside it would be in no patch's data. So the cores cover the
+*searched* ground: the region widened either side in cross range by the largest such
+shift over ground speeds ``<= max_speed_mps`` at the region's corners
+(``PatchPlan.image_shift_m``), within the unambiguous scene; where the widening passes
+either side of the unambiguous scene the shift wraps (by the pulse rate) onto its other
+side, so the searched ground is then the scene's whole cross-range extent over the
+region's range span. The cores outside the region search for movers only
+(``Patch.movers_only``): they list no stationary target (the ground there is not the
+region's) and add nothing to the mosaic. A pulse rate sized for ``k`` times the region's
+cross range gives about ``k`` times the region's patches; ``search_beyond=False`` tiles
+the region alone.
+
 **Tiling.** The cores are rectangles of sides at most ``P`` along the aperture centre's
 ground range ``e_r`` and cross range ``e_c`` (``P`` is a cross-range extent of the
-migration rule and a range extent of the window), tiling the region's bounding
-rectangle in that frame; those that hold part of the region are kept, so the cores
+migration rule and a range extent of the window), tiling the searched ground's bounding
+rectangle in that frame; those that hold part of it are kept, so the cores
 cover the region at any look azimuth, each point of it in one core
 (:meth:`Patch.inside`: a point-in-rotated-rectangle test, lower sides included). Each
 patch carries its core's true outline; its image is the box along ``x`` and ``y`` that
