@@ -286,3 +286,43 @@ def test_points_on_a_shared_side_of_turned_cores_are_held_once():
     on_side = a[1] + t[:, None] * (70 * e2)
     held = inside_convex(on_side, a).astype(int) + inside_convex(on_side, b)
     assert np.all(held == 1)
+
+
+# ------------------------------------------------------- the movers' images beyond
+@pytest.mark.parametrize("speed_mps", [0.1, 15.0])
+def test_patches_beyond_the_region_reach_a_movers_image_shift(speed_mps):
+    """The searched ground is the declared square widened in cross range by a mover's
+    image shift, ``v cos(elevation) R / V`` at the largest ground speed ``v`` (a range
+    rate ``u_r`` moves the Doppler by ``2 u_r / lambda``, and the stationary Doppler
+    changes by ``2 V / (lambda R)`` per metre of cross range), within the unambiguous
+    scene: 7 m either side at 0.1 m/s, its whole cross-range extent at 15 m/s (a shift
+    of about 1 km, which wraps).
+    The cores hold every searched point once; those beyond the square search for movers
+    only and touch none of it."""
+    acq = oblique(2 * HALF_M, 40.0)
+    src = CollectionScene(
+        acquisition=acq, stationary=(), movers=(), metadata={"image_area_m": SQUARE.tolist()}
+    )
+    plan = plan_patches(src, CollectionOptions(patch_size_m=30.0, max_speed_mps=speed_mps))
+    slant = math.hypot(10e3, 4e3)
+    cos_el = 10e3 / slant
+    assert plan.image_shift_m == pytest.approx(speed_mps * cos_el * slant / 150.0, rel=0.02)
+    e_r = plan.range_direction
+    to_look = np.stack([e_r, [-e_r[1], e_r[0]]], axis=1)
+    region = plan.region_polygon @ to_look
+    searched = plan.search_polygon @ to_look
+    amb = unambiguous_scene(src) @ to_look
+    widened = np.ptp(region[:, 1]) + 2.0 * plan.image_shift_m
+    assert np.ptp(searched[:, 1]) == pytest.approx(min(widened, np.ptp(amb[:, 1])), rel=1e-9)
+    assert np.ptp(searched[:, 0]) == pytest.approx(np.ptp(region[:, 0]), rel=1e-9)
+    rng = np.random.default_rng(3)
+    lo, hi = plan.search_polygon.min(axis=0), plan.search_polygon.max(axis=0)
+    points = rng.uniform(lo, hi, size=(40_000, 2))
+    points = points[inside_polygon(points, plan.search_polygon)]
+    held = np.sum([p.inside(points) for p in plan.patches], axis=0)
+    assert np.all(held == 1)
+    for p in plan.patches:  # beyond the square: no part of it in the core
+        overlap = abs(polygon_area(clip_convex(SQUARE, p.corners_m)))
+        assert (overlap > 1e-6) != p.movers_only, (p.index, overlap)
+    if speed_mps > 1.0:  # the whole extent: cores wholly beyond the square
+        assert sum(p.movers_only for p in plan.patches) > 0
