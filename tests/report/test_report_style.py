@@ -200,6 +200,10 @@ def test_analysis_track_and_collection_reports_share_one_page_style(geometry, tm
 # ------------------------------------------------------------------ the track map
 def _tracking_result(*, on_road: bool):
     """One track of two states (test_results_known's): long ellipses, or on a road."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "documents"))
     from test_results_known import _tracking_result as made
 
     return made(on_road)

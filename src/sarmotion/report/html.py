@@ -239,16 +239,29 @@ def _patches_html(doc: dict[str, Any]) -> str:
                 f"{p['n_pulses']} &times; {p['n_samples']}",
                 str(p["decimation"]),
                 str(s.get("movers", "&ndash;")),
-                str(s.get("stationary_listed", "&ndash;")),
+                (
+                    "none: beyond the region, movers only"
+                    if p.get("movers_only")
+                    else str(s.get("stationary_listed", "&ndash;"))
+                ),
             ]
         )
     head = ["patch", "core x0, y0, x1, y1 (m)", "centre (m)", "pulses &times; samples"]
     head += ["decimation", "movers", "stationary listed"]
     plan = doc.get("plan") or {}
+    beyond = sum(bool(p.get("movers_only")) for p in _patches(doc))
+    widened = (
+        f" {beyond} of them lie beyond it and search for movers only: a mover's range speed "
+        "shifts its image in cross range, here by up to "
+        f"{plan.get('image_shift_m', float('nan')):.0f} m at the largest speed (dotted in "
+        "the mosaic)."
+        if beyond
+        else ""
+    )
     text = (
         f"<p>{len(rows)} patches of {plan.get('patch_size_m', float('nan')):.1f} m over the "
-        f"region {_fmt(doc.get('region_m'), 1)} (x0, y0, x1, y1, m). A mover's range, "
-        "family and speeds are measured from its kept patch's centre.</p>"
+        f"region {_fmt(doc.get('region_m'), 1)} (x0, y0, x1, y1, m).{widened} A mover's "
+        "range, family and speeds are measured from its kept patch's centre.</p>"
     )
     return text + _html_table(head, rows, escape_head=False)
 
