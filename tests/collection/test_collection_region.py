@@ -225,7 +225,7 @@ def test_the_reader_refuses_a_degenerate_polygon():
     [
         (["--region", "0", "0", "0.01", "0.01"], "narrower than the least patch core"),
         (["--patch-size", "2"], "resolution cells"),
-        (["--patch-size", "5"], "a plan may hold"),
+        (["--patch-size", "4.5"], "a plan may hold"),
         (
             ["--region", "-20", "-10", "20", "10", "--region-frame", "look", "--patch-size", "3"],
             "resolution cells",
@@ -247,7 +247,7 @@ def test_the_patch_count_is_bounded():
     """Cores above the least side, but more of them than a plan may hold: refused."""
     src = CollectionScene(acquisition=oblique(400.0, 30.0), stationary=(), movers=())
     assert len(plan_patches(src, CollectionOptions()).patches) <= MAX_PATCHES
-    side = 20.0
+    side = 10.0
     assert abs(polygon_area(unambiguous_scene(src))) / side**2 > MAX_PATCHES
     with pytest.raises(RegionError, match=f"more than the {MAX_PATCHES} a plan may hold"):
         plan_patches(src, CollectionOptions(patch_size_m=side))

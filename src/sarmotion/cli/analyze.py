@@ -258,7 +258,7 @@ def _write_sicd_images(result, stage: Path) -> None:
     default=None,
     help="Side of each patch's core (m); default from the data's resolution and aperture. "
     "At least 8 resolution cells (the fast-time guard either side of a core), and at most "
-    "256 patches in a plan.",
+    "1024 patches in a plan.",
 )
 @click.option(
     "--max-speed",

@@ -156,12 +156,12 @@ _N_DIRECTIONS = 16
 #: core, and its image (the core) holds a target's main lobe and first sidelobes (3 cells)
 #: only about its centre.
 MIN_CORE_CELLS = 8.0
-#: Most patches a plan holds. A patch costs tens of seconds (its traces extracted,
-#: imaged, separated and searched: 4 patches of a 100 m scene took 82 to 114 s in
-#: ``benchmarks/look_azimuth.py`` on a shared 2-core machine), so 256 patches are hours;
-#: more is a core far below the side the data need (a typo), or a scene to analyse
-#: region by region.
-MAX_PATCHES = 256
+#: Most patches a plan holds. A patch costs seconds to tens of seconds (its traces
+#: extracted, imaged, separated and searched), and a square kilometre at a 2-degree
+#: aperture is some 180 cores of 75 m, about 300 with the widening for the movers' images
+#: at a pulse rate sized for 1.7 times the scene; more than 1024 is a core far below the
+#: side the data need (a typo), or a scene to analyse region by region.
+MAX_PATCHES = 1024
 
 log = logging.getLogger(__name__)
 
@@ -754,6 +754,13 @@ def plan_patches(
         search = clip_convex(widened[ConvexHull(widened).vertices], amb)
         t_lo[1] = max(lo[1] - reach, amb_lo[1])
         t_hi[1] = min(hi[1] + reach, amb_hi[1])
+    widening, lower = "", ""
+    if image_shift > 0.0:
+        widening = (
+            f" (with the {float(t_hi[1] - t_lo[1] - extent[1]):.0f} m it is widened by in "
+            "cross range for the movers' images)"
+        )
+        lower = ", a lower max speed, or no search beyond it"
     if single:
         n_a = n_b = 1
     else:
@@ -764,9 +771,8 @@ def plan_patches(
         if least_count > MAX_PATCHES:
             raise RegionError(
                 f"{what} needs at least {math.ceil(least_count)} patches of patch size "
-                f"{size:g} m (with its widening of {image_shift:.0f} m either side in cross "
-                f"range for the movers' images), more than the {MAX_PATCHES} a plan may "
-                "hold (a larger patch size, a smaller region, or a lower max speed)"
+                f"{size:g} m{widening}, more than the {MAX_PATCHES} a plan may hold (a "
+                f"larger patch size, a smaller region{lower})"
             )
     a_edges = np.linspace(t_lo[0], t_hi[0], n_a + 1)
     b_edges = np.linspace(t_lo[1], t_hi[1], n_b + 1)
@@ -789,10 +795,9 @@ def plan_patches(
                 cores.append((outline, False))
     if len(cores) > MAX_PATCHES:
         raise RegionError(
-            f"{what} needs {len(cores)} patches of patch size {size:g} m (with its "
-            f"widening of {image_shift:.0f} m either side in cross range for the movers' "
-            f"images), more than the {MAX_PATCHES} a plan may hold (a larger patch size, "
-            "a smaller region, or a lower max speed)"
+            f"{what} needs {len(cores)} patches of patch size {size:g} m{widening}, more "
+            f"than the {MAX_PATCHES} a plan may hold (a larger patch size, a smaller "
+            f"region{lower})"
         )
     guard_t = PULSE_GUARD / radar.bandwidth_hz
     prf = 1.0 / traj.pulse_interval_s
