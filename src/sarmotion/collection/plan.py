@@ -745,69 +745,71 @@ def plan_patches(
     if not opts.search_beyond:
         image_shift = 0.0
     search = region
-    t_lo, t_hi = lo.copy(), hi.copy()
+    need_lo, need_hi = float(lo[1]), float(hi[1])
     if image_shift > 0.0:
         reach = image_shift
         if lo[1] - reach < amb_lo[1] or hi[1] + reach > amb_hi[1]:
             reach = float(amb_hi[1] - amb_lo[1])
         widened = np.vstack([region - reach * e_c, region + reach * e_c])
         search = clip_convex(widened[ConvexHull(widened).vertices], amb)
-        t_lo[1] = max(lo[1] - reach, amb_lo[1])
-        t_hi[1] = min(hi[1] + reach, amb_hi[1])
+        need_lo = max(float(lo[1]) - reach, float(amb_lo[1]))
+        need_hi = min(float(hi[1]) + reach, float(amb_hi[1]))
     widening, lower = "", ""
     if image_shift > 0.0:
         widening = (
-            f" (with the {float(t_hi[1] - t_lo[1] - extent[1]):.0f} m it is widened by in "
+            f" (with the {need_hi - need_lo - float(extent[1]):.0f} m it is widened by in "
             "cross range for the movers' images)"
         )
         lower = ", a lower max speed, or no search beyond it"
     if single:
         n_a = n_b = 1
     else:
-        t_extent = t_hi - t_lo
-        n_a = max(1, math.ceil(t_extent[0] / size - 1e-9))
-        n_b = max(1, math.ceil(t_extent[1] / size - 1e-9))
-        least_count = abs(polygon_area(search)) / size**2
+        n_a = max(1, math.ceil(extent[0] / size - 1e-9))
+        n_b = max(1, math.ceil(extent[1] / size - 1e-9))
+        least_count = abs(polygon_area(region)) / size**2
         if least_count > MAX_PATCHES:
             raise RegionError(
                 f"{what} needs at least {math.ceil(least_count)} patches of patch size "
-                f"{size:g} m{widening}, more than the {MAX_PATCHES} a plan may hold (a "
-                f"larger patch size, a smaller region{lower})"
+                f"{size:g} m, more than the {MAX_PATCHES} a plan may hold (a larger patch "
+                "size, or a smaller region)"
             )
-    a_edges = np.linspace(t_lo[0], t_hi[0], n_a + 1)
-    b_edges = np.linspace(t_lo[1], t_hi[1], n_b + 1)
+    a_edges = np.linspace(lo[0], hi[0], n_a + 1)
+    b_edges = np.linspace(lo[1], hi[1], n_b + 1)
 
-    cores = []
-    for ib in range(n_b):
-        for ia in range(n_a):
-            a0, a1, b0, b1 = a_edges[ia], a_edges[ia + 1], b_edges[ib], b_edges[ib + 1]
-            outline = np.array([ground(a0, b0), ground(a1, b0), ground(a1, b1), ground(a0, b1)])
-            # to the nanometre: a look along x or y leaves no 1e-20 m of rounding in the
-            # corners (a core's box is then its core, exactly)
-            outline = np.round(outline, 9) + 0.0
-            if not single:
+    def tile(b_cuts: NDArray[np.float64]) -> list[tuple[NDArray[np.float64], bool]]:
+        """The cores of the rows ``a_edges`` and columns ``b_cuts`` holding searched ground,
+        each with whether it lies beyond the region (it searches for movers only)."""
+        out = []
+        for ib in range(b_cuts.size - 1):
+            for ia in range(n_a):
+                a0, a1, b0, b1 = a_edges[ia], a_edges[ia + 1], b_cuts[ib], b_cuts[ib + 1]
+                outline = np.array(
+                    [ground(a0, b0), ground(a1, b0), ground(a1, b1), ground(a0, b1)]
+                )
+                # to the nanometre: a look along x or y leaves no 1e-20 m of rounding in
+                # the corners (a core's box is then its core, exactly)
+                outline = np.round(outline, 9) + 0.0
+                if single:
+                    out.append((outline, False))
+                    continue
                 tiny = 1e-9 * (a1 - a0) * (b1 - b0)
                 if not abs(polygon_area(clip_convex(search, outline))) > tiny:
                     continue  # no part of the searched ground in this core
                 ours = abs(polygon_area(clip_convex(region, outline))) > tiny
-                cores.append((outline, not ours))
-            else:
-                cores.append((outline, False))
-    if len(cores) > MAX_PATCHES:
-        raise RegionError(
-            f"{what} needs {len(cores)} patches of patch size {size:g} m{widening}, more "
-            f"than the {MAX_PATCHES} a plan may hold (a larger patch size, a smaller "
-            f"region{lower})"
-        )
+                out.append((outline, not ours))
+        return out
+
     guard_t = PULSE_GUARD / radar.bandwidth_hz
     prf = 1.0 / traj.pulse_interval_s
     dt = radar.sample_interval_s
 
     from .merge import ECHO_CELLS
 
-    patches = []
-    rects = []
-    for outline, movers_only in cores:
+    patches: list[Patch] = []
+    rects: list[tuple[tuple[NDArray, NDArray], tuple[NDArray, NDArray]]] = []
+
+    def build(outline: NDArray[np.float64], movers_only: bool) -> None:
+        """Append the patch of a core and its halo and keep rectangles (look frame)."""
         pts = _outline_points(outline, z)
         centre = pts[4].copy()
         rel = _delays(pos, pts) - travel_time(pos, centre)[None, :]
@@ -878,6 +880,43 @@ def plan_patches(
                 halo_m=None if single else halo_side,
                 movers_only=movers_only,
             )
+        )
+
+    for outline, beyond in tile(b_edges):
+        build(outline, beyond)
+    if need_lo < lo[1] or need_hi > hi[1]:
+        # the searched ground beyond the region's cores (module notes). Where the region's
+        # patches hold every Doppler of the data (no slow-time filter), their keep boxes
+        # already reach part of it: columns beyond them for the rest. Else (a filter cuts
+        # a spectrum at its band's edge) cores over all of it: the searched extent tiled
+        # afresh, the fewest columns of side at most P.
+        whole = all(p.taps.size == 1 and p.decimation == p.interpolation == 1 for p in patches)
+        if whole:
+            reach_lo = min(min(float(k[0][1]) for _, k in rects), float(lo[1]))
+            reach_hi = max(max(float(k[1][1]) for _, k in rects), float(hi[1]))
+            for far, near, side in ((need_lo, reach_lo, -1.0), (need_hi, reach_hi, 1.0)):
+                if abs(far - near) <= 1e-9 * size or (far - near) * side < 0.0:
+                    continue
+                edge = float(hi[1] if side > 0 else lo[1])
+                room = float(amb_hi[1] - hi[1] if side > 0 else lo[1] - amb_lo[1])
+                width = min(max(abs(far - near), least), room)
+                if width <= 0.0:
+                    continue
+                n = max(1, math.ceil(width / size - 1e-9))
+                cut = np.sort(edge + side * np.linspace(0.0, width, n + 1))
+                for outline, _ in tile(cut):
+                    build(outline, True)
+        else:
+            patches.clear()
+            rects.clear()
+            n_b = max(1, math.ceil((need_hi - need_lo) / size - 1e-9))
+            for outline, beyond in tile(np.linspace(need_lo, need_hi, n_b + 1)):
+                build(outline, beyond)
+    if len(patches) > MAX_PATCHES:
+        raise RegionError(
+            f"{what} needs {len(patches)} patches of patch size {size:g} m{widening}, more "
+            f"than the {MAX_PATCHES} a plan may hold (a larger patch size, a smaller "
+            f"region{lower})"
         )
     if len(patches) > 1:  # each patch's share of the false-alarm rate (module notes)
         kept = sum(_box_area(k) for _, k in rects)
