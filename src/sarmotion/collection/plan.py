@@ -59,23 +59,30 @@ passes, so a mover is found in the patch where its Doppler centre places its ima
 shifted from its position in cross range by its Doppler centre ``f_o tau_x'(0)`` (the
 range rate's, ``2 u_r / lambda``) over the stationary Doppler per metre of cross range at
 the aperture centre, about ``R / V`` metres per m/s of range speed. A mover of the region
-whose image lands outside it would be in no patch's data. So the cores cover the
+whose image lands outside it would be in no patch's data. So the patches search the
 *searched* ground: the region widened either side in cross range by the largest such
 shift over ground speeds ``<= max_speed_mps`` at the region's corners
 (``PatchPlan.image_shift_m``), within the unambiguous scene; where the widening passes
 either side of the unambiguous scene the shift wraps (by the pulse rate) onto its other
 side, so the searched ground is then the scene's whole cross-range extent over the
-region's range span. The cores outside the region search for movers only
-(``Patch.movers_only``): they list no stationary target (the ground there is not the
-region's) and add nothing to the mosaic. A pulse rate sized for ``k`` times the region's
-cross range gives about ``k`` times the region's patches; ``search_beyond=False`` tiles
-the region alone.
+region's range span. Where the region's patches hold every Doppler of the data (no
+slow-time filter: a small scene), a mover imaged within a patch's keep box (its core's
+Doppler band plus the movers' margin, :func:`~sarmotion.collection.run.in_band`) is
+already estimated whole there: columns of cores are added beyond the region only for
+the searched ground those boxes do not reach. Where a filter cuts each patch's band, a
+mover imaged beyond a core's edge loses part of its spectrum, so cores cover all the
+searched ground (its cross-range extent tiled afresh, the fewest columns of side at most
+``P``). The cores outside the region search for movers only (``Patch.movers_only``):
+they list no stationary target (the ground there is not the region's) and add nothing to
+the mosaic. A pulse rate sized for ``k`` times the region's cross range gives about
+``k`` times the region's patches; ``search_beyond=False`` tiles the region alone.
 
 **Tiling.** The cores are rectangles of sides at most ``P`` along the aperture centre's
 ground range ``e_r`` and cross range ``e_c`` (``P`` is a cross-range extent of the
-migration rule and a range extent of the window), tiling the searched ground's bounding
-rectangle in that frame; those that hold part of it are kept, so the cores
-cover the region at any look azimuth, each point of it in one core
+migration rule and a range extent of the window), tiling the region's bounding
+rectangle in that frame (and the columns beyond it, above); those that hold part of the
+searched ground are kept, so the cores cover the region at any look azimuth, each point
+of it in one core
 (:meth:`Patch.inside`: a point-in-rotated-rectangle test, lower sides included). Each
 patch carries its core's true outline; its image is the box along ``x`` and ``y`` that
 holds it, the pixels outside the core not its own.
@@ -353,7 +360,8 @@ class PatchPlan:
     Attributes
     ----------
     patches : tuple of Patch
-        The patches, row by row along the look (cross range, then ground range).
+        The patches, row by row along the look (cross range, then ground range); the
+        columns added beyond the region's after them.
     region_m : (float, float, float, float)
         The region's bounding box ``(x0, y0, x1, y1)`` along ``x`` and ``y`` (m).
     patch_size_m : float
