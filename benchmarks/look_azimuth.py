@@ -32,9 +32,11 @@ headings, drawn relative to the look.
 The file is analysed with the library's defaults (``analyze_collection`` over
 ``open_cphd_blocks``; ``n_workers=0``, one process). Reported per case:
 
+- **patches**, and in brackets those beyond the declared square that search for movers
+  only (a mover's range speed shifts its image in cross range; ``collection/plan.py``);
 - **covered**: share of 40 000 points drawn uniformly in the declared square that the
-  analysis images: inside a patch core (several patches), or inside today's single
-  analysis's image (one patch);
+  analysis images: inside a core of the square's patches (several patches), or inside
+  today's single analysis's image (one patch);
 - **movers**: true movers found accurate on their cross-range families (the rule of
   ``benchmarks/bench_collection.py``: the truth slid along its family to the fit's
   cross range, ``pipeline.family_errors``; range position within 3 ground-range cells
