@@ -666,7 +666,11 @@ def _run(
         futures: set[Any] = set()
         try:
             for group in _groups(plan, memory_mb):
+                # a Ctrl-C that a callback swallowed while the patches were submitted is
+                # seen here, not once every group is on the cluster
+                raise_if_interrupted()
                 traces = extract_patches(src, group, block_pulses=opts.block_pulses)
+                raise_if_interrupted()
                 for patch, tr in zip(group, traces, strict=True):
                     f = _submit(
                         client,
@@ -684,6 +688,7 @@ def _run(
                     futures.add(f)
                     pending.add(f)
                 del traces
+                raise_if_interrupted()
                 for f in _ready(pending):
                     done += 1
                     report(progress, "patches", done, total)
