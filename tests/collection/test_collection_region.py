@@ -356,3 +356,24 @@ def test_patches_beyond_the_region_reach_a_movers_image_shift(side_m, patch_m, s
         assert (overlap > 1e-6) != p.movers_only, (p.index, overlap)
     if speed_mps > 1.0 and not unfiltered:  # the whole extent, in cores: some beyond it
         assert sum(p.movers_only for p in plan.patches) > 0
+
+
+def test_the_mosaic_of_a_scene_without_echoes_is_drawn_without_nan():
+    """A null input (every sample zero): the mosaic is zero and its figure finite, no
+    warning (a float32 zero over the 1e-300 guard was 0/0)."""
+    import warnings
+
+    from sarmotion.collection import analyze_collection
+    from sarmotion.report.collection import mosaic_figure
+
+    acq = oblique(2 * HALF_M, 25.0, oversample=3.1, cross=1.7)
+    src = CollectionScene(
+        acquisition=acq, stationary=(), movers=(), metadata={"image_area_m": SQUARE.tolist()}
+    )
+    res = analyze_collection(src.traces(), CollectionOptions(patch_size_m=40.0), n_workers=0)
+    assert len(res.plan.patches) > 1 and not res.movers and not res.stationary
+    assert np.all(res.mosaic == 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        fig = mosaic_figure(res)
+    assert np.all(np.isfinite(fig.axes[0].images[0].get_array()))

@@ -67,7 +67,7 @@ def mosaic_figure(result: CollectionResult) -> Figure:
     """
     fig = Figure(figsize=(8, 8))
     ax = fig.add_subplot(1, 1, 1)
-    img = result.mosaic
+    img = np.asarray(result.mosaic, dtype=np.float64)  # a float32 zero over 1e-300 is 0/0
     peak = float(img.max()) if img.size else 0.0
     db = 20 * np.log10(np.maximum(img, 1e-12 * max(peak, 1e-300)) / max(peak, 1e-300))
     ax.imshow(db, origin="lower", extent=result.mosaic_extent_m, cmap="gray", vmin=-40, vmax=0)
