@@ -785,15 +785,15 @@ def plan_patches(
     b_edges = np.linspace(lo[1], hi[1], n_b + 1)
 
     def tile(b_cuts: NDArray[np.float64]) -> list[tuple[NDArray[np.float64], bool]]:
-        """The cores of the rows ``a_edges`` and columns ``b_cuts`` holding searched ground,
-        each with whether it lies beyond the region (it searches for movers only)."""
+        """The cores of the rows ``a_edges`` and columns ``b_cuts`` holding searched ground.
+
+        Each with whether it lies beyond the region (it searches for movers only).
+        """
         out = []
         for ib in range(b_cuts.size - 1):
             for ia in range(n_a):
                 a0, a1, b0, b1 = a_edges[ia], a_edges[ia + 1], b_cuts[ib], b_cuts[ib + 1]
-                outline = np.array(
-                    [ground(a0, b0), ground(a1, b0), ground(a1, b1), ground(a0, b1)]
-                )
+                outline = np.array([ground(a0, b0), ground(a1, b0), ground(a1, b1), ground(a0, b1)])
                 # to the nanometre: a look along x or y leaves no 1e-20 m of rounding in
                 # the corners (a core's box is then its core, exactly)
                 outline = np.round(outline, 9) + 0.0
@@ -815,6 +815,16 @@ def plan_patches(
 
     patches: list[Patch] = []
     rects: list[tuple[tuple[NDArray, NDArray], tuple[NDArray, NDArray]]] = []
+
+    def bounded(cores: list[tuple[NDArray[np.float64], bool]]) -> list:
+        """``cores``, refused before any is built when the plan would pass ``MAX_PATCHES``."""
+        if len(patches) + len(cores) > MAX_PATCHES:
+            raise RegionError(
+                f"{what} needs {len(patches) + len(cores)} patches of patch size {size:g} m"
+                f"{widening}, more than the {MAX_PATCHES} a plan may hold (a larger patch "
+                f"size, a smaller region{lower})"
+            )
+        return cores
 
     def build(outline: NDArray[np.float64], movers_only: bool) -> None:
         """Append the patch of a core and its halo and keep rectangles (look frame)."""
@@ -890,7 +900,7 @@ def plan_patches(
             )
         )
 
-    for outline, beyond in tile(b_edges):
+    for outline, beyond in bounded(tile(b_edges)):
         build(outline, beyond)
     if need_lo < lo[1] or need_hi > hi[1]:
         # the searched ground beyond the region's cores (module notes). Where the region's
@@ -912,20 +922,14 @@ def plan_patches(
                     continue
                 n = max(1, math.ceil(width / size - 1e-9))
                 cut = np.sort(edge + side * np.linspace(0.0, width, n + 1))
-                for outline, _ in tile(cut):
+                for outline, _ in bounded(tile(cut)):
                     build(outline, True)
         else:
             patches.clear()
             rects.clear()
             n_b = max(1, math.ceil((need_hi - need_lo) / size - 1e-9))
-            for outline, beyond in tile(np.linspace(need_lo, need_hi, n_b + 1)):
+            for outline, beyond in bounded(tile(np.linspace(need_lo, need_hi, n_b + 1))):
                 build(outline, beyond)
-    if len(patches) > MAX_PATCHES:
-        raise RegionError(
-            f"{what} needs {len(patches)} patches of patch size {size:g} m{widening}, more "
-            f"than the {MAX_PATCHES} a plan may hold (a larger patch size, a smaller "
-            f"region{lower})"
-        )
     if len(patches) > 1:  # each patch's share of the false-alarm rate (module notes)
         kept = sum(_box_area(k) for _, k in rects)
         patches = [

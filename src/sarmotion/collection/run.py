@@ -54,6 +54,7 @@ from ..core.constants import C
 from ..core.geometry import Trajectory, look_geometry
 from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
+from ..imaging.grid import Image
 from ..motion import PointFit
 from ..pipeline import AnalysisOptions, AnalysisResult, NotEstimated, analyze
 from ..separation import default_method
@@ -375,20 +376,7 @@ def analyze_patch(
                     level=peak * 10.0 ** (t.level_db / 20.0),
                 )
             )
-    x0, y0, x1, y1 = patch.core_m
-    gx, gy = img.grid.x_m, img.grid.y_m
-    okx = np.ones(gx.size, bool) if single else (gx >= x0) & (gx < x1)
-    oky = np.ones(gy.size, bool) if single else (gy >= y0) & (gy < y1)
-    cut = mag[np.ix_(oky, okx)].astype(np.float32)
-    if not single:  # the core is turned to the look: its box's pixels outside it are not its
-        xx, yy = np.meshgrid(gx[okx], gy[oky])
-        own = patch.inside(np.stack([xx.ravel(), yy.ravel()], axis=1)).reshape(cut.shape)
-        cut[~own] = 0.0
-    image: PatchImage | None = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=cut)
-    if patch.movers_only:  # outside the region: searched for movers, not in the mosaic
-        image = None
-    elif mosaic_m is not None:
-        image = coarsen(image, (mosaic_m[0], mosaic_m[1]), mosaic_m[2])
+    image = None if patch.movers_only else _core_image(img, mag, patch, single, mosaic_m)
     opts = result.options
     slim = PatchResult(
         index=patch.index,
@@ -404,6 +392,33 @@ def analyze_patch(
         not_estimated=tuple(result.movers_not_estimated),
     )
     return slim, result
+
+
+def _core_image(
+    img: Image,
+    mag: NDArray,
+    patch: Patch,
+    single: bool,
+    mosaic_m: tuple[float, float, float] | None,
+) -> PatchImage:
+    """The core's pixels of a patch's stationary image ``mag`` (the others zero).
+
+    On the mosaic's pixels when ``mosaic_m`` is given. A patch beyond the region (movers
+    only) has none: :func:`analyze_patch` does not call this.
+    """
+    x0, y0, x1, y1 = patch.core_m
+    gx, gy = img.grid.x_m, img.grid.y_m
+    okx = np.ones(gx.size, bool) if single else (gx >= x0) & (gx < x1)
+    oky = np.ones(gy.size, bool) if single else (gy >= y0) & (gy < y1)
+    cut = mag[np.ix_(oky, okx)].astype(np.float32)
+    if not single:  # the core is turned to the look: its box's pixels outside it are not its
+        xx, yy = np.meshgrid(gx[okx], gy[oky])
+        own = patch.inside(np.stack([xx.ravel(), yy.ravel()], axis=1)).reshape(cut.shape)
+        cut[~own] = 0.0
+    image = PatchImage(x_m=gx[okx], y_m=gy[oky], magnitude=cut)
+    if mosaic_m is not None:
+        image = coarsen(image, (mosaic_m[0], mosaic_m[1]), mosaic_m[2])
+    return image
 
 
 def _task(

@@ -81,7 +81,8 @@ def mosaic_figure(result: CollectionResult) -> Figure:
     ax.plot(q[:, 0], q[:, 1], color="tab:orange", lw=1.0, ls="--")
     # the region's cores, and the movers found beyond them (in a core that searched for
     # movers only: its mover's image landed there)
-    region = _holding(result.plan.extent_m, [np.asarray(m.position_m[:2]) for m, _ in result.movers])
+    found = [np.asarray(m.position_m[:2]) for m, _ in result.movers]
+    region = _holding(result.plan.extent_m, found)
     for k, (m, _) in enumerate(result.movers):
         family = m.document.get("cross_range_family", {}).get("position_per_m", (0.0, 0.0))
         fam = np.asarray(family, float)
