@@ -103,15 +103,22 @@ benchmark, ``benchmarks/results/look_azimuth.md``); only the core's targets are 
 
 **False-alarm share.** The collection's false-alarm rate ``alpha`` is the probability of
 a false mover anywhere in it. Patch ``p``'s ``g(u)`` test finds a null candidate
-somewhere in the data it holds (its halo ``H_p``, the rectangle above, in ground range
-and cross range) and reports it only where its band keeps the fit
-(:func:`~sarmotion.collection.run.in_band`: the core's range span and ``ECHO_CELLS``
-range cells, Doppler within the pass band; the box ``K_p``). With the null candidate as
-likely anywhere in ``H_p``, ``alpha_p = alpha min(1, |H_p| / sum_q |K_q|)``
-(``Patch.false_alarm_share``) bounds the collection's rate by ``sum_p alpha_p |K_p| /
-|H_p| <= alpha``. Patches holding disjoint data share ``alpha`` about as ``alpha / N``;
-patches holding the same data (a small scene, no slow-time filter) each test near
-``alpha``, as one analysis of those data does.
+somewhere in the data it holds (``H_p``, in ground range and cross range: its window in
+range; in cross range the halo's band, or the unambiguous scene's whole extent where the
+patch keeps every Doppler, the Doppler wrapping at the pulse rate) and reports it only
+where its band keeps the fit (:func:`~sarmotion.collection.run.in_band`: the core's
+range span and ``ECHO_CELLS`` range cells, Doppler within the pass band; the box
+``K_p``). Patches that keep every Doppler with one range window (the cores of one row
+of a plan without a slow-time filter) hold the same echoes: the same null candidate,
+seen from centres that shift its range speed, is reported by those whose keep holds it,
+and merged into one mover. Such a group ``g`` is one test and its keeps count once,
+``K_g`` their union; any other patch is a group of its own. With the null candidate as
+likely anywhere in ``H_p``, ``alpha_p = alpha min(1, |H_p| / sum_g |K_g|)``
+(``Patch.false_alarm_share``, :func:`false_alarm_shares`) bounds the collection's rate
+by ``sum_g alpha_g |K_g| / |H_g| <= alpha`` (the union bound over the groups). Patches
+holding disjoint data share ``alpha`` about as ``alpha / N``; patches holding the same
+data each test near ``alpha``, as one analysis of those data does. Measured on null
+scenes (``benchmarks/look_azimuth_null.py``, ``docs/notes/look_azimuth.md``).
 
 **Bounds.** A core side below ``MIN_CORE_CELLS`` = 8 resolution cells is refused: the
 fast-time guard either side of a core is ``PULSE_GUARD`` = 8 compressed-pulse lengths,
@@ -145,7 +152,14 @@ from ..errors import InputError
 from ..pipeline import AnalysisOptions
 from .resample import aliased_doppler_hz, design, output_grid, slow_time_ratio
 
-__all__ = ["CollectionOptions", "Patch", "PatchPlan", "plan_patches", "RegionError"]
+__all__ = [
+    "CollectionOptions",
+    "Patch",
+    "PatchPlan",
+    "RegionError",
+    "false_alarm_shares",
+    "plan_patches",
+]
 
 #: Residual migration at a core's edge, in range-resolution cells (module notes).
 MIGRATION_CELLS = 1.3
@@ -815,6 +829,9 @@ def plan_patches(
 
     patches: list[Patch] = []
     rects: list[tuple[tuple[NDArray, NDArray], tuple[NDArray, NDArray]]] = []
+    # per patch, for the false-alarm shares: the key of the data it holds, and in cross
+    # range its keep's centre and half-width (module notes)
+    tests: list[tuple[tuple, float, float]] = []
 
     def bounded(cores: list[tuple[NDArray[np.float64], bool]]) -> list:
         """``cores``, refused before any is built when the plan would pass ``MAX_PATCHES``."""
@@ -877,6 +894,9 @@ def plan_patches(
         halo = _clip_box(mid - halo_half, mid + halo_half, amb_lo, amb_hi)
         keep = _clip_box(mid - keep_half, mid + keep_half, *halo)
         rects.append((halo, keep))
+        whole = taps.size == 1 and q == up == 1
+        key = (round(float(core_ab[:, 0].min()), 6), round(float(core_ab[:, 0].max()), 6), n_samples)
+        tests.append((key if whole else (len(patches),), float(mid[1]), float(keep_half[1])))
         corners_ab = np.array(
             [[a, b] for a in (halo[0][0], halo[1][0]) for b in (halo[0][1], halo[1][1])]
         )
@@ -927,15 +947,13 @@ def plan_patches(
         else:
             patches.clear()
             rects.clear()
+            tests.clear()
             n_b = max(1, math.ceil((need_hi - need_lo) / size - 1e-9))
             for outline, beyond in bounded(tile(np.linspace(need_lo, need_hi, n_b + 1))):
                 build(outline, beyond)
     if len(patches) > 1:  # each patch's share of the false-alarm rate (module notes)
-        kept = sum(_box_area(k) for _, k in rects)
-        patches = [
-            replace(p, false_alarm_share=min(1.0, _box_area(h) / kept))
-            for p, (h, _) in zip(patches, rects, strict=True)
-        ]
+        shares = false_alarm_shares(rects, tests, float(amb_hi[1] - amb_lo[1]))
+        patches = [replace(p, false_alarm_share=a) for p, a in zip(patches, shares, strict=True)]
     box_lo, box_hi = region.min(axis=0), region.max(axis=0)
     return PatchPlan(
         patches=tuple(patches),
@@ -965,6 +983,66 @@ def _clip_box(
 
 def _box_area(box: tuple[NDArray[np.float64], NDArray[np.float64]]) -> float:
     return float(np.prod(box[1] - box[0]))
+
+
+def false_alarm_shares(
+    rects: list[tuple[tuple[NDArray, NDArray], tuple[NDArray, NDArray]]],
+    tests: list[tuple[tuple, float, float]],
+    width_m: float,
+) -> list[float]:
+    """Each patch's share of the collection's false-alarm rate (module notes).
+
+    Parameters
+    ----------
+    rects : list of (halo, keep)
+        Per patch, its halo and keep boxes ``(lo, hi)`` in ground range and cross range
+        about the reference point (m).
+    tests : list of (key, centre, half)
+        Per patch, the key of the data it holds: patches with one key hold the same
+        echoes (every Doppler, one range window; a key of one element is a patch's own),
+        and in cross range its keep's centre and half-width (m).
+    width_m : float
+        The unambiguous scene's cross-range extent (m): what a patch holding every
+        Doppler holds, its Doppler wrapping at the pulse rate.
+
+    Returns
+    -------
+    list of float
+        ``min(1, |H_p| / sum_g |K_g|)`` per patch, in (0, 1]: ``H_p`` the ground whose
+        echoes it holds, ``K_g`` the ground that the patches of data key ``g`` report.
+    """
+    groups: dict[tuple, list[int]] = {}
+    for i, (key, _, _) in enumerate(tests):
+        groups.setdefault(key, []).append(i)
+    kept = 0.0
+    held = []
+    for i, ((halo, keep), (key, _, _)) in enumerate(zip(rects, tests, strict=True)):
+        depth = float(halo[1][0] - halo[0][0])
+        held.append(depth * width_m if len(key) > 1 else _box_area(halo))
+        if len(key) == 1:
+            kept += _box_area(keep)
+        elif groups[key][0] == i:  # the group's keeps in cross range, on the circle
+            arcs = [(tests[j][1], tests[j][2]) for j in groups[key]]
+            kept += float(keep[1][0] - keep[0][0]) * _arc_union(arcs, width_m)
+    return [min(1.0, h / kept) for h in held]
+
+
+def _arc_union(arcs: list[tuple[float, float]], period: float) -> float:
+    """Length of the union of intervals ``centre +- half`` on a circle of ``period``."""
+    cuts = []
+    for centre, half in arcs:
+        if 2.0 * half >= period:
+            return period
+        a = (centre - half) % period
+        b = a + 2.0 * half
+        cuts += [(a, b)] if b <= period else [(a, period), (0.0, b - period)]
+    cuts.sort()
+    total, end = 0.0, -np.inf
+    for a, b in cuts:
+        if b > end:
+            total += b - max(a, end)
+            end = b
+    return total
 
 
 def _single_image_m(source: PulseBlocks, elevation_rad: float) -> float:

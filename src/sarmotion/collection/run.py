@@ -241,19 +241,18 @@ def patch_false_alarm(options: AnalysisOptions, patch: Patch) -> AnalysisOptions
 
     ``options.false_alarm_rate`` ``alpha`` is the collection's: the probability of a
     false mover anywhere in it. A patch's ``g(u)`` test at ``alpha_p`` finds a null
-    candidate somewhere in the data its traces hold (its halo ``H_p``, in ground range
-    and cross range); it reports it only where its fit lies in the patch's band
-    (:func:`in_band`: its keep box ``K_p``). With the null candidate as likely anywhere
-    in ``H_p``, the patch reports a false mover with probability at most ``alpha_p
-    |K_p| / |H_p|``; ``alpha_p = alpha min(1, |H_p| / sum_q |K_q|)``
-    (``patch.false_alarm_share``, :func:`~sarmotion.collection.plan_patches`) makes the
-    sum over the patches at most ``alpha`` (the union bound over the patches' reports,
-    a keep box shared by two patches counted twice). Patches that hold disjoint data
-    test at ``alpha |K_p| / sum |K_q|``, about ``alpha / n``; patches that hold the same
-    data (a small scene, every Doppler kept) test each at ``alpha``, as the whole-trace
-    analysis of those data does. The ``g(u)`` threshold rises by the null tail's scale
-    times ``ln(1 / share)`` (:func:`~sarmotion.motion.threshold_db`). A share of 1 (one
-    patch): unchanged.
+    candidate somewhere in the data its traces hold (``H_p``, in ground range and cross
+    range); it reports it only where its fit lies in the patch's band (:func:`in_band`:
+    its keep box ``K_p``). Patches holding the same echoes (every Doppler, one range
+    window) are one test whose keeps count once (``K_g``, their union). With the null
+    candidate as likely anywhere in ``H_p``, ``alpha_p = alpha min(1, |H_p| / sum_g
+    |K_g|)`` (``patch.false_alarm_share``,
+    :func:`~sarmotion.collection.plan.false_alarm_shares`) makes the sum over the groups
+    at most ``alpha`` (the union bound). Patches that hold disjoint data test at about
+    ``alpha / n``; patches that hold the same data test each near ``alpha``, as the
+    whole-trace analysis of those data does. The ``g(u)`` threshold rises by the null
+    tail's scale times ``ln(1 / share)`` (:func:`~sarmotion.motion.threshold_db`). A
+    share of 1 (one patch): unchanged.
     """
     share = float(patch.false_alarm_share)
     if share >= 1.0:
