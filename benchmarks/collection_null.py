@@ -7,13 +7,12 @@ Run (about 5 min on 2 cores)::
 Data: the four real GOTCHA degrees (pass 1 HH; ``$SARMOTION_GOTCHA_DIR`` or
 ``../shared/data/gotcha``), a parking lot with no mover known to be in it. One analysis
 covers them in one piece; here ``sarmotion analyze`` cuts the data's default region (the
-largest box along x and y inside the unambiguous scene,
-``sarmotion.collection.inscribed_box``) into patches of each ``--patch-sizes`` (m), with
+unambiguous scene, nothing being declared; its bounding box in the table) into patches
+of each ``--patch-sizes`` (m), with
 and without ``--defocus-search``, the collection's false-alarm rate 0.01 shared by its
 patches. Every mover declared is listed with the evidence that made it (the ``g(u)``
 statistic, or the defocus bank's statistic, smear margin and focus gain over the best
-stationary point). With ``--region`` the patches cut that region instead (the old default,
-the unambiguous scene's bounding box, reached past its corners).
+stationary point). With ``--region`` the patches cut that region instead.
 
 A declared mover is not proven false: nothing says the lot was still. What the table
 shows is how many the analysis declares, where, and on what evidence, as the patching

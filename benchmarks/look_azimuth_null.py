@@ -107,8 +107,8 @@ def run_case(azimuth_deg: float, seed: int, side_m: float, alpha: float) -> list
 def table(rows: list[dict]) -> str:
     """The share of null scenes with a false mover, per rule, against ``alpha``."""
     out = [
-        "| rule | alpha | scenes | with a false mover | share (95 % interval) | false movers "
-        "| patches' shares |",
+        "| rule | alpha | scenes (seeds) | with a false mover | share (95 % interval) "
+        "| false movers | patches' shares |",
         "|---|---|---|---|---|---|---|",
     ]
     keys = sorted({(r["rule"], r["alpha"]) for r in rows}, key=lambda k: (k[1], k[0]))
@@ -119,7 +119,8 @@ def table(rows: list[dict]) -> str:
         hi = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
         shares = [s for r in sel for s in r["shares"]]
         out.append(
-            f"| {rule} | {alpha:g} | {n} | {k} | {k / n:.2f} ({lo:.2f}-{hi:.2f}) "
+            f"| {rule} | {alpha:g} | {n} ({min(r['seed'] for r in sel)}-"
+            f"{max(r['seed'] for r in sel)}) | {k} | {k / n:.2f} ({lo:.2f}-{hi:.2f}) "
             f"| {sum(r['false_movers'] for r in sel)} | {min(shares):.2f}-{max(shares):.2f} |"
         )
     return "\n".join(out) + "\n"
@@ -147,13 +148,14 @@ def main() -> None:
     store.write_text(json.dumps(rows, indent=1) + "\n")
     text = (
         "`python benchmarks/look_azimuth_null.py --seeds N --alpha ALPHA` (module notes): "
-        "the share of null scenes (100 m, the eight look azimuths in turn, seeds from "
-        f"{args.first_seed}; the look-azimuth benchmark's own scenes use seed 7) where the "
+        "the share of null scenes (100 m, the eight look azimuths in turn; the look-azimuth "
+        "benchmark's own scenes use seed 7) where the "
         "collection reports a mover, per rule for the patches' shares of its false-alarm "
-        "rate ``alpha``.\n\n"
+        "rate `alpha`.\n\n"
     )
     (args.out / "look_azimuth_null.md").write_text(text + table(rows))
     print(table(rows))
+
 
 
 if __name__ == "__main__":

@@ -16,8 +16,10 @@ along the locus of the stationary points whose range and range rate it shares at
 pulse of the analysed aperture (:mod:`~sarmotion.collection.merge` notes). A listed
 stationary point whose range and range rate are within ``ECHO_CELLS`` (2) range cells
 ``c / 2B`` and ``ECHO_CELLS`` Doppler cells ``lambda_o / 2T`` (``T`` the analysed
-aperture's duration) of a found mover's at some pulse is that smear, not a target: it is
-dropped and counted in ``stationary_mover_images``. One patch: on the analysis
+aperture's duration) of a found mover's at some pulse, and no brighter than the mover's
+echo can make it there (its fitted amplitude times the mean over the pulses of the
+compressed pulse's envelope at their range difference), is that smear, not a target: it
+is dropped and counted in ``stationary_mover_images``. One patch: on the analysis
 (:func:`~sarmotion.collection.drop_smear`); several: on the merged listing, against the
 merged movers (:func:`~sarmotion.collection.merge.drop_mover_images`). The bare
 :func:`~sarmotion.pipeline.analyze` is the stage below, without that rule: its listing

@@ -58,12 +58,25 @@ the least fraction of a peak its nearest pixel reads).
 range and range rate at slow time ``s`` are a stationary point's at some ``p``, and
 its energy lands on the locus of those points over the aperture. A slow mover's
 Doppler test passes as stationary (its Doppler spread is small), so a patch may list
-points of that locus. A listed stationary point ``p`` is a found mover's image when at
-some pulse of the analysed aperture ``|R_p(s) - R_m(s)| <= ECHO_CELLS c / 2B`` and
+points of that locus. A listed stationary point ``p`` lies on a found mover's echo when
+at some pulse of the analysed aperture ``|R_p(s) - R_m(s)| <= ECHO_CELLS c / 2B`` and
 ``|R_p'(s) - R_m'(s)| <= ECHO_CELLS lambda_o / (2 T)`` (a Doppler resolution ``1 / T``
-in range rate, aliased by the pulse rate): it is dropped and counted
-(:func:`drop_mover_images`). A true stationary target that close to a mover's echo in
-both cannot be told from it by the data of that aperture.
+in range rate, aliased by the pulse rate). The echo can make at ``p`` at most
+
+    B = |a_m| mean_s E(|R_p(s) - R_m(s)| / (c / 2B))
+
+(the triangle inequality over the pulses, each pulse's compressed echo at most the
+envelope ``E`` of :func:`~sarmotion.imaging.sidelobes.envelope`, the rect pulse's or the
+Gaussian's; ``|a_m|`` the mover's fitted amplitude, in the image's level units: a
+stationary point of reflectivity ``a`` reads ``|a|``). A listing on the echo whose
+level ``|I(p)| / n_pulses`` is at most ``SMEAR_MARGIN`` (2) times ``B``, so that half
+its amplitude or more can be the mover's echo (the rest what else sums there: clutter,
+other targets' sidelobes, noise), is the mover's image: dropped and counted
+(:func:`drop_mover_images`). A listing above it holds more than the echo can explain
+(a unit point crossed by a fast mover's echo for a few pulses: its range moves through
+a cell in ``(c / 2B) / |u_r|``) and is kept. A true stationary target that close to a
+mover's echo and no brighter than that cannot be told from it by the data of that
+aperture.
 
 **Mosaic.** Each patch's stationary image on its core, ``|I| / n_pulses``, on one grid
 of a stated spacing: each patch's image is reduced to the mosaic's pixels by block
@@ -73,6 +86,8 @@ maxima where it is analysed (:func:`coarsen`) and pasted in as it arrives
 
 from __future__ import annotations
 
+import math
+
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -81,7 +96,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.geometry import Trajectory
-from ..imaging.sidelobes import sidelobe_peaks
+from ..imaging.sidelobes import envelope, sidelobe_peaks
 
 __all__ = [
     "ECHO_CELLS",
@@ -169,6 +184,9 @@ class MoverRecord:
         Matched-filter SNR (dB); ``-inf`` when unknown.
     document : dict
         Its entry of the ``sarmotion.results/2`` document.
+    amplitude : float
+        ``|a|`` of its fit, in data units: the level ``|I| / n_pulses`` a stationary
+        point of that reflectivity has in a stationary image; ``inf`` when unknown.
     """
 
     patch: int
@@ -178,6 +196,7 @@ class MoverRecord:
     sigma_range_speed_mps: float
     snr_db: float
     document: dict[str, Any]
+    amplitude: float = math.inf
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -381,6 +400,11 @@ def _histories(
     return r, rate
 
 
+#: A listing on a mover's echo at most this many times the echo's bound there is the
+#: mover's image (module notes): half its amplitude or more can be the echo.
+SMEAR_MARGIN = 2.0
+
+
 def drop_mover_images(
     targets: Sequence[StationaryRecord],
     movers: Sequence[MoverRecord],
@@ -390,6 +414,7 @@ def drop_mover_images(
     wavelength_m: float,
     rate_period_mps: float,
     height_m: float = 0.0,
+    gaussian_range: bool = False,
 ) -> tuple[list[StationaryRecord], int]:
     """Stationary listings that are a found mover's image, dropped (module notes).
 
@@ -409,6 +434,8 @@ def drop_mover_images(
         ``lambda_o PRF / 2`` (m/s): range rates are compared modulo it.
     height_m : float
         Height of the stationary targets (m).
+    gaussian_range : bool
+        The pulse is Gaussian (its compressed envelope), else rect (a sinc).
 
     Returns
     -------
@@ -430,8 +457,22 @@ def drop_mover_images(
     dd = d_s[:, None, :] - d_m[None, :, :]
     if np.isfinite(rate_period_mps):
         dd -= rate_period_mps * np.floor(dd / rate_period_mps + 0.5)
-    image = (dr <= ECHO_CELLS * range_resolution_m) & (np.abs(dd) <= ECHO_CELLS * rate_cell)
-    hit = np.any(image, axis=(1, 2))
+    on_echo = np.any(
+        (dr <= ECHO_CELLS * range_resolution_m) & (np.abs(dd) <= ECHO_CELLS * rate_cell), axis=2
+    )
+    hit = np.zeros(len(targets), dtype=bool)
+    for i, j in zip(*np.nonzero(on_echo), strict=True):
+        if hit[i]:
+            continue
+        amplitude = float(movers[j].amplitude)
+        if not np.isfinite(amplitude):
+            hit[i] = True
+            continue
+        # the echo's level at the listing, bounded over every pulse (module notes)
+        r_p, _ = _histories(trajectory, spos[i : i + 1], np.zeros((1, 2)), 1)
+        r_j, _ = _histories(trajectory, mpos[j : j + 1], mvel[j : j + 1], 1)
+        reach = envelope((r_p - r_j) / range_resolution_m, gaussian_range)
+        hit[i] = targets[i].level <= SMEAR_MARGIN * amplitude * float(np.mean(reach))
     kept = [t for t, h in zip(targets, hit, strict=True) if not h]
     return kept, int(np.sum(hit))
 

@@ -360,6 +360,7 @@ def analyze_patch(
                 sigma_range_speed_mps=float(b.range_speed_mps) if b is not None else math.inf,
                 snr_db=float(b.snr_db) if b is not None else -math.inf,
                 document=entry,
+                amplitude=abs(complex(m.fit.amplitude)),
             )
         )
     img = result.stationary_image
@@ -463,8 +464,12 @@ def drop_smear(result: AnalysisResult) -> AnalysisResult:
         positions_m=tr.trajectory.positions_m[sl], slow_times_s=tr.trajectory.slow_times_s[sl]
     )
     wavelength = tr.radar.wavelength_m
+    magnitude = result.stationary_image.magnitude
+    peak = float(magnitude.max()) / tr.n_pulses if magnitude.size else 0.0
     records = [
-        StationaryRecord(patch=0, position_m=tuple(t.position_m), level=1.0)
+        StationaryRecord(
+            patch=0, position_m=tuple(t.position_m), level=peak * 10.0 ** (t.level_db / 20.0)
+        )
         for t in result.stationary
     ]
     movers = [
@@ -476,6 +481,7 @@ def drop_smear(result: AnalysisResult) -> AnalysisResult:
             sigma_range_speed_mps=math.inf,
             snr_db=-math.inf,
             document={},
+            amplitude=abs(complex(m.fit.amplitude)),
         )
         for m in result.movers
     ]
@@ -487,6 +493,7 @@ def drop_smear(result: AnalysisResult) -> AnalysisResult:
         wavelength_m=wavelength,
         rate_period_mps=0.5 * wavelength / tr.trajectory.pulse_interval_s,
         height_m=float(tr.reference_point_m[2]),
+        gaussian_range=tr.radar.pulse == "gaussian",
     )
     if not dropped:
         return result
@@ -836,6 +843,7 @@ def _merge(
             wavelength_m=src.radar.wavelength_m,
             rate_period_mps=0.5 * src.radar.wavelength_m * prf,
             height_m=float(src.reference_point_m[2]),
+            gaussian_range=src.radar.pulse == "gaussian",
         )
     cap = opts.analysis.max_stationary * len(plan.patches)
     dropped = max(0, len(stationary) - cap)
