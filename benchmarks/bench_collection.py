@@ -62,7 +62,8 @@ cell of a true one), listed, and dropped as sidelobes.
 
 The patches' margins are sized for the scene's movers (``max_speed_mps`` 15 m/s, the
 default). Threads against processes for the local cluster were compared on the
-two-patch scene of ``tests/collection/test_collection_run.py`` cut into 8 patches of 30 m, 2 workers,
+two-patch scene of ``tests/collection/test_collection_run.py`` cut into 8 patches of
+30 m, 2 workers,
 alternated in one run (``--threads-vs-processes``).
 """
 

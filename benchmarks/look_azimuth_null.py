@@ -33,7 +33,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 from scipy.stats import beta
 
 HERE = Path(__file__).resolve().parent
@@ -155,7 +154,6 @@ def main() -> None:
     )
     (args.out / "look_azimuth_null.md").write_text(text + table(rows))
     print(table(rows))
-
 
 
 if __name__ == "__main__":

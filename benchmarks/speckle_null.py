@@ -108,7 +108,9 @@ def table(rows: list[dict]) -> str:
             lo = beta.ppf(0.025, k, n - k + 1) if k > 0 else 0.0
             hi = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
             snr = [r["snr_db"] for r in sel]
-            top = [r["max_over_threshold_db"] for r in sel if r["max_over_threshold_db"] is not None]
+            top = [
+                r["max_over_threshold_db"] for r in sel if r["max_over_threshold_db"] is not None
+            ]
             out.append(
                 f"| {family} | {detector} | {n} | {min(snr):.1f}-{max(snr):.1f} | {k} "
                 f"| {k / n:.2f} ({lo:.2f}-{hi:.2f}) | {max(top, default=float('nan')):+.2f} "

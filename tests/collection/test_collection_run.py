@@ -369,7 +369,10 @@ def test_patches_holding_the_same_echoes_are_one_test():
     )
     src = TracesBlocks(zeros)
     plan = plan_patches(
-        src, CollectionOptions(search_beyond=False), region_m=(-50, -50, 50, 50), region_frame="look"
+        src,
+        CollectionOptions(search_beyond=False),
+        region_m=(-50, -50, 50, 50),
+        region_frame="look",
     )
     assert len(plan.patches) == 4
     assert all(p.taps.size == 1 and p.decimation == p.interpolation == 1 for p in plan.patches)
@@ -379,7 +382,14 @@ def test_patches_holding_the_same_echoes_are_one_test():
     for p in plan.patches:
         keep = in_band(make_traces(p, src, np.zeros((p.pulses.size, p.n_samples), np.complex64)), p)
         still = np.zeros(2)
-        kept.append(np.array([keep(SimpleNamespace(position_m=np.r_[x, 0.0], velocity_mps=still)) for x in points]))
+        kept.append(
+            np.array(
+                [
+                    keep(SimpleNamespace(position_m=np.r_[x, 0.0], velocity_mps=still))
+                    for x in points
+                ]
+            )
+        )
     # rows in range: the cores' spans along the look at the aperture centre
     j0 = int(np.argmin(np.abs(traj.slow_times_s)))
     e_r = traj.positions_m[j0, :2] / np.linalg.norm(traj.positions_m[j0, :2])

@@ -87,7 +87,6 @@ maxima where it is analysed (:func:`coarsen`) and pasted in as it arrives
 from __future__ import annotations
 
 import math
-
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any

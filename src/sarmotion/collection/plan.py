@@ -895,7 +895,11 @@ def plan_patches(
         keep = _clip_box(mid - keep_half, mid + keep_half, *halo)
         rects.append((halo, keep))
         whole = taps.size == 1 and q == up == 1
-        key = (round(float(core_ab[:, 0].min()), 6), round(float(core_ab[:, 0].max()), 6), n_samples)
+        key = (
+            round(float(core_ab[:, 0].min()), 6),
+            round(float(core_ab[:, 0].max()), 6),
+            n_samples,
+        )
         tests.append((key if whole else (len(patches),), float(mid[1]), float(keep_half[1])))
         corners_ab = np.array(
             [[a, b] for a in (halo[0][0], halo[1][0]) for b in (halo[0][1], halo[1][1])]

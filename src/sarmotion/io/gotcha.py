@@ -173,6 +173,7 @@ def written_by_sarmotion(path: PathLike) -> bool:
     except OSError:
         return False
 
+
 #: Largest deviation of ``freq`` from its least-squares uniform grid, as a fraction of the
 #: step: float32 rounds ~9.6 GHz to 512 Hz, 3.5e-4 of GOTCHA's 1.47 MHz step; 1e-2 is 30x that.
 _GRID_TOL = 1e-2
