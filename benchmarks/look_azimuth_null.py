@@ -33,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from scipy.stats import beta
+from scipy.stats import binomtest
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
@@ -114,8 +114,7 @@ def table(rows: list[dict]) -> str:
     for rule, alpha in keys:
         sel = [r for r in rows if (r["rule"], r["alpha"]) == (rule, alpha)]
         n, k = len(sel), sum(r["false_movers"] > 0 for r in sel)
-        lo = beta.ppf(0.025, k, n - k + 1) if k > 0 else 0.0
-        hi = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
+        lo, hi = binomtest(k, n).proportion_ci(0.95, method="exact")  # Clopper-Pearson
         shares = [s for r in sel for s in r["shares"]]
         out.append(
             f"| {rule} | {alpha:g} | {n} ({min(r['seed'] for r in sel)}-"

@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import beta
+from scipy.stats import binomtest
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
@@ -105,8 +105,7 @@ def table(rows: list[dict]) -> str:
             if not sel:
                 continue
             n, k = len(sel), sum(r["false_movers"] > 0 for r in sel)
-            lo = beta.ppf(0.025, k, n - k + 1) if k > 0 else 0.0
-            hi = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
+            lo, hi = binomtest(k, n).proportion_ci(0.95, method="exact")  # Clopper-Pearson
             snr = [r["snr_db"] for r in sel]
             top = [
                 r["max_over_threshold_db"] for r in sel if r["max_over_threshold_db"] is not None

@@ -337,30 +337,11 @@ def test_patches_holding_the_same_echoes_are_one_test():
     ``sum_rows alpha_p |K_row| / |H_p|``, ``K_row`` the ground any patch of the row keeps
     (:func:`in_band`, on a grid of points), at most ``alpha``; each patch then tests at
     more than the union bound over the four allows (which counts a row's keeps twice)."""
-    import math
-
     from sarmotion.collection.extract import make_traces
     from sarmotion.collection.run import in_band
-    from sarmotion.core import C
 
-    # the look-azimuth benchmark's 100 m geometry: 2 degrees of X band at 10 km ground
-    # range, 4 km up, window and pulse rate sized for 1.6 times the square
-    ground, height, side = 10e3, 4e3, 100.0
-    cos_el = ground / math.hypot(ground, height)
-    df = C / (2.0 * 1.6 * side * cos_el)
-    radar = Radar(
-        carrier_hz=9.6e9, bandwidth_hz=640e6, n_samples=math.ceil(640e6 / df), frequency_step_hz=df
-    )
-    count = math.ceil(np.deg2rad(2.0) * cos_el * 2.0 * 1.6 * side / radar.wavelength_m)
-    traj = Trajectory.circular(
-        altitude_m=height,
-        ground_radius_m=ground,
-        speed_mps=150.0,
-        pulses_per_deg=count / 2.0,
-        aperture_deg=2.0,
-        centre_azimuth_deg=30.0,
-        n_pulses=count,
-    )
+    acq = _look_azimuth_acquisition(30.0)
+    traj, radar, count = acq.trajectory, acq.radar, acq.n_pulses
     zeros = Traces(
         data=np.zeros((count, radar.n_samples), np.complex64),
         trajectory=traj,
@@ -477,18 +458,13 @@ def test_candidates_beyond_max_movers_are_kept_in_the_document_and_said(scene, t
     assert (f"{sidelobes} dropped as a brighter target's sidelobes" in console) == (sidelobes > 0)
 
 
-def _look_azimuth_scene(azimuth_deg: float):
-    """benchmarks/look_azimuth.py's 100 m scene at ``azimuth_deg`` (seed 7, no clutter).
-
-    A 2-degree X-band arc (9.6 GHz, 640 MHz) at 10 km ground range and 4 km height,
-    window and pulse rate for 1.6 times the side; 8 unit points, 4 unit movers (their
-    positions and velocities those the benchmark draws at 45 degrees), noise -20 dB per
-    sample of a unit point; the square declared as the image area.
-    """
+def _look_azimuth_acquisition(azimuth_deg: float):
+    """benchmarks/look_azimuth.py's 100 m acquisition: a 2-degree X-band arc (9.6 GHz,
+    640 MHz) at 10 km ground range and 4 km height about ``azimuth_deg``, window and
+    pulse rate sized for 1.6 times the side."""
     import math
 
     from sarmotion.core import Acquisition, C
-    from sarmotion.simulation import CollectionScene
 
     side, over, ground, height = 100.0, 1.6, 10e3, 4e3
     cos_el = ground / math.hypot(ground, height)
@@ -506,7 +482,21 @@ def _look_azimuth_scene(azimuth_deg: float):
         centre_azimuth_deg=azimuth_deg,
         n_pulses=count,
     )
-    acq = Acquisition(trajectory=traj, radar=radar, reference_point_m=np.zeros(3))
+    return Acquisition(trajectory=traj, radar=radar, reference_point_m=np.zeros(3))
+
+
+def _look_azimuth_scene(azimuth_deg: float):
+    """benchmarks/look_azimuth.py's 100 m scene at ``azimuth_deg`` (seed 7, no clutter).
+
+    A 2-degree X-band arc (9.6 GHz, 640 MHz) at 10 km ground range and 4 km height,
+    window and pulse rate for 1.6 times the side; 8 unit points, 4 unit movers (their
+    positions and velocities those the benchmark draws at 45 degrees), noise -20 dB per
+    sample of a unit point; the square declared as the image area.
+    """
+    from sarmotion.simulation import CollectionScene
+
+    side = 100.0
+    acq = _look_azimuth_acquisition(azimuth_deg)
     corners = [(-45.0, -45.0), (45.0, -45.0), (45.0, 45.0), (-45.0, 45.0)]
     inner = [(8.8, 27.8), (19.3, -19.2), (-14.0, 26.1), (-34.6, 22.5)]
     movers = [
