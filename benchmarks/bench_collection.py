@@ -645,8 +645,9 @@ def patch_profile(
 ) -> list[dict]:
     """One patch's analysis at several pulse counts: its stage timings and their exponent.
 
-    The scene's pulse rate is sized for ``rate_factor`` times the side; the patch holding
-    mover ``mover`` (0, 1 or 2) keeps every ``q``-th pulse, ``q = max(1, round(n_pulses /
+    The scene's pulse rate is sized for ``rate_factor`` times the side; the patch whose
+    band keeps mover ``mover``'s echo (0, 1 or 2; ``run.in_band`` of its true motion)
+    keeps every ``q``-th pulse, ``q = max(1, round(n_pulses /
     n))`` for each count ``n`` of ``pulses`` (integer decimations: exact for its aliased
     movers; the same pass band and filter rule), and is analysed as a collection's patch
     is (:func:`~sarmotion.collection.run.analyze_patch`, the command's defaults, after one
@@ -668,15 +669,28 @@ def patch_profile(
 
         timing.time = types.SimpleNamespace(perf_counter=time.process_time)
     from sarmotion.collection import CollectionOptions, extract_patches, plan_patches
+    from sarmotion.collection.extract import make_traces
     from sarmotion.collection.plan import BAND_GUARD
     from sarmotion.collection.resample import design, output_grid
-    from sarmotion.collection.run import analyze_patch
+    from sarmotion.collection.run import analyze_patch, in_band
     from sarmotion.core.blocks import TracesBlocks
 
     traces, _, movers = make_scene(side_m, seed, rate_factor)
     source = TracesBlocks(traces)
     plan = plan_patches(source)
-    patch = next(p for p in plan.patches if p.contains(movers[mover].position_m))
+    # the patch whose band keeps the mover's echo (its Doppler shifts it in cross range by
+    # about R / V per m/s of range speed: not the patch that holds its position)
+    truth = types.SimpleNamespace(
+        position_m=np.asarray(movers[mover].position_m, float),
+        velocity_mps=np.asarray(movers[mover].velocity_mps, float)[:2],
+    )
+    patch = next(
+        p
+        for p in plan.patches
+        if in_band(make_traces(p, source, np.zeros((p.pulses.size, p.n_samples), np.complex64)), p)(
+            truth
+        )
+    )
     prf = 1.0 / traces.trajectory.pulse_interval_s
     opts = CollectionOptions().analysis
     rows = []
