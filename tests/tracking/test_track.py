@@ -219,6 +219,7 @@ def test_gotcha_two_movers_two_tracks(gotcha_movers):
         assert min(s.position_std_m for s in trk.states) > 15.0
         assert trk.turn is not None and trk.turn.model == "looks" and trk.turn.n_looks == 4
         assert not trk.turn.flagged and trk.turn.false_alarm == 0.01
+        assert trk.end is not None and trk.end.reason == "data"  # detected to the last
     doc = json.loads(json.dumps(tracks_document(result)))
     assert doc["schema"] == "sarmotion.tracks/1" and len(doc["tracks"]) == 2
     state = doc["tracks"][0]["states"][0]
@@ -226,6 +227,7 @@ def test_gotcha_two_movers_two_tracks(gotcha_movers):
         state
     )
     assert abs(doc["sub_apertures"][0]["time_s"] + doc["sub_apertures"][-1]["time_s"]) < 0.01
+    assert {t["end"]["reason"] for t in doc["tracks"]} == {"data"}
 
 
 @pytest.mark.gotcha

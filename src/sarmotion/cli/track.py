@@ -265,6 +265,8 @@ def track(
             )
         )
         click.echo("    " + turn_line(t))
+        if t.get("end"):
+            click.echo("    " + t["end"]["text"])
         if t.get("fit"):
             click.echo("    " + fit_line(t["fit"]))
         missed = [s["road_missed"] for s in t["states"] if s.get("road_missed")]

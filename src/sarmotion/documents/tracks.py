@@ -12,6 +12,8 @@
                          "family": {"position_per_m", "velocity_per_m"}} or null,
                  "turn": {"flagged", "statistic", "threshold", "dof", "false_alarm",
                           "n_pairs", "apparent_turn_rate_deg_s", "apparent_turn_rate_std_deg_s"},
+                 "end": {"reason", "time_s", "next_time_s", "predicted_position_m",
+                         "range_offset_m", "range_half_extent_m", "fixed", "text"},
                  "states": [{"time_s", "sub_aperture", "position_m": [x, y],
                              "velocity_mps": [ux, uy], "position_std_m",
                              "position_cov_m2", "velocity_std_mps", "speed_mps",
@@ -39,7 +41,12 @@ false-alarm probability ``false_alarm`` (Bonferroni over ``n_pairs``), whether i
 exceeded, and the heading rate of the velocity estimates between the first and last
 detections with its standard error (degrees per second, counter-clockwise positive; null
 when they overlap): the *apparent* turn rate, which for a mover that accelerates differs
-from its own (:mod:`sarmotion.tracking.turns`).
+from its own (:mod:`sarmotion.tracking.turns`). ``end`` (a key added without changing any
+other) says why the track ends where it does (:mod:`sarmotion.tracking.ends`): ``"data"``
+(its last detection is in the last sub-aperture), ``"left_scene"`` (moving on uniformly
+it is outside the imaged scene at the next sub-aperture: in ground range whatever its
+place along the family, or, its position fixed, outside the image) or
+``"not_detected"``, with ``text`` the same in words.
 """
 
 from __future__ import annotations
@@ -85,6 +92,7 @@ def tracks_document(result: TrackingResult) -> dict[str, Any]:
                     "n_detections": t.n_detections,
                     "turn": _turn(t.turn),
                     "fit": _fit(t.fit),
+                    **({"end": _end(t.end)} if t.end is not None else {}),
                     "states": [_state(s, result) for s in t.states],
                 }
                 for t in result.tracks
@@ -117,6 +125,23 @@ def _fit(fit: Any) -> dict[str, Any] | None:
             "position_per_m": [float(v) for v in fit.family_position_per_m],
             "velocity_per_m": [float(v) for v in fit.family_velocity_per_m],
         },
+    }
+
+
+def _end(end: Any) -> dict[str, Any]:
+    """Why the track ends (``tracking.TrackEnd``)."""
+    p = end.predicted_position_m
+    return {
+        "reason": end.reason,
+        "time_s": float(end.time_s),
+        "next_time_s": None if end.next_time_s is None else float(end.next_time_s),
+        "predicted_position_m": None if p is None else [float(v) for v in p],
+        "range_offset_m": None if end.range_offset_m is None else float(end.range_offset_m),
+        "range_half_extent_m": (
+            None if end.range_half_extent_m is None else float(end.range_half_extent_m)
+        ),
+        "fixed": bool(end.fixed),
+        "text": end.describe(),
     }
 
 

@@ -300,6 +300,13 @@ def write_tracks_report(
             "<ul>"
             + "".join(f"<li>{html.escape(turn_line(t))}</li>" for t in document["tracks"])
             + "</ul>"
+            + "<p>Where each track ends, and why:</p><ul>"
+            + "".join(
+                f"<li>track {t['id']}: {html.escape(t['end']['text'])}</li>"
+                for t in document["tracks"]
+                if t.get("end")
+            )
+            + "</ul>"
             if document["tracks"]
             else "<p>No track.</p>",
         ),

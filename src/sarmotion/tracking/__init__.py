@@ -13,9 +13,12 @@
 - :mod:`~sarmotion.tracking.wide_aspect` — each detection as a measurement of the range
   history through its look, a track's position fixed where the look turns enough, and
   the tracks of one uniform mover joined;
+- :mod:`~sarmotion.tracking.ends` — why a track ends: the data's end, the imaged
+  scene's edge, or no detection;
 - :mod:`~sarmotion.tracking.track` — :func:`track`, the whole chain.
 """
 
+from .ends import TrackEnd, track_end
 from .roads import Road, RoadFix, road_fix, road_misses
 from .scale import map_sub_apertures
 from .sub_apertures import (
@@ -36,6 +39,7 @@ __all__ = [
     "RoadFix",
     "SubApertureDetections",
     "Track",
+    "TrackEnd",
     "TrackState",
     "Tracker",
     "TrackingOptions",
@@ -43,6 +47,7 @@ __all__ = [
     "TurnTest",
     "analyze_sub_aperture",
     "fit_track",
+    "track_end",
     "join_tracks",
     "map_sub_apertures",
     "road_fix",

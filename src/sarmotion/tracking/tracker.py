@@ -88,6 +88,7 @@ from ..core import Traces
 from ..errors import EstimationError
 from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
+from .ends import TrackEnd, track_end
 from .roads import Road, RoadFix, road_fix, road_misses
 from .sub_apertures import Detection, SubApertureDetections, check_overlap
 from .turns import TurnTest, look_turn_test, turn_test
@@ -326,12 +327,16 @@ class Track:
         The uniform motion fitted to the range histories of all its detections through
         their looks, with whether the data fix its position
         (:mod:`sarmotion.tracking.wide_aspect`); None when a detection lacks its bound.
+    end : TrackEnd or None
+        Why it ends where it does: the data's end, the imaged scene's edge, or no
+        detection (:mod:`sarmotion.tracking.ends`).
     """
 
     id: int
     states: tuple[TrackState, ...]
     turn: TurnTest | None = None
     fit: PositionFit | None = None
+    end: TrackEnd | None = None
 
     @property
     def n_detections(self) -> int:
@@ -374,6 +379,8 @@ class Tracker:
         self._ended: list[StoneTrack] = []
         self._meta: dict[int, _Meta] = {}
         self._order: dict[StoneTrack, int] = {}
+        # every sub-aperture stepped: index, time, ground range direction, image box
+        self._subs: list[tuple[int, float, NDArray[np.float64], tuple[float, ...]]] = []
 
     def _build(self) -> None:
         """Stone Soup's predictor, updater, associator, initiator and deleter (once)."""
@@ -404,6 +411,15 @@ class Tracker:
     # ------------------------------------------------------------------ steps
     def step(self, sub: SubApertureDetections) -> None:
         """Associate, update and start tracks with one sub-aperture (in time order)."""
+        x, y = np.asarray(sub.grid.x_m, float), np.asarray(sub.grid.y_m, float)
+        dx, dy = (float(v) for v in sub.grid.spacing_m)
+        box = (
+            0.5 * (x[0] + x[-1]),
+            0.5 * (y[0] + y[-1]),
+            0.5 * (abs(x[-1] - x[0]) + dx),
+            0.5 * (abs(y[-1] - y[0]) + dy),
+        )
+        self._subs.append((sub.index, sub.time_s, np.asarray(sub.range_direction, float), box))
         if not sub.detections and not self._live:
             return  # nothing to associate, update, start or end
         self._build()
@@ -481,9 +497,23 @@ class Tracker:
                 if hits_looks
                 else None
             )
-            out.append((tuple(self._state(s) for s in kept), self._turn(kept), fit))
+            states = tuple(self._state(s) for s in kept)
+            out.append((states, self._turn(kept), fit, self._end(states, fit)))
         return tuple(
-            Track(id=k + 1, states=s, turn=turn, fit=fit) for k, (s, turn, fit) in enumerate(out)
+            Track(id=k + 1, states=s, turn=turn, fit=fit, end=end)
+            for k, (s, turn, fit, end) in enumerate(out)
+        )
+
+    def _end(self, states: Sequence[TrackState], fit: PositionFit | None) -> TrackEnd:
+        """Why a track ends at its last detection (:mod:`~sarmotion.tracking.ends`)."""
+        last = [s for s in states if s.detection is not None][-1]
+        return track_end(
+            last_time_s=last.time_s,
+            last_index=last.sub_aperture,
+            position_m=last.position_m,
+            velocity_mps=last.velocity_mps,
+            fixed=last.on_road or bool(fit is not None and fit.fixed),
+            sub_apertures=self._subs,
         )
 
     def _hit(self, state: GaussianState) -> bool:
