@@ -118,7 +118,7 @@ likely anywhere in ``H_p``, ``alpha_p = alpha min(1, |H_p| / sum_g |K_g|)``
 by ``sum_g alpha_g |K_g| / |H_g| <= alpha`` (the union bound over the groups). Patches
 holding disjoint data share ``alpha`` about as ``alpha / N``; patches holding the same
 data each test near ``alpha``, as one analysis of those data does. Measured on null
-scenes (``benchmarks/look_azimuth_null.py``, ``docs/notes/look_azimuth.md``).
+scenes (``benchmarks/look_azimuth_null.py``, ``benchmarks/results/look_azimuth.md``).
 
 **Bounds.** A core side below ``MIN_CORE_CELLS`` = 8 resolution cells is refused: the
 fast-time guard either side of a core is ``PULSE_GUARD`` = 8 compressed-pulse lengths,
