@@ -63,13 +63,13 @@ at some pulse of the analysed aperture ``|R_p(s) - R_m(s)| <= ECHO_CELLS c / 2B`
 ``|R_p'(s) - R_m'(s)| <= ECHO_CELLS lambda_o / (2 T)`` (a Doppler resolution ``1 / T``
 in range rate, aliased by the pulse rate). The echo can make at ``p`` at most
 
-    B = |a_m| mean_s E(|R_p(s) - R_m(s)| / (c / 2B))
+    L_m(p) = |a_m| mean_s E(|R_p(s) - R_m(s)| / (c / 2B))
 
 (the triangle inequality over the pulses, each pulse's compressed echo at most the
 envelope ``E`` of :func:`~sarmotion.imaging.sidelobes.envelope`, the rect pulse's or the
 Gaussian's; ``|a_m|`` the mover's fitted amplitude, in the image's level units: a
 stationary point of reflectivity ``a`` reads ``|a|``). A listing on the echo whose
-level ``|I(p)| / n_pulses`` is at most ``SMEAR_MARGIN`` (2) times ``B``, so that half
+level ``|I(p)| / n_pulses`` is at most ``SMEAR_MARGIN`` (2) times ``L_m(p)``, so that half
 its amplitude or more can be the mover's echo (the rest what else sums there: clutter,
 other targets' sidelobes, noise), is the mover's image: dropped and counted
 (:func:`drop_mover_images`). A listing above it holds more than the echo can explain
