@@ -89,6 +89,7 @@ INDEX: dict[str, tuple[str, ...]] = {
         "test_collection.py",
         "test_collection_sidelobes.py",
         "test_collection_doppler.py",
+        "test_collection_smear.py",
     ),
     "collection.plan": (
         "test_collection.py",
@@ -255,6 +256,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "sources": ("test_sources.py",),
     "simulation.signals": ("test_signals.py",),
     # tracking
+    "tracking.ends": ("test_ends.py", "test_track.py"),
     "tracking.roads": ("test_track.py", "test_road_misses.py"),
     "tracking.scale": ("test_track.py", "test_scheduler_security.py"),
     "tracking.sub_apertures": ("test_track.py",),
