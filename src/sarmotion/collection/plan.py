@@ -1028,7 +1028,7 @@ def false_alarm_shares(
         elif groups[key][0] == i:  # the group's keeps in cross range, on the circle
             arcs = [(tests[j][1], tests[j][2]) for j in groups[key]]
             kept += float(keep[1][0] - keep[0][0]) * _arc_union(arcs, width_m)
-    return [min(1.0, h / kept) for h in held]
+    return [min(1.0, h / kept) if kept > 0.0 else 1.0 for h in held]
 
 
 def _arc_union(arcs: list[tuple[float, float]], period: float) -> float:
