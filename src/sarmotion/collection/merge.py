@@ -460,18 +460,20 @@ def drop_mover_images(
         (dr <= ECHO_CELLS * range_resolution_m) & (np.abs(dd) <= ECHO_CELLS * rate_cell), axis=2
     )
     hit = np.zeros(len(targets), dtype=bool)
-    for i, j in zip(*np.nonzero(on_echo), strict=True):
-        if hit[i]:
-            continue
-        amplitude = float(movers[j].amplitude)
-        if not np.isfinite(amplitude):
-            hit[i] = True
-            continue
-        # the echo's level at the listing, bounded over every pulse (module notes)
-        r_p, _ = _histories(trajectory, spos[i : i + 1], np.zeros((1, 2)), 1)
-        r_j, _ = _histories(trajectory, mpos[j : j + 1], mvel[j : j + 1], 1)
-        reach = envelope((r_p - r_j) / range_resolution_m, gaussian_range)
-        hit[i] = targets[i].level <= SMEAR_MARGIN * amplitude * float(np.mean(reach))
+    rows, cols = np.nonzero(on_echo)
+    if rows.size:
+        # the echo's level at each listing on it, bounded over every pulse (module
+        # notes): each history on the whole pulse grid once
+        ti, t_of = np.unique(rows, return_inverse=True)
+        mj, m_of = np.unique(cols, return_inverse=True)
+        r_p, _ = _histories(trajectory, spos[ti], np.zeros((ti.size, 2)), 1)
+        r_q, _ = _histories(trajectory, mpos[mj], mvel[mj], 1)
+        reach = np.mean(envelope((r_p[t_of] - r_q[m_of]) / range_resolution_m, gaussian_range), 1)
+        amplitude = np.array([float(m.amplitude) for m in movers])[cols]
+        level = np.array([targets[i].level for i in rows])
+        with np.errstate(invalid="ignore"):  # an unknown amplitude: the echo explains it
+            dropped = ~np.isfinite(amplitude) | (level <= SMEAR_MARGIN * amplitude * reach)
+        np.logical_or.at(hit, rows, dropped)
     kept = [t for t, h in zip(targets, hit, strict=True) if not h]
     return kept, int(np.sum(hit))
 

@@ -67,17 +67,17 @@ class TrackEnd:
         if self.reason == "data":
             return f"ends with the data (last detection at {self.time_s:.2f} s)"
         if self.reason == "left_scene":
-            where = (
-                "its position"
-                if self.fixed
-                else (
+            if self.fixed:
+                x, y = self.predicted_position_m
+                where = f"predicted at ({x:.1f}, {y:.1f}) m, outside the image,"
+            else:
+                where = (
                     f"{abs(self.range_offset_m or 0.0):.1f} m from the centre in ground range, "
-                    f"the image reaching {self.range_half_extent_m:.1f} m"
+                    f"the image reaching {self.range_half_extent_m:.1f} m,"
                 )
-            )
             return (
                 f"left the imaged scene after {self.time_s:.2f} s ({where} at "
-                f"{self.next_time_s:.2f} s); a larger --size or the collection path "
+                f"{self.next_time_s:.2f} s): a larger --size or the collection path "
                 "follows it further"
             )
         return f"not detected after {self.time_s:.2f} s, while still in the imaged scene" + (
