@@ -59,6 +59,7 @@ def test_across_the_look_the_family_does_not_say_unless_the_position_is_fixed():
     assert free.reason == "not_detected" and "across its family" in free.describe()
     fixed = _end((0.0, 25.0), (0.0, 5.0), fixed=True)
     assert fixed.reason == "left_scene" and fixed.fixed
+    assert "predicted at (0.0, 35.0) m" in fixed.describe()
 
 
 @pytest.mark.parametrize("azimuth_deg", [30.0, 45.0, 120.0])
