@@ -35,6 +35,7 @@ which the caller computes: this layer imports no analysis).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -48,11 +49,10 @@ from ..core import (
     Radar,
     Traces,
     Trajectory,
-    delay_phase,
-    delta_tau,
     to_fast_time,
 )
 from ..core.blocks import check_block_pulses
+from .echoes import point_echoes
 from .paths import radar_with_range_window
 from .scene import PointTarget
 
@@ -171,6 +171,20 @@ class CollectionScene:
         if self.snr_db is not None and not np.isfinite(self.snr_db):
             raise ValueError(f"snr_db must be finite or None, got {self.snr_db!r}")
 
+    @functools.cached_property
+    def _target_arrays(
+        self,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.complex128]]:
+        """All targets' positions at ``s = 0`` (n, 3), velocities (n, 3), reflectivities (n,)."""
+        targets = (*self.stationary, *self.movers)
+        if not targets:
+            return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.complex128)
+        return (
+            np.array([t.position_m for t in targets], dtype=np.float64),
+            np.array([t.velocity3_mps for t in targets], dtype=np.float64),
+            np.array([t.reflectivity for t in targets], dtype=np.complex128),
+        )
+
     # ------------------------------------------------------------ PulseBlocks
     @property
     def radar(self) -> Radar:
@@ -204,7 +218,8 @@ class CollectionScene:
         """Deramped phase history of pulses ``start:stop``, shape (stop - start, n_samples).
 
         The rows of :func:`~sarmotion.simulation.forward.simulate_phase_history` for all
-        targets (no spreading), plus each pulse's noise.
+        targets (no spreading; summed by the compiled
+        :func:`~sarmotion.simulation.echoes.point_echoes`), plus each pulse's noise.
         """
         if not 0 <= start < stop <= self.n_pulses:
             raise ValueError(f"pulses {start}:{stop} are not within 0:{self.n_pulses}")
@@ -212,11 +227,8 @@ class CollectionScene:
         f = radar.frequencies_hz
         pos = self.trajectory.positions_m[start:stop]
         s = self.trajectory.slow_times_s[start:stop]
-        rho_o = self.reference_point_m
-        out = np.zeros((stop - start, radar.n_samples), dtype=np.complex128)
-        for tgt in (*self.stationary, *self.movers):
-            dtau = delta_tau(pos, tgt.positions_at(s), rho_o)
-            out += tgt.reflectivity * delay_phase(-dtau, f)
+        positions, velocities, reflectivities = self._target_arrays
+        out = point_echoes(pos, s, positions, velocities, reflectivities, self.reference_point_m, f)
         out *= radar.spectral_weights()[None, :]
         sigma = self.noise_sigma
         if sigma > 0:
