@@ -18,6 +18,7 @@ from sarmotion.collection import (
     same_mover,
     unambiguous_scene,
 )
+from sarmotion.collection.plan import window_transform_length
 from sarmotion.core import Radar, Traces, Trajectory, to_fast_time, travel_time
 from sarmotion.core.blocks import PulseBlocks, TracesBlocks
 from sarmotion.motion import family_member
@@ -50,10 +51,10 @@ def _window_bound(radar: Radar, patch_radar: Radar, max_delay_s: float) -> float
     The data's pulse (``n`` bins) cut to the window against the pulse of the patch's own
     radar (``n_p`` bins) for a point at differential delay ``d`` (module ``extract``).
     """
-    dt = radar.sample_interval_s
+    dt = patch_radar.sample_interval_s  # the window's samples (the data's, or finer)
     t = (np.arange(patch_radar.n_samples) - patch_radar.n_samples // 2) * dt
     worst = 0.0
-    for d in np.linspace(-max_delay_s, max_delay_s, 41):
+    for d in np.linspace(-max_delay_s, max_delay_s, 401):
         worst = max(worst, float(np.max(np.abs(_pulse(radar, t - d) - _pulse(patch_radar, t - d)))))
     return worst
 
@@ -70,12 +71,32 @@ def test_traces_blocks_is_a_pulse_source():
         list(src.blocks(0))
 
 
-@pytest.mark.parametrize("block_pulses", [37, 1000])
-def test_patch_traces_are_the_data_compressed_to_the_patch_centre(block_pulses):
+def _prime_length(radar: Radar) -> Radar:
+    """The same band and window on ``2 p`` samples, ``p`` prime: a slow transform length."""
+    p = radar.n_samples // 2 + 1
+    while any(p % k == 0 for k in range(2, int(p**0.5) + 1)):
+        p += 1
+    n = 2 * p
+    return Radar(
+        carrier_hz=radar.carrier_hz,
+        bandwidth_hz=radar.bandwidth_hz,
+        n_samples=n,
+        frequency_step_hz=radar.span_hz / n,
+        pulse=radar.pulse,
+    )
+
+
+@pytest.mark.parametrize(("block_pulses", "length"), [(37, "fast"), (1000, "fast"), (64, "prime")])
+def test_patch_traces_are_the_data_compressed_to_the_patch_centre(block_pulses, length):
     """A point's patch traces equal its traces simulated with the patch centre as the
     reference point, on the patch's pulses and radar: to the FIR ripple 10^(-A/20) plus
-    the difference of the two compressed pulses over the window (module ``extract``)."""
+    the difference of the two compressed pulses over the window (module ``extract``).
+
+    Data of ``2 p`` samples (``p`` prime) are cut from the transform padded to a fast
+    length: the patch's samples are finer by ``n / n'`` and the same bound holds."""
     radar, traj = _acquisition()
+    if length == "prime":
+        radar = _prime_length(radar)
     src = TracesBlocks(_traces([], radar, traj))
     opts = CollectionOptions(patch_size_m=40.0, max_speed_mps=10.0, stopband_db=60.0)
     plan = plan_patches(src, opts)
@@ -106,7 +127,11 @@ def test_patch_traces_are_the_data_compressed_to_the_patch_centre(block_pulses):
         on_axis = np.interp(patch.pulse_positions, np.arange(traj.n_pulses), traj.slow_times_s)
         assert np.allclose(got.slow_times_s, on_axis, rtol=0.0, atol=1e-12)
         assert got.radar.carrier_hz == radar.carrier_hz
-        assert got.radar.sample_interval_s == pytest.approx(radar.sample_interval_s, rel=1e-12)
+        n_t = window_transform_length(radar.n_samples)
+        assert n_t > radar.n_samples or length == "fast"
+        assert got.radar.sample_interval_s == pytest.approx(
+            radar.sample_interval_s * radar.n_samples / n_t, rel=1e-12
+        )
 
 
 def test_a_patch_rejects_stationary_echoes_outside_its_band():

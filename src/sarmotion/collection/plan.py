@@ -824,6 +824,7 @@ def plan_patches(
     guard_t = PULSE_GUARD / radar.bandwidth_hz
     prf = 1.0 / traj.pulse_interval_s
     dt = radar.sample_interval_s
+    dt_window = dt * radar.n_samples / window_transform_length(radar.n_samples)
 
     from .merge import ECHO_CELLS
 
@@ -849,7 +850,8 @@ def plan_patches(
         centre = pts[4].copy()
         rel = _delays(pos, pts) - travel_time(pos, centre)[None, :]
         half_t = float(np.max(np.abs(rel))) + margin_t + guard_t
-        n_samples = _window_samples(half_t, dt, radar.n_samples)
+        n_samples = _window_samples(half_t, dt_window, radar.n_samples)
+        step_t = dt_window if n_samples < radar.n_samples else dt
         rate = np.gradient(rel, s, axis=1)
         core_band = float(max(np.max(np.abs(f_lo * rate)), np.max(np.abs(f_hi * rate))))
         passband = core_band + margin_d
@@ -879,7 +881,7 @@ def plan_patches(
         edge = prf / 2.0 if taps.size == 1 else min(prf / 2.0, (1.0 + 2.0 * BAND_GUARD) * passband)
         halo_half = np.array(
             [
-                0.5 * n_samples * dt / float(np.min(delay_per_m)),
+                0.5 * n_samples * step_t / float(np.min(delay_per_m)),
                 edge / float(np.min(doppler_per_m)),
             ]
         )
@@ -1141,6 +1143,23 @@ def _outline_points(outline: NDArray[np.float64], z: float) -> NDArray:
     o, u, v = outline[0], outline[1] - outline[0], outline[3] - outline[0]
     pts = [o + a * u + b * v for b in (0.0, 0.5, 1.0) for a in (0.0, 0.5, 1.0)]
     return _lift(np.array(pts), z)
+
+
+def window_transform_length(n_samples: int) -> int:
+    """Length of the inverse transform that cuts a patch's fast-time window from the data.
+
+    The data's own length ``n`` may hold a large prime factor (a CPHD's sample count is
+    the writer's), which makes its transform several times slower than a length of small
+    factors. The data's spectrum, zero-padded about its centre to ``n' =
+    next_fast_len(n) >= n``, transforms to the same band-limited traces sampled at
+    ``dt n / n'`` (exactly: the same trigonometric polynomial, its samples scaled by
+    ``n' / n``). A patch whose window is narrower than the data is cut from those
+    samples (:class:`~sarmotion.collection.extract.PatchBuilder`); its radar has the
+    span ``n' df`` and its window covers ``n_samples dt n / n'``.
+    """
+    from scipy.fft import next_fast_len
+
+    return int(next_fast_len(int(n_samples)))
 
 
 def _window_samples(half_s: float, dt: float, n_max: int) -> int:
