@@ -113,7 +113,13 @@ def analyze(
     with timed(timings, "images"):
         sep = detection.separation
         stat_img = stationary_image(
-            traces, sep, movers, detection.image.grid, progress=progress, device=opts.device
+            traces,
+            sep,
+            movers,
+            detection.image.grid,
+            progress=progress,
+            device=opts.device,
+            method=opts.image_method or "exact",
         )
         movers = mover_images(movers, stat_img, opts, acquisition=acq)
     with timed(timings, "stationary_targets"):

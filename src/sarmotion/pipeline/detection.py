@@ -149,7 +149,11 @@ def preliminary_image(
     """``eq:image`` of the data on the square scene grid of ``options`` (resolved)."""
     grid = scene_grid(traces, size_m=options.image_size_m, spacing_m=options.spacing_m)
     return backproject(
-        traces, grid, progress=staged(progress, "preliminary image"), device=options.device
+        traces,
+        grid,
+        progress=staged(progress, "preliminary image"),
+        device=options.device,
+        method=options.image_method or "exact",
     )
 
 

@@ -109,6 +109,15 @@ class AnalysisOptions:
         Where the images (preliminary, stationary, each mover's) are backprojected:
         ``"cuda"`` on an NVIDIA GPU (``backproject(device="cuda")``, the ``sarmotion[gpu]``
         extra), the same sum to its own accuracy. Default ``"cpu"``.
+    image_method : {"exact", "ffbp"} or None
+        How the scene images (preliminary and stationary) are backprojected
+        (:func:`~sarmotion.imaging.backproject`'s ``method``): ``"exact"`` the sum over
+        every pulse at every pixel; ``"ffbp"`` fast factorised backprojection where its
+        cost model predicts a gain (else exact), to its error budget
+        (:mod:`sarmotion.imaging.ffbp`). ``None`` (default): exact for one analysis,
+        ``"ffbp"`` for the patches of a collection on the CPU, whose halo images are
+        large (:func:`~sarmotion.collection.run.analyze_patch`). A mover's own image is
+        always exact.
 
     Notes
     -----
@@ -137,6 +146,7 @@ class AnalysisOptions:
     trajectory: bool = True
     sub_aperture_deg: float = 1.0
     device: str = "cpu"
+    image_method: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.separation, SeparationOptions):
@@ -175,6 +185,10 @@ class AnalysisOptions:
         positive(self.sub_aperture_deg, "sub_aperture_deg", unit="degrees")
         if self.device not in ("cpu", "cuda"):
             raise ValueError(f"device must be 'cpu' or 'cuda', got {self.device!r}")
+        if self.image_method not in (None, "exact", "ffbp"):
+            raise ValueError(
+                f"image_method must be 'exact', 'ffbp' or None, got {self.image_method!r}"
+            )
 
     @property
     def method(self) -> str | None:

@@ -150,13 +150,15 @@ def stationary_image(
     *,
     progress: ProgressCallback | None = None,
     device: str = "cpu",
+    method: str = "exact",
 ) -> Image:
     """``eq:image`` of the stationary traces: ``L``, or ``M`` minus the movers' traces.
 
     ``L`` less the traces of the movers found in the stationary band
     (:mod:`sarmotion.pipeline.defocused`), whose echoes the separation left there.
 
-    ``device``: where to backproject (:func:`~sarmotion.imaging.backproject`). Traces
+    ``device``, ``method``: where and how to backproject
+    (:func:`~sarmotion.imaging.backproject`). Traces
     that are zero (a separation that found no stationary target) image to zero.
     """
     if separation.stationary is not None:
@@ -170,7 +172,11 @@ def stationary_image(
     if not np.any(data):
         return Image(values=np.zeros(grid.shape, np.complex128), grid=grid)
     return backproject(
-        traces.with_data(data), grid, progress=staged(progress, "stationary image"), device=device
+        traces.with_data(data),
+        grid,
+        progress=staged(progress, "stationary image"),
+        device=device,
+        method=method,
     )
 
 
