@@ -250,6 +250,7 @@ INDEX: dict[str, tuple[str, ...]] = {
     "separation.transforms": ("test_transforms.py",),
     # simulation
     "simulation.collection": ("test_collection_cphd.py",),
+    "simulation.echoes": ("test_echoes.py",),
     "simulation.forward": ("test_simulate.py", "test_signals.py"),
     "simulation.paths": ("test_paths.py", "test_acceleration.py", "test_turns.py"),
     "simulation.scene": ("test_scene.py", "test_fuzz_scene.py"),
