@@ -172,6 +172,14 @@ def analyse(args: argparse.Namespace, path: Path) -> dict:
         "movers_found": found,
         "false_movers": false,
         "missed": missed,
+        "fits": [
+            {
+                "position_m": [float(v) for v in m.position_m[:2]],
+                "velocity_mps": [float(v) for v in m.velocity_mps],
+                "patches": [int(i) for i in where],
+            }
+            for m, where in result.movers
+        ],
         "stationary": len(points),
         "stationary_near": near,
         "stationary_listed": len(result.stationary),

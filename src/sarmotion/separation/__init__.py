@@ -17,7 +17,13 @@ is :mod:`sarmotion.paper.rank`.
 """
 
 from .annihilation import separate_annihilation
-from .candidates import NOISE_FALSE_ALARM, doppler_contrast_db, noise_only, stationary_candidates
+from .candidates import (
+    NOISE_FALSE_ALARM,
+    doppler_contrast_db,
+    noise_level,
+    noise_only,
+    stationary_candidates,
+)
 from .combined import aligned_constant_part, default_half_window, separate_combined
 from .dispatch import METHODS, SeparationOptions, default_method, separate
 from .quality import mover_trace_coverage, quality_against_truth, separation_quality
@@ -65,6 +71,7 @@ __all__ = [
     "separation_quality",
     "slow_time_difference",
     "stationary_candidates",
+    "noise_level",
     "noise_only",
     "NOISE_FALSE_ALARM",
     "transform_minus",
