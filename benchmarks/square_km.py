@@ -157,6 +157,7 @@ def analyse(args: argparse.Namespace, path: Path) -> dict:
             stages[k] = stages.get(k, 0.0) + float(v)
     kept = sorted(int(p.pulses.size) for p in plan.patches)
     return {
+        "label": args.label,
         "side_m": args.side,
         "azimuth_deg": args.azimuth,
         "oversample": args.oversample,
@@ -193,16 +194,17 @@ def analyse(args: argparse.Namespace, path: Path) -> dict:
 
 def table(rows: list[dict]) -> str:
     head = (
-        "| side (m) | look az (deg) | pulses x samples | patches (beyond) | pulses kept "
+        "| code | side (m) | look az (deg) | pulses x samples | patches (beyond) | pulses kept "
         "(min/median/max) | movers found | false | stationary within a cell | wall (s) "
         "| CPU (s) | peak RSS (MiB) | km²/h |\n"
-        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     )
     lines = []
     for r in rows:
         kept = "/".join(str(v) for v in r["pulses_kept"])
         lines.append(
-            f"| {r['side_m']:g} | {r['azimuth_deg']:g} | {r['n_pulses']} x {r['n_samples']} "
+            f"| {r.get('label', '')} | {r['side_m']:g} | {r['azimuth_deg']:g} "
+            f"| {r['n_pulses']} x {r['n_samples']} "
             f"| {r['patches']} ({r['patches_beyond']}) | {kept} "
             f"| {r['movers_found']}/{r['movers']} | {r['false_movers']} "
             f"| {r['stationary_near']}/{r['stationary']} | {r['wall_s']:.0f} | {r['cpu_s']:.0f} "
@@ -214,7 +216,7 @@ def table(rows: list[dict]) -> str:
 def write_table(path: Path, rows: list[dict]) -> None:
     """Write ``rows``' table into ``path``, keeping the text around an earlier table."""
     text = path.read_text() if path.exists() else ""
-    start = text.find("| side (m)")
+    start = text.find("| code | side (m)")
     if start < 0:
         head = (
             "# A square kilometre at a realistic pulse rate\n\n"
@@ -240,6 +242,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=11)
     parser.add_argument("--cache", type=Path, required=True, help="folder of simulated files")
     parser.add_argument("--out", type=Path, default=HERE / "results")
+    parser.add_argument(
+        "--label", default="", help="the code's name in the table (e.g. a commit); rows by it"
+    )
     parser.add_argument("--analyse-only", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
@@ -257,8 +262,10 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     store = args.out / "square_km.json"
     rows = json.loads(store.read_text()) if store.exists() else []
-    key = ("side_m", "azimuth_deg", "oversample", "seed")
-    rows = [r for r in rows if tuple(r[k] for k in key) != tuple(row[k] for k in key)] + [row]
+    key = ("label", "side_m", "azimuth_deg", "oversample", "seed")
+    rows = [r for r in rows if tuple(r.get(k, "") for k in key) != tuple(row[k] for k in key)] + [
+        row
+    ]
     store.write_text(json.dumps(rows, indent=1) + "\n")
     write_table(args.out / "square_km.md", rows)
     print(table(rows))
