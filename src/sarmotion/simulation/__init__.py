@@ -9,10 +9,13 @@
   longer range window, for long acquisitions;
 - :mod:`~sarmotion.simulation.signals` — chirps, Gaussian pulses, range compression;
 - :mod:`~sarmotion.simulation.collection` — large constant-density scenes computed a
-  block of pulses at a time (:class:`CollectionScene`), never held whole.
+  block of pulses at a time (:class:`CollectionScene`), never held whole;
+- :mod:`~sarmotion.simulation.echoes` — the summed echoes of many straight-moving
+  points in one compiled pass (:func:`point_echoes`), which those blocks use.
 """
 
 from .collection import CollectionScene, collection_acquisition, random_collection
+from .echoes import point_echoes
 from .forward import Simulation, add_noise, inject, simulate, simulate_phase_history
 from .paths import AcceleratingTarget, PathTarget, TurningTarget, radar_with_range_window
 from .scene import (
@@ -45,4 +48,5 @@ __all__ = [
     "random_scene",
     "simulate",
     "simulate_phase_history",
+    "point_echoes",
 ]
