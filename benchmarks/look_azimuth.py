@@ -104,6 +104,60 @@ def acquisition(side_m: float, azimuth_deg: float, oversample: float) -> Acquisi
     return Acquisition(trajectory=traj, radar=radar, reference_point_m=np.zeros(3))
 
 
+def weak_scatterers(rng: np.random.Generator, half_m: float, count: int) -> list[PointTarget]:
+    """``count`` scatterers of amplitude ``CLUTTER_AMPLITUDE``, random phase, uniform in the
+    square of half-side ``half_m``."""
+    return [
+        PointTarget(position_m=p, reflectivity=CLUTTER_AMPLITUDE * np.exp(2j * np.pi * ph))
+        for p, ph in zip(
+            rng.uniform(-half_m, half_m, size=(count, 2)), rng.uniform(0, 1, count), strict=True
+        )
+    ]
+
+
+def draw_mover(
+    rng: np.random.Generator,
+    position_m,
+    half_m: float,
+    t_half_s: float,
+    look_rad: float,
+    slowest_mps: float,
+    label: str,
+) -> PointTarget:
+    """A unit mover at ``position_m``, staying in the square over the aperture.
+
+    Speed uniform from ``slowest_mps`` to 15 m/s (less where the square's edge is nearer
+    than 0.9 of what that speed covers in ``t_half_s``), heading within 60 degrees of the
+    line of sight (``look_rad``, either way): a range speed of at least half the speed,
+    not the slow-range-speed regime.
+    """
+    room = half_m - np.max(np.abs(position_m))
+    speed = rng.uniform(slowest_mps, min(15.0, max(slowest_mps, 0.9 * room / t_half_s)))
+    phi = look_rad + rng.choice([0.0, np.pi]) + rng.uniform(-np.pi / 3, np.pi / 3)
+    return PointTarget(
+        position_m=position_m,
+        velocity_mps=(speed * np.cos(phi), speed * np.sin(phi)),
+        reflectivity=np.exp(2j * np.pi * rng.uniform()),
+        label=label,
+    )
+
+
+def points_within_a_cell(acq, result, points) -> int:
+    """How many of ``points`` have a listed stationary target within a resolution cell."""
+    cells = resolution(acq)
+    e_r = result.range_direction
+    e_c = np.array([-e_r[1], e_r[0]])
+    listed = np.array([t.position_m for t in result.stationary]).reshape(-1, 2)
+    near = 0
+    for t in points:
+        d = listed - t.position_m[:2]
+        if d.size and np.any(
+            (np.abs(d @ e_r) <= cells.ground_range_m) & (np.abs(d @ e_c) <= cells.cross_range_m)
+        ):
+            near += 1
+    return near
+
+
 def scene(side_m: float, azimuth_deg: float, oversample: float, clutter: int, seed: int):
     """The seeded scene (module notes) and its declared square."""
     acq = acquisition(side_m, azimuth_deg, oversample)
@@ -113,12 +167,7 @@ def scene(side_m: float, azimuth_deg: float, oversample: float, clutter: int, se
     corners = 0.9 * square
     inner = rng.uniform(-0.7 * half, 0.7 * half, size=(4, 2))
     points = [PointTarget(position_m=p) for p in np.vstack([corners, inner])]
-    weak = [
-        PointTarget(position_m=p, reflectivity=CLUTTER_AMPLITUDE * np.exp(2j * np.pi * ph))
-        for p, ph in zip(
-            rng.uniform(-half, half, size=(clutter, 2)), rng.uniform(0, 1, clutter), strict=True
-        )
-    ]
+    weak = weak_scatterers(rng, half, clutter)
     t_half = float(np.max(np.abs(acq.trajectory.slow_times_s)))
     movers = []
     places = [
@@ -129,20 +178,7 @@ def scene(side_m: float, azimuth_deg: float, oversample: float, clutter: int, se
     ]
     look = np.deg2rad(azimuth_deg)  # e_r's direction
     for k, p in enumerate(places):
-        room = half - np.max(np.abs(p))  # stays in the square over the aperture
-        top = min(15.0, max(5.0, 0.9 * room / t_half))
-        speed = rng.uniform(5.0, top)
-        # within 60 degrees of the line of sight, either way: a range speed of at least
-        # half the speed (2.5 m/s), not the slow-range-speed regime
-        phi = look + rng.choice([0.0, np.pi]) + rng.uniform(-np.pi / 3, np.pi / 3)
-        movers.append(
-            PointTarget(
-                position_m=p,
-                velocity_mps=(speed * np.cos(phi), speed * np.sin(phi)),
-                reflectivity=np.exp(2j * np.pi * rng.uniform()),
-                label=f"mover {k + 1}",
-            )
-        )
+        movers.append(draw_mover(rng, p, half, t_half, look, 5.0, f"mover {k + 1}"))
     meta = {"source": "simulation", "scene": f"look azimuth {azimuth_deg:g} deg, side {side_m:g} m"}
     sc = CollectionScene(
         acquisition=acq,
@@ -218,17 +254,7 @@ def run_case(
         # the region's cores (those beyond it search for movers only)
         held = np.any([p.inside(probe) for p in plan.patches if not p.movers_only], axis=0)
     found, missed, false = score_movers(acq, sc.movers, [m for m, _ in result.movers])
-    cells = resolution(acq)
-    e_r = result.range_direction
-    e_c = np.array([-e_r[1], e_r[0]])
-    listed = np.array([t.position_m for t in result.stationary]).reshape(-1, 2)
-    near = 0
-    for t in points:
-        d = listed - t.position_m[:2]
-        if d.size and np.any(
-            (np.abs(d @ e_r) <= cells.ground_range_m) & (np.abs(d @ e_c) <= cells.cross_range_m)
-        ):
-            near += 1
+    near = points_within_a_cell(acq, result, points)
     row: dict = {}
     if reference:  # today's analysis of the whole traces, its image the declared square
         from sarmotion.pipeline import AnalysisOptions, analyze

@@ -48,10 +48,16 @@ ROOT = HERE.parent
 sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(HERE))
 
-from look_azimuth import CLUTTER_AMPLITUDE, SNR_DB, acquisition, score_movers  # noqa: E402
+from look_azimuth import (  # noqa: E402
+    SNR_DB,
+    acquisition,
+    draw_mover,
+    points_within_a_cell,
+    score_movers,
+    weak_scatterers,
+)
 
 from sarmotion.collection import CollectionOptions, analyze_collection  # noqa: E402
-from sarmotion.imaging import resolution  # noqa: E402
 from sarmotion.io import open_cphd_blocks, write_cphd_blocks  # noqa: E402
 from sarmotion.simulation import CollectionScene, PointTarget  # noqa: E402
 
@@ -66,30 +72,13 @@ def scene(args: argparse.Namespace) -> tuple[CollectionScene, np.ndarray]:
         PointTarget(position_m=p, label=f"point {k}")
         for k, p in enumerate(rng.uniform(-0.9 * half, 0.9 * half, size=(args.points, 2)))
     ]
-    weak = [
-        PointTarget(position_m=p, reflectivity=CLUTTER_AMPLITUDE * np.exp(2j * np.pi * ph))
-        for p, ph in zip(
-            rng.uniform(-half, half, size=(args.clutter, 2)),
-            rng.uniform(0, 1, args.clutter),
-            strict=True,
-        )
-    ]
+    weak = weak_scatterers(rng, half, args.clutter)
     t_half = float(np.max(np.abs(acq.trajectory.slow_times_s)))
     look = np.deg2rad(args.azimuth)  # e_r's direction
     movers = []
     for k in range(args.movers):
         p = rng.uniform(-0.7 * half, 0.7 * half, 2)
-        room = half - np.max(np.abs(p))
-        speed = rng.uniform(3.0, min(15.0, max(3.0, 0.9 * room / t_half)))
-        phi = look + rng.choice([0.0, np.pi]) + rng.uniform(-np.pi / 3, np.pi / 3)
-        movers.append(
-            PointTarget(
-                position_m=p,
-                velocity_mps=(speed * np.cos(phi), speed * np.sin(phi)),
-                reflectivity=np.exp(2j * np.pi * rng.uniform()),
-                label=f"mover {k + 1}",
-            )
-        )
+        movers.append(draw_mover(rng, p, half, t_half, look, 3.0, f"mover {k + 1}"))
     meta = {"source": "simulation", "scene": f"square km benchmark, side {args.side:g} m"}
     sc = CollectionScene(
         acquisition=acq,
@@ -139,18 +128,8 @@ def analyse(args: argparse.Namespace, path: Path) -> dict:
     rss_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     plan = result.plan
     found, missed, false = score_movers(acq, sc.movers, [m for m, _ in result.movers])
-    cells = resolution(acq)
-    e_r = result.range_direction
-    e_c = np.array([-e_r[1], e_r[0]])
-    listed = np.array([t.position_m for t in result.stationary]).reshape(-1, 2)
     points = [t for t in sc.stationary if abs(t.reflectivity) == 1.0]
-    near = 0
-    for t in points:
-        d = listed - t.position_m[:2]
-        if d.size and np.any(
-            (np.abs(d @ e_r) <= cells.ground_range_m) & (np.abs(d @ e_c) <= cells.cross_range_m)
-        ):
-            near += 1
+    near = points_within_a_cell(acq, result, points)
     stages: dict[str, float] = {}
     for pr in result.patches:
         for k, v in pr.timings_s.items():

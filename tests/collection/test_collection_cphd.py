@@ -125,7 +125,7 @@ def test_blocks_are_the_forward_model_plus_noise_of_the_stated_level(scene):
     targets = [*scene.stationary, *scene.movers]
     whole = simulate_phase_history(targets, acq.trajectory, acq.radar, acq.reference_point_m)
     n = acq.n_pulses
-    # to the rounding of the travel times (1e-9 rad a term: simulation/echoes.py)
+    # to the rounding of the travel times (a few 1e-9 rad a term: simulation/echoes.py)
     bound = 1e-8 * sum(abs(t.reflectivity) for t in targets) * acq.radar.spectral_weights().max()
     assert np.allclose(clean.phase_history(0, n), whole, rtol=0, atol=bound)
     noise = scene.phase_history(0, n) - whole

@@ -127,20 +127,8 @@ def noise_level(image_power: ArrayLike, *, n_cells: float, false_alarm: float) -
 def noise_only(image_values: ArrayLike, *, n_cells: float, false_alarm: float) -> bool:
     """Whether an image's brightest pixel is no brighter than noise alone would make it.
 
-    Its largest ``|I|^2`` is at most :func:`noise_level`.
-
-    Parameters
-    ----------
-    image_values : (ny, nx) array_like
-        Complex image.
-    n_cells : float
-        Independent resolution cells in the image (> 0).
-    false_alarm : float
-        ``a`` in (0, 1).
-
-    Returns
-    -------
-    bool
+    Its largest ``|I|^2`` is at most :func:`noise_level` (same ``n_cells`` and
+    ``false_alarm``); ``image_values`` is the complex image, shape (ny, nx).
     """
     power = np.abs(np.asarray(image_values)) ** 2
     if power.size == 0:
