@@ -292,6 +292,40 @@ def test_a_patch_images_every_stationary_echo_its_traces_hold(scene):
         assert _patch_options(p, OPTIONS.analysis, False, halo=False).image_size_m == p.size_m
 
 
+def test_a_patch_lists_its_core_from_an_image_of_its_core(scene, monkeypatch):
+    """The stationary image that lists a patch's targets and fills the mosaic covers the
+    core's box and its margin, not the halo the separation images; the core's targets
+    are the same as from the halo's image (here points of one amplitude: the same
+    brightest pixel), and the mosaic's pixels the same to the images' float32 rounding."""
+    import sarmotion.collection.run as run
+    from sarmotion.collection.extract import extract_patches
+
+    plan = plan_patches(TracesBlocks(scene), OPTIONS, region_m=REGION)
+    traces = extract_patches(TracesBlocks(scene), plan.patches)
+    opts = dataclasses.replace(OPTIONS.analysis, image_method="exact")
+    for p, tr in zip(plan.patches, traces, strict=True):
+        box = run.stationary_box(tr, p)
+        slim, res = run.analyze_patch(tr, p, opts)
+        g = res.stationary_image.grid
+        x0, x1, y0, y1 = g.extent
+        dx, dy = g.spacing_m
+        # within the box, and over the core to a pixel
+        assert box[0] - dx <= x0 <= p.core_m[0] and p.core_m[2] <= x1 <= box[2] + dx
+        assert box[1] - dy <= y0 <= p.core_m[1] and p.core_m[3] <= y1 <= box[3] + dy
+        assert g.shape[0] * g.shape[1] < 0.5 * res.preliminary_image.grid.shape[0] ** 2
+        with monkeypatch.context() as m:
+            m.setattr(run, "stationary_box", lambda traces, patch: None)
+            halo, _ = run.analyze_patch(tr, p, opts)
+        assert [t.position_m for t in slim.stationary] == [t.position_m for t in halo.stationary]
+        assert np.allclose([t.level for t in slim.stationary], [t.level for t in halo.stationary],
+                           rtol=1e-6)  # fmt: skip
+        assert slim.image is not None and halo.image is not None
+        assert np.array_equal(slim.image.x_m, halo.image.x_m)
+        assert np.array_equal(slim.image.y_m, halo.image.y_m)
+        peak = float(halo.image.magnitude.max())
+        assert np.max(np.abs(slim.image.magnitude - halo.image.magnitude)) <= 1e-5 * peak
+
+
 def test_the_false_alarm_rate_is_shared_by_the_data_the_patches_report(scene):
     """Patch ``p`` tests at ``alpha_p = alpha min(1, |H_p| / sum |K_q|)``: a null candidate
     anywhere in the data it holds (``H_p``) is reported only where its band keeps it

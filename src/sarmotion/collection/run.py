@@ -4,7 +4,8 @@
 patches (:func:`~sarmotion.collection.extract.extract_patches`; a group is as many
 patches as fit in ``memory_mb``), submits each patch as a task running
 :func:`~sarmotion.pipeline.analyze` on its traces (its image: its halo, the ground its
-traces hold, its stationary targets listed on the core; its share of the false-alarm
+traces hold; its stationary image only its core's box, where its stationary targets are
+listed, :func:`stationary_box`; its share of the false-alarm
 rate, :mod:`~sarmotion.collection.plan` notes; only the movers whose echoes its band
 passes estimated beyond a first fit, :func:`in_band`), and gathers the results as
 they complete. Then one mover per range history, stationary targets de-duplicated and
@@ -54,6 +55,7 @@ from ..core.constants import C
 from ..core.geometry import Trajectory, look_geometry
 from ..core.progress import ProgressCallback, report
 from ..core.traces import Traces
+from ..imaging import resolution
 from ..imaging.grid import Image
 from ..motion import PointFit
 from ..pipeline import AnalysisOptions, AnalysisResult, NotEstimated, analyze
@@ -83,12 +85,20 @@ __all__ = [
     "analyze_collection",
     "patch_false_alarm",
     "drop_smear",
+    "stationary_box",
 ]
 
 log = logging.getLogger(__name__)
 
 #: Most pixels a side of the stationary mosaic (it is coarsened beyond).
 MOSAIC_MAX_PIXELS = 4096
+
+#: Resolution cells (the larger of ground range and cross range) by which a patch's
+#: stationary image extends beyond its core's box (:func:`stationary_box`): a target of
+#: the core has its main lobe (two cells either side, null to null) and the side lobes
+#: next to it in the image, so that its peak is a local maximum of the image and is not
+#: cut at the image's edge.
+CORE_IMAGE_MARGIN_CELLS = 4.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -350,7 +360,8 @@ def analyze_patch(
     keep = None if single else in_band(traces, patch)
     method = options.separation.method or default_method(traces)
     opts = _patch_options(patch, options, single, traces.trajectory, halo=method != "rpca")
-    result = analyze(traces, opts, keep=keep, progress=progress)
+    box = None if single else stationary_box(traces, patch)
+    result = analyze(traces, opts, keep=keep, stationary_box_m=box, progress=progress)
     if single:  # the merge drops a collection's smear (one smear rule for every size)
         result = drop_smear(result)
     entries = describe(result) if describe is not None else [{} for _ in result.movers]
@@ -398,6 +409,23 @@ def analyze_patch(
         not_estimated=tuple(result.movers_not_estimated),
     )
     return slim, result
+
+
+def stationary_box(traces: Traces, patch: Patch) -> tuple[float, float, float, float]:
+    """The box ``(x0, y0, x1, y1)`` (m) of a patch's stationary image: its core's.
+
+    The core's box widened by ``CORE_IMAGE_MARGIN_CELLS`` resolution cells of its
+    traces either side. The separation still models the halo's stationary targets on
+    the preliminary image of the halo (:func:`_patch_options`); only the image that lists
+    the core's targets and fills the mosaic is cut to the core, whose pixels are all the
+    patch reports. Its levels are relative to the brightest pixel of that box (the
+    collection's listing rule then applies the threshold to the brightest target of the
+    mosaic, :func:`_merge`), and so is a mover's ``image_peak_db``.
+    """
+    cells = resolution(traces)
+    margin = CORE_IMAGE_MARGIN_CELLS * max(cells.ground_range_m, cells.cross_range_m)
+    x0, y0, x1, y1 = patch.core_m
+    return (x0 - margin, y0 - margin, x1 + margin, y1 + margin)
 
 
 def _core_image(

@@ -27,7 +27,8 @@
    ``T_-^{u, rho}``: the mover's own trace ``D_q``, and ``R <- R - D_q``;
 5. **trajectory** of each mover by the phase-space algorithm
    (:func:`sarmotion.motion.estimate_trajectory`) from its own traces;
-6. **images**: the stationary image from ``L`` (``M - S``), and each mover's image
+6. **images**: the stationary image from ``L`` (``M - S``) on the preliminary image's
+   pixels (or those within ``stationary_box_m``), and each mover's image
    ``eq:imagecompu`` from its own traces compensated at its estimated velocity;
 7. **stationary targets**: bright points of the stationary image.
 
@@ -51,8 +52,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numpy as np
+
 from ..core.progress import ProgressCallback
 from ..core.traces import Traces
+from ..imaging import ImageGrid
 from ..motion import PointFit
 from ._timing import timed
 from .detection import detect
@@ -69,6 +73,7 @@ def analyze(
     options: AnalysisOptions | None = None,
     *,
     keep: Callable[[PointFit], bool] | None = None,
+    stationary_box_m: tuple[float, float, float, float] | None = None,
     progress: ProgressCallback | None = None,
 ) -> AnalysisResult:
     """Separate, estimate and image the stationary and moving targets of ``traces``.
@@ -91,6 +96,11 @@ def analyze(
     keep : callable, optional
         ``keep(fit)``: whether a mover's fit is estimated further
         (:func:`~sarmotion.pipeline.estimate_movers`); default every one.
+    stationary_box_m : (x0, y0, x1, y1), optional
+        The stationary image (and so its listing, whose levels are relative to its
+        brightest pixel) is the preliminary image's pixels within this box (m); default
+        all of them. A collection's patch lists only its core's targets
+        (:func:`sarmotion.collection.analyze_patch`).
     progress : callable, optional
         ``progress(stage, done, total)`` during the long stages.
 
@@ -116,7 +126,7 @@ def analyze(
             traces,
             sep,
             movers,
-            detection.image.grid,
+            _within(detection.image.grid, stationary_box_m),
             progress=progress,
             device=opts.device,
             method=opts.image_method or "exact",
@@ -141,3 +151,19 @@ def analyze(
         movers_not_estimated=stage.not_estimated,
         stationary_sidelobes=sidelobes,
     )
+
+
+def _within(grid: ImageGrid, box_m: tuple[float, float, float, float] | None) -> ImageGrid:
+    """``grid``'s pixels within ``box_m`` ``(x0, y0, x1, y1)`` (m), at least two a side."""
+    if box_m is None:
+        return grid
+    x0, y0, x1, y1 = box_m
+
+    def axis(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
+        i = np.flatnonzero((v >= lo) & (v <= hi))
+        if i.size < 2:  # the box misses the grid or is under two pixels: its nearest two
+            j = int(np.clip(np.searchsorted(v, 0.5 * (lo + hi)), 1, v.size - 1))
+            return v[j - 1 : j + 1]
+        return v[i[0] : i[-1] + 1]
+
+    return ImageGrid(x_m=axis(grid.x_m, x0, x1), y_m=axis(grid.y_m, y0, y1))
