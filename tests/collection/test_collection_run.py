@@ -326,6 +326,39 @@ def test_a_patch_lists_its_core_from_an_image_of_its_core(scene, monkeypatch):
         assert np.max(np.abs(slim.image.magnitude - halo.image.magnitude)) <= 1e-5 * peak
 
 
+@pytest.mark.parametrize("azimuth_deg", [0.0, 30.0, 135.0])
+def test_a_patch_outline_holds_every_stationary_echo_its_traces_hold(azimuth_deg):
+    """Where a slow-time filter bounds a patch's band (a 400 m scene at 1.6 times its
+    pulse rate: patches of a fraction of it), its halo outline, the only pixels of its
+    preliminary image, holds every ground point whose echo its window and band hold,
+    the square image holds the outline, and the outline is a fraction of the square."""
+    from sarmotion.collection.run import _patch_options
+    from sarmotion.imaging import in_outline
+
+    acq = _look_azimuth_acquisition(azimuth_deg, side=400.0)
+    traces = Traces(
+        data=np.zeros((acq.n_pulses, acq.radar.n_samples), np.complex64),
+        trajectory=acq.trajectory,
+        radar=acq.radar,
+        reference_point_m=acq.reference_point_m,
+        metadata={"image_area_m": [[-200, -200], [200, -200], [200, 200], [-200, 200]]},
+    )
+    plan = plan_patches(TracesBlocks(traces), CollectionOptions())
+    points = _scene_points(plan, n=81)
+    outlined = [p for p in plan.patches if p.halo_outline_m is not None]
+    assert len(outlined) == len(plan.patches) > 4
+    for p in outlined[:: max(1, len(outlined) // 8)]:
+        held = _held(traces, p, points)
+        assert held.any()
+        assert np.all(in_outline(points[held], p.halo_outline_m)), p.index
+        size = _patch_options(p, AnalysisOptions(), False).image_size_m
+        reach = np.abs(p.halo_outline_m - p.centre_m[:2]).max()
+        assert reach <= 0.5 * size + 1e-9
+        o = p.halo_outline_m
+        u, v = o[1] - o[0], o[3] - o[0]
+        assert abs(u[0] * v[1] - u[1] * v[0]) < 0.6 * size**2
+
+
 def test_the_false_alarm_rate_is_shared_by_the_data_the_patches_report(scene):
     """Patch ``p`` tests at ``alpha_p = alpha min(1, |H_p| / sum |K_q|)``: a null candidate
     anywhere in the data it holds (``H_p``) is reported only where its band keeps it
@@ -492,15 +525,15 @@ def test_candidates_beyond_max_movers_are_kept_in_the_document_and_said(scene, t
     assert (f"{sidelobes} dropped as a brighter target's sidelobes" in console) == (sidelobes > 0)
 
 
-def _look_azimuth_acquisition(azimuth_deg: float):
-    """benchmarks/look_azimuth.py's 100 m acquisition: a 2-degree X-band arc (9.6 GHz,
+def _look_azimuth_acquisition(azimuth_deg: float, side: float = 100.0):
+    """benchmarks/look_azimuth.py's acquisition (100 m): a 2-degree X-band arc (9.6 GHz,
     640 MHz) at 10 km ground range and 4 km height about ``azimuth_deg``, window and
     pulse rate sized for 1.6 times the side."""
     import math
 
     from sarmotion.core import Acquisition, C
 
-    side, over, ground, height = 100.0, 1.6, 10e3, 4e3
+    over, ground, height = 1.6, 10e3, 4e3
     cos_el = ground / math.hypot(ground, height)
     df = C / (2.0 * over * side * cos_el)
     radar = Radar(

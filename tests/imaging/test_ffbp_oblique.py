@@ -113,3 +113,51 @@ def test_window_ends_are_computed_exactly(gotcha, monkeypatch):
     assert fast.metadata["ffbp"]["path"] == "rotated"
     without = _ser_db(exact, fast.values)
     assert without < ffbp.TARGET_DB <= with_edges
+
+
+def _turned_outline(azimuth_deg: float, centre, depth_m: float, width_m: float) -> np.ndarray:
+    """A rectangle ``depth_m`` along the look and ``width_m`` across, about ``centre``."""
+    a = math.radians(azimuth_deg)
+    e_r, e_c = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
+    o = np.asarray(centre, float) - 0.5 * depth_m * e_r - 0.5 * width_m * e_c
+    return np.array([o, o + depth_m * e_r, o + depth_m * e_r + width_m * e_c, o + width_m * e_c])
+
+
+@pytest.mark.parametrize("azimuth_deg", [0.0, 30.0])
+def test_an_outline_forms_only_its_pixels_with_the_same_values(azimuth_deg):
+    # A patch's halo: a rectangle turned to the look, a fraction of the square grid. Every
+    # path forms the pixels within it with the values it forms without it (exact: the
+    # same sums; FFBP: to its accuracy against exact), and 0 outside; the rotated path
+    # factorises a smaller grid.
+    from sarmotion.imaging import in_outline
+
+    tr = _points(azimuth_deg)
+    grid = ImageGrid.square(size_m=256.0, spacing_m=0.25)
+    outline = _turned_outline(azimuth_deg, (5.0, -3.0), 60.0, 170.0)
+    xx, yy = np.meshgrid(grid.x_m, grid.y_m)
+    inside = in_outline(np.stack([xx, yy], axis=-1), outline)
+    assert 0.1 < inside.mean() < 0.25
+    exact = backproject(tr, grid)
+    cut = backproject(tr, grid, outline_m=outline)
+    assert not np.any(cut.values[~inside])
+    peak = np.abs(exact.values).max()
+    assert np.max(np.abs(cut.values[inside] - exact.values[inside])) <= 1e-6 * peak
+    fast = backproject(tr, grid, method="ffbp")
+    fast_cut = backproject(tr, grid, method="ffbp", outline_m=outline)
+    assert not np.any(fast_cut.values[~inside])
+    assert _ser_db(exact.values[inside], fast_cut.values[inside]) >= ffbp.TARGET_DB
+    info, whole = fast_cut.metadata["ffbp"], fast.metadata["ffbp"]
+    assert info["path"] == whole["path"]
+    if azimuth_deg:  # the rotated path: only the outline's box in its frame
+        assert np.prod(info["rotated_grid"]) < 0.5 * np.prod(whole["rotated_grid"])
+    else:  # the axis-aligned path: only the outline's box on the grid
+        assert fast_cut.metadata["outline_m"] == outline.tolist()
+
+
+def test_an_outline_must_be_a_parallelogram():
+    tr = _points(0.0)
+    grid = ImageGrid.square(size_m=20.0, spacing_m=0.5)
+    with pytest.raises(ValueError, match="parallelogram"):
+        backproject(tr, grid, outline_m=[[0, 0], [1, 0], [2, 2], [0, 1]])
+    with pytest.raises(ValueError, match=r"\(4, 2\)"):
+        backproject(tr, grid, outline_m=[[0, 0], [1, 0], [1, 1]])

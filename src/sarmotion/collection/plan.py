@@ -100,6 +100,12 @@ takes out only the targets that image holds: the patch's image is its halo
 core, in the window but off the core's box, does not stay in the moving part and lift
 the floor of every mover's ``g(u)`` statistic (measured at 1.3-1.5 dB on the look-azimuth
 benchmark, ``benchmarks/results/look_azimuth.md``); only the core's targets are listed.
+Where a slow-time filter bounds the band, the halo itself is a parallelogram turned to
+the look (``Patch.halo_outline_m``, :func:`halo_outline`: its sides the window's ends
+and the band's edges, linearised at the centre and widened by the linearisation's
+error), a fraction of the square that holds it at an oblique look; the preliminary
+image is formed only there (its pixels beyond are 0: the traces hold no echo from
+them).
 
 **False-alarm share.** The collection's false-alarm rate ``alpha`` is the probability of
 a false mover anywhere in it. Patch ``p``'s ``g(u)`` test finds a null candidate
@@ -158,6 +164,7 @@ __all__ = [
     "PatchPlan",
     "RegionError",
     "false_alarm_shares",
+    "halo_outline",
     "plan_patches",
 ]
 
@@ -296,6 +303,15 @@ class Patch:
         ground whose stationary echoes its traces hold (its *halo*: the fast-time window
         in range, the slow-time band up to the filter's stop band in cross range, within
         the unambiguous scene; module notes). None: the core's box.
+    halo_outline_m : (4, 2) ndarray or None
+        The halo itself, where a slow-time filter bounds it in cross range: the ground
+        parallelogram ``o, o + u, o + u + v, o + v`` (m) whose sides are the window's
+        ends (lines of equal delay) and the band's edges (lines of equal Doppler) about
+        the centre, at the aperture's centre, widened by their curvature and migration
+        over the halo and the aperture and a resolution cell (:func:`halo_outline`).
+        The separation's image is formed only there
+        (:func:`~sarmotion.collection.run.analyze_patch`). None: no filter (every Doppler
+        of the data: the halo is the square ``halo_m``).
     false_alarm_share : float
         Its share of the collection's false-alarm rate, in (0, 1] (module notes).
     movers_only : bool
@@ -315,6 +331,7 @@ class Patch:
     pulses: NDArray[np.int64]
     outline_m: NDArray[np.float64] | None = None
     halo_m: float | None = None
+    halo_outline_m: NDArray[np.float64] | None = None
     false_alarm_share: float = 1.0
     movers_only: bool = False
 
@@ -536,6 +553,57 @@ def _moving_delays(positions: NDArray, s: NDArray, point: NDArray, velocities: N
         where = point[None, :] + s[:, None] * np.r_[u, 0.0][None, :]
         out.append(travel_time(positions, where))
     return np.stack(out)
+
+
+def halo_outline(
+    positions_m: NDArray,
+    slow_times_s: NDArray,
+    centre_m: NDArray,
+    half_window_s: float,
+    edge_hz: float,
+    carrier_hz: float,
+    cell_m: float,
+) -> NDArray[np.float64]:
+    """The ground a patch's traces hold, as a parallelogram ``(4, 2)`` (m) about its centre.
+
+    The points ``x`` with ``|tau(s_0, x) - tau(s_0, c)| <= half_window_s`` and
+    ``|f(x) - f(c)| <= edge_hz`` (``f = f_o d tau / ds`` at the aperture's centre ``s_0``,
+    ``c`` the centre): to first order in ``x - c`` a parallelogram, whose sides are the
+    lines of equal delay and of equal Doppler at those bounds. It is widened on every side
+    by ``cell_m`` and by the first order's error, the most that the exact delay (at every
+    pulse: a point migrates in range over the aperture) and Doppler depart from it at the
+    parallelogram's corners and sides' midpoints, expressed in metres along each side's
+    normal: so it holds every such point to second order.
+    """
+    pos = np.asarray(positions_m, dtype=np.float64)
+    s = np.asarray(slow_times_s, dtype=np.float64)
+    c = np.asarray(centre_m, dtype=np.float64)
+    z = float(c[2])
+    j0 = int(np.argmin(np.abs(s)))
+
+    def offsets(xy: NDArray) -> tuple[NDArray, NDArray]:
+        """Delay offsets at every pulse (n, n_pulses) (s) and Doppler offsets (n,) (Hz)."""
+        rel = _delays(pos, _lift(xy, z)) - travel_time(pos, c)[None, :]
+        doppler = carrier_hz * np.gradient(rel, s, axis=1)[:, j0]
+        return rel, doppler
+
+    step = 1.0  # m: the gradients by differences over a metre (the delay is smooth)
+    rel, dop = offsets(c[None, :2] + step * np.array([[1.0, 0.0], [0.0, 1.0]]))
+    grad = np.array([rel[:, j0], dop]) / step  # rows: delay (s/m), Doppler (Hz/m)
+    inv = np.linalg.inv(grad)
+    bounds = np.array([half_window_s, edge_hz])
+    signs = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    corners = c[:2] + (signs * bounds) @ inv.T
+    probes = np.vstack([corners, 0.5 * (corners + np.roll(corners, -1, axis=0))])
+    lin = (probes - c[:2]) @ grad.T  # the first order at the probes
+    rel, dop = offsets(probes)
+    norm = np.linalg.norm(grad, axis=1)  # (s or Hz) per m along each side's normal
+    err_t = np.max(np.abs(rel - lin[:, :1]), axis=1) / norm[0]
+    err_f = np.abs(dop - lin[:, 1]) / norm[1]
+    widen = cell_m + float(max(err_t.max(), err_f.max()))
+    # each bound moved out by ``widen`` metres along its normal
+    bounds = bounds + widen * norm
+    return c[:2] + (signs * bounds) @ inv.T
 
 
 def _velocities(speed: float) -> NDArray:
@@ -909,6 +977,11 @@ def plan_patches(
         offsets = corners_ab @ to_look.T - (centre[:2] - rho)
         halo_side = max(float(hi_xy[0] - lo_xy[0]), float(hi_xy[1] - lo_xy[1]))
         halo_side = max(halo_side, 2.0 * float(np.max(np.abs(offsets))))
+        held = None
+        if taps.size > 1 and not single:
+            held = halo_outline(
+                pos, s, centre, 0.5 * n_samples * step_t, edge, radar.carrier_hz, cell_r
+            )
         patches.append(
             Patch(
                 index=len(patches),
@@ -922,6 +995,7 @@ def plan_patches(
                 taps=taps,
                 pulses=pulses,
                 halo_m=None if single else halo_side,
+                halo_outline_m=held,
                 movers_only=movers_only,
             )
         )

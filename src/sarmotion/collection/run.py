@@ -216,7 +216,9 @@ def _patch_options(
     """The analysis options of ``patch`` (unless one patch): its image, speeds and rate.
 
     - **Image**: where no ``image_size_m`` is given, the square that holds the patch's
-      halo (``patch.halo_m``: the ground whose stationary echoes its traces hold) when
+      halo (``patch.halo_m``: the ground whose stationary echoes its traces hold, and
+      its outline ``patch.halo_outline_m`` where there is one, outside which
+      :func:`analyze_patch` forms no pixel) when
       ``halo`` (a separation that models the stationary scene from the preliminary
       image, ``combined`` or ``annihilation``), else the core's box. A stationary
       target inside the window and band but outside the image is no candidate of such a
@@ -244,6 +246,9 @@ def _patch_options(
         out = dataclasses.replace(out, image_method="ffbp")
     if options.image_size_m is None:
         size = patch.halo_m if halo and patch.halo_m is not None else patch.size_m
+        if halo and patch.halo_outline_m is not None:  # the square holds the outline
+            reach = np.abs(np.asarray(patch.halo_outline_m) - patch.centre_m[:2]).max()
+            size = max(size, 2.0 * float(reach))
         out = dataclasses.replace(out, image_size_m=max(size, patch.size_m))
     if trajectory is not None and options.stationary_speed_mps is None:
         out = dataclasses.replace(
@@ -361,7 +366,15 @@ def analyze_patch(
     method = options.separation.method or default_method(traces)
     opts = _patch_options(patch, options, single, traces.trajectory, halo=method != "rpca")
     box = None if single else stationary_box(traces, patch)
-    result = analyze(traces, opts, keep=keep, stationary_box_m=box, progress=progress)
+    outline = None if single or method == "rpca" else patch.halo_outline_m
+    result = analyze(
+        traces,
+        opts,
+        keep=keep,
+        image_outline_m=outline,
+        stationary_box_m=box,
+        progress=progress,
+    )
     if single:  # the merge drops a collection's smear (one smear rule for every size)
         result = drop_smear(result)
     entries = describe(result) if describe is not None else [{} for _ in result.movers]

@@ -20,7 +20,7 @@
 """
 
 from .autofocus import AutofocusResult, apply_phase_correction, focus_mover, pga
-from .backprojection import backproject, backproject_phase_history, backproject_points
+from .backprojection import backproject, backproject_phase_history, backproject_points, in_outline
 from .exact_sum import exact_sum
 from .grid import Image, ImageGrid, default_scene_size_m, scene_grid
 from .peaks import find_peaks, parabolic_peak
@@ -45,6 +45,7 @@ __all__ = [
     "scene_grid",
     "backproject_phase_history",
     "backproject_points",
+    "in_outline",
     "find_peaks",
     "parabolic_peak",
     "point_response",

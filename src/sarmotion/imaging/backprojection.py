@@ -85,7 +85,13 @@ from ._bp_reference import run_numpy
 from ._bp_table import TABLES
 from .grid import Image, ImageGrid
 
-__all__ = ["accuracy_db", "backproject", "backproject_phase_history", "backproject_points"]
+__all__ = [
+    "accuracy_db",
+    "backproject",
+    "backproject_phase_history",
+    "backproject_points",
+    "in_outline",
+]
 
 
 Kernel = Literal["numba", "numpy"]
@@ -146,8 +152,9 @@ def _run_ffbp(
     grid: ImageGrid,
     alpha: float | None,
     progress: ProgressCallback | None,
+    outline: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.complex128], str, dict]:
-    """Fast factorised backprojection (:mod:`.ffbp`).
+    """Fast factorised backprojection (:mod:`.ffbp`); ``outline``: pixels needed only there.
 
     Exact backprojection when the float32 kernel is out of bounds for this geometry or the
     factorisation would not save work. The float32 kernel on sub-grids (``exact_for``)
@@ -179,7 +186,7 @@ def _run_ffbp(
     )  # fmt: skip
     values, info = ffbp_values(
         pulses, np.asarray(grid.x_m), np.asarray(grid.y_m), tile_for=tile_for, alpha=alpha,
-        progress=progress, exact_for=exact_for,
+        progress=progress, exact_for=exact_for, outline_m=outline,
     )  # fmt: skip
     if values is None:
         values, variant = _run_numba(st, traces, grid, progress)
@@ -210,6 +217,7 @@ def backproject(
     ffbp_oversampling: float | None = None,
     progress: ProgressCallback | None = None,
     device: Device = "cpu",
+    outline_m: ArrayLike | None = None,
 ) -> Image:
     """Backprojection image ``eq:image``, or ``eq:imagecompu`` with a velocity.
 
@@ -249,12 +257,100 @@ def backproject(
     device : {"cpu", "cuda"}
         ``"cuda"`` hands the call, with the same keywords, to
         ``sarmotion.imaging.cuda.backproject_cuda`` (the ``sarmotion[gpu]`` extra).
+    outline_m : (4, 2) array_like, optional
+        A ground parallelogram ``o, o + u, o + u + v, o + v`` (m) beyond which the traces
+        hold no echo (a collection patch's halo, :class:`~sarmotion.collection.Patch`):
+        the image is formed on the grid's pixels within its bounding box (on the rotated
+        FFBP path, within its box in the look's frame) and every pixel outside it is 0.
+        Inside it the values are those of the same method without it (FFBP's to its
+        error budget). Default: every pixel.
 
     Returns
     -------
     Image
         Complex image, shape ``grid.shape``, with ``velocity_mps`` and metadata.
     """
+    if outline_m is not None:
+        return _within_outline(
+            traces, grid, _as_outline(outline_m),
+            velocity_mps=velocity_mps, upsample=upsample, kernel=kernel, method=method,
+            ffbp_oversampling=ffbp_oversampling, progress=progress, device=device,
+        )  # fmt: skip
+    return _backproject(
+        traces, grid, velocity_mps=velocity_mps, upsample=upsample, kernel=kernel,
+        method=method, ffbp_oversampling=ffbp_oversampling, progress=progress, device=device,
+    )  # fmt: skip
+
+
+def _as_outline(outline_m: ArrayLike) -> NDArray[np.float64]:
+    q = np.asarray(outline_m, dtype=np.float64)
+    if q.shape != (4, 2) or not np.all(np.isfinite(q)):
+        raise ValueError(f"outline_m must be 4 finite ground corners (4, 2) (m), got {q.shape}")
+    u, v = q[1] - q[0], q[3] - q[0]
+    if not np.allclose(q[2], q[0] + u + v, atol=1e-6 * (1.0 + np.abs(q).max())):
+        raise ValueError("outline_m must be a parallelogram o, o + u, o + u + v, o + v")
+    if abs(u[0] * v[1] - u[1] * v[0]) <= 0.0:
+        raise ValueError("outline_m must have a positive area")
+    return q
+
+
+def in_outline(points_m: ArrayLike, outline_m: ArrayLike) -> NDArray[np.bool_]:
+    """Whether ground points ``(..., 2)`` lie in the parallelogram ``outline_m`` (sides in)."""
+    q = np.asarray(outline_m, dtype=np.float64)
+    p = np.asarray(points_m, dtype=np.float64)[..., :2] - q[0]
+    u, v = q[1] - q[0], q[3] - q[0]
+    det = u[0] * v[1] - u[1] * v[0]
+    a = (p[..., 0] * v[1] - p[..., 1] * v[0]) / det
+    b = (u[0] * p[..., 1] - u[1] * p[..., 0]) / det
+    tol = 1e-9
+    return (a >= -tol) & (a <= 1.0 + tol) & (b >= -tol) & (b <= 1.0 + tol)
+
+
+def _within_outline(
+    traces: Traces, grid: ImageGrid, outline: NDArray[np.float64], **keywords
+) -> Image:
+    """:func:`backproject` with ``outline_m``: the pixels of its box formed, the rest 0."""
+    lo, hi = outline.min(axis=0), outline.max(axis=0)
+    cols = np.flatnonzero((grid.x_m >= lo[0]) & (grid.x_m <= hi[0]))
+    rows = np.flatnonzero((grid.y_m >= lo[1]) & (grid.y_m <= hi[1]))
+    values = np.zeros(grid.shape, np.complex128)
+    meta: dict = {}
+    if cols.size and rows.size:
+        # at least two pixels a side (a grid's least), one more either side if the grid has it
+        c0, c1 = max(0, cols[0] - 1), min(grid.shape[1], cols[-1] + 2)
+        r0, r1 = max(0, rows[0] - 1), min(grid.shape[0], rows[-1] + 2)
+        if c1 - c0 < 2:
+            c0, c1 = (c0, c0 + 2) if c0 + 2 <= grid.shape[1] else (c1 - 2, c1)
+        if r1 - r0 < 2:
+            r0, r1 = (r0, r0 + 2) if r0 + 2 <= grid.shape[0] else (r1 - 2, r1)
+        sub = ImageGrid(x_m=grid.x_m[c0:c1], y_m=grid.y_m[r0:r1])
+        image = _backproject(traces, sub, outline=outline, **keywords)
+        values[r0:r1, c0:c1] = image.values
+        meta = dict(image.metadata)
+        vel = image.velocity_mps
+    else:
+        vel = np.zeros(2) if keywords["velocity_mps"] is None else np.asarray(
+            keywords["velocity_mps"], float)[:2]  # fmt: skip
+    xx, yy = np.meshgrid(grid.x_m, grid.y_m)
+    values[~in_outline(np.stack([xx, yy], axis=-1), outline)] = 0.0
+    meta["outline_m"] = outline.tolist()
+    return Image(values=values, grid=grid, velocity_mps=vel, metadata=meta)
+
+
+def _backproject(
+    traces: Traces,
+    grid: ImageGrid,
+    *,
+    velocity_mps: ArrayLike | None,
+    upsample: int,
+    kernel: Kernel,
+    method: Method,
+    ffbp_oversampling: float | None,
+    progress: ProgressCallback | None,
+    device: Device,
+    outline: NDArray[np.float64] | None = None,
+) -> Image:
+    """:func:`backproject` on every pixel of ``grid`` (``outline``: FFBP's clip, if any)."""
     if device == "cuda":
         return _backproject_cuda(
             traces, grid, velocity_mps=velocity_mps, upsample=upsample, kernel=kernel,
@@ -271,7 +367,7 @@ def backproject(
     st = make_setup(traces, velocity_mps, upsample)
     extra: dict = {}
     if method == "ffbp":
-        values, variant, extra = _run_ffbp(st, traces, grid, alpha, progress)
+        values, variant, extra = _run_ffbp(st, traces, grid, alpha, progress, outline)
     elif kernel == "numba":
         values, variant = _run_numba(st, traces, grid, progress)
     else:

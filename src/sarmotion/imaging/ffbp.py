@@ -1092,6 +1092,7 @@ def ffbp_values(
     progress: ProgressCallback | None = None,
     exact_for=None,
     kernels: CpuKernels = CPU_KERNELS,
+    outline_m: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.complex128] | None, dict]:
     """FFBP image on the axis-aligned grid ``x_m`` x ``y_m``; returns ``(values, info)``.
 
@@ -1129,6 +1130,10 @@ def ffbp_values(
     kernels : CpuKernels, optional
         What evaluates the plan: the CPU's compiled kernels by default, or an object with
         the same methods for another device (the table in ``pulses`` is the one it reads).
+    outline_m : (k, 2) ndarray, optional
+        Ground points (m) whose hull holds every pixel the caller needs: the rotated path
+        factorises only the part of the grid's footprint within their box in its frame
+        (the pixels beyond it are 0). Default: the whole grid.
 
     Returns
     -------
@@ -1174,7 +1179,8 @@ def ffbp_values(
         turned = DEFAULT_ALPHA if alpha is None else alpha
         values, info = _rotated_values(pulses, x, y, alpha=turned, budget=budget,
                                        exact_for=exact_for, tile_for=tile_for,
-                                       progress=progress, kernels=kernels)  # fmt: skip
+                                       progress=progress, kernels=kernels,
+                                       outline_m=outline_m)  # fmt: skip
         if values is not None:
             return values, info
     return None, {"path": "exact", "fallback": "exact (the factorisation would not save work here)"}
@@ -1399,7 +1405,7 @@ def resample_error(band: float, taps: int) -> float:
 
 def _rotated_values(
     pulses: FfbpPulses, x, y, *, tile_for, alpha, budget, progress, exact_for,
-    kernels=CPU_KERNELS,
+    kernels=CPU_KERNELS, outline_m=None,
 ):  # fmt: skip
     """The ``"rotated"`` path: factorise on a grid turned to the look direction, resample.
 
@@ -1418,6 +1424,8 @@ def _rotated_values(
     resampling's (independent, they add in power). Returns ``(None, info)`` when the time
     model (:data:`_TREE_COST`, :data:`_RESAMPLE_COST`, :data:`_EDGE_COST`) predicts more
     than :data:`_ROTATED_BUDGET` of exact backprojection on the requested grid.
+    ``outline_m``: the rotated grid covers only the footprint's part within the box of
+    these ground points in the frame (plus the filter's reach); pixels beyond it are 0.
     """
     pos, ref_ranges, rho_o = pulses.positions, pulses.ref_ranges, pulses.reference_point_m
     constants, n_up, carrier_hz = pulses.constants, pulses.n_up, pulses.carrier_hz
@@ -1445,10 +1453,17 @@ def _rotated_values(
     du = 1.0 / (RESAMPLE_OVERSAMPLING[0] * (hi_u - lo_u))
     dv = 1.0 / (RESAMPLE_OVERSAMPLING[1] * alpha * (hi_v - lo_v))
     reach = max(RESAMPLE_TAPS) // 2 + 1
-    u0 = pu.min() - reach * du
-    v0 = pv.min() - reach * dv
-    us = u0 + du * np.arange(math.ceil((pu.max() + reach * du - u0) / du) + 1)
-    vs = v0 + dv * np.arange(math.ceil((pv.max() + reach * dv - v0) / dv) + 1)
+    u_lo, u_hi, v_lo, v_hi = pu.min(), pu.max(), pv.min(), pv.max()
+    if outline_m is not None:  # only the footprint's part the caller needs
+        ou, ov = turn(np.asarray(outline_m)[:, 0], np.asarray(outline_m)[:, 1])
+        u_lo, u_hi = max(u_lo, ou.min()), min(u_hi, ou.max())
+        v_lo, v_hi = max(v_lo, ov.min()), min(v_hi, ov.max())
+        if not (u_lo < u_hi and v_lo < v_hi):
+            return None, {"path": "exact", "fallback": "exact (the outline misses the grid)"}
+    u0 = u_lo - reach * du
+    v0 = v_lo - reach * dv
+    us = u0 + du * np.arange(math.ceil((u_hi + reach * du - u0) / du) + 1)
+    vs = v0 + dv * np.arange(math.ceil((v_hi + reach * dv - v0) / dv) + 1)
     # Work of the resampling, in pixel-pulses, counted against the factorisation's budget.
     n_pixels = x.size * y.size
     edges: list = []

@@ -53,6 +53,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.progress import ProgressCallback
 from ..core.traces import Traces
@@ -73,6 +74,7 @@ def analyze(
     options: AnalysisOptions | None = None,
     *,
     keep: Callable[[PointFit], bool] | None = None,
+    image_outline_m: ArrayLike | None = None,
     stationary_box_m: tuple[float, float, float, float] | None = None,
     progress: ProgressCallback | None = None,
 ) -> AnalysisResult:
@@ -96,6 +98,11 @@ def analyze(
     keep : callable, optional
         ``keep(fit)``: whether a mover's fit is estimated further
         (:func:`~sarmotion.pipeline.estimate_movers`); default every one.
+    image_outline_m : (4, 2) array_like, optional
+        A ground parallelogram (m) beyond which the traces hold no stationary echo: the
+        preliminary image is formed only within it, 0 beyond
+        (:func:`~sarmotion.imaging.backproject`'s ``outline_m``; a collection patch's
+        halo, :attr:`sarmotion.collection.Patch.halo_outline_m`). Default: every pixel.
     stationary_box_m : (x0, y0, x1, y1), optional
         The stationary image (and so its listing, whose levels are relative to its
         brightest pixel) is the preliminary image's pixels within this box (m); default
@@ -111,7 +118,7 @@ def analyze(
         sum; the ``movers.<step>`` entries break ``movers`` down
         (:mod:`sarmotion.pipeline.movers`) and are not added to ``total``.
     """
-    detection = detect(traces, options, progress=progress)
+    detection = detect(traces, options, image_outline_m=image_outline_m, progress=progress)
     opts, acq = detection.options, traces.acquisition
     timings = dict(detection.timings_s)
     with timed(timings, "movers"):

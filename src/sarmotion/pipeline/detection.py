@@ -12,7 +12,7 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..core.acquisition import Acquisition
 from ..core.progress import ProgressCallback
@@ -85,6 +85,7 @@ def detect(
     traces: Traces,
     options: AnalysisOptions | None = None,
     *,
+    image_outline_m: ArrayLike | None = None,
     progress: ProgressCallback | None = None,
 ) -> DetectionResult:
     """Preliminary image, stationary/moving separation and range-speed candidates.
@@ -100,6 +101,9 @@ def detect(
         Data ``M``.
     options : AnalysisOptions, optional
         Every choice of the analysis (resolved here against ``traces``).
+    image_outline_m : (4, 2) array_like, optional
+        The preliminary image's pixels are formed only within this ground parallelogram
+        (m) (:func:`preliminary_image`).
     progress : callable, optional
         ``progress(stage, done, total)`` during the long steps.
 
@@ -125,7 +129,7 @@ def detect(
             central.stop - 1,
         )
     with timed(timings, "preliminary_image"):
-        prelim = preliminary_image(traces, opts, progress=progress)
+        prelim = preliminary_image(traces, opts, outline_m=image_outline_m, progress=progress)
     with timed(timings, "separation"):
         sep = separate(traces, prelim, opts.separation, progress=progress)
     with timed(timings, "range_speeds"):
@@ -144,9 +148,18 @@ def detect(
 
 
 def preliminary_image(
-    traces: Traces, options: AnalysisOptions, *, progress: ProgressCallback | None = None
+    traces: Traces,
+    options: AnalysisOptions,
+    *,
+    outline_m: ArrayLike | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Image:
-    """``eq:image`` of the data on the square scene grid of ``options`` (resolved)."""
+    """``eq:image`` of the data on the square scene grid of ``options`` (resolved).
+
+    ``outline_m``: a ground parallelogram (m) beyond which the traces hold no stationary
+    echo; the pixels outside it are 0 and not formed
+    (:func:`~sarmotion.imaging.backproject`).
+    """
     grid = scene_grid(traces, size_m=options.image_size_m, spacing_m=options.spacing_m)
     return backproject(
         traces,
@@ -154,6 +167,7 @@ def preliminary_image(
         progress=staged(progress, "preliminary image"),
         device=options.device,
         method=options.image_method or "exact",
+        outline_m=outline_m,
     )
 
 
