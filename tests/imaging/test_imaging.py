@@ -415,3 +415,29 @@ def test_an_image_refuses_non_finite_values_unless_its_producer_checked():
         assert np.isnan(Image(values=values, grid=grid).values[1, 1])
     with pytest.raises(ValueError, match="NaN or infinite"):  # only inside the block
         Image(values=values, grid=grid)
+
+
+def test_an_outline_row_by_row_is_the_point_test():
+    # outline_columns (each row's x interval) and in_outline (each point's parallelogram
+    # coordinates) select the same pixels, for parallelograms in any direction and
+    # rectangles along the axes (whose sides a row or column may run along)
+    from sarmotion.imaging import in_outline, outline_columns
+
+    rng = np.random.default_rng(1)
+    grid = ImageGrid.square(size_m=50.0, spacing_m=0.5)
+    xx, yy = np.meshgrid(grid.x_m, grid.y_m)
+    tried = 0
+    for trial in range(200):
+        o, u, v = rng.uniform(-30.0, 30.0, (3, 2))
+        if trial % 5 == 0:  # sides on the pixels' rows and columns
+            u = np.array([rng.integers(2, 40) * 0.5, 0.0])
+            v = np.array([0.0, rng.integers(2, 40) * 0.5])
+            o = np.round(o * 2.0) / 2.0
+        if abs(u[0] * v[1] - u[1] * v[0]) < 1e-3:
+            continue
+        q = np.array([o, o + u, o + u + v, o + v])
+        lo, hi = outline_columns(grid, q)
+        rows = (xx >= lo[:, None]) & (xx <= hi[:, None])
+        assert np.array_equal(rows, in_outline(np.stack([xx, yy], axis=-1), q)), trial
+        tried += 1
+    assert tried > 150

@@ -20,9 +20,9 @@
 """
 
 from .autofocus import AutofocusResult, apply_phase_correction, focus_mover, pga
-from .backprojection import backproject, backproject_phase_history, backproject_points, in_outline
+from .backprojection import backproject, backproject_phase_history, backproject_points
 from .exact_sum import exact_sum
-from .grid import Image, ImageGrid, default_scene_size_m, scene_grid
+from .grid import Image, ImageGrid, default_scene_size_m, in_outline, outline_columns, scene_grid
 from .peaks import find_peaks, parabolic_peak
 from .point_response import point_response, pulse_responses, refine_location
 from .quality import PointQuality, cut_quality, point_quality
@@ -46,6 +46,7 @@ __all__ = [
     "backproject_phase_history",
     "backproject_points",
     "in_outline",
+    "outline_columns",
     "find_peaks",
     "parabolic_peak",
     "point_response",

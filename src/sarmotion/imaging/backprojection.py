@@ -83,14 +83,13 @@ from ._bp_common import DEFAULT_UPSAMPLE, Setup, kernel_constants, make_setup
 from ._bp_kernels import STEPS, TILES, backproject_f32, run_numba_f64, tile_shape
 from ._bp_reference import run_numpy
 from ._bp_table import TABLES
-from .grid import Image, ImageGrid
+from .grid import Image, ImageGrid, outline_columns
 
 __all__ = [
     "accuracy_db",
     "backproject",
     "backproject_phase_history",
     "backproject_points",
-    "in_outline",
 ]
 
 
@@ -294,28 +293,19 @@ def _as_outline(outline_m: ArrayLike) -> NDArray[np.float64]:
     return q
 
 
-def in_outline(points_m: ArrayLike, outline_m: ArrayLike) -> NDArray[np.bool_]:
-    """Whether ground points ``(..., 2)`` lie in the parallelogram ``outline_m`` (sides in)."""
-    q = np.asarray(outline_m, dtype=np.float64)
-    p = np.asarray(points_m, dtype=np.float64)[..., :2] - q[0]
-    u, v = q[1] - q[0], q[3] - q[0]
-    det = u[0] * v[1] - u[1] * v[0]
-    a = (p[..., 0] * v[1] - p[..., 1] * v[0]) / det
-    b = (u[0] * p[..., 1] - u[1] * p[..., 0]) / det
-    tol = 1e-9
-    return (a >= -tol) & (a <= 1.0 + tol) & (b >= -tol) & (b <= 1.0 + tol)
-
-
 def _within_outline(
     traces: Traces, grid: ImageGrid, outline: NDArray[np.float64], **keywords
 ) -> Image:
     """:func:`backproject` with ``outline_m``: the pixels of its box formed, the rest 0."""
-    lo, hi = outline.min(axis=0), outline.max(axis=0)
-    cols = np.flatnonzero((grid.x_m >= lo[0]) & (grid.x_m <= hi[0]))
-    rows = np.flatnonzero((grid.y_m >= lo[1]) & (grid.y_m <= hi[1]))
+    lo, hi = outline_columns(grid, outline)
+    full = lo <= hi
     values = np.zeros(grid.shape, np.complex128)
     meta: dict = {}
-    if cols.size and rows.size:
+    vel = np.zeros(2)
+    rows = np.flatnonzero(full)
+    cols = np.flatnonzero((grid.x_m >= lo[full].min()) & (grid.x_m <= hi[full].max())) if (
+        rows.size) else rows  # fmt: skip
+    if rows.size and cols.size:
         # at least two pixels a side (a grid's least), one more either side if the grid has it
         c0, c1 = max(0, cols[0] - 1), min(grid.shape[1], cols[-1] + 2)
         r0, r1 = max(0, rows[0] - 1), min(grid.shape[0], rows[-1] + 2)
@@ -328,11 +318,19 @@ def _within_outline(
         values[r0:r1, c0:c1] = image.values
         meta = dict(image.metadata)
         vel = image.velocity_mps
-    else:
-        vel = np.zeros(2) if keywords["velocity_mps"] is None else np.asarray(
-            keywords["velocity_mps"], float)[:2]  # fmt: skip
-    xx, yy = np.meshgrid(grid.x_m, grid.y_m)
-    values[~in_outline(np.stack([xx, yy], axis=-1), outline)] = 0.0
+        del image
+    elif keywords["velocity_mps"] is not None:
+        vel = _as_velocity(keywords["velocity_mps"], name="velocity_mps")[:2]
+    # every row's pixels outside its interval to 0, in slices (no pixel-sized temporaries)
+    x = np.asarray(grid.x_m)
+    first = np.searchsorted(x, lo, side="left")
+    stop = np.searchsorted(x, hi, side="right")
+    for r in range(grid.shape[0]):
+        if first[r] >= stop[r]:
+            values[r] = 0.0
+            continue
+        values[r, : first[r]] = 0.0
+        values[r, stop[r] :] = 0.0
     meta["outline_m"] = outline.tolist()
     return Image(values=values, grid=grid, velocity_mps=vel, metadata=meta)
 

@@ -139,6 +139,7 @@ from ..core import C, ProgressCallback
 from . import _ffbp_kernels as _kernels
 from ._bp_kernels import lane_spans
 from ._simd import LANES
+from .grid import ImageGrid, outline_columns
 
 __all__ = ["FfbpPulses", "ffbp_values"]
 
@@ -1474,7 +1475,7 @@ def _rotated_values(
         if left < 0.0:
             return False
         edges[:] = _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up,
-                                       EDGE_MARGIN * du + margin)  # fmt: skip
+                                       EDGE_MARGIN * du + margin, outline=outline_m)  # fmt: skip
         return _EDGE_COST * n_pulses * _n_pixels(edges) <= left
 
     total = [1]
@@ -1525,7 +1526,7 @@ def _n_pixels(blocks) -> int:
     return sum((r.stop - r.start) * (c.stop - c.start) for r, c in blocks)
 
 
-def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32):
+def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32, outline=None):
     """Rectangles ``(row slice, column slice)`` covering the pixels near a window end.
 
     Near an end of the fast-time window each pulse's contribution steps to 0 along the
@@ -1534,7 +1535,8 @@ def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32
     with these pixels resampled, ``docs/notes/ffbp.md``). A pixel is near an end when, over
     :data:`N_EDGE_PULSES` pulses spread on the aperture, ``[min d_j - margin, max d_j +
     margin]`` holds one (``margin`` the filter's reach). Rows in blocks of ``block``;
-    columns in runs, gaps under ``block`` closed.
+    columns in runs, gaps under ``block`` closed. ``outline``: only pixels within that
+    ground parallelogram (the others are not wanted).
     """
     idx_scale, idx_offset, _ = constants
     d_lo = (1.0 - idx_offset) / idx_scale
@@ -1546,6 +1548,9 @@ def _window_edge_blocks(pos, ref_ranges, x, y, constants, n_up, margin, block=32
             np.ascontiguousarray(pos[js, 2] ** 2), np.ascontiguousarray(ref_ranges[js], np.float64),
             float(d_lo), float(d_hi), float(margin),
         )  # fmt: skip
+    if outline is not None:
+        lo, hi = outline_columns(ImageGrid(x_m=x, y_m=y), outline)
+        mask &= (x[None, :] >= lo[:, None]) & (x[None, :] <= hi[:, None])
     out = []
     for r0 in range(0, y.size, block):
         rows = slice(r0, min(r0 + block, y.size))

@@ -16,7 +16,14 @@ from .._validation import positive as _positive
 from ..core import C, Traces, as_point
 from .peaks import find_peaks, parabolic_peak
 
-__all__ = ["ImageGrid", "Image", "default_scene_size_m", "scene_grid"]
+__all__ = [
+    "ImageGrid",
+    "Image",
+    "default_scene_size_m",
+    "in_outline",
+    "outline_columns",
+    "scene_grid",
+]
 
 
 # =============================================================================== grid
@@ -390,3 +397,43 @@ def scene_grid(
         raise ValueError(f"size_m must be at most 2e+06 m (1000 km either side), got {size:g} m")
     centre = tuple(float(v) for v in traces.reference_point_m[:2])
     return ImageGrid.square(centre_m=centre, size_m=size, spacing_m=spacing)
+
+
+def in_outline(points_m: ArrayLike, outline_m: ArrayLike) -> NDArray[np.bool_]:
+    """Whether ground points ``(..., 2)`` lie in the parallelogram ``outline_m`` (sides in)."""
+    q = np.asarray(outline_m, dtype=np.float64)
+    p = np.asarray(points_m, dtype=np.float64)[..., :2] - q[0]
+    u, v = q[1] - q[0], q[3] - q[0]
+    det = u[0] * v[1] - u[1] * v[0]
+    a = (p[..., 0] * v[1] - p[..., 1] * v[0]) / det
+    b = (u[0] * p[..., 1] - u[1] * p[..., 0]) / det
+    tol = 1e-9
+    return (a >= -tol) & (a <= 1.0 + tol) & (b >= -tol) & (b <= 1.0 + tol)
+
+
+def outline_columns(
+    grid: ImageGrid, outline_m: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Each grid row's ``x`` interval ``[lo, hi]`` (m) within the parallelogram ``outline_m``.
+
+    :func:`in_outline`'s test along each row: ``a`` and ``b`` are linear in ``x``, so each of
+    ``0 <= a <= 1``, ``0 <= b <= 1`` bounds ``x`` on one side or holds for every ``x`` or
+    none; an empty row has ``lo > hi``.
+    """
+    q = np.asarray(outline_m, dtype=np.float64)
+    u, v = q[1] - q[0], q[3] - q[0]
+    det = u[0] * v[1] - u[1] * v[0]
+    dy = np.asarray(grid.y_m, np.float64) - q[0][1]
+    lo = np.full(dy.shape, -np.inf)
+    hi = np.full(dy.shape, np.inf)
+    tol = 1e-9
+    # a = (dx v1 - dy v0) / det, b = (u0 dy - u1 dx) / det: each c0 + c1 dx
+    for c1, c0 in ((v[1] / det, -dy * v[0] / det), (-u[1] / det, u[0] * dy / det)):
+        if c1 == 0.0:
+            ok = (c0 >= -tol) & (c0 <= 1.0 + tol)
+            lo = np.where(ok, lo, np.inf)
+            continue
+        x_a, x_b = (-tol - c0) / c1, (1.0 + tol - c0) / c1
+        lo = np.maximum(lo, np.minimum(x_a, x_b))
+        hi = np.minimum(hi, np.maximum(x_a, x_b))
+    return lo + q[0][0], hi + q[0][0]
