@@ -359,6 +359,42 @@ def test_a_patch_outline_holds_every_stationary_echo_its_traces_hold(azimuth_deg
         assert abs(u[0] * v[1] - u[1] * v[0]) < 0.6 * size**2
 
 
+@pytest.mark.slow
+def test_stationary_points_the_pulse_rate_wraps_into_a_patch_are_no_movers():
+    """A 500 m square seen at 30 degrees spans 683 m in cross range; a pulse rate sized
+    for 500 m wraps the Doppler of the points near two of its corners onto the far side
+    of the scene, where their echoes have the range walk of points about 500 m away: to a
+    patch there, a mover of 5-7 m/s. The analysis of the whole data tests such a
+    candidate against the stationary point of its range history anywhere in the data's
+    alias-free extent; each patch now does the same (``Patch.alias_free_m``), where it
+    tested only its own, one pulse in ``q`` (9 false movers on this null before)."""
+    side, half = 500.0, 250.0
+    acq = _look_azimuth_acquisition(30.0, side=side, over=1.6, rate_over=1.0)
+    rng = np.random.default_rng(5)
+    from sarmotion.simulation import CollectionScene
+
+    sc = CollectionScene(
+        acquisition=acq,
+        stationary=tuple(
+            PointTarget(position_m=p) for p in rng.uniform(-0.9 * half, 0.9 * half, (30, 2))
+        ),
+        movers=(),
+        snr_db=-20.0,
+        seed=3,
+        metadata={
+            "source": "simulation",
+            "image_area_m": [[-half, -half], [half, -half], [half, half], [-half, half]],
+        },
+    )
+    traces = sc.traces()
+    res = analyze_collection(traces, CollectionOptions(analysis=AnalysisOptions(trajectory=False)))
+    extent = [p.alias_free_m for p in res.plan.patches]
+    # the rate covers about 500 m of the square's 683 m in cross range
+    assert all(e is not None and 0.9 * side < e[2] < 1.1 * side for e in extent)
+    assert any(p.decimation > 1 for p in res.plan.patches)
+    assert len(res.movers) == 0, [(m.position_m, m.velocity_mps) for m, _ in res.movers]
+
+
 def test_the_false_alarm_rate_is_shared_by_the_data_the_patches_report(scene):
     """Patch ``p`` tests at ``alpha_p = alpha min(1, |H_p| / sum |K_q|)``: a null candidate
     anywhere in the data it holds (``H_p``) is reported only where its band keeps it
@@ -525,21 +561,25 @@ def test_candidates_beyond_max_movers_are_kept_in_the_document_and_said(scene, t
     assert (f"{sidelobes} dropped as a brighter target's sidelobes" in console) == (sidelobes > 0)
 
 
-def _look_azimuth_acquisition(azimuth_deg: float, side: float = 100.0):
+def _look_azimuth_acquisition(
+    azimuth_deg: float, side: float = 100.0, over: float = 1.6, rate_over: float | None = None
+):
     """benchmarks/look_azimuth.py's acquisition (100 m): a 2-degree X-band arc (9.6 GHz,
     640 MHz) at 10 km ground range and 4 km height about ``azimuth_deg``, window and
-    pulse rate sized for 1.6 times the side."""
+    pulse rate sized for ``over`` (1.6) times the side (the pulse rate for ``rate_over``
+    times it, if given)."""
     import math
 
     from sarmotion.core import Acquisition, C
 
-    over, ground, height = 1.6, 10e3, 4e3
+    ground, height = 10e3, 4e3
     cos_el = ground / math.hypot(ground, height)
     df = C / (2.0 * over * side * cos_el)
     radar = Radar(
         carrier_hz=9.6e9, bandwidth_hz=640e6, n_samples=math.ceil(640e6 / df), frequency_step_hz=df
     )
-    count = math.ceil(np.deg2rad(2.0) * cos_el * 2.0 * over * side / radar.wavelength_m)
+    rate = over if rate_over is None else rate_over
+    count = math.ceil(np.deg2rad(2.0) * cos_el * 2.0 * rate * side / radar.wavelength_m)
     traj = Trajectory.circular(
         altitude_m=height,
         ground_radius_m=ground,

@@ -314,6 +314,13 @@ class Patch:
         of the data: the halo is the square ``halo_m``).
     false_alarm_share : float
         Its share of the collection's false-alarm rate, in (0, 1] (module notes).
+    alias_free_m : (x, y, extent) or None
+        The data's reference point (m) and cross-range extent free of azimuth aliasing
+        at the data's pulse rate, ``lambda L / (2 dx)`` (m): where a stationary point may
+        explain a candidate of this patch, as in the analysis of the whole data
+        (:func:`~sarmotion.collection.run.analyze_patch`; the data's pulse rate wraps
+        the Doppler of stationary points beyond the patch's band into it). None: the
+        traces' own.
     movers_only : bool
         The core lies outside the region, in its widening for the movers' images
         (module notes): the patch reports the movers whose echoes its band holds, and no
@@ -333,6 +340,7 @@ class Patch:
     halo_m: float | None = None
     halo_outline_m: NDArray[np.float64] | None = None
     false_alarm_share: float = 1.0
+    alias_free_m: tuple[float, float, float] | None = None
     movers_only: bool = False
 
     @property
@@ -753,6 +761,13 @@ def plan_patches(
     to_look = np.stack([e_r, e_c], axis=1)  # ground offset @ to_look: (range, cross)
     # resolution cells: slant range c / 2B on the ground, cross range lambda L / 2a
     geom = look_geometry(traj, source.reference_point_m)
+    # the data's alias-free cross-range extent (detector.alias_free_extent_m's rule)
+    spacing = float(np.median(np.linalg.norm(np.diff(traj.positions_m, axis=0), axis=1)))
+    alias_free = (
+        float(rho[0]),
+        float(rho[1]),
+        float(radar.wavelength_m * geom.range_m / (2.0 * spacing)),
+    )
     cell_r = radar.range_resolution_m / math.cos(geom.elevation_rad)
     cell_c = radar.wavelength_m * geom.range_m / (2.0 * traj.aperture_length_m)
     cell = max(cell_r, cell_c)
@@ -996,6 +1011,7 @@ def plan_patches(
                 pulses=pulses,
                 halo_m=None if single else halo_side,
                 halo_outline_m=held,
+                alias_free_m=alias_free,
                 movers_only=movers_only,
             )
         )

@@ -234,6 +234,12 @@ def _patch_options(
       the next patch, whose reference is two core bands away and whose pass band
       reaches it (:mod:`~sarmotion.collection.merge` notes).
     - **False-alarm rate**: its share of the collection's (:func:`patch_false_alarm`).
+    - **Stationary explanations**: a candidate may be a stationary point's echo
+      anywhere in the data's alias-free extent about the data's reference point
+      (``patch.alias_free_m``; ``alias_free_extent_m``, ``alias_free_centre_m``), as in
+      the analysis of the whole data, not only in the traces' own (``p / q`` of it): the
+      data's pulse rate wraps the Doppler of a stationary point beyond the band into it
+      when the scene is wider in cross range than that rate covers.
     - **Images**: where ``image_method`` is not given, on the CPU, the halo's images
       (preliminary and stationary: about 300 m a side for a 75 m core) are formed by fast
       factorised backprojection (:mod:`sarmotion.imaging.ffbp`, to its error budget;
@@ -254,6 +260,11 @@ def _patch_options(
         out = dataclasses.replace(
             out, stationary_speed_mps=core_stationary_speed(trajectory, patch)
         )
+    if patch.alias_free_m is not None and options.alias_free_extent_m is None:
+        # the data's, not the traces' (one pulse in q kept): the band holds the echoes of
+        # stationary points the data's pulse rate wraps into it, over the data's extent
+        x, y, extent = patch.alias_free_m
+        out = dataclasses.replace(out, alias_free_extent_m=extent, alias_free_centre_m=(x, y))
     return out
 
 

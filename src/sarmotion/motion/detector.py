@@ -227,6 +227,8 @@ def stationary_explanation(
     value: complex,
     *,
     acquisition: Acquisition | None = None,
+    extent_m: float | None = None,
+    extent_centre_m: ArrayLike | None = None,
 ) -> StationaryExplanation:
     """The zero-range-speed member of a fit's family, refined as a stationary point.
 
@@ -247,6 +249,16 @@ def stationary_explanation(
         Matched filter at the fit (data units times ``n_pulses``).
     acquisition : Acquisition, optional
         The acquisition of ``data`` (about a degree); required when it is an array.
+    extent_m : float, optional
+        The cross-range extent (m) about ``extent_centre_m`` within which a stationary
+        point may explain the fit (``within_extent``): the data's alias-free extent.
+        Default :func:`alias_free_extent_m` of ``data``'s own pulses; traces resampled to
+        fewer pulses (a collection's patch) hold, through the wrap of the data's Doppler
+        at the data's pulse rate, echoes of stationary points over the data's extent,
+        not their own.
+    extent_centre_m : (2,) or (3,) array_like, optional
+        Where that extent is centred (m): the data's reference point. Default ``data``'s
+        reference point.
 
     Returns
     -------
@@ -268,12 +280,13 @@ def stationary_explanation(
     _, member = speed_at(dy)
     best, stat = refine_location(tr, member, velocity_mps=None, step_m=0.05)
     cross = resolution(tr).cross_range_direction
-    reach = abs(float((best[:2] - tr.reference_point_m[:2]) @ cross))
+    centre = tr.reference_point_m if extent_centre_m is None else np.asarray(extent_centre_m)
+    reach = abs(float((best[:2] - np.asarray(centre, dtype=np.float64)[:2]) @ cross))
     gain = 20.0 * np.log10(max(abs(value), 1e-300) / max(abs(stat), 1e-300))
     return StationaryExplanation(
         position_m=best,
         cross_offset_m=float(dy),
-        within_extent=reach <= alias_free_extent_m(tr),
+        within_extent=reach <= (alias_free_extent_m(tr) if extent_m is None else extent_m),
         focus_gain_db=float(gain),
     )
 

@@ -56,7 +56,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import maximum_filter
 
 from ..core import Traces
@@ -312,6 +312,8 @@ def test_candidate(
     min_focus_gain_db: float | None = None,
     *,
     band_mps: float,
+    extent_m: float | None = None,
+    extent_centre_m: ArrayLike | None = None,
 ) -> CandidateTest:
     """Fit one bank candidate on ``data`` from its cell and test it against stationary points.
 
@@ -324,12 +326,21 @@ def test_candidate(
     a stationary point within the focus gain, or incoherent): the verdict of
     :meth:`CandidateTest.stationary` and :attr:`CandidateTest.cancels` together is the
     same, and ``joint_ratio`` is NaN when skipped. Without it every test runs.
+    ``extent_m``, ``extent_centre_m``: where a stationary point may explain it (m,
+    :func:`~sarmotion.motion.stationary_explanation`; default the data's own).
     """
     fit = fit_point_mover_at(
         data, cand.delay_s, _g_speed(data, cand.range_speed_mps), cand.cross_range_speed_mps
     )
     value = fit.amplitude * data.n_pulses
-    why = stationary_explanation(data, fit.position_m, fit.velocity_mps, value)
+    why = stationary_explanation(
+        data,
+        fit.position_m,
+        fit.velocity_mps,
+        value,
+        extent_m=extent_m,
+        extent_centre_m=extent_centre_m,
+    )
     track = fit.position_m[None, :] + data.slow_times_s[:, None] * np.r_[fit.velocity_mps, 0.0]
     _, kappa = uniform_start_holds(data, track, noise_variance=noise_variance(data.data))
     model = point_model(data, fit.position_m, fit.velocity_mps, fit.amplitude)
@@ -460,7 +471,15 @@ def defocused_movers(
         ]
         for echo in echoes[:MAX_REJECTED]:
             for cell in cells_to_fit(echo):
-                test = test_candidate(here, cell, step, opts.min_focus_gain_db, band_mps=band)
+                test = test_candidate(
+                    here,
+                    cell,
+                    step,
+                    opts.min_focus_gain_db,
+                    band_mps=band,
+                    extent_m=opts.alias_free_extent_m,
+                    extent_centre_m=opts.alias_free_centre_m,
+                )
                 if not test.stationary(opts.min_focus_gain_db) and test.cancels:
                     found = test
                     break

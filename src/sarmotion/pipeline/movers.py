@@ -432,7 +432,13 @@ def fit_candidates(
             )
             continue
         why = stationary_explanation(
-            residual, fit.position_m, fit.velocity_mps, value, acquisition=sub
+            residual,
+            fit.position_m,
+            fit.velocity_mps,
+            value,
+            acquisition=sub,
+            extent_m=options.alias_free_extent_m,
+            extent_centre_m=options.alias_free_centre_m,
         )
         if why.within_extent and why.focus_gain_db < options.min_focus_gain_db:
             log.info(

@@ -12,6 +12,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from .._validation import finite, integer, interval, positive
 from ..core.traces import Traces
 from ..imaging import default_scene_size_m
@@ -118,6 +120,17 @@ class AnalysisOptions:
         ``"ffbp"`` for the patches of a collection on the CPU, whose halo images are
         large (:func:`~sarmotion.collection.run.analyze_patch`). A mover's own image is
         always exact.
+    alias_free_extent_m : float or None
+        Cross-range extent (m) about ``alias_free_centre_m`` within which a stationary
+        point may explain a candidate (:func:`~sarmotion.motion.stationary_explanation`):
+        the extent free of azimuth aliasing of the data the traces hold. ``None``
+        (default): the traces' own, ``lambda L / (2 dx)``. A collection's patch, whose
+        traces keep one pulse in ``q``, gives the data's (``q`` times its own) about the
+        data's reference point: its band holds the echoes of stationary points over that
+        extent that the data's pulse rate wraps into it, as the analysis of the whole
+        data tests them.
+    alias_free_centre_m : (x, y) or None
+        Where that extent is centred (m). ``None`` (default): the traces' reference point.
 
     Notes
     -----
@@ -147,6 +160,8 @@ class AnalysisOptions:
     sub_aperture_deg: float = 1.0
     device: str = "cpu"
     image_method: str | None = None
+    alias_free_extent_m: float | None = None
+    alias_free_centre_m: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.separation, SeparationOptions):
@@ -185,6 +200,16 @@ class AnalysisOptions:
         positive(self.sub_aperture_deg, "sub_aperture_deg", unit="degrees")
         if self.device not in ("cpu", "cuda"):
             raise ValueError(f"device must be 'cpu' or 'cuda', got {self.device!r}")
+        if self.alias_free_extent_m is not None:
+            positive(self.alias_free_extent_m, "alias_free_extent_m", unit="m")
+        if self.alias_free_centre_m is not None:
+            c = tuple(float(v) for v in np.asarray(self.alias_free_centre_m, float).ravel())
+            if len(c) != 2 or not all(np.isfinite(c)):
+                raise ValueError(
+                    "alias_free_centre_m must be a finite (x, y) (m), "
+                    f"got {self.alias_free_centre_m!r}"
+                )
+            object.__setattr__(self, "alias_free_centre_m", c)
         if self.image_method not in (None, "exact", "ffbp"):
             raise ValueError(
                 f"image_method must be 'exact', 'ffbp' or None, got {self.image_method!r}"
@@ -214,4 +239,10 @@ class AnalysisOptions:
         d["speed_range_mps"] = list(self.speed_range_mps)
         if self.stationary_speed_mps is None:  # the image's rule: recorded as before
             del d["stationary_speed_mps"]
+        if self.alias_free_extent_m is None:  # the traces' own: recorded as before
+            del d["alias_free_extent_m"]
+        if self.alias_free_centre_m is None:
+            del d["alias_free_centre_m"]
+        else:
+            d["alias_free_centre_m"] = list(self.alias_free_centre_m)
         return {**sep, **d}
