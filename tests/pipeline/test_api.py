@@ -181,3 +181,21 @@ def test_report_legends_read_at_8_pt_as_the_page_shows_them(scene1, tmp_path):
     with_legends = [k for k in shown if k.startswith(("g(u) with", "Each mover imaged"))]
     assert len(with_legends) == 2, shown
     assert min(shown[k] for k in with_legends) >= 8.0 - 0.05, shown
+
+
+def test_the_alias_free_extent_options_are_checked_and_recorded_only_when_given():
+    from sarmotion.pipeline import AnalysisOptions
+
+    plain = AnalysisOptions().to_dict()
+    assert "alias_free_extent_m" not in plain and "alias_free_centre_m" not in plain
+    given = AnalysisOptions(alias_free_extent_m=500.0, alias_free_centre_m=np.array([1.0, -2.0]))
+    assert given.alias_free_centre_m == (1.0, -2.0)
+    d = given.to_dict()
+    assert d["alias_free_extent_m"] == 500.0 and d["alias_free_centre_m"] == [1.0, -2.0]
+    json.dumps(d)
+    with pytest.raises(ValueError, match="alias_free_extent_m"):
+        AnalysisOptions(alias_free_extent_m=0.0)
+    with pytest.raises(ValueError, match="alias_free_centre_m"):
+        AnalysisOptions(alias_free_centre_m=(1.0, 2.0, 3.0))
+    with pytest.raises(ValueError, match="alias_free_centre_m"):
+        AnalysisOptions(alias_free_centre_m=(np.nan, 2.0))
