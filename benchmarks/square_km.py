@@ -173,17 +173,17 @@ def analyse(args: argparse.Namespace, path: Path) -> dict:
 
 def table(rows: list[dict]) -> str:
     head = (
-        "| code | side (m) | look az (deg) | pulses x samples | patches (beyond) | pulses kept "
-        "(min/median/max) | movers found | false | stationary within a cell | wall (s) "
-        "| CPU (s) | peak RSS (MiB) | km²/h |\n"
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        "| code | side (m) | look az (deg) | rate and window (x side) | pulses x samples "
+        "| patches (beyond) | pulses kept (min/median/max) | movers found | false "
+        "| stationary within a cell | wall (s) | CPU (s) | peak RSS (MiB) | km²/h |\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     )
     lines = []
     for r in rows:
         kept = "/".join(str(v) for v in r["pulses_kept"])
         lines.append(
             f"| {r.get('label', '')} | {r['side_m']:g} | {r['azimuth_deg']:g} "
-            f"| {r['n_pulses']} x {r['n_samples']} "
+            f"| {r['oversample']:g} | {r['n_pulses']} x {r['n_samples']} "
             f"| {r['patches']} ({r['patches_beyond']}) | {kept} "
             f"| {r['movers_found']}/{r['movers']} | {r['false_movers']} "
             f"| {r['stationary_near']}/{r['stationary']} | {r['wall_s']:.0f} | {r['cpu_s']:.0f} "
