@@ -441,3 +441,18 @@ def test_an_outline_row_by_row_is_the_point_test():
         assert np.array_equal(rows, in_outline(np.stack([xx, yy], axis=-1), q)), trial
         tried += 1
     assert tried > 150
+
+
+def test_a_grid_window_holds_the_box_and_two_pixels_at_least():
+    grid = ImageGrid.square(size_m=10.0, spacing_m=1.0)  # x, y = -5 .. 4
+    rows, cols = grid.window((-2.0, 0.5, 1.0, 3.0))
+    assert grid.x_m[cols].tolist() == [-2.0, -1.0, 0.0, 1.0]
+    assert grid.y_m[rows].tolist() == [1.0, 2.0, 3.0]
+    rows, cols = grid.window((-2.0, 0.5, 1.0, 3.0), pad=1)
+    assert grid.x_m[cols].tolist() == [-3.0, -2.0, -1.0, 0.0, 1.0, 2.0]
+    rows, cols = grid.window((4.0, -5.0, 4.0, -5.0), pad=3)  # a pixel at the corner
+    assert (cols.stop - cols.start, rows.stop - rows.start) == (4, 4)
+    rows, cols = grid.window((0.2, 0.2, 0.4, 0.4))  # between pixels: the two nearest
+    assert grid.x_m[cols].tolist() == [0.0, 1.0]
+    rows, cols = grid.window((50.0, 50.0, 60.0, 60.0))  # beside the grid: its last two
+    assert grid.x_m[cols].tolist() == [3.0, 4.0] and grid.y_m[rows].tolist() == [3.0, 4.0]

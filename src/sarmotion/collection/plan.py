@@ -150,11 +150,13 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull
 
 from .._validation import integer, positive
+from ..core.acquisition import Acquisition
 from ..core.blocks import PulseBlocks, declared_area
 from ..core.constants import C
 from ..core.geometry import look_geometry, travel_time
 from ..core.polygon import clip_convex, inside_convex, polygon_area, polygon_problem
 from ..errors import InputError
+from ..motion.detector import alias_free_extent_m
 from ..pipeline import AnalysisOptions
 from .resample import aliased_doppler_hz, design, output_grid, slow_time_ratio
 
@@ -761,13 +763,9 @@ def plan_patches(
     to_look = np.stack([e_r, e_c], axis=1)  # ground offset @ to_look: (range, cross)
     # resolution cells: slant range c / 2B on the ground, cross range lambda L / 2a
     geom = look_geometry(traj, source.reference_point_m)
-    # the data's alias-free cross-range extent (detector.alias_free_extent_m's rule)
-    spacing = float(np.median(np.linalg.norm(np.diff(traj.positions_m, axis=0), axis=1)))
-    alias_free = (
-        float(rho[0]),
-        float(rho[1]),
-        float(radar.wavelength_m * geom.range_m / (2.0 * spacing)),
-    )
+    # the data's alias-free cross-range extent, about the data's reference point
+    data = Acquisition(trajectory=traj, radar=radar, reference_point_m=source.reference_point_m)
+    alias_free = (float(rho[0]), float(rho[1]), alias_free_extent_m(data))
     cell_r = radar.range_resolution_m / math.cos(geom.elevation_rad)
     cell_c = radar.wavelength_m * geom.range_m / (2.0 * traj.aperture_length_m)
     cell = max(cell_r, cell_c)

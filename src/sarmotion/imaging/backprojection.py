@@ -85,12 +85,7 @@ from ._bp_reference import run_numpy
 from ._bp_table import TABLES
 from .grid import Image, ImageGrid, outline_columns
 
-__all__ = [
-    "accuracy_db",
-    "backproject",
-    "backproject_phase_history",
-    "backproject_points",
-]
+__all__ = ["accuracy_db", "backproject", "backproject_phase_history", "backproject_points"]
 
 
 Kernel = Literal["numba", "numpy"]
@@ -302,20 +297,14 @@ def _within_outline(
     values = np.zeros(grid.shape, np.complex128)
     meta: dict = {}
     vel = np.zeros(2)
-    rows = np.flatnonzero(full)
-    cols = np.flatnonzero((grid.x_m >= lo[full].min()) & (grid.x_m <= hi[full].max())) if (
-        rows.size) else rows  # fmt: skip
-    if rows.size and cols.size:
-        # at least two pixels a side (a grid's least), one more either side if the grid has it
-        c0, c1 = max(0, cols[0] - 1), min(grid.shape[1], cols[-1] + 2)
-        r0, r1 = max(0, rows[0] - 1), min(grid.shape[0], rows[-1] + 2)
-        if c1 - c0 < 2:
-            c0, c1 = (c0, c0 + 2) if c0 + 2 <= grid.shape[1] else (c1 - 2, c1)
-        if r1 - r0 < 2:
-            r0, r1 = (r0, r0 + 2) if r0 + 2 <= grid.shape[0] else (r1 - 2, r1)
-        sub = ImageGrid(x_m=grid.x_m[c0:c1], y_m=grid.y_m[r0:r1])
+    if full.any():  # the outline's box on the grid and a pixel either side
+        ys = grid.y_m[full]
+        rows, cols = grid.window(
+            (float(lo[full].min()), float(ys[0]), float(hi[full].max()), float(ys[-1])), pad=1
+        )
+        sub = ImageGrid(x_m=grid.x_m[cols], y_m=grid.y_m[rows])
         image = _backproject(traces, sub, outline=outline, **keywords)
-        values[r0:r1, c0:c1] = image.values
+        values[rows, cols] = image.values
         meta = dict(image.metadata)
         vel = image.velocity_mps
         del image

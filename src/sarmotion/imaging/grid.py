@@ -209,6 +209,30 @@ class ImageGrid:
         dx, dy = self.spacing_m
         return (float(self.x_m[0] + ix * dx), float(self.y_m[0] + iy * dy))
 
+    def window(
+        self, box_m: tuple[float, float, float, float], *, pad: int = 0
+    ) -> tuple[slice, slice]:
+        """Row and column slices of the pixels within ``box_m`` ``(x0, y0, x1, y1)`` (m).
+
+        Widened by ``pad`` pixels either side where the grid has them, and to at least
+        two pixels a side (a grid's least): a box under two pixels, or beside the grid,
+        gives the two nearest its centre.
+        """
+        x0, y0, x1, y1 = box_m
+
+        def axis(v: NDArray[np.float64], lo: float, hi: float) -> slice:
+            i = np.flatnonzero((v >= lo) & (v <= hi))
+            if i.size == 0:
+                j = int(np.clip(np.searchsorted(v, 0.5 * (lo + hi)), 1, v.size - 1))
+                a, b = j - 1, j + 1
+            else:
+                a, b = max(0, int(i[0]) - pad), min(v.size, int(i[-1]) + 1 + pad)
+            if b - a < 2:
+                a, b = (a, a + 2) if a + 2 <= v.size else (b - 2, b)
+            return slice(a, b)
+
+        return axis(self.y_m, y0, y1), axis(self.x_m, x0, x1)
+
 
 # ============================================================================== image
 @numba.njit(parallel=True, cache=True)

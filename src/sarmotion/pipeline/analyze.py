@@ -52,7 +52,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.progress import ProgressCallback
@@ -161,16 +160,8 @@ def analyze(
 
 
 def _within(grid: ImageGrid, box_m: tuple[float, float, float, float] | None) -> ImageGrid:
-    """``grid``'s pixels within ``box_m`` ``(x0, y0, x1, y1)`` (m), at least two a side."""
+    """``grid``'s pixels within ``box_m`` ``(x0, y0, x1, y1)`` (m) (:meth:`ImageGrid.window`)."""
     if box_m is None:
         return grid
-    x0, y0, x1, y1 = box_m
-
-    def axis(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
-        i = np.flatnonzero((v >= lo) & (v <= hi))
-        if i.size < 2:  # the box misses the grid or is under two pixels: its nearest two
-            j = int(np.clip(np.searchsorted(v, 0.5 * (lo + hi)), 1, v.size - 1))
-            return v[j - 1 : j + 1]
-        return v[i[0] : i[-1] + 1]
-
-    return ImageGrid(x_m=axis(grid.x_m, x0, x1), y_m=axis(grid.y_m, y0, y1))
+    rows, cols = grid.window(box_m)
+    return ImageGrid(x_m=grid.x_m[cols], y_m=grid.y_m[rows])
