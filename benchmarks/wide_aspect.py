@@ -252,6 +252,7 @@ def run_draw(aperture_deg: float, seed: int) -> dict:
             "turn_flagged": [bool(t.turn.flagged) if t.turn else None for t in mine],
             "turn_model": [t.turn.model if t.turn else None for t in mine],
             "turn_flagged_pairs": [_pairs_flagged(t, pulses) for t in mine],
+            "ground_turn_rate": [_ground_rate(t) for t in mine],
         }
         if mine:
             best = max(mine, key=lambda t: t.n_detections)
@@ -289,6 +290,18 @@ def run_draw(aperture_deg: float, seed: int) -> dict:
         "false_tracks": sum(o is None for o in owner),
         "movers": out_movers,
         "seconds": seconds,
+    }
+
+
+def _ground_rate(trk) -> dict | None:
+    """A track's turn rate in the ground frame (where its position is fixed), or None."""
+    rate = trk.turn.turn_rate if trk.turn is not None else None
+    if rate is None:
+        return None
+    return {
+        "rate_deg_s": rate.rate_deg_s,
+        "interval_deg_s": list(rate.interval_deg_s),
+        "fixed": rate.fixed,
     }
 
 
@@ -340,11 +353,24 @@ class _GeometricSub:
         self.__dict__.update(fields)
 
 
+def _empty_pass(aperture_deg: float):
+    """The traces of a circular pass with no target, at the geometric modes' pulse rate."""
+    empty = Scene(
+        name="pass", targets=(), radar=load_scene("scene1").radar,
+        trajectory_spec={
+            "kind": "circular", "aperture_deg": float(aperture_deg),
+            "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG, "speed_mps": SPEED_MPS,
+        },
+    )  # fmt: skip
+    return simulate(empty).traces
+
+
 def run_geometric(aperture_deg: float, seed: int) -> dict:
     """One seeded geometric draw (module notes): fits, and joins of pieces."""
     from sarmotion.tracking.wide_aspect import fit_track, join_tracks, pooled_factors
 
-    scene, _, duration = draw_scene(aperture_deg, seed)
+    traces = _empty_pass(aperture_deg)
+    duration = np.deg2rad(aperture_deg) * 7100.0 / SPEED_MPS
     rng = np.random.default_rng(seed)
     movers = []
     for _ in range(N_MOVERS):  # 1-8 m/s, headings uniform: nothing is imaged
@@ -353,17 +379,12 @@ def run_geometric(aperture_deg: float, seed: int) -> dict:
         movers.append(
             PointTarget(position_m=rng.uniform(-HALF_SCENE_M, HALF_SCENE_M, 2), velocity_mps=u)
         )
-    empty = Scene(
-        name="pass", targets=(), radar=scene.radar,
-        trajectory_spec={**scene.trajectory_spec, "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG},
-    )  # fmt: skip
-    traces = simulate(empty).traces
     start = time.perf_counter()
     prior = {"prior_std_m": IMAGE_M / 2.0}
     looks = [_geometric_looks(traces, m, rng) for m in movers]
     out_movers = []
     for m, mine in zip(movers, looks, strict=True):
-        fit = fit_track(mine, **prior)
+        fit = fit_track(mine, wavelength_m=float(traces.radar.wavelength_m), **prior)
         x, cov = fit.at(0.0)
         e = x[:2] - np.asarray(m.position_m)[:2]
         w, v = np.linalg.eigh(cov[:2, :2])
@@ -486,14 +507,7 @@ def run_turns(aperture_deg: float, seed: int, overlap: float) -> dict:
     from sarmotion.tracking.turns import look_turn_test, turn_test
 
     rng = np.random.default_rng(seed + 11)
-    empty = Scene(
-        name="pass", targets=(), radar=load_scene("scene1").radar,
-        trajectory_spec={
-            "kind": "circular", "aperture_deg": float(aperture_deg),
-            "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG, "speed_mps": SPEED_MPS,
-        },
-    )  # the pass alone: its movers are drawn below  # fmt: skip
-    traces = simulate(empty).traces
+    traces = _empty_pass(aperture_deg)  # the pass alone: its movers are drawn below
     out = {"aperture_deg": aperture_deg, "seed": seed, "overlap": overlap, "tracks": []}
     for rate in (0.0, TURN_RATE_DEG_S):
         speed, heading = rng.uniform(1.0, 8.0), rng.uniform(0.0, 2.0 * np.pi)
@@ -512,7 +526,8 @@ def run_turns(aperture_deg: float, seed: int, overlap: float) -> dict:
         looks, pulses, dets = _moving_looks(traces, motion, rng, overlap, TURN_FACTORS)
         start = time.perf_counter()
         new = look_turn_test(looks, pulses, false_alarm=TURN_FALSE_ALARM,
-                             prior_std_m=IMAGE_M / 2.0)  # fmt: skip
+                             prior_std_m=IMAGE_M / 2.0, rate=True)  # fmt: skip
+        ground = new.turn_rate if new else None
         seconds = time.perf_counter() - start
         old = turn_test(
             [t for t, _ in dets], pulses, [d.position_m for _, d in dets],
@@ -529,8 +544,9 @@ def run_turns(aperture_deg: float, seed: int, overlap: float) -> dict:
                 "statistic": new.statistic if new else None,
                 "threshold": new.threshold if new else None,
                 "n_looks": new.n_looks if new else 0,
-                "turn_rate_fit_deg_s": new.apparent_turn_rate_deg_s if new else None,
-                "turn_rate_fit_std_deg_s": new.apparent_turn_rate_std_deg_s if new else None,
+                "ground_rate_deg_s": ground.rate_deg_s if ground else None,
+                "ground_rate_interval_deg_s": list(ground.interval_deg_s) if ground else None,
+                "ground_rate_fixed": ground.fixed if ground else None,
                 "old_flagged": bool(old.flagged),
                 "old_statistic": old.statistic,
                 "old_threshold": old.threshold,
@@ -548,11 +564,14 @@ def summarise_turns(draws: list[dict]) -> dict:
     tracks = [t for d in draws for t in d["tracks"]]
     uni = [t for t in tracks if t["turn_rate_deg_s"] == 0.0]
     turn = [t for t in tracks if t["turn_rate_deg_s"] != 0.0]
-    rate_z = [
-        abs(t["turn_rate_fit_deg_s"] - t["turn_rate_deg_s"]) / t["turn_rate_fit_std_deg_s"]
-        for t in turn
-        if t["turn_rate_fit_std_deg_s"]
-    ]
+    rated = [t for t in tracks if t.get("ground_rate_interval_deg_s")]
+    fixed = [t for t in rated if t["ground_rate_fixed"]]
+
+    def covered(t):
+        lo, hi = t["ground_rate_interval_deg_s"]
+        return lo <= t["turn_rate_deg_s"] <= hi
+
+    widths = [np.diff(t["ground_rate_interval_deg_s"])[0] for t in fixed]
     return {
         "uniform_tracks": len(uni),
         "uniform_flagged": sum(bool(t["flagged"]) for t in uni),
@@ -560,7 +579,14 @@ def summarise_turns(draws: list[dict]) -> dict:
         "turning_tracks": len(turn),
         "turning_flagged": sum(bool(t["flagged"]) for t in turn),
         "turning_flagged_old": sum(t["old_flagged"] for t in turn),
-        "turn_rate_within_3_std": sum(z <= 3.0 for z in rate_z),
+        "ground_rate_tracks": len(rated),
+        "ground_rate_fixed": len(fixed),
+        "ground_rate_covered": sum(covered(t) for t in rated),
+        "ground_rate_fixed_covered": sum(covered(t) for t in fixed),
+        "ground_rate_fixed_width_median_deg_s": float(np.median(widths)) if widths else None,
+        "ground_rate_fixed_error_max_deg_s": max(
+            (abs(t["ground_rate_deg_s"] - t["turn_rate_deg_s"]) for t in fixed), default=None
+        ),
         "untested": sum(t["flagged"] is None for t in tracks),
     }
 
@@ -571,6 +597,7 @@ def summarise(draws: list[dict]) -> dict:
     fitted = [m for m in movers if "fixed" in m]
     fixed = [m for m in fitted if m["fixed"]]
     detected = [m for m in movers if m["n_tracks"] > 0]
+    rates = [r for m in movers for r in m.get("ground_turn_rate", []) if r]
 
     def median(key, items):
         return float(np.median([m[key] for m in items])) if items else None
@@ -605,6 +632,12 @@ def summarise(draws: list[dict]) -> dict:
         ),
         "turn_tested_tracks": int(
             sum(sum(f is not None for f in m["turn_flagged"]) for m in movers)
+        ),
+        # every mover is uniform: a fixed rate's interval should hold 0
+        "ground_rate_tracks": len(rates),
+        "ground_rate_fixed": sum(r["fixed"] for r in rates),
+        "ground_rate_covers_zero": sum(
+            r["interval_deg_s"][0] <= 0.0 <= r["interval_deg_s"][1] for r in rates
         ),
         "seconds": float(sum(d["seconds"] for d in draws)),
     }  # fmt: skip
@@ -738,14 +771,24 @@ def main_turns(args: argparse.Namespace) -> int:
     (args.out / f"{args.name}.json").write_text(json.dumps(doc, indent=1) + "\n")
     rows = [
         "| pass | uniform tracks | flagged (looks) | flagged (pairs, before) "
-        "| 3 deg/s turns | flagged (looks) | flagged (pairs, before) |",
-        "|---|---|---|---|---|---|---|",
+        "| 3 deg/s turns | flagged (looks) | flagged (pairs, before) "
+        "| ground rate fixed | interval covers the truth (fixed; all) "
+        "| fixed interval width (median) | fixed rate error (max) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
+
+    def num(x):
+        return "-" if x is None else f"{x:.3f} deg/s"
+
     for key, v in summary.items():
         rows.append(
             f"| {key} | {v['uniform_tracks']} | {v['uniform_flagged']} "
             f"| {v['uniform_flagged_old']} | {v['turning_tracks']} | {v['turning_flagged']} "
-            f"| {v['turning_flagged_old']} |"
+            f"| {v['turning_flagged_old']} | {v['ground_rate_fixed']}/{v['ground_rate_tracks']} "
+            f"| {v['ground_rate_fixed_covered']}/{v['ground_rate_fixed']}; "
+            f"{v['ground_rate_covered']}/{v['ground_rate_tracks']} "
+            f"| {num(v['ground_rate_fixed_width_median_deg_s'])} "
+            f"| {num(v['ground_rate_fixed_error_max_deg_s'])} |"
         )
     (args.out / f"{args.name}.md").write_text("\n".join(rows) + "\n")
     print("\n".join(rows))

@@ -28,7 +28,9 @@ from sarmotion.tracking import Detection, SubApertureDetections, TrackingOptions
 from sarmotion.tracking.sub_apertures import sub_aperture_slices, sub_aperture_time_s
 from sarmotion.tracking.wide_aspect import (
     PRIOR_SHARE,
+    LookMeasurement,
     antenna_state,
+    coherence_acceleration_mps2,
     fit_track,
     join_tracks,
     look_measurement,
@@ -219,6 +221,94 @@ def test_one_mover_cut_in_pieces_is_one_track_two_movers_are_two():
         [looks[:7], others, looks[13:]], prior_std_m=PRIOR_STD_M, gate_probability=GATE
     )
     assert sorted(groups) == [[0, 2], [1]]
+
+
+# Errors of the order of the detections' Cramér-Rao bounds at 20 dB (ground range,
+# range speed, cross-range speed): the looks alone then claim a point even over 4 degrees.
+SMALL_STD = np.array([3e-4, 1e-5, 5e-4])
+
+
+def _accelerating_looks(aperture_deg, p0, u0, acc, seed, std):
+    """Looks of a mover at a constant ground acceleration ``acc`` (m/s^2) through ``s = 0``.
+
+    Each look's ``z`` is the accelerating mover's range history at its centre time (its
+    acceleration's range component in ``R''``) plus the error that :func:`_looks` draws.
+    """
+    p0, u0, acc = (np.asarray(v, dtype=float) for v in (p0, u0, acc))
+    mover = PointTarget(position_m=list(p0), velocity_mps=list(u0))
+    out = []
+    for m in _looks(aperture_deg, mover, np.random.default_rng(seed), std=std):
+        t = m.time_s
+        error = m.z - range_history(p0 + t * u0, u0, m.antenna)
+        p, v = p0 + t * u0 + 0.5 * t**2 * acc, u0 + t * acc
+        z = range_history(p, v, m.antenna)
+        z[2] += float((np.r_[p, 0.0] - m.antenna.position_m)[:2] @ acc) / z[0]
+        out.append(
+            LookMeasurement(
+                sub_aperture=m.sub_aperture, antenna=m.antenna, z=z + error,
+                covariance=m.covariance, detection=m.detection,
+            )
+        )  # fmt: skip
+    return out
+
+
+def _mahalanobis(fit, truth):
+    x, cov = fit.at(0.0)
+    e = x[:2] - np.asarray(truth)[:2]
+    return float(np.sqrt(e @ np.linalg.solve(cov[:2, :2], e)))
+
+
+def test_the_coherence_margin_is_an_eighth_of_a_wavelength_over_the_track():
+    """``a_c T^2 / 8 = lambda / 8``, ``T`` the span of the looks' centre times; 0 without."""
+    looks = _looks(10.0, MOVER, np.random.default_rng(0))
+    lam = float(_pass(10.0).radar.wavelength_m)
+    span = looks[-1].time_s - looks[0].time_s
+    a_c = coherence_acceleration_mps2(looks, lam)
+    assert a_c * span**2 / 8.0 == pytest.approx(lam / 8.0, rel=1e-12)
+    assert coherence_acceleration_mps2(looks, None) == 0.0
+    assert coherence_acceleration_mps2(looks[:1], lam) == 0.0
+    fit = fit_track(looks, prior_std_m=PRIOR_STD_M, wavelength_m=lam)
+    assert fit.acceleration_std_mps2 == pytest.approx(a_c)
+    with pytest.raises(ValueError, match="wavelength_m"):
+        coherence_acceleration_mps2(looks, -1.0)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_four_degrees_are_a_family_however_small_the_errors(seed):
+    """4 degrees, errors at the bounds: with the coherence margin the looks leave a family.
+
+    The mover accelerating by the margin moves the uniform fit's point 11-13 m along
+    the family: a point over 4 degrees rests on nothing a vehicle's motion holds to.
+    """
+    lam = float(_pass(4.0).radar.wavelength_m)
+    looks = _looks(4.0, PointTarget(position_m=[6.0, -9.0], velocity_mps=[3.0, -4.0]),
+                   np.random.default_rng(seed), std=SMALL_STD)  # fmt: skip
+    fit = fit_track(looks, prior_std_m=PRIOR_STD_M, wavelength_m=lam)
+    assert not fit.fixed
+    assert fit.position_std_m > np.sqrt(PRIOR_SHARE) * PRIOR_STD_M
+    a = looks[len(looks) // 2].detection.family_position_per_m
+    assert abs(fit.family_position_per_m @ a) / np.linalg.norm(a) > 0.99
+
+
+@pytest.mark.parametrize(("aperture_deg", "speed_scale"), [(10.0, 1.0), (30.0, 0.25)])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_the_coherence_margin_covers_a_mover_accelerating_by_it(aperture_deg, speed_scale, seed):
+    """A mover accelerating by ``a_c``: the uniform fit misses it, the margin covers it.
+
+    The fixed position's error is within 3 of the fit's standard deviations with the
+    margin; without it, beyond 4 (measured 4.7-11): the test can fail both ways.
+    """
+    lam = float(_pass(aperture_deg).radar.wavelength_m)
+    p0, u0 = np.array([6.0, -9.0]), speed_scale * np.array([3.0, -4.0])
+    plain = _looks(aperture_deg, PointTarget(position_m=list(p0), velocity_mps=list(u0)),
+                   np.random.default_rng(seed), std=SMALL_STD)  # fmt: skip
+    acc = coherence_acceleration_mps2(plain, lam) * np.array([0.6, 0.8])
+    looks = _accelerating_looks(aperture_deg, p0, u0, acc, seed, SMALL_STD)
+    uniform = fit_track(looks, prior_std_m=PRIOR_STD_M)
+    margin = fit_track(looks, prior_std_m=PRIOR_STD_M, wavelength_m=lam)
+    assert uniform.fixed and margin.fixed
+    assert _mahalanobis(uniform, p0) > 4.0
+    assert _mahalanobis(margin, p0) <= 3.0
 
 
 @pytest.mark.slow

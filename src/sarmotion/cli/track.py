@@ -278,15 +278,17 @@ def fit_line(fit: dict[str, Any]) -> str:
     """The track's fit over its looks in words: a fixed position, or the family it leaves."""
     (x, y), (ux, uy) = fit["position_m"], fit["velocity_mps"]
     looks = f"{fit['n_looks']} looks over {fixed(fit['aspect_deg'], 2)} deg of aspect"
+    margin = fit.get("acceleration_std_mps2") or 0.0
+    uniform = f", allowing {margin:.2g} m/s^2 of acceleration" if margin > 0 else ", uniform motion"
     if fit["fixed"]:
         return (
             f"position fixed by {looks}: ({fixed(x, 2)}, {fixed(y, 2)}) m +- "
-            f"{fit['position_std_m']:.2g} m at s = {fixed(fit['time_s'])} s, velocity "
-            f"({fixed(ux, 2)}, {fixed(uy, 2)}) m/s"
+            f"{fit['position_std_m']:.2g} m at s = {fixed(fit['time_s'])} s{uniform}, "
+            f"velocity ({fixed(ux, 2)}, {fixed(uy, 2)}) m/s"
         )
     dx, dy = fit["family"]["position_per_m"]
     return (
         f"position not fixed by {looks}: on the family through ({fixed(x, 2)}, {fixed(y, 2)}) m "
         f"along ({fixed(dx, 3)}, {fixed(dy, 3)}) (standard deviation {fit['position_std_m']:.2g} m "
-        "along it from the ranges and range rates, the scene's prior included)"
+        f"along it from the ranges and range rates, the scene's prior included{uniform})"
     )

@@ -9,9 +9,12 @@
                  "fit": {"time_s", "position_m", "velocity_mps", "covariance",
                          "position_std_m", "fixed", "chi2", "dof", "n_looks",
                          "aspect_deg", "prior_std_m", "error_factors",
+                         "acceleration_std_mps2",
                          "family": {"position_per_m", "velocity_per_m"}} or null,
                  "turn": {"flagged", "statistic", "threshold", "dof", "false_alarm",
-                          "n_pairs", "apparent_turn_rate_deg_s", "apparent_turn_rate_std_deg_s"},
+                          "n_pairs", "apparent_turn_rate_deg_s", "apparent_turn_rate_std_deg_s",
+                          "turn_rate": {"rate_deg_s", "interval_deg_s", "fixed",
+                                        "confidence", "n_looks"} or null},
                  "end": {"reason", "time_s", "next_time_s", "predicted_position_m",
                          "range_offset_m", "range_half_extent_m", "fixed", "text"},
                  "states": [{"time_s", "sub_aperture", "position_m": [x, y],
@@ -41,7 +44,10 @@ false-alarm probability ``false_alarm`` (Bonferroni over ``n_pairs``), whether i
 exceeded, and the heading rate of the velocity estimates between the first and last
 detections with its standard error (degrees per second, counter-clockwise positive; null
 when they overlap): the *apparent* turn rate, which for a mover that accelerates differs
-from its own (:mod:`sarmotion.tracking.turns`). ``end`` (a key added without changing any
+from its own (:mod:`sarmotion.tracking.turns`); ``turn_rate`` (a key added without
+changing any other) is, where the track's position is fixed, the constant-rate turn in
+the ground frame that fits its looks, with the hull of its confidence set and whether
+that set fixes it (:mod:`sarmotion.tracking.turn_rate`). ``end`` (a key added without changing any
 other) says why the track ends where it does (:mod:`sarmotion.tracking.ends`): ``"data"``
 (its last detection is in the last sub-aperture), ``"left_scene"`` (moving on uniformly
 it is outside the imaged scene at the next sub-aperture: in ground range whatever its
@@ -121,6 +127,7 @@ def _fit(fit: Any) -> dict[str, Any] | None:
         "aspect_deg": float(fit.aspect_deg),
         "prior_std_m": float(fit.prior_std_m),
         "error_factors": [float(v) for v in fit.error_factors],
+        "acceleration_std_mps2": float(fit.acceleration_std_mps2),
         "family": {
             "position_per_m": [float(v) for v in fit.family_position_per_m],
             "velocity_per_m": [float(v) for v in fit.family_velocity_per_m],
@@ -158,6 +165,20 @@ def _turn(turn: TurnTest | None) -> dict[str, Any] | None:
         "n_pairs": turn.n_pairs,
         "apparent_turn_rate_deg_s": turn.apparent_turn_rate_deg_s,
         "apparent_turn_rate_std_deg_s": turn.apparent_turn_rate_std_deg_s,
+        "turn_rate": _turn_rate(turn.turn_rate),
+    }
+
+
+def _turn_rate(rate: Any) -> dict[str, Any] | None:
+    """The turn rate in the ground frame (``tracking.TurnRate``), or None."""
+    if rate is None:
+        return None
+    return {
+        "rate_deg_s": float(rate.rate_deg_s),
+        "interval_deg_s": [float(v) for v in rate.interval_deg_s],
+        "fixed": bool(rate.fixed),
+        "confidence": float(rate.confidence),
+        "n_looks": int(rate.n_looks),
     }
 
 

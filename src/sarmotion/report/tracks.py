@@ -197,7 +197,24 @@ def turn_line(track: dict[str, Any]) -> str:
     return (
         head + f"{verdict}: chi-square {turn['statistic']:.3g} against {turn['threshold']:.3g} "
         f"(2 dof, false-alarm probability {turn['false_alarm']:g} per track over "
-        f"{turn['n_pairs']} pair(s)){rate}"
+        f"{turn['n_pairs']} pair(s)){rate}{ground_rate_text(turn.get('turn_rate'))}"
+    )
+
+
+def ground_rate_text(rate: dict[str, Any] | None) -> str:
+    """The turn rate in the ground frame in words (``turn``'s ``turn_rate``), or ''."""
+    if not rate:
+        return ""
+    lo, hi = rate["interval_deg_s"]
+    level = f"{100 * rate['confidence']:g} %"
+    if rate["fixed"]:
+        return (
+            f"; turn rate in the ground frame {rate['rate_deg_s']:.3g} deg/s "
+            f"({level} interval {lo:.3g} to {hi:.3g}, {rate['n_looks']} looks)"
+        )
+    return (
+        f"; turn rate not fixed by the {rate['n_looks']} looks: rates from {lo:.3g} to "
+        f"{hi:.3g} deg/s fit within {level} (best {rate['rate_deg_s']:.3g})"
     )
 
 

@@ -29,6 +29,7 @@ from .sub_apertures import (
 )
 from .track import TrackingResult, track
 from .tracker import Track, Tracker, TrackingOptions, TrackState
+from .turn_rate import TurnRate, turn_rate
 from .turns import TurnTest, turn_test
 from .wide_aspect import PositionFit, fit_track, join_tracks
 
@@ -44,6 +45,7 @@ __all__ = [
     "Tracker",
     "TrackingOptions",
     "TrackingResult",
+    "TurnRate",
     "TurnTest",
     "analyze_sub_aperture",
     "fit_track",
@@ -54,5 +56,6 @@ __all__ = [
     "road_misses",
     "sub_aperture_slices",
     "track",
+    "turn_rate",
     "turn_test",
 ]

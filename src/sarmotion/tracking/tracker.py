@@ -48,7 +48,9 @@ make it, and without roads each state carries its family.
 sub-apertures turn with the look and cross at the mover. :meth:`Tracker.tracks` gives
 each track the fit of its detections' range histories through their looks
 (:func:`~sarmotion.tracking.wide_aspect.fit_track`: the position with its standard
-deviation and whether the data fix it, else the family), and first joins the tracks of
+deviation and whether the data fix it, else the family; the mover allowed the
+acceleration that keeps it within an eighth of the radar's wavelength of uniform motion
+over the track, the fit's coherence margin), and first joins the tracks of
 one uniform mover (:func:`~sarmotion.tracking.wide_aspect.join_tracks`): the filter above
 takes each detection's velocity for the mover's, and on a wide pass a uniform mover's
 detections drift as the look turns, so the filter cuts it into several tracks. Each
@@ -493,12 +495,18 @@ class Tracker:
                 continue
             hits_looks = self._looks(kept)
             fit = (
-                fit_track(hits_looks, error_factors=factors, **self._prior())
+                fit_track(
+                    hits_looks,
+                    error_factors=factors,
+                    wavelength_m=float(self.traces.radar.wavelength_m),
+                    **self._prior(),
+                )
                 if hits_looks
                 else None
             )
             states = tuple(self._state(s) for s in kept)
-            out.append((states, self._turn(kept), fit, self._end(states, fit)))
+            turn = self._turn(kept, rate=bool(fit is not None and fit.fixed))
+            out.append((states, turn, fit, self._end(states, fit)))
         return tuple(
             Track(id=k + 1, states=s, turn=turn, fit=fit, end=end)
             for k, (s, turn, fit, end) in enumerate(out)
@@ -561,12 +569,13 @@ class Tracker:
             )
         return out
 
-    def _turn(self, states: Sequence[GaussianState]) -> TurnTest | None:
+    def _turn(self, states: Sequence[GaussianState], *, rate: bool = False) -> TurnTest | None:
         """The turn test of a track's detections (:mod:`~sarmotion.tracking.turns`).
 
         Through the looks (:func:`~sarmotion.tracking.turns.look_turn_test`) where every
-        detection has its bound and 3 come from sub-apertures that share no pulse; else
-        the pairs of velocities (:func:`~sarmotion.tracking.turns.turn_test`).
+        detection has its bound and 3 come from sub-apertures that share no pulse, with
+        the turn rate in the ground frame where ``rate`` (the track's position fixed);
+        else the pairs of velocities (:func:`~sarmotion.tracking.turns.turn_test`).
         """
         metas = [self._meta[id(s)] for s in states]
         hits = [
@@ -583,6 +592,7 @@ class Tracker:
                 prior_std_m=prior["prior_std_m"],  # type: ignore[arg-type]
                 centre_m=prior["centre_m"],  # type: ignore[arg-type]
                 height_m=prior["height_m"],  # type: ignore[arg-type]
+                rate=rate,
             )
             if test is not None:
                 return test

@@ -71,12 +71,14 @@ degrees of freedom for a uniform mover whose errors are independent between the 
 (the unknown error scale cancels). The track is flagged when ``F`` exceeds its quantile
 at ``1 - p``; the statistic reported is the chi-square (2 degrees of freedom) of the same
 tail probability, with its quantile at ``1 - p``, so that both tests read alike. At least
-3 independent detections are needed (``3 n - 6 >= 3``). No turn rate is given: the
-accelerating model's ``(u x a) / |u|^2`` is not a turn's rate once the heading turns by
-a good part of a radian (a 3 deg/s turn over 30 degrees of GOTCHA's pass: +1.7 deg/s
-for -3), and a constant-rate turn fitted from several starting rates found fits as
-good at rates of both signs (at 10 degrees: -1.8 and +2.9 deg/s for +3; +1.2 and 0 for a
-uniform mover): one antenna's range histories leave the rate ambiguous there.
+3 independent detections are needed (``3 n - 6 >= 3``).
+
+The accelerating model's ``(u x a) / |u|^2`` is not a turn's rate once the heading turns
+by a good part of a radian (a 3 deg/s turn over 30 degrees of GOTCHA's pass: +1.7 deg/s
+for -3); the rate in the ground frame is instead fitted as a constant-rate turn, with
+its confidence interval, by :mod:`sarmotion.tracking.turn_rate` (``rate=True``), which
+also says when the looks leave it ambiguous (rates of both signs that fit as well are
+common over 10 degrees).
 
 Times in s, velocities in m/s, angles in degrees.
 """
@@ -90,6 +92,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
+from .turn_rate import TurnRate, turn_rate
 from .wide_aspect import LookMeasurement, fit_track
 
 __all__ = ["TurnTest", "look_turn_test", "turn_test"]
@@ -122,6 +125,10 @@ class TurnTest:
         histories through their looks (:func:`look_turn_test`).
     n_looks : int
         Independent detections the looks' test used (0 for the pairs).
+    turn_rate : TurnRate or None
+        The turn rate in the ground frame through the looks
+        (:mod:`sarmotion.tracking.turn_rate`), where it was asked for (the tracker asks
+        where the track's position is fixed).
     """
 
     flagged: bool
@@ -133,6 +140,7 @@ class TurnTest:
     apparent_turn_rate_std_deg_s: float | None
     model: str = "pairs"
     n_looks: int = 0
+    turn_rate: TurnRate | None = None
 
 
 def _heading(v: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
@@ -281,6 +289,7 @@ def look_turn_test(
     prior_std_m: float,
     centre_m: NDArray[np.float64] | None = None,
     height_m: float = 0.0,
+    rate: bool = False,
 ) -> TurnTest | None:
     """Uniform motion against a constant acceleration through the looks (module notes).
 
@@ -295,6 +304,10 @@ def look_turn_test(
     prior_std_m, centre_m, height_m
         The scene prior and the movers' height
         (:func:`~sarmotion.tracking.wide_aspect.fit_track`).
+    rate : bool
+        Also estimate the turn rate in the ground frame
+        (:func:`~sarmotion.tracking.turn_rate.turn_rate`, seconds a track over tens of
+        degrees).
 
     Returns
     -------
@@ -360,4 +373,9 @@ def look_turn_test(
         apparent_turn_rate_std_deg_s=None,
         model="looks",
         n_looks=n,
+        turn_rate=(
+            turn_rate(sel, prior_std_m=prior_std_m, centre_m=centre_m, height_m=height_m)
+            if rate
+            else None
+        ),
     )

@@ -51,8 +51,9 @@ the looks are nearly parallel, the data leave the position free along them, and 
 prior decides it; over tens of degrees of a circular pass the families turn with the
 look and cross at the mover. The search starts on the family of the detection nearest
 ``t_0`` (offsets within ``3 sigma_f`` scanned, the best polished by
-:func:`scipy.optimize.least_squares`); the covariance is ``(A^T A)^-1`` of the whitened
-Jacobian ``A`` at the solution, prior included.
+:func:`scipy.optimize.least_squares`). The covariance it reports is that of the looks'
+ranges and range rates at the solution, the scene prior and the coherence margin
+(below) included: ``(A^T A)^-1`` of their whitened Jacobian ``A``.
 
 **Fixed or not.** The data fix the position when they, not the prior, carry it: when the
 prior holds at most :data:`PRIOR_SHARE` (1 %) of the position's information in every
@@ -74,9 +75,25 @@ range speed, cross-range speed), 4 degrees gave standard deviations of 1.3-2.4 m
 the ranges and range rates alone leave at 24-30 m; over tens of degrees the families'
 ranges and range rates cross at the mover. When the ranges and range rates do not fix
 it, the fit reports the family, as a single sub-aperture does, with their covariance:
-the family they leave, and its spread. Every fix assumes uniform motion: a constant
-acceleration left free with a prior spread of 1e-4 m/s^2 widens the position's standard
-deviation to 1.5-1.8 m at 10 and at 30 degrees (from 0.03-0.9 m).
+the family they leave, and its spread.
+
+**The coherence margin.** Every fix assumes uniform motion, and what it rests on is a
+fraction of a wavelength: along the family the range histories of the members differ
+only in their higher-order terms (over 30 degrees a 10 m offset moves the history by
+about a wavelength), and a mover's own acceleration makes such terms too (a constant
+range acceleration is a range curvature, as a cross-range offset is). An exactly
+uniform simulated mover lets the fit claim centimetres over a 4 degree pass, which no
+vehicle's motion supports. The fit therefore allows the mover a constant ground
+acceleration of standard deviation ``a_c = lambda / T^2`` in each axis
+(:func:`coherence_acceleration_mps2`; ``lambda`` the central wavelength, ``T`` the span
+of the looks' centre times), marginalised in the covariance it reports and in the
+decision above: the acceleration that moves the mover ``a_c T^2 / 8 = lambda / 8`` off
+its uniform path at the ends of the pass, a two-way phase of ``pi / 2``, the quadratic
+phase error that coherent focusing of the whole pass tolerates. A mover closer to
+uniform than that is within its stated spread; one that departs more is what the turn
+test (:mod:`sarmotion.tracking.turns`) is for. The spread is an upper bound for an
+exactly uniform mover, and the honest one for a vehicle. Without a wavelength
+(``wavelength_m`` None) the motion is taken as exactly uniform.
 
 **One track per vehicle.** A uniform mover's range speed turns with the look: what
 changes between the sub-apertures of a wide pass is expected. Two tracks of one uniform
@@ -114,6 +131,7 @@ __all__ = [
     "LookMeasurement",
     "PositionFit",
     "antenna_state",
+    "coherence_acceleration_mps2",
     "fit_track",
     "join_tracks",
     "look_measurement",
@@ -318,7 +336,9 @@ class PositionFit:
     state : (4,) ndarray
         ``(x, y, ux, uy)`` at ``time_s`` (m, m/s).
     covariance : (4, 4) ndarray
-        Its covariance, the scene prior included (m^2, m^2/s, m^2/s^2).
+        Its covariance from the looks' ranges and range rates (their range
+        accelerations marginalised), the scene prior and the coherence margin included
+        (m^2, m^2/s, m^2/s^2; module notes).
     chi2 : float
         Weighted residual of the measurements at the solution (the prior left out).
     dof : int
@@ -329,10 +349,14 @@ class PositionFit:
         Change of the look's azimuth between the first and last detections (degrees).
     prior_std_m : float
         ``sigma_f``, the scene prior's standard deviation in each axis (m).
+    acceleration_std_mps2 : float
+        The coherence margin: the standard deviation of a constant ground acceleration
+        per axis that :attr:`covariance` allows (m/s^2; 0: exactly uniform motion).
     fixed : bool
         Whether the data fix the position (module notes): the position's largest
-        standard deviation from the looks' ranges and range rates alone is at most
-        ``sqrt(PRIOR_SHARE) prior_std_m``. When not, :attr:`covariance` is that one.
+        standard deviation in :attr:`covariance` is at most
+        ``sqrt(PRIOR_SHARE) prior_std_m``. When not, the state is the member of the
+        family that the scene prior picks.
     family_position_per_m, family_velocity_per_m : (2,) ndarray
         The direction in which the position is least known and the velocity's change
         along it (m/m, (m/s)/m): the track's family when it is not fixed.
@@ -349,15 +373,23 @@ class PositionFit:
     n_looks: int
     aspect_deg: float
     prior_std_m: float
+    acceleration_std_mps2: float
     fixed: bool
     family_position_per_m: NDArray[np.float64]
     family_velocity_per_m: NDArray[np.float64]
     error_factors: NDArray[np.float64]
 
     def at(self, time_s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """State ``(x, y, ux, uy)`` and its covariance at ``time_s`` (uniform motion)."""
-        f = _transition(float(time_s) - self.time_s)
-        return f @ self.state, f @ self.covariance @ f.T
+        """State ``(x, y, ux, uy)`` and its covariance at ``time_s`` (uniform motion).
+
+        The coherence margin's acceleration adds ``(dt^2 / 2, dt)`` times its spread,
+        taken as independent of the state at :attr:`time_s`.
+        """
+        dt = float(time_s) - self.time_s
+        f = _transition(dt)
+        g = np.vstack([0.5 * dt**2 * np.eye(2), dt * np.eye(2)])
+        cov = f @ self.covariance @ f.T + self.acceleration_std_mps2**2 * (g @ g.T)
+        return f @ self.state, cov
 
     @property
     def position_std_m(self) -> float:
@@ -391,6 +423,7 @@ def fit_track(
     height_m: float = 0.0,
     error_factors: NDArray[np.float64] | None = None,
     calibrate: bool = True,
+    wavelength_m: float | None = None,
 ) -> PositionFit:
     """The uniform motion that best fits the looks' range histories (module notes).
 
@@ -409,6 +442,11 @@ def fit_track(
         Variance factors ``f_c`` to start from (default ones: the bounds).
     calibrate : bool
         Re-estimate them from the fit's residuals (with at least 3 looks).
+    wavelength_m : float, optional
+        The radar's central wavelength (m): the fix's covariance and whether the data
+        fix the position allow the mover a constant ground acceleration of
+        :func:`coherence_acceleration_mps2` (module notes). Without it the motion is
+        taken as exactly uniform.
 
     Returns
     -------
@@ -416,10 +454,11 @@ def fit_track(
     """
     factors = np.ones(3) if error_factors is None else np.asarray(error_factors, dtype=float)
     rounds = _CALIBRATION_ROUNDS if calibrate and len(looks) >= 3 else 1
-    fit = _fit_once(looks, prior_std_m, centre_m, height_m, factors)
+    margin = coherence_acceleration_mps2(looks, wavelength_m)
+    fit = _fit_once(looks, prior_std_m, centre_m, height_m, factors, margin)
     for _ in range(rounds - 1):
         factors = _factors(looks, fit, height_m)
-        fit = _fit_once(looks, prior_std_m, centre_m, height_m, factors)
+        fit = _fit_once(looks, prior_std_m, centre_m, height_m, factors, margin)
     return fit
 
 
@@ -445,6 +484,7 @@ def _fit_once(
     centre_m: NDArray[np.float64] | None,
     height_m: float,
     factors: NDArray[np.float64],
+    acceleration_std_mps2: float = 0.0,
 ) -> PositionFit:
     """One weighted least-squares fit with the measurements' deviations times ``factors``."""
     if not looks:
@@ -500,15 +540,11 @@ def _fit_once(
             best = sol
     assert best is not None
     x = best.x
-    jac = best.jac
-    info = jac.T @ jac
-    cov = np.linalg.pinv(info)
-    cov = 0.5 * (cov + cov.T)
     chi2 = float(np.sum(data_residual(x) ** 2))
-    geometry = _geometry_covariance(looks, x, t0, height_m, factors, prior_std_m)
-    fixed = bool(np.linalg.eigvalsh(geometry[:2, :2])[-1] <= PRIOR_SHARE * prior_std_m**2)
-    if not fixed:  # the family the ranges and range rates leave, with its spread
-        cov = geometry
+    # the ranges' and range rates' covariance, with the coherence margin: whether they
+    # fix the position, and the spread reported either way (module notes)
+    cov = _geometry_covariance(looks, x, t0, height_m, factors, prior_std_m, acceleration_std_mps2)
+    fixed = bool(np.linalg.eigvalsh(cov[:2, :2])[-1] <= PRIOR_SHARE * prior_std_m**2)
     w, v = np.linalg.eigh(cov[:2, :2])
     worst = v[:, -1]
     # velocity change along the worst position direction (regression in the covariance)
@@ -522,11 +558,41 @@ def _fit_once(
         n_looks=len(looks),
         aspect_deg=_aspect_deg(looks),
         prior_std_m=float(prior_std_m),
+        acceleration_std_mps2=float(acceleration_std_mps2),
         fixed=fixed,
         family_position_per_m=worst,
         family_velocity_per_m=along,
         error_factors=np.array(factors, dtype=np.float64),
     )
+
+
+def coherence_acceleration_mps2(
+    looks: Sequence[LookMeasurement], wavelength_m: float | None
+) -> float:
+    """The ground acceleration a fix allows (module notes): ``lambda / T^2`` per axis.
+
+    ``T`` is the span of the looks' centre times (s). 0 (exactly uniform motion) without
+    a wavelength or with fewer than two distinct times.
+
+    Parameters
+    ----------
+    looks : sequence of LookMeasurement
+        A track's detections.
+    wavelength_m : float or None
+        The radar's central wavelength (m).
+
+    Returns
+    -------
+    float
+        The standard deviation of each ground component of the acceleration (m/s^2).
+    """
+    if wavelength_m is None or len(looks) < 2:
+        return 0.0
+    if not (np.isfinite(wavelength_m) and wavelength_m > 0):
+        raise ValueError(f"wavelength_m must be positive (m), got {wavelength_m!r}")
+    times = [m.time_s for m in looks]
+    span = max(times) - min(times)
+    return float(wavelength_m) / span**2 if span > 0 else 0.0
 
 
 def _geometry_covariance(
@@ -536,26 +602,37 @@ def _geometry_covariance(
     height_m: float,
     factors: NDArray[np.float64],
     prior_std_m: float,
+    acceleration_std_mps2: float = 0.0,
 ) -> NDArray[np.float64]:
     """Covariance of the state from the looks' ranges and range rates alone (notes).
 
     The range accelerations are marginalised (each look's ``(R, R')`` block of its
-    covariance); the scene prior is included. ``(4, 4)``, linearised at ``x``.
+    covariance); the scene prior is included; with ``acceleration_std_mps2`` > 0 a
+    constant ground acceleration of that spread per axis is marginalised too (the
+    coherence margin, module notes). ``(4, 4)``, linearised at ``x``.
     """
-    info = np.zeros((4, 4))
+    n = 6 if acceleration_std_mps2 > 0 else 4
+    info = np.zeros((n, n))
     info[:2, :2] = np.eye(2) / prior_std_m**2
-    steps = np.array([1e-3, 1e-3, 1e-4, 1e-4])  # m, m, m/s, m/s: central differences
+    if n == 6:
+        info[4:, 4:] = np.eye(2) / acceleration_std_mps2**2
+    # m, m, m/s, m/s, m/s^2, m/s^2: central differences of a smooth function
+    steps = np.array([1e-3, 1e-3, 1e-4, 1e-4, 1e-5, 1e-5])[:n]
+    state = np.r_[x, np.zeros(n - 4)]
     for m in looks:
         dt = m.time_s - t0
 
         def h(s: NDArray[np.float64], dt: float = dt, m: LookMeasurement = m):
-            return range_history(s[:2] + dt * s[2:], s[2:], m.antenna, height_m)[:2]
+            acc = s[4:6] if n == 6 else np.zeros(2)
+            position = s[:2] + dt * s[2:4] + 0.5 * dt**2 * acc
+            velocity = s[2:4] + dt * acc
+            return range_history(position, velocity, m.antenna, height_m)[:2]
 
-        jac = np.column_stack([(h(x + e) - h(x - e)) / (2.0 * e[k]) for k, e in
+        jac = np.column_stack([(h(state + e) - h(state - e)) / (2.0 * e[k]) for k, e in
                                enumerate(np.diag(steps))])  # fmt: skip
         c = (m.covariance * np.outer(factors, factors))[:2, :2]
         info += jac.T @ np.linalg.solve(c, jac)
-    cov = np.linalg.pinv(info)
+    cov = np.linalg.pinv(info)[:4, :4]
     return 0.5 * (cov + cov.T)
 
 
