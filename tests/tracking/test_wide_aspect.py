@@ -347,9 +347,9 @@ def test_the_fit_in_the_tracks_document_and_on_the_console(aperture_deg, fixed_e
     """The document's ``fit`` validates against the shipped schema and says fixed or family."""
     import jsonschema
 
-    from sarmotion.cli.track import fit_line
     from sarmotion.documents.schema import load_schema
     from sarmotion.documents.tracks import _fit
+    from sarmotion.report.tracks import fit_line
 
     looks = _looks(aperture_deg, MOVER, np.random.default_rng(5))
     fit = fit_track(looks, prior_std_m=PRIOR_STD_M)

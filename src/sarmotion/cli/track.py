@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import os
 from pathlib import Path
-from typing import Any
 
 import click
 
@@ -14,7 +13,7 @@ from ..documents.roads import read_roads
 from ..documents.tracks import tracks_document
 from ..io import staged_directory, write_json
 from ..pipeline import AnalysisOptions
-from ..report.tracks import turn_line, write_tracks_report
+from ..report.tracks import coherent_line, fit_line, turn_line, write_tracks_report
 from ..separation import SeparationOptions
 from ..tracking import TrackingOptions, sub_aperture_slices
 from ..tracking import track as run_tracking
@@ -269,26 +268,8 @@ def track(
             click.echo("    " + t["end"]["text"])
         if t.get("fit"):
             click.echo("    " + fit_line(t["fit"]))
+        if t.get("coherent"):
+            click.echo("    " + coherent_line(t["coherent"]))
         missed = [s["road_missed"] for s in t["states"] if s.get("road_missed")]
         if missed:
             click.echo(f"    {len(missed)} detection(s) on no road; the first: {missed[0]}")
-
-
-def fit_line(fit: dict[str, Any]) -> str:
-    """The track's fit over its looks in words: a fixed position, or the family it leaves."""
-    (x, y), (ux, uy) = fit["position_m"], fit["velocity_mps"]
-    looks = f"{fit['n_looks']} looks over {fixed(fit['aspect_deg'], 2)} deg of aspect"
-    margin = fit.get("acceleration_std_mps2") or 0.0
-    uniform = f", allowing {margin:.2g} m/s^2 of acceleration" if margin > 0 else ", uniform motion"
-    if fit["fixed"]:
-        return (
-            f"position fixed by {looks}: ({fixed(x, 2)}, {fixed(y, 2)}) m +- "
-            f"{fit['position_std_m']:.2g} m at s = {fixed(fit['time_s'])} s{uniform}, "
-            f"velocity ({fixed(ux, 2)}, {fixed(uy, 2)}) m/s"
-        )
-    dx, dy = fit["family"]["position_per_m"]
-    return (
-        f"position not fixed by {looks}: on the family through ({fixed(x, 2)}, {fixed(y, 2)}) m "
-        f"along ({fixed(dx, 3)}, {fixed(dy, 3)}) (standard deviation {fit['position_std_m']:.2g} m "
-        f"along it from the ranges and range rates, the scene's prior included{uniform})"
-    )

@@ -15,6 +15,10 @@
                           "n_pairs", "apparent_turn_rate_deg_s", "apparent_turn_rate_std_deg_s",
                           "turn_rate": {"rate_deg_s", "interval_deg_s", "fixed",
                                         "confidence", "n_looks"} or null},
+                 "coherent": {"time_s", "position_m", "velocity_mps", "covariance",
+                              "bound_covariance", "position_std_m", "position_bound_m",
+                              "error_factor", "coherence", "coherent", "amplitude",
+                              "snr_db", "n_pulses", "n_sub_apertures", "shift_m"} or null,
                  "end": {"reason", "time_s", "next_time_s", "predicted_position_m",
                          "range_offset_m", "range_half_extent_m", "fixed", "text"},
                  "states": [{"time_s", "sub_aperture", "position_m": [x, y],
@@ -47,7 +51,11 @@ when they overlap): the *apparent* turn rate, which for a mover that accelerates
 from its own (:mod:`sarmotion.tracking.turns`); ``turn_rate`` (a key added without
 changing any other) is, where the track's position is fixed, the constant-rate turn in
 the ground frame that fits its looks, with the hull of its confidence set and whether
-that set fixes it (:mod:`sarmotion.tracking.turn_rate`). ``end`` (a key added without changing any
+that set fixes it (:mod:`sarmotion.tracking.turn_rate`). ``coherent`` (a key added
+without changing any other) is, where the track's position is fixed, its uniform motion
+focused over all its pulses (:mod:`sarmotion.tracking.coherent`): the Cramér–Rao bound,
+the measured error factor and the covariance they make, and the coherence of its
+sub-apertures' echoes. ``end`` (a key added without changing any
 other) says why the track ends where it does (:mod:`sarmotion.tracking.ends`): ``"data"``
 (its last detection is in the last sub-aperture), ``"left_scene"`` (moving on uniformly
 it is outside the imaged scene at the next sub-aperture: in ground range whatever its
@@ -98,6 +106,7 @@ def tracks_document(result: TrackingResult) -> dict[str, Any]:
                     "n_detections": t.n_detections,
                     "turn": _turn(t.turn),
                     "fit": _fit(t.fit),
+                    "coherent": _coherent(t.coherent),
                     **({"end": _end(t.end)} if t.end is not None else {}),
                     "states": [_state(s, result) for s in t.states],
                 }
@@ -166,6 +175,30 @@ def _turn(turn: TurnTest | None) -> dict[str, Any] | None:
         "apparent_turn_rate_deg_s": turn.apparent_turn_rate_deg_s,
         "apparent_turn_rate_std_deg_s": turn.apparent_turn_rate_std_deg_s,
         "turn_rate": _turn_rate(turn.turn_rate),
+    }
+
+
+def _coherent(fit: Any) -> dict[str, Any] | None:
+    """The track focused over all its pulses (``tracking.CoherentFit``), or None."""
+    if fit is None:
+        return None
+    measured = bool(np.isfinite(fit.error_factor))
+    return {
+        "time_s": float(fit.time_s),
+        "position_m": [float(v) for v in fit.state[:2]],
+        "velocity_mps": [float(v) for v in fit.state[2:]],
+        "covariance": np.asarray(fit.covariance, dtype=float).tolist() if measured else None,
+        "bound_covariance": np.asarray(fit.bound_covariance, dtype=float).tolist(),
+        "position_std_m": fit.position_std_m if measured else None,
+        "position_bound_m": fit.position_bound_m,
+        "error_factor": float(fit.error_factor) if measured else None,
+        "coherence": float(fit.coherence),
+        "coherent": bool(fit.coherent),
+        "amplitude": float(abs(fit.amplitude)),
+        "snr_db": float(fit.snr_db),
+        "n_pulses": int(fit.n_pulses),
+        "n_sub_apertures": int(fit.n_sub_apertures),
+        "shift_m": float(fit.shift_m),
     }
 
 

@@ -25,6 +25,7 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Patch
 
+from ..core.text import fixed
 from ..tracking import TrackingResult
 from .page import figure, header_line, page, section, table
 from .plotting import LEGEND_PT, draw_look_arrow
@@ -218,6 +219,47 @@ def ground_rate_text(rate: dict[str, Any] | None) -> str:
     )
 
 
+def coherent_line(fit: dict[str, Any]) -> str:
+    """The track focused over all its pulses in words (``tracks.json``'s ``coherent``)."""
+    (x, y), (ux, uy) = fit["position_m"], fit["velocity_mps"]
+    head = (
+        f"focused over {fit['n_pulses']} pulses: ({fixed(x, 3)}, {fixed(y, 3)}) m, velocity "
+        f"({fixed(ux, 4)}, {fixed(uy, 4)}) m/s at s = {fixed(fit['time_s'])} s"
+    )
+    if fit["position_std_m"] is None:
+        spread = (
+            f", bound {fit['position_bound_m']:.2g} m (error not measured: "
+            f"{fit['n_sub_apertures']} sub-apertures)"
+        )
+    else:
+        spread = (
+            f" +- {fit['position_std_m']:.2g} m (bound {fit['position_bound_m']:.2g} m times "
+            f"{fit['error_factor']:.3g})"
+        )
+    verdict = "coherent" if fit["coherent"] else "not coherent: the looks' fit stands"
+    return f"{head}{spread}; coherence {fit['coherence']:.3f}, {verdict}"
+
+
+def fit_line(fit: dict[str, Any]) -> str:
+    """The track's fit over its looks in words: a fixed position, or the family it leaves."""
+    (x, y), (ux, uy) = fit["position_m"], fit["velocity_mps"]
+    looks = f"{fit['n_looks']} looks over {fixed(fit['aspect_deg'], 2)} deg of aspect"
+    margin = fit.get("acceleration_std_mps2") or 0.0
+    uniform = f", allowing {margin:.2g} m/s^2 of acceleration" if margin > 0 else ", uniform motion"
+    if fit["fixed"]:
+        return (
+            f"position fixed by {looks}: ({fixed(x, 2)}, {fixed(y, 2)}) m +- "
+            f"{fit['position_std_m']:.2g} m at s = {fixed(fit['time_s'])} s{uniform}, "
+            f"velocity ({fixed(ux, 2)}, {fixed(uy, 2)}) m/s"
+        )
+    dx, dy = fit["family"]["position_per_m"]
+    return (
+        f"position not fixed by {looks}: on the family through ({fixed(x, 2)}, {fixed(y, 2)}) m "
+        f"along ({fixed(dx, 3)}, {fixed(dy, 3)}) (standard deviation {fit['position_std_m']:.2g} m "
+        f"along it from the ranges and range rates, the scene's prior included{uniform})"
+    )
+
+
 def timing_rows(timings_s: dict[str, float], n_sub_apertures: int) -> list[list[str]]:
     """The rows of the tracks report's timings (HTML cells): the wall-clock total first.
 
@@ -312,6 +354,20 @@ def write_tracks_report(
     timings = timing_rows(result.timings_s, n_sub)
     parts = [
         section("Tracks", figure(uri, caption) + note),
+        section(
+            "Positions",
+            "<ul>"
+            + "".join(
+                f"<li>track {t['id']}: {html.escape(fit_line(t['fit']))}"
+                + (f"; {html.escape(coherent_line(t['coherent']))}" if t.get("coherent") else "")
+                + "</li>"
+                for t in document["tracks"]
+                if t.get("fit")
+            )
+            + "</ul>"
+            if any(t.get("fit") for t in document["tracks"])
+            else "<p>No track has the bounds its fit over the looks needs.</p>",
+        ),
         section(
             "Turns",
             "<ul>"

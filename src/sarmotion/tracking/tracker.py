@@ -90,10 +90,11 @@ from ..core import Traces
 from ..errors import EstimationError
 from ..motion import estimate_velocity
 from ..pipeline import AnalysisOptions
+from .coherent import CoherentFit, refine_coherently
 from .ends import TrackEnd, track_end
 from .roads import Road, RoadFix, road_fix, road_misses
 from .sub_apertures import Detection, SubApertureDetections, check_overlap
-from .turns import TurnTest, look_turn_test, turn_test
+from .turns import TurnTest, _independent, look_turn_test, turn_test
 from .wide_aspect import (
     PositionFit,
     antenna_state,
@@ -210,6 +211,10 @@ class TrackingOptions:
     turn_false_alarm : float
         Probability that a uniform mover's track is flagged as turning
         (:mod:`sarmotion.tracking.turns`; 0 < p < 1). Default 0.01.
+    coherent : bool
+        Focus each track whose position the looks fix over all its pulses
+        (:mod:`sarmotion.tracking.coherent`; about a second a track over 30 degrees).
+        Default True.
     """
 
     analysis: AnalysisOptions = dataclasses.field(
@@ -227,6 +232,7 @@ class TrackingOptions:
     max_road_std_m: float = 5.0
     road_cross_speed_std_mps: float = 0.5
     turn_false_alarm: float = 0.01
+    coherent: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.analysis, AnalysisOptions):
@@ -249,6 +255,8 @@ class TrackingOptions:
         positive(self.road_cross_speed_std_mps, "road_cross_speed_std_mps", unit="m/s")
         if not (0.0 < self.turn_false_alarm < 1.0):
             raise ValueError(f"turn_false_alarm must be in (0, 1), got {self.turn_false_alarm!r}")
+        if not isinstance(self.coherent, bool):
+            raise TypeError(f"coherent must be a bool, got {self.coherent!r}")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -332,6 +340,11 @@ class Track:
     end : TrackEnd or None
         Why it ends where it does: the data's end, the imaged scene's edge, or no
         detection (:mod:`sarmotion.tracking.ends`).
+    coherent : CoherentFit or None
+        Where :attr:`fit` fixes the position and
+        :attr:`TrackingOptions.coherent` asks for it: the uniform motion focused over
+        all its pulses, with its bound, measured error factor and coherence
+        (:mod:`sarmotion.tracking.coherent`).
     """
 
     id: int
@@ -339,6 +352,7 @@ class Track:
     turn: TurnTest | None = None
     fit: PositionFit | None = None
     end: TrackEnd | None = None
+    coherent: CoherentFit | None = None
 
     @property
     def n_detections(self) -> int:
@@ -505,11 +519,30 @@ class Tracker:
                 else None
             )
             states = tuple(self._state(s) for s in kept)
-            turn = self._turn(kept, rate=bool(fit is not None and fit.fixed))
-            out.append((states, turn, fit, self._end(states, fit)))
+            fixed = bool(fit is not None and fit.fixed)
+            turn = self._turn(kept, rate=fixed)
+            coherent = self._coherent(kept, fit) if fixed and self.options.coherent else None
+            out.append((states, turn, fit, self._end(states, fit), coherent))
         return tuple(
-            Track(id=k + 1, states=s, turn=turn, fit=fit, end=end)
-            for k, (s, turn, fit, end) in enumerate(out)
+            Track(id=k + 1, states=s, turn=turn, fit=fit, end=end, coherent=coherent)
+            for k, (s, turn, fit, end, coherent) in enumerate(out)
+        )
+
+    def _coherent(
+        self, states: Sequence[GaussianState], fit: PositionFit | None
+    ) -> CoherentFit | None:
+        """The track focused over all its pulses (:mod:`~sarmotion.tracking.coherent`).
+
+        Over the pulses from its first detection's sub-aperture to its last; the
+        coherence and error factor compare the sub-apertures of its detections that
+        share no pulse.
+        """
+        if fit is None:
+            return None
+        pulses = [self._meta[id(s)].sub.pulses for s in states if self._hit(s)]
+        independent = [pulses[k] for k in _independent([(p.start, p.stop) for p in pulses])]
+        return refine_coherently(
+            self.traces, fit, independent, height_m=float(self.traces.reference_point_m[2])
         )
 
     def _end(self, states: Sequence[TrackState], fit: PositionFit | None) -> TrackEnd:
