@@ -265,6 +265,8 @@ INDEX: dict[str, tuple[str, ...]] = {
     "tracking.wide_aspect": ("test_wide_aspect.py",),
     "tracking.tracker": ("test_track.py", "test_turns.py"),
     "tracking.turns": ("test_turns.py",),
+    "tracking.turn_rate": ("test_turn_rate.py",),
+    "tracking.coherent": ("test_coherent.py",),
 }
 
 

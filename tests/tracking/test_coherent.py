@@ -69,10 +69,7 @@ def _fit(traces, rng):
 
 
 def _mahalanobis_at_zero(fit):
-    dt = -fit.time_s
-    f = np.eye(4)
-    f[0, 2] = f[1, 3] = dt
-    x, cov = f @ fit.state, f @ fit.covariance @ f.T
+    x, cov = fit.at(0.0)
     e = x[:2] - np.asarray(MOVER.position_m)[:2]
     return float(np.sqrt(e @ np.linalg.solve(cov[:2, :2], e))), float(np.hypot(*e))
 

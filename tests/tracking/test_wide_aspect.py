@@ -317,7 +317,8 @@ def test_one_mover_one_track_on_a_simulated_pass():
 
     Its fit fixes the position at the pass's centre, within 4 of its own standard
     deviations of the truth (measured: 0.8 m off, a standard deviation of 1.5 m, where
-    the track's filter is 22 m off along the family).
+    the track's filter is 22 m off along the family); the fixed track also gets its
+    turn rate in the ground frame and its focused fit.
     """
     sc = load_scene("scene1")
     rng = np.random.default_rng(3)
@@ -335,11 +336,24 @@ def test_one_mover_one_track_on_a_simulated_pass():
     )
     result = track(traces, opts, n_workers=0)
     assert len(result.tracks) == 1
-    fit = result.tracks[0].fit
+    trk = result.tracks[0]
+    fit = trk.fit
     assert fit is not None and fit.fixed
+    assert fit.acceleration_std_mps2 > 0.0  # the coherence margin
     x, cov = fit.at(0.0)
     e = x[:2] - mover.position_m[:2]
     assert np.sqrt(e @ np.linalg.solve(cov[:2, :2], e)) <= 4.0
+    # the position fixed: the ground-frame turn rate (a uniform mover: 0 within its
+    # interval) and the track focused over its pulses, within 4 of its deviations
+    assert trk.turn is not None and trk.turn.turn_rate is not None
+    lo, hi = trk.turn.turn_rate.interval_deg_s
+    assert lo <= 0.0 <= hi
+    focused = trk.coherent
+    assert focused is not None and focused.coherent
+    assert np.isfinite(focused.error_factor)
+    xc, cov_c = focused.at(0.0)
+    ec = xc[:2] - mover.position_m[:2]
+    assert np.sqrt(ec @ np.linalg.solve(cov_c[:2, :2], ec)) <= 4.0
 
 
 @pytest.mark.parametrize(("aperture_deg", "fixed_expected"), [(30.0, True), (4.0, False)])

@@ -126,6 +126,12 @@ class CoherentFit:
     error_factor: float
     n_sub_apertures: int
 
+    def at(self, time_s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """State ``(x, y, ux, uy)`` and :attr:`covariance` at ``time_s`` (uniform motion)."""
+        f = np.eye(4)
+        f[0, 2] = f[1, 3] = float(time_s) - self.time_s
+        return f @ self.state, f @ self.covariance @ f.T
+
     @property
     def position_std_m(self) -> float:
         """Largest standard deviation of the position at :attr:`time_s` (m)."""
