@@ -89,8 +89,9 @@ whole chain at 4 degrees: the clutter residue). Both the looks' test
 (:func:`~sarmotion.tracking.turns.turn_test`, the rule before) at ``p`` = 0.01; seeds
 ``1000 a + 500 + k``; the turn rate in the ground frame
 (:mod:`sarmotion.tracking.turn_rate`) and its 95 % interval on every track (the tracker
-fits it only where the position is fixed). Through the whole chain (the default mode) each track's test is
-the tracker's, with the pairs' beside it (``turn_flagged_pairs``). Regenerate::
+fits it only where the position is fixed). Through the whole chain (the default mode)
+each track's test is the tracker's, with the pairs' beside it (``turn_flagged_pairs``).
+Regenerate::
 
     python benchmarks/wide_aspect.py --turns --draws 7 --apertures 4 10 20 30 40 \
         --name wide_aspect_turns
