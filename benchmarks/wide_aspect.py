@@ -133,6 +133,43 @@ GEOMETRIC_STD = np.array([5e-3, 2e-5, 0.07])
 GEOMETRIC_PULSES_PER_DEG = 30
 
 
+#: Movers' range speeds at the pass's centre exceed this many times the stationary band's
+#: edge (``--band-factor``; module notes).
+BAND_FACTOR = 2.0
+
+#: Frequencies of the chain's radar over GOTCHA's band (``--frequencies``; its range
+#: extent ``c N / (2 B)``, 99 m at GOTCHA's 424).
+N_FREQUENCIES = 424
+
+
+def _radar(radar):
+    """``radar`` with :data:`N_FREQUENCIES` frequencies over the same band."""
+    if N_FREQUENCIES == radar.n_samples:
+        return radar
+    import dataclasses
+
+    return dataclasses.replace(
+        radar, n_samples=N_FREQUENCIES, frequency_step_hz=radar.bandwidth_hz / N_FREQUENCIES
+    )
+
+
+def configure(
+    image_m: float,
+    pulses_per_deg: int,
+    frequencies: int,
+    max_crossing_m: float,
+    band_factor: float = 2.0,
+):
+    """The chain's scene for other sizes (``--image-m`` and the options beside it).
+
+    The movers and points are drawn within 5 m of the image's edge.
+    """
+    global IMAGE_M, HALF_SCENE_M, PULSES_PER_DEG, N_FREQUENCIES, MAX_CROSSING_M, BAND_FACTOR
+    IMAGE_M, HALF_SCENE_M = float(image_m), 0.5 * float(image_m) - 5.0
+    PULSES_PER_DEG, N_FREQUENCIES = int(pulses_per_deg), int(frequencies)
+    MAX_CROSSING_M, BAND_FACTOR = float(max_crossing_m), float(band_factor)
+
+
 def draw_scene(aperture_deg: float, seed: int) -> tuple[Scene, list[PointTarget], float]:
     """A seeded scene (module notes): the scene, its movers and the pass's duration (s)."""
     rng = np.random.default_rng(seed)
@@ -148,21 +185,21 @@ def draw_scene(aperture_deg: float, seed: int) -> tuple[Scene, list[PointTarget]
     ]
     look = np.array([7100.0, 0.0]) / RANGE_M  # ground part of m_o at the pass's centre
     band = SPEED_MPS * IMAGE_M / (2.0 * RANGE_M)  # stationary band's edge (module notes)
-    if top * float(np.linalg.norm(look)) <= 2.0 * band:  # else the draws below never end
+    if top * float(np.linalg.norm(look)) <= BAND_FACTOR * band:  # else the draws never end
         raise ValueError(
             f"{aperture_deg:g} degrees: no mover crosses at most {MAX_CROSSING_M:g} m "
-            f"({top:.2f} m/s) with a range speed beyond twice the stationary band "
-            f"({2.0 * band:.2f} m/s)"
+            f"({top:.2f} m/s) with a range speed beyond {BAND_FACTOR:g} times the stationary "
+            f"band ({BAND_FACTOR * band:.2f} m/s)"
         )
     movers: list[PointTarget] = []
     times = np.linspace(-duration / 2.0, duration / 2.0, 21)
     for k in range(N_MOVERS):
         while True:
-            while True:  # range speed outside twice the stationary band
+            while True:  # range speed outside BAND_FACTOR times the stationary band
                 speed = rng.uniform(min(1.0, top / 2.0), top)
                 heading = rng.uniform(0.0, 2.0 * np.pi)
                 u = speed * np.array([np.cos(heading), np.sin(heading)])
-                if abs(u @ look) > 2.0 * band:
+                if abs(u @ look) > BAND_FACTOR * band:
                     break
             reach = np.abs(u) * duration / 2.0
             p = rng.uniform(-HALF_SCENE_M + reach, HALF_SCENE_M - reach)
@@ -184,7 +221,7 @@ def draw_scene(aperture_deg: float, seed: int) -> tuple[Scene, list[PointTarget]
     scene = Scene(
         name=f"wide{aperture_deg:g}-{seed}",
         targets=(*clutter, *movers),
-        radar=base.radar,
+        radar=_radar(base.radar),
         trajectory_spec={
             "kind": "circular",
             "aperture_deg": float(aperture_deg),
@@ -886,6 +923,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--turns", action="store_true", help="the turn tests on uniform and turning movers"
     )
+    parser.add_argument("--image-m", type=float, default=IMAGE_M, help="the chain's image side (m)")
+    parser.add_argument(
+        "--pulses-per-deg", type=int, default=PULSES_PER_DEG, help="the chain's pulse rate"
+    )
+    parser.add_argument(
+        "--frequencies", type=int, default=N_FREQUENCIES, help="the chain's radar frequencies"
+    )
+    parser.add_argument(
+        "--max-crossing-m",
+        type=float,
+        default=MAX_CROSSING_M,
+        help="the farthest a chain's mover travels over the pass (m)",
+    )
+    parser.add_argument(
+        "--band-factor",
+        type=float,
+        default=BAND_FACTOR,
+        help="movers' range speeds beyond this many times the stationary band's edge",
+    )
     parser.add_argument(
         "--coherent",
         action="store_true",
@@ -915,6 +971,10 @@ def main(argv: list[str] | None = None) -> int:
         (args.out / f"{args.name}.md").write_text(markdown(summary))
         print(markdown(summary))
         return 0
+    configure(
+        args.image_m, args.pulses_per_deg, args.frequencies, args.max_crossing_m,
+        args.band_factor,
+    )  # fmt: skip
     if args.turns:
         return main_turns(args)
     if args.coherent:
@@ -939,6 +999,8 @@ def main(argv: list[str] | None = None) -> int:
                     "image_m": IMAGE_M,
                     "half_scene_m": HALF_SCENE_M,
                     "max_crossing_m": MAX_CROSSING_M,
+                    "frequencies": N_FREQUENCIES,
+                    "band_factor": BAND_FACTOR,
                     "n_clutter": N_CLUTTER,
                     "n_movers": N_MOVERS,
                     "snr_db": SNR_DB,
