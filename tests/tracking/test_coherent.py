@@ -119,3 +119,37 @@ def test_a_mover_off_uniform_motion_is_not_coherent():
     data = clean + 0.1 * float(np.sqrt(np.mean(np.abs(clean) ** 2))) * noise
     found = refine_coherently(traces.with_data(data), fit, subs)
     assert not found.coherent and found.coherence < COHERENCE_FLOOR
+
+
+def test_fewer_than_six_sub_apertures_leave_the_error_unmeasured():
+    """Five sub-apertures: the bound is given, the factor and covariance are not."""
+    traces = _traces(30.0, 0)
+    fit, subs = _fit(traces, np.random.default_rng(0))
+    found = refine_coherently(traces, fit, subs[10:15])
+    assert found.n_sub_apertures == 5 and found.n_pulses == subs[14].stop - subs[10].start
+    assert np.isnan(found.error_factor) and np.isnan(found.position_std_m)
+    assert np.isfinite(found.position_bound_m) and found.position_bound_m > 0.0
+    with pytest.raises(ValueError, match="sub-aperture"):
+        refine_coherently(traces, fit, [])
+
+
+def test_the_focused_fit_in_the_tracks_document_and_in_words():
+    """``coherent`` validates against the shipped schema; the line says coherent or not."""
+    import jsonschema
+
+    from sarmotion.documents.schema import load_schema
+    from sarmotion.documents.tracks import _coherent
+    from sarmotion.report.tracks import coherent_line
+
+    schema = load_schema("sarmotion.tracks/1")["properties"]["tracks"]["items"]
+    traces = _traces(30.0, 0)
+    fit, subs = _fit(traces, np.random.default_rng(0))
+    for found in (refine_coherently(traces, fit, subs), refine_coherently(traces, fit, subs[:5])):
+        entry = _coherent(found)
+        jsonschema.validate(entry, schema["properties"]["coherent"])
+        np.testing.assert_allclose(entry["position_m"], found.state[:2])
+        line = coherent_line(entry)
+        assert line.startswith(f"focused over {found.n_pulses} pulses")
+        assert ("error not measured" in line) is bool(np.isnan(found.error_factor))
+        assert "coherent" in line
+    assert _coherent(None) is None

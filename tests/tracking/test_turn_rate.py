@@ -135,3 +135,25 @@ def test_too_few_looks_give_no_rate():
     """Two looks leave ``3 n - 5 < 4`` degrees of freedom: no rate."""
     looks = _looks(4.0, np.array([0.0, 0.0]), 5.0, 0.0, 0.0, np.random.default_rng(0))
     assert turn_rate(looks[:2], prior_std_m=PRIOR_STD_M) is None
+
+
+def test_the_turn_rate_in_the_tracks_document_and_in_words():
+    """``turn_rate`` validates against the shipped schema; the words say fixed or not."""
+    import jsonschema
+
+    from sarmotion.documents.schema import load_schema
+    from sarmotion.documents.tracks import _turn_rate
+    from sarmotion.report.tracks import ground_rate_text
+    from sarmotion.tracking import TurnRate
+
+    schema = load_schema("sarmotion.tracks/1")["properties"]["tracks"]["items"]
+    turn_schema = schema["properties"]["turn"]["properties"]["turn_rate"]
+    for fixed in (True, False):
+        rate = TurnRate(rate_deg_s=2.9, interval_deg_s=(2.7, 3.1) if fixed else (-1.8, 3.1),
+                        fixed=fixed, confidence=0.95, n_looks=10)  # fmt: skip
+        entry = _turn_rate(rate)
+        jsonschema.validate(entry, turn_schema)
+        text = ground_rate_text(entry)
+        assert ("turn rate in the ground frame 2.9" in text) is fixed
+        assert ("not fixed" in text) is not fixed
+    assert _turn_rate(None) is None and ground_rate_text(None) == ""

@@ -134,8 +134,11 @@ class CoherentFit:
 
     @property
     def position_std_m(self) -> float:
-        """Largest standard deviation of the position at :attr:`time_s` (m)."""
-        return float(np.sqrt(max(0.0, np.linalg.eigvalsh(self.covariance[:2, :2])[-1])))
+        """Largest standard deviation of the position at :attr:`time_s` (m; NaN unmeasured)."""
+        cov = self.covariance[:2, :2]
+        if not np.all(np.isfinite(cov)):
+            return float("nan")
+        return float(np.sqrt(max(0.0, np.linalg.eigvalsh(cov)[-1])))
 
     @property
     def position_bound_m(self) -> float:
@@ -145,8 +148,11 @@ class CoherentFit:
 
     @property
     def velocity_std_mps(self) -> float:
-        """Largest standard deviation of the velocity (m/s)."""
-        return float(np.sqrt(max(0.0, np.linalg.eigvalsh(self.covariance[2:, 2:])[-1])))
+        """Largest standard deviation of the velocity (m/s; NaN unmeasured)."""
+        cov = self.covariance[2:, 2:]
+        if not np.all(np.isfinite(cov)):
+            return float("nan")
+        return float(np.sqrt(max(0.0, np.linalg.eigvalsh(cov)[-1])))
 
 
 def refine_coherently(
