@@ -1021,11 +1021,12 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     draws: dict[str, list[dict]] = {}
     if args.join:
+        settings: dict[str, dict] = {}  # each aperture's, from its first file
         for path in args.join:
             doc = json.loads(path.read_text())
-            settings = doc["settings"]
             for key, recs in doc["draws"].items():
                 draws.setdefault(key, []).extend(recs)
+                settings.setdefault(key, doc["settings"])
         summary = {a: summarise(d) for a, d in draws.items()}
         out = {"settings": settings, "summary": summary, "draws": draws}
         (args.out / f"{args.name}.json").write_text(json.dumps(out, indent=1) + "\n")
