@@ -18,6 +18,7 @@
 - :mod:`~sarmotion.tracking.track` — :func:`track`, the whole chain.
 """
 
+from .coherent import CoherentFit
 from .ends import TrackEnd, track_end
 from .roads import Road, RoadFix, road_fix, road_misses
 from .scale import map_sub_apertures
@@ -29,11 +30,12 @@ from .sub_apertures import (
 )
 from .track import TrackingResult, track
 from .tracker import Track, Tracker, TrackingOptions, TrackState
-from .turn_rate import TurnRate, turn_rate
+from .turn_rate import TurnRate
 from .turns import TurnTest, turn_test
 from .wide_aspect import PositionFit, fit_track, join_tracks
 
 __all__ = [
+    "CoherentFit",
     "Detection",
     "PositionFit",
     "Road",
@@ -56,6 +58,5 @@ __all__ = [
     "road_misses",
     "sub_aperture_slices",
     "track",
-    "turn_rate",
     "turn_test",
 ]
