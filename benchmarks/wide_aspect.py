@@ -482,16 +482,24 @@ class _GeometricSub:
         self.__dict__.update(fields)
 
 
-def _empty_pass(aperture_deg: float):
-    """The traces of a circular pass with no target, at the geometric modes' pulse rate."""
-    empty = Scene(
-        name="pass", targets=(), radar=load_scene("scene1").radar,
+def _circular_scene(aperture_deg: float, targets=(), pulses_per_deg: int | None = None):
+    """A circular pass of GOTCHA's geometry holding ``targets`` (default none).
+
+    ``pulses_per_deg``: default the geometric modes' :data:`GEOMETRIC_PULSES_PER_DEG`.
+    """
+    return Scene(
+        name="pass", targets=tuple(targets), radar=load_scene("scene1").radar,
         trajectory_spec={
             "kind": "circular", "aperture_deg": float(aperture_deg),
-            "pulses_per_deg": GEOMETRIC_PULSES_PER_DEG, "speed_mps": SPEED_MPS,
+            "pulses_per_deg": pulses_per_deg or GEOMETRIC_PULSES_PER_DEG,
+            "speed_mps": SPEED_MPS,
         },
     )  # fmt: skip
-    return simulate(empty).traces
+
+
+def _empty_pass(aperture_deg: float):
+    """The traces of a circular pass with no target, at the geometric modes' pulse rate."""
+    return simulate(_circular_scene(aperture_deg)).traces
 
 
 def run_geometric(aperture_deg: float, seed: int) -> dict:
@@ -583,13 +591,7 @@ def run_coherent(aperture_deg: float, seed: int) -> dict:
         )
         for _ in range(N_CLUTTER)
     ]
-    scene = Scene(
-        name="coherent", targets=(*clutter, mover), radar=load_scene("scene1").radar,
-        trajectory_spec={
-            "kind": "circular", "aperture_deg": float(aperture_deg),
-            "pulses_per_deg": PULSES_PER_DEG, "speed_mps": SPEED_MPS,
-        },
-    )  # fmt: skip
+    scene = _circular_scene(aperture_deg, (*clutter, mover), PULSES_PER_DEG)
     traces = noisy_traces(scene, 1, seed)
     start = time.perf_counter()
     looks = _geometric_looks(traces, mover, rng)

@@ -64,7 +64,7 @@ def test_responses_on_the_planes_are_the_row_sums_and_the_direct_sum():
     # I(theta) for one point (row sums, no planes built), for a batch (which builds the
     # frequency-major planes) and after them (the planes again), against the direct
     # sum of P W exp(2i pi f dtau) over pulses and frequencies: the same to 1e-13 of
-    # sum |P W| / sum W^2, the largest |I| the data allow.
+    # sum |P W| / sum W^2, the largest |I| the data allow; each pulse's term too.
     sim = simulate(random_scene(n_stationary=3, movers=[((2.0, -3.0), (4.0, 6.0))], rng=7))
     tr = sim.traces
     rng = np.random.default_rng(7)
@@ -78,7 +78,7 @@ def test_responses_on_the_planes_are_the_row_sums_and_the_direct_sum():
     again = mf.responses(pos[:1], vel[:1])
     w = tr.radar.spectral_weights()
     weighted = tr.phase_history() * w[None, :]
-    direct = []
+    direct, per_pulse = [], []
     for p, v in zip(pos, vel, strict=True):
         where = p[None, :] + tr.slow_times_s[:, None] * np.r_[v, 0.0][None, :]
         dtau = (
@@ -91,6 +91,10 @@ def test_responses_on_the_planes_are_the_row_sums_and_the_direct_sum():
         )
         phase = np.exp(2j * np.pi * np.outer(dtau, tr.frequencies_hz))
         direct.append(np.sum(weighted * phase) / np.sum(w**2))
+        per_pulse.append(np.sum(weighted * phase, axis=1) / np.sum(w**2))
     scale = np.sum(np.abs(weighted)) / np.sum(w**2)
     for got in (single, batch, np.r_[again, batch[1:]]):
         np.testing.assert_allclose(got, direct, rtol=0, atol=1e-13 * scale)
+    # each pulse's term (pulse_responses) is the direct sum's row
+    for p, v, rows in zip(pos, vel, per_pulse, strict=True):
+        np.testing.assert_allclose(mf.pulse_responses(p, v), rows, rtol=0, atol=1e-13 * scale)

@@ -1,29 +1,23 @@
 """A track's uniform motion focused over its whole aperture (sarmotion.tracking.coherent).
 
 The wide-aspect fit is made from look measurements of the exact range history plus
-white errors (as in ``test_turn_rate.py``); the traces are simulated. Over 30 degrees
+white errors (``circular_passes.exact_looks``); the traces are simulated. Over 30 degrees
 among stationary points the focused fit must be within 3 of its stated deviations of
 the truth, its echo coherent; a mover that departs from uniform motion by metres over
 the pass must be reported not coherent.
 """
 
-from functools import lru_cache
+from functools import lru_cache, partial
 
 import numpy as np
 import pytest
 
+from circular_passes import exact_looks, turn_motion
 from sarmotion.core import C, to_fast_time
-from sarmotion.motion.aperture import family_direction
 from sarmotion.simulation import PointTarget, Scene, load_scene, simulate
-from sarmotion.tracking import Detection
 from sarmotion.tracking.coherent import COHERENCE_FLOOR, refine_coherently
-from sarmotion.tracking.sub_apertures import sub_aperture_slices, sub_aperture_time_s
-from sarmotion.tracking.wide_aspect import (
-    LookMeasurement,
-    antenna_state,
-    fit_track,
-    range_history,
-)
+from sarmotion.tracking.sub_apertures import sub_aperture_slices
+from sarmotion.tracking.wide_aspect import fit_track
 
 # Standard deviations of R (m), R' (m/s) and R'' (m/s^2) of the looks.
 STD = np.array([3e-4, 1e-5, 1e-3])
@@ -47,23 +41,10 @@ def _traces(aperture_deg: float, n_points: int):
 
 def _fit(traces, rng):
     """The wide-aspect fit of one look per degree of the uniform mover (module notes)."""
-    p0, u = np.asarray(MOVER.position_m)[:2], np.asarray(MOVER.velocity_mps)
-    looks = []
-    for k, sl in enumerate(sub_aperture_slices(traces, 1.0, 0.0)):
-        t_c = sub_aperture_time_s(traces, sl)
-        antenna = antenna_state(traces, sl, t_c)
-        p = p0 + t_c * u
-        a, b = family_direction(traces.select_pulses(sl.start, sl.stop), np.r_[p, 0.0], u)
-        det = Detection(
-            position_m=p, velocity_mps=u, range_speed_mps=0.0, cross_range_speed_mps=0.0,
-            family_position_per_m=a, family_velocity_per_m=b, peak_db=0.0, traces=None,
-        )  # fmt: skip
-        z = range_history(p, u, antenna) + rng.standard_normal(3) * STD
-        looks.append(
-            LookMeasurement(
-                sub_aperture=k, antenna=antenna, z=z, covariance=np.diag(STD**2), detection=det
-            )
-        )
+    u = np.asarray(MOVER.velocity_mps)
+    motion = partial(turn_motion, np.asarray(MOVER.position_m)[:2], float(np.hypot(*u)),
+                     float(np.arctan2(u[1], u[0])), 0.0)  # fmt: skip
+    looks = exact_looks(traces, motion, STD, rng)
     fit = fit_track(looks, prior_std_m=30.0, wavelength_m=float(traces.radar.wavelength_m))
     return fit, sub_aperture_slices(traces, 1.0, 0.0)
 

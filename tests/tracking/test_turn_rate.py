@@ -2,22 +2,20 @@
 
 Each look's measurement is made from the exact range of a mover turning at a constant
 rate: the derivatives of a polynomial fitted to its range over the sub-aperture's pulses
-(independent of the model's closed form), plus white errors of the stated standard
-deviations. Over 30 degrees a 3 deg/s turn must be fixed, its interval covering the
-truth; over 10 degrees the interval must cover it, fixed or not.
+(independent of the model's closed form, ``circular_passes.exact_looks``), plus white
+errors of the stated standard deviations. Over 30 degrees a 3 deg/s turn must be fixed,
+its interval covering the truth; over 10 degrees the interval must cover it, fixed or not.
 """
 
-from functools import lru_cache
+from functools import partial
 
 import numpy as np
 import pytest
 
-from sarmotion.motion.aperture import family_direction
-from sarmotion.simulation import Scene, load_scene, simulate
-from sarmotion.tracking import Detection
+from circular_passes import empty_pass, exact_history, exact_looks, turn_motion
 from sarmotion.tracking.sub_apertures import sub_aperture_slices, sub_aperture_time_s
 from sarmotion.tracking.turn_rate import turn_histories, turn_rate
-from sarmotion.tracking.wide_aspect import LookMeasurement, antenna_state, range_history
+from sarmotion.tracking.wide_aspect import antenna_state, range_history
 
 # Standard deviations of R (m), R' (m/s) and R'' (m/s^2): the order of the analysis's
 # errors on a simulated 10 degree pass at 20 dB (sarmotion.tracking.wide_aspect notes).
@@ -25,81 +23,29 @@ STD = np.array([5e-3, 2e-5, 1e-3])
 PRIOR_STD_M = 30.0
 
 
-@lru_cache(maxsize=4)
-def _pass(aperture_deg: float):
-    """An empty circular pass at GOTCHA's geometry, 30 pulses per degree."""
-    sc = load_scene("scene1")
-    scene = Scene(
-        name="pass",
-        targets=(),
-        radar=sc.radar,
-        trajectory_spec={"kind": "circular", "aperture_deg": aperture_deg, "pulses_per_deg": 30},
-    )
-    return simulate(scene).traces
-
-
-def _motion(p0, speed, heading, rate_deg_s, t):
-    """Position and velocity (ground, m and m/s) at times ``t`` of a constant-rate turn."""
-    w = np.radians(rate_deg_s)
-    th = heading + w * t
-    u = speed * np.column_stack([np.cos(th), np.sin(th)])
-    if w == 0.0:
-        return p0 + np.outer(t, u[0]), u
-    p = p0 + speed / w * np.column_stack(
-        [np.sin(th) - np.sin(heading), np.cos(heading) - np.cos(th)]
-    )
-    return p, u
-
-
-def _exact_history(traces, sl, t_c, p0, speed, heading, rate_deg_s):
-    """``(R, R', R'')`` at ``t_c`` from a polynomial fitted to the exact range (m, s)."""
-    s = traces.slow_times_s[sl]
-    p, _ = _motion(p0, speed, heading, rate_deg_s, s)
-    r = np.linalg.norm(traces.positions_m[sl] - np.c_[p, np.zeros(len(s))], axis=1)
-    h = float(np.max(np.abs(s - t_c)))
-    c = np.polyfit((s - t_c) / h, r, 6)[::-1]
-    return np.array([c[0], c[1] / h, 2.0 * c[2] / h**2])
-
-
 def _looks(aperture_deg, p0, speed, heading, rate_deg_s, rng):
-    """One look per sub-aperture of a degree, its measurement exact plus errors of STD."""
-    traces = _pass(aperture_deg)
-    out = []
-    for k, sl in enumerate(sub_aperture_slices(traces, 1.0, 0.0)):
-        t_c = sub_aperture_time_s(traces, sl)
-        z = _exact_history(traces, sl, t_c, p0, speed, heading, rate_deg_s)
-        p, u = _motion(p0, speed, heading, rate_deg_s, np.array([t_c]))
-        a, b = family_direction(traces.select_pulses(sl.start, sl.stop), np.r_[p[0], 0.0], u[0])
-        det = Detection(
-            position_m=p[0], velocity_mps=u[0], range_speed_mps=0.0, cross_range_speed_mps=0.0,
-            family_position_per_m=a, family_velocity_per_m=b, peak_db=0.0, traces=None,
-        )  # fmt: skip
-        out.append(
-            LookMeasurement(
-                sub_aperture=k, antenna=antenna_state(traces, sl, t_c),
-                z=z + rng.standard_normal(3) * STD, covariance=np.diag(STD**2), detection=det,
-            )
-        )  # fmt: skip
-    return out
+    """One look per sub-aperture of a degree of a constant-rate turn (module notes)."""
+    motion = partial(turn_motion, p0, speed, heading, rate_deg_s)
+    return exact_looks(empty_pass(aperture_deg), motion, STD, rng)
 
 
 @pytest.mark.parametrize("rate_deg_s", [-3.0, 0.0, 5.0])
 def test_turn_histories_are_the_exact_ranges_derivatives(rate_deg_s):
     """The closed form against the exact range's fitted derivatives; w = 0 is uniform."""
-    traces = _pass(4.0)
+    traces = empty_pass(4.0)
     sl = sub_aperture_slices(traces, 1.0, 0.0)[2]
     t_c = sub_aperture_time_s(traces, sl)
     p0, speed, heading = np.array([6.0, -9.0]), 5.0, 0.7
     t0 = 0.3  # the reference time of the state, s
-    p, u = _motion(p0, speed, heading, rate_deg_s, np.array([t0]))
+    p, u = turn_motion(p0, speed, heading, rate_deg_s, np.array([t0]))
     ant = antenna_state(traces, sl, t_c)
     antenna = (ant.position_m[None], ant.velocity_mps[None], ant.acceleration_mps2[None])
     got = turn_histories(np.r_[p[0], u[0]], np.radians(rate_deg_s), np.array([t_c - t0]), antenna)
-    want = _exact_history(traces, sl, t_c, p0, speed, heading, rate_deg_s)
+    want = exact_history(traces, sl, t_c, partial(turn_motion, p0, speed, heading, rate_deg_s))
     for k, tol in enumerate((1e-7, 1e-8, 1e-7)):  # m, m/s, m/s^2
         assert abs(got[0, k] - want[k]) < tol, (k, got[0, k] - want[k])
     if rate_deg_s == 0.0:
-        pc, _ = _motion(p0, speed, heading, 0.0, np.array([t_c]))
+        pc, _ = turn_motion(p0, speed, heading, 0.0, np.array([t_c]))
         np.testing.assert_allclose(got[0], range_history(pc[0], u[0], ant), rtol=1e-12)
 
 

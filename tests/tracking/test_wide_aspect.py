@@ -15,6 +15,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
+from circular_passes import empty_pass
 from sarmotion.core import ground_velocity
 from sarmotion.imaging import ImageGrid, resolution
 from sarmotion.motion.aperture import family_direction, family_member
@@ -46,22 +47,9 @@ GATE = 0.999
 
 
 @lru_cache(maxsize=8)
-def _pass(aperture_deg: float):
-    """An empty circular pass at GOTCHA's geometry, 30 pulses per degree (the antenna only)."""
-    sc = load_scene("scene1")
-    scene = Scene(
-        name="pass",
-        targets=(),
-        radar=sc.radar,
-        trajectory_spec={"kind": "circular", "aperture_deg": aperture_deg, "pulses_per_deg": 30},
-    )
-    return simulate(scene).traces
-
-
-@lru_cache(maxsize=8)
 def _members(aperture_deg: float, position: tuple, velocity: tuple):
     """Each sub-aperture's member of the family at the reference cross range, noise-free."""
-    traces = _pass(aperture_deg)
+    traces = empty_pass(aperture_deg)
     p0, u = np.array(position), np.array(velocity)
     out = []
     for sl in sub_aperture_slices(traces, 1.0, 0.0):
@@ -81,7 +69,7 @@ def _looks(aperture_deg: float, mover: PointTarget, rng, *, index_offset: int = 
 
     ``std``: the standard deviations of its errors and bound (default ``BOUND_STD``).
     """
-    traces = _pass(aperture_deg)
+    traces = empty_pass(aperture_deg)
     members = _members(
         aperture_deg, tuple(np.asarray(mover.position_m)[:2]), tuple(mover.velocity_mps)
     )
@@ -129,7 +117,7 @@ MOVER = PointTarget(position_m=[6.0, -9.0], velocity_mps=[0.4, 0.3])
 
 def test_range_history_is_the_range_and_its_derivatives():
     """R, R', R'' against finite differences of the exact range over a sub-aperture."""
-    traces = _pass(2.0)
+    traces = empty_pass(2.0)
     sl = slice(20, 50)
     t_c = sub_aperture_time_s(traces, sl)
     ant = antenna_state(traces, sl, t_c)
@@ -146,7 +134,7 @@ def test_range_history_is_the_range_and_its_derivatives():
 
 def test_a_family_member_measures_the_same_range_history():
     """The measurement is a property of the range history, not of the member chosen."""
-    traces = _pass(3.0)
+    traces = empty_pass(3.0)
     looks = _looks(3.0, MOVER, np.random.default_rng(0))
     m = looks[1]
     sl = sub_aperture_slices(traces, 1.0, 0.0)[1]
@@ -261,7 +249,7 @@ def _mahalanobis(fit, truth):
 def test_the_coherence_margin_is_an_eighth_of_a_wavelength_over_the_track():
     """``a_c T^2 / 8 = lambda / 8``, ``T`` the span of the looks' centre times; 0 without."""
     looks = _looks(10.0, MOVER, np.random.default_rng(0))
-    lam = float(_pass(10.0).radar.wavelength_m)
+    lam = float(empty_pass(10.0).radar.wavelength_m)
     span = looks[-1].time_s - looks[0].time_s
     a_c = coherence_acceleration_mps2(looks, lam)
     assert a_c * span**2 / 8.0 == pytest.approx(lam / 8.0, rel=1e-12)
@@ -280,7 +268,7 @@ def test_four_degrees_are_a_family_however_small_the_errors(seed):
     The mover accelerating by the margin moves the uniform fit's point 11-13 m along
     the family: a point over 4 degrees rests on nothing a vehicle's motion holds to.
     """
-    lam = float(_pass(4.0).radar.wavelength_m)
+    lam = float(empty_pass(4.0).radar.wavelength_m)
     looks = _looks(4.0, PointTarget(position_m=[6.0, -9.0], velocity_mps=[3.0, -4.0]),
                    np.random.default_rng(seed), std=SMALL_STD)  # fmt: skip
     fit = fit_track(looks, prior_std_m=PRIOR_STD_M, wavelength_m=lam)
@@ -298,7 +286,7 @@ def test_the_coherence_margin_covers_a_mover_accelerating_by_it(aperture_deg, sp
     The fixed position's error is within 3 of the fit's standard deviations with the
     margin; without it, beyond 4 (measured 4.7-11): the test can fail both ways.
     """
-    lam = float(_pass(aperture_deg).radar.wavelength_m)
+    lam = float(empty_pass(aperture_deg).radar.wavelength_m)
     p0, u0 = np.array([6.0, -9.0]), speed_scale * np.array([3.0, -4.0])
     plain = _looks(aperture_deg, PointTarget(position_m=list(p0), velocity_mps=list(u0)),
                    np.random.default_rng(seed), std=SMALL_STD)  # fmt: skip

@@ -172,6 +172,28 @@ class MatchedFilter:
             1.0 / self.norm,
         )
 
+    def _delays(self, pos: NDArray[np.float64], vel: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``(k, n_pulses)`` two-way delays (s) from the reference point's, float64."""
+        v3 = np.concatenate([vel, np.zeros((vel.shape[0], 1))], axis=1)
+        where = pos[:, None, :] + self.slow[None, :, None] * v3[:, None]
+        rng = np.linalg.norm(self.antenna[None] - where, axis=2)
+        return np.ascontiguousarray(2.0 * (rng - self.ref_range[None]) / C)
+
+    def pulse_responses(
+        self, position_m: ArrayLike, velocity_mps: ArrayLike
+    ) -> NDArray[np.complex128]:
+        """Each pulse's term of ``I`` at one position (m, ``s = 0``) and ground velocity.
+
+        Returns
+        -------
+        (n_pulses,) ndarray
+            Complex; their sum is :meth:`responses` at the same point (on :meth:`planes`).
+        """
+        pos = np.asarray(position_m, dtype=np.float64).reshape(1, 3)
+        vel = np.asarray(velocity_mps, dtype=np.float64).reshape(1, 2)
+        d = self._delays(pos, vel)[0]
+        return self.planes().sums(d, float(self.freq[0]), self.freq_step) / self.norm
+
     def responses(
         self, positions_m: ArrayLike, velocities_mps: ArrayLike
     ) -> NDArray[np.complex128]:
@@ -192,17 +214,12 @@ class MatchedFilter:
         """
         pos = np.atleast_2d(np.asarray(positions_m, dtype=np.float64))
         vel = np.atleast_2d(np.asarray(velocities_mps, dtype=np.float64))
-        v3 = np.concatenate([vel, np.zeros((vel.shape[0], 1))], axis=1)
         out = np.empty(pos.shape[0], dtype=np.complex128)
         step = max(1, _CHUNK // self.weighted.size)
         f0 = float(self.freq[0])
         planes = self.planes() if self._planes is not None or pos.shape[0] > 1 else None
         for i0 in range(0, pos.shape[0], step):
-            where = (
-                pos[i0 : i0 + step, None, :] + self.slow[None, :, None] * v3[i0 : i0 + step, None]
-            )
-            rng = np.linalg.norm(self.antenna[None] - where, axis=2)
-            delays = np.ascontiguousarray(2.0 * (rng - self.ref_range[None]) / C)
+            delays = self._delays(pos[i0 : i0 + step], vel[i0 : i0 + step])
             for i, d in enumerate(delays):
                 if planes is not None:
                     out[i0 + i] = planes.sums(d, f0, self.freq_step).sum()

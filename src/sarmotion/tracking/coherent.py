@@ -194,20 +194,18 @@ def refine_coherently(
     # select_pulses re-centres slow time: its s = 0 is `offset` in the acquisition's
     offset = float(traces.slow_times_s[start] - data.slow_times_s[0])
     mf = MatchedFilter(data)
-    planes = mf.planes()
     lam = float(traces.radar.wavelength_m)
     t0 = float(fit.time_s)
     antenna = data.positions_m
     times = data.slow_times_s + offset - t0  # from t_0, s
 
-    def delays(state: NDArray[np.float64]) -> NDArray[np.float64]:
-        p = state[:2] + times[:, None] * state[2:]
-        where = np.column_stack([p, np.full(times.size, height_m)])
-        rng = np.linalg.norm(antenna - where, axis=1)
-        return np.ascontiguousarray(2.0 * (rng - mf.ref_range) / C)
+    def at_data_zero(states: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Positions at the data's ``s = 0`` (m, with the height) of ``(k, 4)`` states."""
+        p = states[:, :2] - (t0 - offset) * states[:, 2:]
+        return np.column_stack([p, np.full(len(states), height_m)])
 
     def rows(state: NDArray[np.float64]) -> NDArray[np.complex128]:
-        return planes.sums(delays(state), float(mf.freq[0]), mf.freq_step) / mf.norm
+        return mf.pulse_responses(at_data_zero(state[None])[0], state[2:])
 
     def grad_range(state: NDArray[np.float64]) -> NDArray[np.float64]:
         p = state[:2] + times[:, None] * state[2:]
@@ -219,23 +217,16 @@ def refine_coherently(
     x0 = np.asarray(fit.state, dtype=np.float64)
     w, v = np.linalg.eigh(0.5 * (fit.covariance + fit.covariance.T))
     rates = (4.0 * np.pi / lam) * grad_range(x0) @ v  # (n_pulses, 4) rad per unit
-    spread = np.ptp(rates, axis=0)
-    steps = np.pi / np.maximum(spread, 1e-300)
-    counts = [
-        int(min(_MAX_STEPS, 2 * np.ceil(3.0 * np.sqrt(max(wi, 0.0)) / si) + 1)) | 1
-        for wi, si in zip(w, steps, strict=True)
-    ]
-    counts = [max(3, c) for c in counts]
+    steps = np.pi / np.maximum(np.ptp(rates, axis=0), 1e-300)
+    reach = 3.0 * np.sqrt(np.maximum(w, 0.0))  # 3 deviations along each axis
+    halves = np.clip(np.ceil(reach / steps), 1, _MAX_STEPS // 2).astype(int)
     spans = [
-        np.linspace(-1.0, 1.0, c) * min(3.0 * np.sqrt(max(wi, 0.0)), (c // 2) * si)
-        for c, wi, si in zip(counts, w, steps, strict=True)
+        np.linspace(-1.0, 1.0, 2 * h + 1) * min(r, h * st)
+        for h, r, st in zip(halves, reach, steps, strict=True)
     ]
     mesh = np.stack(np.meshgrid(*spans, indexing="ij"), axis=-1).reshape(-1, 4)
     candidates = x0[None, :] + mesh @ v.T
-    positions = np.column_stack(
-        [candidates[:, :2] - (t0 - offset) * candidates[:, 2:], np.full(len(mesh), height_m)]
-    )  # at the data's s = 0
-    values = np.abs(mf.responses(positions, candidates[:, 2:]))
+    values = np.abs(mf.responses(at_data_zero(candidates), candidates[:, 2:]))
     best = candidates[int(np.argmax(values))]
 
     def objective(z: NDArray[np.float64]) -> float:
@@ -252,7 +243,7 @@ def refine_coherently(
     amplitude = value / data.n_pulses
 
     # interference the matched filter sees about the fit, per phase-history sample
-    p_s0 = np.r_[state[:2] - (t0 - offset) * state[2:], height_m]
+    p_s0 = at_data_zero(state[None])[0]
     sigma2 = (
         matched_filter_noise_variance(
             data, half_size_m=max(5.0 * fit.position_std_m, 20.0), centre_m=p_s0,

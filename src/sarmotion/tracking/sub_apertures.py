@@ -36,6 +36,7 @@ __all__ = [
     "analyze_sub_aperture",
     "check_overlap",
     "check_sub_apertures",
+    "disjoint_in_time",
     "sub_aperture_slices",
 ]
 
@@ -354,3 +355,16 @@ def sub_aperture_time_s(traces: Traces, pulses: slice) -> float:
     """Centre time of the pulses ``pulses`` in ``traces``' slow time (s)."""
     s = traces.slow_times_s
     return float(0.5 * (s[pulses.start] + s[pulses.stop - 1]))
+
+
+def disjoint_in_time(pulses: Sequence[tuple[int, int]]) -> list[int]:
+    """Indices of sub-apertures that share no pulse, greedily in time.
+
+    ``pulses``: each one's ``(start, stop)`` pulses, in time order. Their errors are
+    then independent (:mod:`sarmotion.tracking.turns`, :mod:`sarmotion.tracking.coherent`).
+    """
+    keep: list[int] = []
+    for k, (start, _) in enumerate(pulses):
+        if not keep or start >= pulses[keep[-1]][1]:
+            keep.append(k)
+    return keep

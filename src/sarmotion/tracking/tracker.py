@@ -93,8 +93,8 @@ from ..pipeline import AnalysisOptions
 from .coherent import CoherentFit, refine_coherently
 from .ends import TrackEnd, track_end
 from .roads import Road, RoadFix, road_fix, road_misses
-from .sub_apertures import Detection, SubApertureDetections, check_overlap
-from .turns import TurnTest, _independent, look_turn_test, turn_test
+from .sub_apertures import Detection, SubApertureDetections, check_overlap, disjoint_in_time
+from .turns import TurnTest, look_turn_test, turn_test
 from .wide_aspect import (
     PositionFit,
     antenna_state,
@@ -540,7 +540,7 @@ class Tracker:
         if fit is None:
             return None
         pulses = [self._meta[id(s)].sub.pulses for s in states if self._hit(s)]
-        independent = [pulses[k] for k in _independent([(p.start, p.stop) for p in pulses])]
+        independent = [pulses[k] for k in disjoint_in_time([(p.start, p.stop) for p in pulses])]
         return refine_coherently(
             self.traces, fit, independent, height_m=float(self.traces.reference_point_m[2])
         )

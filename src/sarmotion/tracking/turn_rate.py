@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import brentq, least_squares, minimize_scalar
 
-from .wide_aspect import LookMeasurement, fit_track
+from .wide_aspect import LookMeasurement, fit_track, look_antennas, range_histories
 
 __all__ = ["MAX_TURN_RATE_DEG_S", "TURN_RATE_CONFIDENCE", "TurnRate", "turn_rate"]
 
@@ -121,7 +121,6 @@ def turn_histories(
     (n, 3) ndarray
         Range (m), range rate (m/s), range acceleration (m/s^2) of each look.
     """
-    r_a, v_a, acc_a = antenna
     w = float(rate_rad_s)
     theta = w * dts
     c, s = np.cos(theta), np.sin(theta)
@@ -132,15 +131,7 @@ def turn_histories(
     else:  # the series: sin(w t) / w -> t, (1 - cos(w t)) / w -> w t^2 / 2
         along, across = dts, 0.5 * w * dts**2
     p = x[:2] + along[:, None] * u0 + across[:, None] * (_J @ u0)
-    acc = w * (u @ _J.T)
-    n = dts.size
-    d = np.column_stack([p, np.full(n, height_m)]) - r_a
-    dv = np.column_stack([u, np.zeros(n)]) - v_a
-    da = np.column_stack([acc, np.zeros(n)]) - acc_a
-    r = np.sqrt(np.einsum("ij,ij->i", d, d))
-    rate = np.einsum("ij,ij->i", d, dv) / r
-    rdd = (np.einsum("ij,ij->i", dv, dv) + np.einsum("ij,ij->i", d, da) - rate**2) / r
-    return np.column_stack([r, rate, rdd])
+    return range_histories(p, u, w * (u @ _J.T), antenna, height_m)
 
 
 def turn_rate(
@@ -161,7 +152,8 @@ def turn_rate(
         The scene prior and the movers' height
         (:func:`~sarmotion.tracking.wide_aspect.fit_track`).
     error_factors : (3,) ndarray, optional
-        Variance factors of the first pass (default: the uniform fit's, module notes).
+        Variance factors of the first pass (default: the uniform fit's, module notes;
+        :func:`~sarmotion.tracking.turns.look_turn_test` passes its own).
 
     Returns
     -------
@@ -180,16 +172,12 @@ def turn_rate(
         return None
     z = np.stack([m.z for m in looks])
     sd = np.sqrt(np.stack([np.diag(m.covariance) for m in looks]))
-    antenna = (
-        np.stack([m.antenna.position_m for m in looks]),
-        np.stack([m.antenna.velocity_mps for m in looks]),
-        np.stack([m.antenna.acceleration_mps2 for m in looks]),
-    )
-    uniform = fit_track(
-        looks, prior_std_m=prior_std_m, centre_m=centre_m, height_m=height_m,
-        error_factors=error_factors,
-    )  # fmt: skip
-    factors = uniform.error_factors
+    antenna = look_antennas(looks)
+    if error_factors is None:  # the uniform fit's (module notes)
+        fit = fit_track(looks, prior_std_m=prior_std_m, centre_m=centre_m, height_m=height_m)
+        factors = fit.error_factors
+    else:
+        factors = np.asarray(error_factors, dtype=np.float64)
     starts = _family_starts(looks, t0, prior_std_m)
 
     def residual(x: NDArray[np.float64], w: float, f: NDArray[np.float64]):

@@ -92,8 +92,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
+from .sub_apertures import disjoint_in_time
 from .turn_rate import TurnRate, turn_rate
-from .wide_aspect import LookMeasurement, fit_track
+from .wide_aspect import LookMeasurement, fit_track, look_antennas, range_histories
 
 __all__ = ["TurnTest", "look_turn_test", "turn_test"]
 
@@ -246,21 +247,10 @@ def turn_test(
     )
 
 
-def _independent(pulses: Sequence[tuple[int, int]]) -> list[int]:
-    """Indices of detections whose sub-apertures share no pulse, greedily in time."""
-    keep: list[int] = []
-    for k, (start, _) in enumerate(pulses):
-        if not keep or start >= pulses[keep[-1]][1]:
-            keep.append(k)
-    return keep
-
-
 def _histories(
     x: NDArray[np.float64],
     dts: NDArray[np.float64],
-    r_a: NDArray[np.float64],
-    v_a: NDArray[np.float64],
-    acc_a: NDArray[np.float64],
+    antenna: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
     height_m: float,
 ) -> NDArray[np.float64]:
     """``(R, R', R'')`` of every look for a mover of constant acceleration ``x[4:6]``.
@@ -272,13 +262,7 @@ def _histories(
     dt = dts[:, None]
     p = x[:2] + dt * x[2:4] + 0.5 * dt**2 * acc
     u = x[2:4] + dt * acc
-    d = np.column_stack([p, np.full(dts.size, height_m)]) - r_a
-    dv = np.column_stack([u, np.zeros(dts.size)]) - v_a
-    dacc = np.r_[acc, 0.0] - acc_a
-    r = np.sqrt(np.einsum("ij,ij->i", d, d))
-    rate = np.einsum("ij,ij->i", d, dv) / r
-    rdd = (np.einsum("ij,ij->i", dv, dv) + np.einsum("ij,ij->i", d, dacc) - rate**2) / r
-    return np.column_stack([r, rate, rdd])
+    return range_histories(p, u, np.tile(acc, (dts.size, 1)), antenna, height_m)
 
 
 def look_turn_test(
@@ -321,7 +305,7 @@ def look_turn_test(
         raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm!r}")
     if len(pulses) != len(looks):
         raise ValueError(f"{len(looks)} looks but {len(pulses)} pulse ranges")
-    sel = [looks[k] for k in _independent(pulses)]
+    sel = [looks[k] for k in disjoint_in_time(pulses)]
     n = len(sel)
     if n < 3:
         return None
@@ -330,12 +314,10 @@ def look_turn_test(
     dts = np.array([m.time_s for m in sel]) - t0
     z = np.stack([m.z for m in sel])
     sd = np.sqrt(np.stack([np.diag(m.covariance) for m in sel]))
-    r_a = np.stack([m.antenna.position_m for m in sel])
-    v_a = np.stack([m.antenna.velocity_mps for m in sel])
-    acc_a = np.stack([m.antenna.acceleration_mps2 for m in sel])
+    antenna = look_antennas(sel)
 
     def residual(x: NDArray[np.float64], factors: NDArray[np.float64]) -> NDArray[np.float64]:
-        e = (_histories(x, dts, r_a, v_a, acc_a, height_m) - z) / (sd * factors)
+        e = (_histories(x, dts, antenna, height_m) - z) / (sd * factors)
         return np.r_[e.ravel(), (x[:2] - centre) / prior_std_m]
 
     def solve(x: NDArray[np.float64], factors: NDArray[np.float64]):
@@ -350,7 +332,7 @@ def look_turn_test(
     factors = np.ones(3)
     for _ in range(3):  # the uniform model's factors, settled (wide_aspect notes)
         h0 = solve(x0, factors)
-        e = (_histories(h0.x, dts, r_a, v_a, acc_a, height_m) - z) / sd
+        e = (_histories(h0.x, dts, antenna, height_m) - z) / sd
         factors = np.sqrt(np.maximum(1.0, np.sum(e**2, axis=0) / (n - 4.0 / 3.0)))
     h0 = solve(x0, factors)
     h1 = solve(np.r_[h0.x, 0.0, 0.0], factors)
@@ -374,7 +356,13 @@ def look_turn_test(
         model="looks",
         n_looks=n,
         turn_rate=(
-            turn_rate(sel, prior_std_m=prior_std_m, centre_m=centre_m, height_m=height_m)
+            turn_rate(
+                sel,
+                prior_std_m=prior_std_m,
+                centre_m=centre_m,
+                height_m=height_m,
+                error_factors=factors,
+            )  # fmt: skip
             if rate
             else None
         ),

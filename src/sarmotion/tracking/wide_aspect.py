@@ -136,6 +136,8 @@ __all__ = [
     "join_tracks",
     "look_measurement",
     "pooled_factors",
+    "look_antennas",
+    "range_histories",
     "range_history",
 ]
 
@@ -237,12 +239,60 @@ def range_history(
     (3,) ndarray
         Range (m), range rate (m/s), range acceleration (m/s^2).
     """
-    d = np.r_[position_m[0], position_m[1], height_m] - antenna.position_m
-    dv = np.r_[velocity_mps[0], velocity_mps[1], 0.0] - antenna.velocity_mps
-    r = float(np.sqrt(d @ d))
-    rate = float(d @ dv) / r
-    acc = (float(dv @ dv) - float(d @ antenna.acceleration_mps2) - rate**2) / r
-    return np.array([r, rate, acc])
+    one = (antenna.position_m[None], antenna.velocity_mps[None], antenna.acceleration_mps2[None])
+    p, v = np.asarray(position_m, dtype=np.float64), np.asarray(velocity_mps, dtype=np.float64)
+    return range_histories(p[None, :2], v[None, :2], None, one, height_m)[0]
+
+
+def range_histories(
+    position_m: NDArray[np.float64],
+    velocity_mps: NDArray[np.float64],
+    acceleration_mps2: NDArray[np.float64] | None,
+    antenna: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
+    height_m: float = 0.0,
+) -> NDArray[np.float64]:
+    """``(R, R', R'')`` of a mover at many looks at once (:func:`range_history`, vectorised).
+
+    Parameters
+    ----------
+    position_m, velocity_mps : (n, 2) ndarray
+        The mover's ground position (m) and velocity (m/s) at each look's centre time.
+    acceleration_mps2 : (n, 2) ndarray or None
+        Its ground acceleration there (m/s^2; its range component enters ``R''``);
+        None: uniform motion.
+    antenna : tuple of (n, 3) ndarray
+        The antenna's positions (m), velocities (m/s) and accelerations (m/s^2) at them.
+    height_m : float
+        The mover's height (m).
+
+    Returns
+    -------
+    (n, 3) ndarray
+        Range (m), range rate (m/s), range acceleration (m/s^2) of each look.
+    """
+    r_a, v_a, acc_a = antenna
+    n = r_a.shape[0]
+    d = np.column_stack([position_m, np.full(n, height_m)]) - r_a
+    dv = np.column_stack([velocity_mps, np.zeros(n)]) - v_a
+    if acceleration_mps2 is None:
+        da = -acc_a
+    else:
+        da = np.column_stack([acceleration_mps2, np.zeros(n)]) - acc_a
+    r = np.sqrt(np.einsum("ij,ij->i", d, d))
+    rate = np.einsum("ij,ij->i", d, dv) / r
+    rdd = (np.einsum("ij,ij->i", dv, dv) + np.einsum("ij,ij->i", d, da) - rate**2) / r
+    return np.column_stack([r, rate, rdd])
+
+
+def look_antennas(
+    looks: Sequence[LookMeasurement],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The looks' antenna positions, velocities and accelerations, stacked ``(n, 3)`` each."""
+    return (
+        np.stack([m.antenna.position_m for m in looks]),
+        np.stack([m.antenna.velocity_mps for m in looks]),
+        np.stack([m.antenna.acceleration_mps2 for m in looks]),
+    )
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -497,19 +547,11 @@ def _fit_once(
     dts = (times - t0)[:, None]
     whiteners = np.stack([_whitener(m.covariance * np.outer(factors, factors)) for m in looks])
     z = np.stack([m.z for m in looks])
-    r_a = np.stack([m.antenna.position_m for m in looks])
-    v_a = np.stack([m.antenna.velocity_mps for m in looks])
-    acc_a = np.stack([m.antenna.acceleration_mps2 for m in looks])
+    antenna = look_antennas(looks)
 
     def data_residual(x: NDArray[np.float64]) -> NDArray[np.float64]:
-        # range_history of every look at once
-        p = x[:2] + dts * x[2:]
-        d = np.column_stack([p, np.full(len(looks), height_m)]) - r_a
-        dv = np.r_[x[2:], 0.0] - v_a
-        r = np.sqrt(np.einsum("ij,ij->i", d, d))
-        rate = np.einsum("ij,ij->i", d, dv) / r
-        acc = (np.einsum("ij,ij->i", dv, dv) - np.einsum("ij,ij->i", d, acc_a) - rate**2) / r
-        h = np.column_stack([r, rate, acc])
+        h = range_histories(x[:2] + dts * x[2:], np.tile(x[2:], (len(looks), 1)), None,
+                            antenna, height_m)  # fmt: skip
         return np.einsum("nij,nj->ni", whiteners, h - z).ravel()
 
     def residual(x: NDArray[np.float64]) -> NDArray[np.float64]:
