@@ -22,15 +22,18 @@ reference) is ``u = u_w - lambda_c f / 2``, ``u_w`` the hypothesis' own at ``s =
 ``w = 0`` is the stationary range-Doppler image. Adjacent hypotheses' quadratic phases
 differ by ``pi / 2`` at the aperture's edges (:func:`edge_phase_rad`): a mover between
 two is seen with at most ``pi / 4`` of quadratic phase, a loss of
-``|mean_x exp(i pi x^2 / 4)|`` over ``x in [-1, 1]``, 0.24 dB. The transform over slow
-time is exact for the hypothesis at the reference; a stationary point elsewhere in the
-scene has a range curvature of its own (on a circular flight about ``x Omega^2`` for a
-range offset ``x``, ``Omega`` the turn rate; 0.53 rad at the edges of a GOTCHA degree for
-50 m of range, 0.002 rad for 50 m of cross range), so it focuses at ``w = 0`` while that
-phase is under half the bank's first step: scenes of the size the analysis images
-(patches of a collection). Range migration within the band is neglected likewise (the
-band is the scene's own range rates: a few resolution cells over the aperture at most),
-except in the smear test below.
+``|mean_x exp(i pi x^2 / 4)|`` over ``x in [-1, 1]``, 0.24 dB. The hypotheses are about
+the reference; a stationary point elsewhere in the scene has a range curvature of its
+own, mostly from its range offset ``x`` (on a circular flight about ``x Omega^2``,
+``Omega`` the turn rate: at the edges of GOTCHA apertures, for 50 m of range, 0.53 rad
+over a degree and four times that over two, two of that bank's steps; 0.002 rad for 50
+m of cross range over a degree). Each fast-time row's own is removed before the
+transform (:func:`row_phases`: the stationary point on the ground-range line through
+the reference at that row's range), so the stationary points of every row focus at
+``w = 0`` and ``w`` is a cross-range speed relative to them; what remains is the cross
+range's share, under a tenth of a step over the analysed scenes. Range migration within
+the band is neglected (the band is the scene's own range rates: a few resolution cells
+over the aperture at most), except in the smear test below.
 
 **Screen.** Interference in a cell is taken as complex Gaussian, ``|X|^2`` exponential
 with mean ``p``: the noise, estimated per hypothesis as ``median |X|^2 / ln 2`` over the
@@ -68,6 +71,7 @@ from numpy.typing import NDArray
 
 from ..core import Traces, delay_phase, ground_velocity, to_fast_time, to_frequency
 from ..core.constants import C
+from ..core.geometry import range_direction_velocity
 from .aperture import ranges_m
 from .speed_resolution import range_speed_resolution
 
@@ -83,6 +87,8 @@ __all__ = [
     "echo_residue",
     "edge_phase_rad",
     "hypothesis_delays_s",
+    "row_phases",
+    "screen_cells",
 ]
 
 #: Quadratic phase (rad, at the aperture's edges) between adjacent hypotheses of the bank.
@@ -249,6 +255,35 @@ def hypothesis_delays_s(traces: Traces, cross_range_speed_mps: float) -> NDArray
     return 2.0 * (ranges_m(traces, ref, v) - ranges_m(traces, ref, np.zeros(2))) / C
 
 
+def row_phases(traces: Traces, rows: NDArray[np.int64]) -> NDArray[np.complex128]:
+    """Each fast-time row's own stationary phase, removed: shape ``(n_pulses, rows.size)``.
+
+    Row ``t`` holds, at ``s = 0``, the echoes of the points at slant range ``c t / 2``
+    beyond the reference's; the one on the ground along the look's ground-range
+    direction, ``p_t = rho_ref - (c t / 2) b_o / |b_o|^2``
+    (:func:`~sarmotion.core.range_direction_velocity`), has the delays
+    ``delta_t(s) = 2 (|x(s) - p_t| - |x(s) - rho_ref|) / c``. Their part beyond a
+    straight line in ``s`` (least squares), ``delta_t^nl``, is the range curvature that
+    the hypotheses, which are about the reference, do not hold (module notes); these
+    phasors ``exp(2i pi f_c delta_t^nl(s))`` (the carrier's part of
+    :func:`~sarmotion.core.delay_phase`) remove it from an aligned row, so that every
+    row's stationary points on that line focus at ``w = 0``. The straight line stays: a
+    cell's Doppler keeps its meaning, the range rate relative to the reference.
+    ``delta_t^nl`` is millimetres, its envelope's migration is not corrected.
+    """
+    t = np.asarray(traces.fast_times_s, dtype=np.float64)[np.asarray(rows, dtype=np.int64)]
+    ref = np.asarray(traces.reference_point_m, dtype=np.float64)
+    along = np.r_[range_direction_velocity(1.0, traces.geometry), 0.0]  # range up 1 m per m
+    points = ref[None, :] - (0.5 * C * t)[:, None] * along[None, :]  # (rows, 3)
+    x = np.asarray(traces.positions_m, dtype=np.float64)  # (n_pulses, 3)
+    r_ref = np.linalg.norm(x - ref, axis=1)
+    delays = 2.0 * (np.linalg.norm(x[:, None, :] - points[None, :, :], axis=2) - r_ref[:, None]) / C
+    s = np.asarray(traces.slow_times_s, dtype=np.float64)
+    basis = np.stack([np.ones_like(s), s - s.mean()], axis=1)
+    line = basis @ np.linalg.lstsq(basis, delays, rcond=None)[0]
+    return np.exp(2j * np.pi * traces.radar.carrier_hz * (delays - line))
+
+
 def edge_phase_rad(traces: Traces, cross_range_speed_mps: float) -> float:
     """Quadratic phase (rad) of ``delta_w`` at the aperture's edges, ``|a| (T / 2)^2``.
 
@@ -263,18 +298,40 @@ def edge_phase_rad(traces: Traces, cross_range_speed_mps: float) -> float:
     return float(abs(a) * (0.5 * np.ptp(s)) ** 2)
 
 
-def cross_speed_bank(traces: Traces, max_speed_mps: float) -> NDArray[np.float64]:
+def cross_speed_bank(
+    traces: Traces, max_speed_mps: float, *, within_mps: float | None = None
+) -> NDArray[np.float64]:
     """The bank's cross-range speeds (m/s): 0 and steps of ``EDGE_PHASE_STEP_RAD`` to ``max``.
 
     The edge phase is linear in ``w`` over the speeds of ground movers (``2 V w`` against
-    ``V^2`` in the curvature); its slope is taken at 1 m/s.
+    ``V^2`` in the curvature); its slope is taken at 1 m/s. ``within_mps``: only the
+    steps with ``|w| <= within_mps`` (m/s).
     """
     per_mps = edge_phase_rad(traces, 1.0)
     if not per_mps > 0.0:
         raise ValueError("the aperture has no quadratic phase to focus: it is too short")
     step = EDGE_PHASE_STEP_RAD / per_mps
-    n = int(np.floor(float(max_speed_mps) / step))
+    top = float(max_speed_mps) if within_mps is None else min(float(max_speed_mps), within_mps)
+    n = int(np.floor(top / step))
     return step * np.arange(-n, n + 1, dtype=np.float64)
+
+
+def screen_cells(
+    traces: Traces, speeds_mps: NDArray, *, band_mps: float, half_span_s: float
+) -> int:
+    """Independent cells a bank tests (the union bound's ``N``, :func:`defocus_scan`).
+
+    Range resolutions within ``|t| <= half_span_s`` (s) times Doppler resolutions
+    ``lambda / (2 T)`` within ``|u| <= band_mps`` (m/s) times the moving hypotheses of
+    ``speeds_mps`` (m/s; ``w = 0`` is not tested).
+    """
+    n_p = traces.n_pulses
+    prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
+    lam = C / traces.radar.carrier_hz
+    range_cells = max(1.0, 2.0 * half_span_s * traces.radar.bandwidth_hz)
+    dop_cells = max(1.0, 2.0 * band_mps / (0.5 * lam * prf / n_p))
+    moving = int(np.count_nonzero(np.asarray(speeds_mps) != 0.0))
+    return int(np.ceil(range_cells * dop_cells * moving))
 
 
 def _doppler_cells(n_pulses: int) -> int:
@@ -302,12 +359,13 @@ def _hypothesis_values(
     """One hypothesis of the bank: ``(u_w, X)``, the values of shape ``(n_dop, rows)``.
 
     ``spectrum`` (the data over frequency) aligned by ``delays_s`` (carrier included),
-    back to fast time at ``rows``, transformed over slow time on ``n_dop`` cells;
+    back to fast time at ``rows``, each row's own stationary curvature removed
+    (:func:`row_phases`), transformed over slow time on ``n_dop`` cells;
     ``u_w`` (m/s) the hypothesis' own range rate (:func:`_hypothesis_rate`).
     """
     u_w = _hypothesis_rate(traces, delays_s)
     aligned = to_fast_time(spectrum * delay_phase(delays_s, traces.frequencies_hz))[:, rows]
-    return u_w, np.fft.fft(aligned, n=n_dop, axis=0)
+    return u_w, np.fft.fft(aligned * row_phases(traces, rows), n=n_dop, axis=0)
 
 
 def _hypothesis_power(
@@ -337,6 +395,7 @@ class _Bank:
         self.frequencies_hz = np.fft.ifftshift(traces.frequencies_hz)
         # to_fast_time(y)[:, r] = ifft(ifftshift(y))[:, (r - m // 2) % m] (fftshift's roll)
         self.rows = (np.asarray(rows) - m // 2) % m
+        self.phases = row_phases(traces, rows)  # (n_pulses, rows)
         self.n_pulses = traces.n_pulses
         # the slow-time transform's input, zero-padded to n_dop (pulses first, then zeros)
         self._padded = np.zeros((len(rows), n_dop), dtype=np.complex128)
@@ -345,6 +404,7 @@ class _Bank:
         """``|X|^2`` of the hypothesis of ``delays_s`` into ``out`` (rows, n_dop)."""
         shifted = self.spectrum * delay_phase(delays_s, self.frequencies_hz)
         aligned = np.fft.ifft(shifted, axis=-1)[:, self.rows]
+        aligned *= self.phases
         padded = self._padded
         padded[:, : self.n_pulses] = aligned.T
         padded[:, self.n_pulses :] = 0.0
@@ -362,6 +422,8 @@ def defocus_scan(
     false_alarm_rate: float,
     max_candidates: int = 8,
     threshold_db: float | None = None,
+    within_mps: float | None = None,
+    cells_tested: int | None = None,
 ) -> DefocusScan:
     """Cells of the cross-range-speed bank that noise and stationary smears cannot explain.
 
@@ -384,6 +446,12 @@ def defocus_scan(
     threshold_db : float, optional
         The screen's level over the interference (dB), overriding that of
         ``false_alarm_rate`` (to measure the candidates' null below it).
+    within_mps : float, optional
+        Only the bank's hypotheses ``|w| <= within_mps`` (m/s): a longer aperture's search
+        under a shorter one's first step (:mod:`~sarmotion.pipeline.defocused`).
+    cells_tested : int, optional
+        The union bound's ``N``: this bank's cells and those of the banks tested beside
+        it at the same ``false_alarm_rate`` (:func:`screen_cells`); default this bank's.
 
     Returns
     -------
@@ -391,11 +459,10 @@ def defocus_scan(
     """
     if not 0.0 < false_alarm_rate < 1.0:
         raise ValueError(f"false_alarm_rate must be in (0, 1), got {false_alarm_rate!r}")
-    speeds = cross_speed_bank(traces, max_speed_mps)
+    speeds = cross_speed_bank(traces, max_speed_mps, within_mps=within_mps)
     n_p = traces.n_pulses
     n_dop = _doppler_cells(n_p)
     prf = 1.0 / float(np.median(np.diff(traces.slow_times_s)))
-    lam = C / traces.radar.carrier_hz
     doppler = np.fft.fftfreq(n_dop, d=1.0 / prf)
     t = traces.fast_times_s
     rows = np.flatnonzero(np.abs(t) <= half_span_s)
@@ -415,10 +482,9 @@ def defocus_scan(
     zero = int(np.argmin(np.abs(speeds)))
     moving = np.ones(speeds.size, bool)
     moving[zero] = False
-    # independent cells: range resolutions within the span, Doppler resolutions in the band
-    range_cells = max(1.0, 2.0 * half_span_s * traces.radar.bandwidth_hz)
-    dop_cells = max(1.0, 2.0 * band_mps / (0.5 * lam * prf / n_p))
-    n_cells = int(np.ceil(range_cells * dop_cells * moving.sum()))
+    n_cells = screen_cells(traces, speeds, band_mps=band_mps, half_span_s=half_span_s)
+    if cells_tested is not None:
+        n_cells = max(n_cells, int(cells_tested))
     level = np.log(n_cells / false_alarm_rate)
     if threshold_db is not None:
         level = 10.0 ** (float(threshold_db) / 10.0)

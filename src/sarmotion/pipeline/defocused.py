@@ -73,7 +73,13 @@ from ..motion import (
 )
 from ..motion.acceleration import HOLD_COHERENCE, uniform_start_holds
 from ..motion.aperture import ranges_m
-from ..motion.defocus import DefocusCandidate, DefocusScan, echo_residue
+from ..motion.defocus import (
+    DefocusCandidate,
+    DefocusScan,
+    cross_speed_bank,
+    echo_residue,
+    screen_cells,
+)
 from ..motion.detector import peak_statistics
 from ..motion.likelihood import noise_variance
 from ..motion.range_speed import range_speed_objective
@@ -98,6 +104,7 @@ __all__ = [
     "search_data",
     "stationary_near",
     "test_candidate",
+    "wide_pulses",
 ]
 
 #: Echoes rejected after which a bank's remaining candidates are not tried.
@@ -360,41 +367,129 @@ def test_candidate(
     return replace(test, joint_ratio=abs(joint) / max(abs(fit.amplitude), 1e-300))
 
 
-def search_data(detection: DetectionResult, accepted: Sequence[PointFit] = ()) -> NDArray:
+def wide_pulses(detection: DetectionResult) -> slice | None:
+    """The pulses of the wide search: twice the central sub-aperture, about its middle.
+
+    ``e = min(start, n - stop, (stop - start) // 2)`` pulses either side of the central
+    sub-aperture ``start:stop`` of ``n``, so the two share their middle pulse and their
+    ``s = 0`` (:meth:`~sarmotion.core.Traces.select_pulses`): a fit on either is a fit on
+    the other. None where the data hold no pulse beyond the central sub-aperture.
+    """
+    c, n = detection.central, detection.traces.n_pulses
+    e = min(c.start, n - c.stop, (c.stop - c.start) // 2)
+    return slice(c.start - e, c.stop + e) if e > 0 else None
+
+
+def search_data(
+    detection: DetectionResult, accepted: Sequence[PointFit] = (), pulses: slice | None = None
+) -> NDArray:
     """The data the bank searches: ``D`` of the central sub-aperture less accepted movers.
 
     The accepted movers' models (at full amplitude on ``D``) are subtracted; the
     stationary points stay, their smears tested against by the screen and their
     explanations by :meth:`CandidateTest.stationary` (removing them first, as the
     combined separation does, also removes up to half of a defocused mover, whose smear
-    it partly takes for stationary points).
+    it partly takes for stationary points). ``pulses``: another span sharing the central
+    sub-aperture's ``s = 0`` (:func:`wide_pulses`) instead of it.
     """
-    sub = detection.sub
+    sub = detection.sub if pulses is None else _pulses(detection, pulses)
     data = np.array(sub.data, dtype=np.complex128)
     for f in accepted:
         data -= point_model(sub, f.position_m, f.velocity_mps, f.amplitude)
     return data
 
 
+def _pulses(detection: DetectionResult, pulses: slice) -> Traces:
+    return detection.traces.select_pulses(pulses.start, pulses.stop)
+
+
 def scan_detection(
-    detection: DetectionResult, data: Traces, *, threshold_db: float | None = None
+    detection: DetectionResult,
+    data: Traces,
+    *,
+    threshold_db: float | None = None,
+    within_mps: float | None = None,
+    cells_tested: int | None = None,
 ) -> DefocusScan:
     """The bank on ``data`` over the detection's stationary band and its image's range span.
 
-    ``threshold_db`` overrides the screen's level (:func:`~sarmotion.motion.defocus_scan`).
+    ``threshold_db`` overrides the screen's level; ``within_mps`` limits the bank to
+    ``|w| <= within_mps`` and ``cells_tested`` is the union bound's count of cells
+    (:func:`~sarmotion.motion.defocus_scan`).
     """
+    return defocus_scan(
+        data,
+        **_bank_span(detection),
+        false_alarm_rate=detection.options.false_alarm_rate,
+        max_candidates=64,
+        threshold_db=threshold_db,
+        within_mps=within_mps,
+        cells_tested=cells_tested,
+    )
+
+
+def _bank_span(detection: DetectionResult) -> dict[str, float]:
+    """The bank's speeds, band and range span of the detection (m/s, m/s, s)."""
     opts = detection.options
     x0, x1, y0, y1 = detection.image.grid.extent
     half_diagonal = 0.5 * float(np.hypot(x1 - x0, y1 - y0))
-    return defocus_scan(
-        data,
-        max_speed_mps=float(max(abs(v) for v in opts.speed_range_mps)),
-        band_mps=float(detection.candidates.min_speed_mps),
-        half_span_s=2.0 * half_diagonal / C,
-        false_alarm_rate=opts.false_alarm_rate,
-        max_candidates=64,
-        threshold_db=threshold_db,
+    return {
+        "max_speed_mps": float(max(abs(v) for v in opts.speed_range_mps)),
+        "band_mps": float(detection.candidates.min_speed_mps),
+        "half_span_s": 2.0 * half_diagonal / C,
+    }
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Search:
+    """One aperture the bank searches: its traces, data left, first step and bank limit."""
+
+    traces: Traces
+    data: NDArray
+    step_mps: float
+    within_mps: float | None
+
+    def scan(self, detection: DetectionResult, cells: int) -> DefocusScan:
+        return scan_detection(
+            detection,
+            self.traces.with_data(self.data),
+            within_mps=self.within_mps,
+            cells_tested=cells,
+        )
+
+
+def _searches(detection: DetectionResult, accepted: Sequence[PointFit]) -> list[_Search]:
+    """The central sub-aperture's bank and, where the data are longer, the wide one's.
+
+    The central bank's first step ``w_1`` is where a degree's quadratic phase first
+    tells a mover from a stationary point (:data:`~sarmotion.motion.defocus.
+    EDGE_PHASE_STEP_RAD`); movers slower across the line of sight than that are
+    sought over the wide span (:func:`wide_pulses`), whose steps are about a quarter as
+    large (the edge phase grows with the aperture's square), at ``|w| <= w_1`` only.
+    """
+    span = _bank_span(detection)
+    sub = detection.sub
+    central = cross_speed_bank(sub, span["max_speed_mps"])
+    step = float(np.min(np.abs(central[central != 0.0])))
+    out = [
+        _Search(traces=sub, data=search_data(detection, accepted), step_mps=step, within_mps=None)
+    ]
+    wide = wide_pulses(detection)
+    if wide is None:
+        return out
+    tr = _pulses(detection, wide)
+    fine = cross_speed_bank(tr, span["max_speed_mps"], within_mps=step)
+    if not np.any(fine != 0.0):
+        return out
+    out.append(
+        _Search(
+            traces=tr,
+            data=search_data(detection, accepted, wide),
+            step_mps=float(np.min(np.abs(fine[fine != 0.0]))),
+            within_mps=step,
+        )
     )
+    return out
 
 
 def distinct_echoes(scan: DefocusScan, data: Traces) -> list[list[DefocusCandidate]]:
@@ -453,45 +548,60 @@ def defocused_movers(
     """
     opts = detection.options
     sub = detection.sub
-    data = search_data(detection, accepted)
+    searches = _searches(detection, accepted)
+    span = _bank_span(detection)
+    cells = sum(
+        screen_cells(
+            a.traces,
+            cross_speed_bank(a.traces, span["max_speed_mps"], within_mps=a.within_mps),
+            band_mps=span["band_mps"],
+            half_span_s=span["half_span_s"],
+        )
+        for a in searches
+    )
     out: list[tuple[PointFit, MoverEvidence]] = []
     taken: list[DefocusCandidate] = []
     cell_s = 1.0 / sub.radar.bandwidth_hz
     res_u = range_speed_resolution(sub)
     band = float(detection.candidates.min_speed_mps)  # the bank's, scan_detection
     while len(out) < max_movers:
-        here = sub.with_data(data)
-        scan = scan_detection(detection, here)
-        step = float(np.min(np.abs(scan.speeds_mps[scan.speeds_mps != 0.0])))
+        # each aperture's echoes, the strongest first over both (they share s = 0)
+        echoes = []
+        for a in searches:
+            scan = a.scan(detection, cells)
+            here = a.traces.with_data(a.data)
+            echoes += [
+                (e[0].statistic_db, i, a, here, scan, e)
+                for i, e in enumerate(distinct_echoes(scan, here))
+                if not any(_same_echo(e[0], t, cell_s, res_u) for t in taken)
+            ]
+        echoes.sort(key=lambda x: (-x[0], x[1]))
         found = None
-        echoes = [
-            e
-            for e in distinct_echoes(scan, here)
-            if not any(_same_echo(e[0], a, cell_s, res_u) for a in taken)
-        ]
-        for echo in echoes[:MAX_REJECTED]:
+        for _, _, a, here, scan, echo in echoes[:MAX_REJECTED]:
             for cell in cells_to_fit(echo):
                 test = test_candidate(
                     here,
                     cell,
-                    step,
+                    a.step_mps,
                     opts.min_focus_gain_db,
                     band_mps=band,
                     extent_m=opts.alias_free_extent_m,
                     extent_centre_m=opts.alias_free_centre_m,
                 )
                 if not test.stationary(opts.min_focus_gain_db) and test.cancels:
-                    found = test
+                    found = (test, scan)
                     break
                 _log_refusal(test)
             if found is not None:
                 break
         if found is None:
             break
+        found, scan = found
         fit = found.fit
         taken.append(found.candidate)  # what its model leaves there is not another mover
-        data -= point_model(sub, fit.position_m, fit.velocity_mps, fit.amplitude)
-        out.append((fit, _evidence(sub.with_data(data), detection, scan, found)))
+        for a in searches:
+            a.data[...] -= point_model(a.traces, fit.position_m, fit.velocity_mps, fit.amplitude)
+        out.append((fit, _evidence(sub.with_data(searches[0].data), detection, scan, found)))
         log.info(
             "defocus: mover at u_r %.2f m/s, u_p %.2f m/s (margin %.1f dB over the stationary "
             "smear, %.1f dB over its interference, %.2f of its amplitude left by the stationary "
