@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sarmotion.core import Radar, Traces, Trajectory, to_fast_time, to_frequency
+from sarmotion.core import Radar, Traces, Trajectory, delay_phase, to_fast_time, to_frequency
 from sarmotion.imaging import resolution
 from sarmotion.motion import central_sub_aperture, defocus_scan, family_member, point_model
 from sarmotion.motion.defocus import (
@@ -32,10 +32,15 @@ MOVER_AT = np.array([15.0, -10.0])
 OPTIONS = AnalysisOptions(defocus_search=True)
 
 
-def _scene(seed: int, cross_speed_mps: float | None, snr_db: float | None = None):
+def _scene(
+    seed: int,
+    cross_speed_mps: float | None,
+    snr_db: float | None = None,
+    aperture_deg: float = 1.0,
+):
     """Traces of 20 unit stationary points in +-45 m and an optional cross-range mover."""
     rng = np.random.default_rng(seed)
-    traj, radar = Trajectory.circular(), Radar()
+    traj, radar = Trajectory.circular(aperture_deg=aperture_deg), Radar()
     targets = [PointTarget(position_m=p) for p in rng.uniform(-45.0, 45.0, size=(20, 2))]
     mover = None
     if cross_speed_mps is not None:
@@ -111,6 +116,89 @@ def test_compiled_guarded_mean_is_the_cumulative_sums_bit_for_bit(n, guard):
     keep = np.abs((np.arange(n) - j + n // 2) % n - n // 2) > guard
     want = power[:, keep].astype(np.float64).sum(axis=1) / max(n - (2 * guard + 1), 1)
     np.testing.assert_allclose(out[:, 3], want, rtol=1e-5)
+
+
+@pytest.mark.parametrize(("aperture_deg", "offset_m"), [(2.0, 50.0), (2.0, -50.0), (4.0, 45.0)])
+def test_each_rows_stationary_points_focus_at_zero(aperture_deg, offset_m):
+    # A stationary point off the reference in range curves in range by about x Omega^2
+    # s^2 / 2: over two GOTCHA degrees, 50 m away, more than the bank's step. With each
+    # row's own curvature removed it focuses at w = 0, as the smear model takes it;
+    # about the reference alone (the same transform without the row phases) it would
+    # focus at another hypothesis with under half its power at w = 0.
+    from sarmotion.core.geometry import look_geometry, range_direction_velocity
+    from sarmotion.motion.defocus import _hypothesis_power, hypothesis_delays_s
+
+    traj, radar = Trajectory.circular(aperture_deg=aperture_deg), Radar()
+    at = -offset_m * range_direction_velocity(
+        1.0, look_geometry(traj, (0.0, 0.0, 0.0))
+    )  # range up by offset_m
+    ph = simulate_phase_history([PointTarget(position_m=tuple(at))], traj, radar, (0, 0, 0))
+    tr = Traces(data=to_fast_time(ph), trajectory=traj, radar=radar, reference_point_m=(0, 0, 0))
+    bank = cross_speed_bank(tr, 2.0)
+    rows = np.flatnonzero(np.abs(tr.fast_times_s - 2 * offset_m / 3e8) <= 4.0 / radar.bandwidth_hz)
+    n_dop = 2 * tr.n_pulses
+    spectrum = to_frequency(tr.data)
+    with_rows = [
+        float(_hypothesis_power(tr, spectrum, hypothesis_delays_s(tr, w), rows, n_dop)[1].max())
+        for w in bank
+    ]
+    about_ref = []
+    for w in bank:
+        aligned = to_fast_time(
+            spectrum * delay_phase(hypothesis_delays_s(tr, w), tr.frequencies_hz)
+        )
+        about_ref.append(float(np.max(np.abs(np.fft.fft(aligned[:, rows], n=n_dop, axis=0)) ** 2)))
+    zero = bank.size // 2
+    assert bank[zero] == 0.0
+    assert with_rows[zero] == max(with_rows)
+    assert about_ref[zero] < 0.5 * max(about_ref)
+
+
+@pytest.mark.parametrize("at", [(0.0, 45.0), (-35.0, -35.0)])
+def test_keystoned_stationary_points_stay_in_their_cell_and_focus_at_zero(at):
+    # Over two GOTCHA degrees a stationary point 35-45 m off in cross range walks
+    # through several range cells: a fast-time row holds it over part of the aperture
+    # only, and the row's bank peaks at another hypothesis (its power at w = 0 under
+    # 0.8 of the best). Keystoned, its range no longer walks: w = 0 is its best, and
+    # the neighbouring hypotheses read at most the smear of a quarter turn's step.
+    from sarmotion.motion.defocus import _Bank, hypothesis_delays_s
+
+    traj, radar = Trajectory.circular(aperture_deg=2.0), Radar()
+    ph = simulate_phase_history([PointTarget(position_m=at)], traj, radar, (0, 0, 0))
+    tr = Traces(data=to_fast_time(ph), trajectory=traj, radar=radar, reference_point_m=(0, 0, 0))
+    bank = cross_speed_bank(tr, 1.0)
+    rows = np.arange(tr.n_samples)
+    n_dop = 2 * tr.n_pulses
+    best = {}
+    for keystone in (False, True):
+        b = _Bank(tr, rows, n_dop, keystone=keystone)
+        out = np.empty((rows.size, n_dop), dtype=np.float32)
+        powers = []
+        for w in bank:
+            b.power(hypothesis_delays_s(tr, w), out=out)
+            powers.append(float(out.max()))
+        best[keystone] = np.asarray(powers) / max(powers)
+    zero = bank.size // 2
+    assert best[False][zero] < 0.8
+    assert best[True][zero] == 1.0
+    assert max(best[True][zero - 1], best[True][zero + 1]) < 0.95
+
+
+def test_keystone_is_the_scaled_slow_time_of_each_frequency():
+    # A tone over slow time at each frequency, sampled at s f_c / f: band-limited
+    # interpolation to -50 dB of the tone away from the ends of the aperture.
+    from sarmotion.motion.defocus import keystone_spectrum
+
+    s = np.linspace(-0.5, 0.5, 301)
+    f_c = 1e10
+    f = f_c + np.array([-3e8, 0.0, 2e8])
+    nu = 37.0  # Hz, well within the pulse rate's +-150 Hz
+    spectrum = np.exp(2j * np.pi * nu * s[:, None] * np.ones(f.size)[None, :])
+    got = keystone_spectrum(spectrum, s, f, f_c)
+    want = np.exp(2j * np.pi * nu * s[:, None] * (f_c / f)[None, :])
+    inner = np.abs(s) <= 0.4
+    assert np.max(np.abs(got[inner] - want[inner])) < 10 ** (-50 / 20)
+    np.testing.assert_allclose(got[:, 1], spectrum[:, 1], atol=1e-12)  # f = f_c: unchanged
 
 
 def test_bank_power_is_each_hypothesis_transform():
@@ -327,6 +415,35 @@ def test_no_mover_in_stationary_clutter(seed):
     tr, _, _ = _scene(seed, None, snr_db=10.0)
     result = analyze(tr, OPTIONS)
     assert result.movers == ()
+
+
+def test_a_mover_under_the_central_step_is_found_over_the_wide_span():
+    """A mover slower across the line of sight than the central degree's first step.
+
+    Over two degrees, at 0.3 m/s (0.4 of the central bank's step), a degree cannot tell
+    its range history from a stationary point's: the analysis of the central degree
+    alone finds no mover. Over the wide span (both degrees, about the same middle) its
+    quadratic phase is four times as large, and the analysis of the two degrees finds
+    it on its family.
+    """
+    from sarmotion.pipeline import detect
+    from sarmotion.pipeline.defocused import wide_pulses
+
+    tr, stationary, mover = _scene(2, 0.3, aperture_deg=2.0)
+    det = detect(tr, OPTIONS)
+    wide = wide_pulses(det)
+    c = det.central
+    assert wide is not None and wide.start + wide.stop == c.start + c.stop
+    step = float(cross_speed_bank(det.sub, 30.0)[1] - cross_speed_bank(det.sub, 30.0)[0])
+    assert 0.3 < 0.5 * step
+    assert analyze(tr.select_pulses(c.start, c.stop), OPTIONS).movers == ()
+    _assert_found_on_family(tr, analyze(tr, OPTIONS), stationary, mover)
+
+
+@pytest.mark.parametrize("seed", [13, 14])
+def test_no_mover_in_stationary_clutter_over_the_wide_span(seed):
+    tr, _, _ = _scene(seed, None, snr_db=10.0, aperture_deg=2.0)
+    assert analyze(tr, OPTIONS).movers == ()
 
 
 def test_without_the_search_the_mover_is_missed():

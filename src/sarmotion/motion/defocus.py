@@ -87,6 +87,7 @@ __all__ = [
     "echo_residue",
     "edge_phase_rad",
     "hypothesis_delays_s",
+    "keystone_spectrum",
     "row_phases",
     "screen_cells",
 ]
@@ -376,6 +377,74 @@ def _hypothesis_power(
     return u_w, np.abs(values) ** 2
 
 
+#: Half-width of the keystone's interpolating kernel (pulses either side): a Lanczos
+#: kernel ``sinc(x) sinc(x / h)``, ``|x| < h``.
+KEYSTONE_HALF_TAPS = 8
+
+
+@numba.njit(nogil=True, cache=True)
+def _keystone_kernel(spectrum, index, out):  # pragma: no cover - compiled
+    """``out[j, k] = sum_m L(index[j, k] - m) spectrum[m, k]``, ``L`` the Lanczos kernel."""
+    n_p, n_f = spectrum.shape
+    h = KEYSTONE_HALF_TAPS
+    for j in range(n_p):
+        for k in range(n_f):
+            x = index[j, k]
+            if x < 0.0 or x > n_p - 1:
+                out[j, k] = 0.0
+                continue
+            i0 = int(np.floor(x))
+            acc = 0.0 + 0.0j
+            for m in range(max(i0 - h + 1, 0), min(i0 + h + 1, n_p)):
+                d = x - m
+                if d == 0.0:
+                    w = 1.0
+                else:
+                    a = np.pi * d
+                    w = np.sin(a) / a * np.sin(a / h) / (a / h)
+                acc += w * spectrum[m, k]
+            out[j, k] = acc
+
+
+def keystone_spectrum(
+    spectrum: NDArray, slow_times_s: NDArray, frequencies_hz: NDArray, carrier_hz: float
+) -> NDArray[np.complex128]:
+    """The data over frequency with each frequency's slow time scaled by ``f_c / f``.
+
+    ``D_k(f, s) = D(f, s f_c / f)``, by band-limited interpolation over the pulses
+    (:data:`KEYSTONE_HALF_TAPS`; zero where ``s f_c / f`` is beyond the first or last
+    pulse). A target of range ``r_0 + u s`` has the phase ``exp(-4i pi f (r_0 + u s) / c)``
+    over frequency ``f``: its range moves by ``u T`` over the aperture. Keystoned, its
+    linear term is ``f_c u s`` at every frequency: it stays in its fast-time cell,
+    whatever ``u`` (the keystone transform). The slow-time samples must hold the
+    Doppler unaliased (the data referenced within the scene, as the analysis does).
+
+    Parameters
+    ----------
+    spectrum : (n_pulses, n_freq) ndarray
+        The data over frequency.
+    slow_times_s : (n_pulses,) ndarray
+        Pulse times (s), increasing.
+    frequencies_hz : (n_freq,) ndarray
+        Absolute frequencies of the columns (Hz).
+    carrier_hz : float
+        ``f_c`` (Hz).
+
+    Returns
+    -------
+    (n_pulses, n_freq) ndarray
+    """
+    s = np.asarray(slow_times_s, dtype=np.float64)
+    f = np.asarray(frequencies_hz, dtype=np.float64)
+    source = s[:, None] * (float(carrier_hz) / f)[None, :]
+    index = np.interp(source.ravel(), s, np.arange(s.size, dtype=np.float64), left=-1.0, right=-1.0)
+    out = np.empty(np.shape(spectrum), dtype=np.complex128)
+    _keystone_kernel(
+        np.ascontiguousarray(spectrum, dtype=np.complex128), index.reshape(source.shape), out
+    )
+    return out
+
+
 class _Bank:
     """The bank's transforms of one set of traces: ``|X|^2`` of a hypothesis, (rows, n_dop).
 
@@ -385,14 +454,22 @@ class _Bank:
     own order (``ifftshift``, once), so a hypothesis needs no reordering copies of the
     whole array; only the searched fast-time rows are kept after the inverse transform;
     and the slow-time transform runs along the last axis of the rows (contiguous), its
-    power written straight into the bank's map.
+    power written straight into the bank's map. With ``keystone`` the spectrum is first
+    keystoned (:func:`keystone_spectrum`): the transforms of the wide search, whose stationary
+    points cross several fast-time cells over the aperture.
     """
 
-    def __init__(self, traces: Traces, rows: NDArray[np.int64], n_dop: int) -> None:
+    def __init__(
+        self, traces: Traces, rows: NDArray[np.int64], n_dop: int, *, keystone: bool = False
+    ) -> None:
         m = traces.n_samples
         # to_frequency(x) = fftshift(fft(ifftshift(x))): its ifftshift is fft(ifftshift(x))
         self.spectrum = np.fft.fft(np.fft.ifftshift(np.asarray(traces.data), axes=-1), axis=-1)
         self.frequencies_hz = np.fft.ifftshift(traces.frequencies_hz)
+        if keystone:
+            self.spectrum = keystone_spectrum(
+                self.spectrum, traces.slow_times_s, self.frequencies_hz, traces.radar.carrier_hz
+            )
         # to_fast_time(y)[:, r] = ifft(ifftshift(y))[:, (r - m // 2) % m] (fftshift's roll)
         self.rows = (np.asarray(rows) - m // 2) % m
         self.phases = row_phases(traces, rows)  # (n_pulses, rows)
@@ -424,6 +501,7 @@ def defocus_scan(
     threshold_db: float | None = None,
     within_mps: float | None = None,
     cells_tested: int | None = None,
+    keystone: bool = False,
 ) -> DefocusScan:
     """Cells of the cross-range-speed bank that noise and stationary smears cannot explain.
 
@@ -452,6 +530,10 @@ def defocus_scan(
     cells_tested : int, optional
         The union bound's ``N``: this bank's cells and those of the banks tested beside
         it at the same ``false_alarm_rate`` (:func:`screen_cells`); default this bank's.
+    keystone : bool
+        Keystone the data first (:func:`keystone_spectrum`): each stationary point stays
+        in its fast-time cell over the aperture, which the screen's smear model takes
+        (the wide search, over which they cross several).
 
     Returns
     -------
@@ -466,7 +548,7 @@ def defocus_scan(
     doppler = np.fft.fftfreq(n_dop, d=1.0 / prf)
     t = traces.fast_times_s
     rows = np.flatnonzero(np.abs(t) <= half_span_s)
-    bank = _Bank(traces, rows, n_dop)
+    bank = _Bank(traces, rows, n_dop, keystone=keystone)
     u_w = np.empty(speeds.size)
     maps = np.empty((speeds.size, rows.size, n_dop), dtype=np.float32)
     smears = np.empty((speeds.size, n_dop), dtype=np.float64)

@@ -410,12 +410,13 @@ def scan_detection(
     threshold_db: float | None = None,
     within_mps: float | None = None,
     cells_tested: int | None = None,
+    keystone: bool = False,
 ) -> DefocusScan:
     """The bank on ``data`` over the detection's stationary band and its image's range span.
 
     ``threshold_db`` overrides the screen's level; ``within_mps`` limits the bank to
-    ``|w| <= within_mps`` and ``cells_tested`` is the union bound's count of cells
-    (:func:`~sarmotion.motion.defocus_scan`).
+    ``|w| <= within_mps``, ``cells_tested`` is the union bound's count of cells and
+    ``keystone`` keystones the data first (:func:`~sarmotion.motion.defocus_scan`).
     """
     return defocus_scan(
         data,
@@ -425,6 +426,7 @@ def scan_detection(
         threshold_db=threshold_db,
         within_mps=within_mps,
         cells_tested=cells_tested,
+        keystone=keystone,
     )
 
 
@@ -455,6 +457,7 @@ class _Search:
             self.traces.with_data(self.data),
             within_mps=self.within_mps,
             cells_tested=cells,
+            keystone=self.within_mps is not None,
         )
 
 
