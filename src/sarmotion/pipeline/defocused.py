@@ -44,6 +44,24 @@ amplitude: :func:`search_data`), one at a time:
    echoes were rejected (the bank ranks them by statistic, so those after are weaker
    still).
 
+**The wide search.** A mover slower across the line of sight than the central bank's
+first step ``w_1`` has, over the central sub-aperture, at most a quarter turn of
+quadratic phase against the stationary point with its range history: its fit is
+refused as a stationary point (:attr:`CandidateTest.focused_stationary`, or a focus
+gain under ``min_focus_gain_db``), and what its echo leaves in the range side lobes can
+be fitted instead (a false mover 27 range cells from the echo of a 12.8 m/s mover 0.8
+m/s across the line of sight, on the square-kilometre benchmark). The quadratic phase
+grows with the aperture's square: where the data hold more pulses, the bank also
+searches ``|w| <= w_1`` over twice the central sub-aperture about the same middle pulse
+(:func:`wide_pulses`; its steps about ``w_1 / 4``), keystoned
+(:func:`~sarmotion.motion.defocus.keystone_spectrum`: over that span the band's
+stationary points walk through several range cells, which the screen's smear model does
+not take). Both banks share one union bound (the sum of their cells,
+:func:`~sarmotion.motion.defocus.screen_cells`, at the analysis's false-alarm rate);
+each round their echoes are tried together, the strongest by statistic first, each
+fitted and tested on its own span's data (the two share ``s = 0``: a fit on one is a
+fit on the other), and an accepted fit is subtracted from both.
+
 The mover stage then takes the data without the stationary targets near these movers
 (``D - L'``, :func:`~sarmotion.pipeline.refit.data_without_stationary`) as their moving
 traces, since ``S`` holds little of them.
