@@ -48,9 +48,10 @@ amplitude: :func:`search_data`), one at a time:
 first step ``w_1`` has, over the central sub-aperture, at most a quarter turn of
 quadratic phase against the stationary point with its range history: its fit is
 refused as a stationary point (:attr:`CandidateTest.focused_stationary`, or a focus
-gain under ``min_focus_gain_db``), and what its echo leaves in the range side lobes can
-be fitted instead (a false mover 27 range cells from the echo of a 12.8 m/s mover 0.8
-m/s across the line of sight, on the square-kilometre benchmark). The quadratic phase
+gain under ``min_focus_gain_db``), and a weak fit that comes with its echo can be
+accepted instead (on the square-kilometre benchmark, a false mover 27 range cells from
+the echo of a 12.8 m/s mover 0.8 m/s across the line of sight, gone once that echo is
+subtracted). The quadratic phase
 grows with the aperture's square: where the data hold more pulses, the bank also
 searches ``|w| <= w_1`` over twice the central sub-aperture about the same middle pulse
 (:func:`wide_pulses`; its steps about ``w_1 / 4``), keystoned
