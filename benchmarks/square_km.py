@@ -21,7 +21,9 @@ half the speed), white noise of -20 dB per phase-history sample of a unit point.
 The file is simulated in one process (``simulation.echoes.point_echoes``) and written by
 the block writer; the analysis runs in a process of its own, so that its peak RSS
 (``ru_maxrss``) is the analysis's: ``analyze_collection`` over ``open_cphd_blocks`` with
-``CollectionOptions()`` and the default workers (one thread per core). Reported: wall
+``CollectionOptions()`` and the default workers (one thread per core; with
+``--wide-defocus-search`` the defocus search's wide span too, its rows marked "(wide)").
+Reported: wall
 time, the process's CPU time (user + system, all threads), peak RSS, the plan (patches,
 pulses kept per patch), movers found accurate on their families (``look_azimuth.py``'s
 rule: range within 3 ground-range cells, range speed within 0.5 m/s), false movers, the
@@ -34,6 +36,7 @@ table to ``square_km.md``.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import resource
 import subprocess
@@ -122,7 +125,12 @@ def analyse(args: argparse.Namespace, path: Path) -> dict:
 
     cpu0 = time.process_time()
     t0 = time.perf_counter()
-    result = analyze_collection(open_cphd_blocks(path), CollectionOptions(), progress=progress)
+    opts = CollectionOptions()
+    if args.wide_defocus_search:
+        opts = dataclasses.replace(
+            opts, analysis=dataclasses.replace(opts.analysis, wide_defocus_search=True)
+        )
+    result = analyze_collection(open_cphd_blocks(path), opts, progress=progress)
     wall = time.perf_counter() - t0
     cpu = time.process_time() - cpu0
     rss_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -137,6 +145,7 @@ def analyse(args: argparse.Namespace, path: Path) -> dict:
     kept = sorted(int(p.pulses.size) for p in plan.patches)
     return {
         "label": args.label,
+        "wide_defocus_search": bool(args.wide_defocus_search),
         "side_m": args.side,
         "azimuth_deg": args.azimuth,
         "oversample": args.oversample,
@@ -182,7 +191,8 @@ def table(rows: list[dict]) -> str:
     for r in rows:
         kept = "/".join(str(v) for v in r["pulses_kept"])
         lines.append(
-            f"| {r.get('label', '')} | {r['side_m']:g} | {r['azimuth_deg']:g} "
+            f"| {r.get('label', '')}{' (wide)' if r.get('wide_defocus_search') else ''} "
+            f"| {r['side_m']:g} | {r['azimuth_deg']:g} "
             f"| {r['oversample']:g} | {r['n_pulses']} x {r['n_samples']} "
             f"| {r['patches']} ({r['patches_beyond']}) | {kept} "
             f"| {r['movers_found']}/{r['movers']} | {r['false_movers']} "
@@ -224,6 +234,11 @@ def main() -> None:
     parser.add_argument(
         "--label", default="", help="the code's name in the table (e.g. a commit); rows by it"
     )
+    parser.add_argument(
+        "--wide-defocus-search",
+        action="store_true",
+        help="the defocus search also over twice the central degree (not the default)",
+    )
     parser.add_argument("--analyse-only", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
@@ -241,7 +256,7 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     store = args.out / "square_km.json"
     rows = json.loads(store.read_text()) if store.exists() else []
-    key = ("label", "side_m", "azimuth_deg", "oversample", "seed")
+    key = ("label", "wide_defocus_search", "side_m", "azimuth_deg", "oversample", "seed")
     rows = [r for r in rows if tuple(r.get(k, "") for k in key) != tuple(row[k] for k in key)] + [
         row
     ]

@@ -30,6 +30,7 @@ from sarmotion.simulation import PointTarget, add_noise, simulate_phase_history
 
 MOVER_AT = np.array([15.0, -10.0])
 OPTIONS = AnalysisOptions(defocus_search=True)
+WIDE = AnalysisOptions(defocus_search=True, wide_defocus_search=True)
 
 
 def _scene(
@@ -422,28 +423,30 @@ def test_a_mover_under_the_central_step_is_found_over_the_wide_span():
 
     Over two degrees, at 0.3 m/s (0.4 of the central bank's step), a degree cannot tell
     its range history from a stationary point's: the analysis of the central degree
-    alone finds no mover. Over the wide span (both degrees, about the same middle) its
-    quadratic phase is four times as large, and the analysis of the two degrees finds
-    it on its family.
+    alone finds no mover, nor does the default analysis of both degrees (no wide
+    search). Over the wide span (both degrees, about the same middle) its quadratic
+    phase is four times as large, and the analysis with the wide search finds it on its
+    family.
     """
     from sarmotion.pipeline import detect
     from sarmotion.pipeline.defocused import wide_pulses
 
     tr, stationary, mover = _scene(2, 0.3, aperture_deg=2.0)
-    det = detect(tr, OPTIONS)
+    det = detect(tr, WIDE)
     wide = wide_pulses(det)
     c = det.central
     assert wide is not None and wide.start + wide.stop == c.start + c.stop
     step = float(cross_speed_bank(det.sub, 30.0)[1] - cross_speed_bank(det.sub, 30.0)[0])
     assert 0.3 < 0.5 * step
     assert analyze(tr.select_pulses(c.start, c.stop), OPTIONS).movers == ()
-    _assert_found_on_family(tr, analyze(tr, OPTIONS), stationary, mover)
+    assert analyze(tr, OPTIONS).movers == ()
+    _assert_found_on_family(tr, analyze(tr, WIDE), stationary, mover)
 
 
 @pytest.mark.parametrize("seed", [13, 14])
 def test_no_mover_in_stationary_clutter_over_the_wide_span(seed):
     tr, _, _ = _scene(seed, None, snr_db=10.0, aperture_deg=2.0)
-    assert analyze(tr, OPTIONS).movers == ()
+    assert analyze(tr, WIDE).movers == ()
 
 
 def test_without_the_search_the_mover_is_missed():

@@ -199,3 +199,29 @@ def test_the_alias_free_extent_options_are_checked_and_recorded_only_when_given(
         AnalysisOptions(alias_free_centre_m=(1.0, 2.0, 3.0))
     with pytest.raises(ValueError, match="alias_free_centre_m"):
         AnalysisOptions(alias_free_centre_m=(np.nan, 2.0))
+
+
+def test_the_wide_defocus_search_is_recorded_only_when_on():
+    # Off (the default) it is left out, as documents were before the option; on, the
+    # results schema's analysis options admit it as a boolean, not required.
+    from sarmotion.documents.schema import load_schema
+    from sarmotion.pipeline import AnalysisOptions
+
+    assert "wide_defocus_search" not in AnalysisOptions().to_dict()
+    assert AnalysisOptions(wide_defocus_search=True).to_dict()["wide_defocus_search"] is True
+
+    def holders(node):
+        if isinstance(node, dict):
+            if "defocus_search" in node.get("properties", {}):
+                yield node
+            for v in node.values():
+                yield from holders(v)
+        elif isinstance(node, list):
+            for v in node:
+                yield from holders(v)
+
+    found = list(holders(load_schema("sarmotion.results/3")))
+    assert found
+    for node in found:
+        assert node["properties"]["wide_defocus_search"]["type"] == "boolean"
+        assert "wide_defocus_search" not in node.get("required", [])

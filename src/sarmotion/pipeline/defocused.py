@@ -496,7 +496,7 @@ def _searches(detection: DetectionResult, accepted: Sequence[PointFit]) -> list[
     out = [
         _Search(traces=sub, data=search_data(detection, accepted), step_mps=step, within_mps=None)
     ]
-    wide = wide_pulses(detection)
+    wide = wide_pulses(detection) if detection.options.wide_defocus_search else None
     if wide is None:
         return out
     tr = _pulses(detection, wide)

@@ -89,6 +89,15 @@ class AnalysisOptions:
         candidate of three seeds' null scenes
         (``benchmarks/results/detector_null_defocus.md``), and on the movers' benchmark
         it finds the same movers as without it (``movers_accuracy_defocus.md``).
+    wide_defocus_search : bool
+        Whether the defocus search also looks over twice the central sub-aperture, under
+        its bank's first step, where the data hold the pulses (the wide search,
+        :mod:`sarmotion.pipeline.defocused`): movers slower across the line of sight than
+        a degree can tell from a stationary point. Default ``False``: on the real
+        GOTCHA degrees cut into 30 m patches it declared movers at 0.3-0.8 m/s across
+        the line of sight where none is known (the bright targets of a real scene are
+        not points over two degrees), while on simulated point scenes it finds the
+        movers a degree misses (``benchmarks/results/square_km.md``).
     joint_rounds : int
         Rounds of joint maximum-likelihood refinement of all movers, each with the
         others' fitted traces subtracted (>= 0). Default 2.
@@ -152,6 +161,7 @@ class AnalysisOptions:
     max_peak_width: float = 2.5
     min_focus_gain_db: float = 1.0
     defocus_search: bool = True
+    wide_defocus_search: bool = False
     joint_rounds: int = 2
     stationary_threshold_db: float = -20.0
     max_stationary: int = 100
@@ -241,6 +251,8 @@ class AnalysisOptions:
             del d["stationary_speed_mps"]
         if self.alias_free_extent_m is None:  # the traces' own: recorded as before
             del d["alias_free_extent_m"]
+        if not self.wide_defocus_search:  # the default: recorded as before
+            del d["wide_defocus_search"]
         if self.alias_free_centre_m is None:
             del d["alias_free_centre_m"]
         else:
