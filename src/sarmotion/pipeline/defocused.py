@@ -52,8 +52,10 @@ gain under ``min_focus_gain_db``), and a weak fit that comes with its echo can b
 accepted instead (on the square-kilometre benchmark, a false mover 27 range cells from
 the echo of a 12.8 m/s mover 0.8 m/s across the line of sight, gone once that echo is
 subtracted). The quadratic phase
-grows with the aperture's square: where the data hold more pulses, the bank also
-searches ``|w| <= w_1`` over twice the central sub-aperture about the same middle pulse
+grows with the aperture's square: with ``wide_defocus_search`` (off by default:
+:class:`~sarmotion.pipeline.AnalysisOptions` says why), where the data hold more pulses,
+the bank also searches ``|w| <= w_1`` over twice the central sub-aperture about the same
+middle pulse
 (:func:`wide_pulses`; its steps about ``w_1 / 4``), keystoned
 (:func:`~sarmotion.motion.defocus.keystone_spectrum`: over that span the band's
 stationary points walk through several range cells, which the screen's smear model does
