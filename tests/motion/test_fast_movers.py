@@ -31,6 +31,7 @@ from sarmotion.motion import (
     duplicate_fits,
     family_member,
     fit_point_mover,
+    point_model,
     range_speed_resolution,
     refine_on_aperture,
 )
@@ -145,6 +146,37 @@ def test_the_same_range_history_is_one_mover():
     other_v = ground_velocity(fit.range_speed_mps + 0.5, fit.cross_range_speed_mps, geom)
     other = _fit_like(fit, fit.position_m, other_v, geom, fit.amplitude)
     assert duplicate_fits(tr, [fit, other]) == []
+
+
+def test_a_fit_at_a_strong_movers_range_speed_alias_is_its_echo():
+    """Two range-speed periods ``lambda PRF / 2`` away, at the same position.
+
+    The alias's model has the mover's phase at every pulse and parts from its envelope
+    by a cell in ``(c / 2B) / (2 lambda PRF / 2)`` of slow time: the mover's echo reads
+    a share ``rho`` of its amplitude there (the least-squares projection, computed here
+    from the two models). A weaker fit at the alias under twice that is the mover's
+    echo and is dropped; one above it, or the same amplitude 0.3 m/s off the alias (its
+    phase turning against the mover's), is another mover.
+    """
+    sim = fast_mover_scene(1060, 1.0, 0)
+    tr, truth = sim.traces, sim.scene.moving[0]
+    geom = tr.geometry
+    fit = fit_point_mover(tr, range_speed(truth.velocity_mps, geom))
+    prf = 1.0 / float(np.median(np.diff(tr.slow_times_s)))
+    period = 0.5 * tr.radar.wavelength_m * prf
+    v_alias = ground_velocity(fit.range_speed_mps + 2 * period, fit.cross_range_speed_mps, geom)
+    m = point_model(tr, fit.position_m, fit.velocity_mps, 1.0).ravel()
+    m_alias = point_model(tr, fit.position_m, v_alias, 1.0).ravel()
+    rho = abs(np.vdot(m_alias, m)) / np.vdot(m_alias, m_alias).real
+    assert 0.01 < rho < 0.5  # the envelopes part over the aperture; the phases agree
+    a = abs(fit.amplitude)
+    weak = _fit_like(fit, fit.position_m, v_alias, geom, 1.5 * rho * a)
+    assert duplicate_fits(tr, [fit, weak]) == [1]
+    strong = _fit_like(fit, fit.position_m, v_alias, geom, 2.5 * rho * a)
+    assert duplicate_fits(tr, [fit, strong]) == []
+    v_off = ground_velocity(fit.range_speed_mps + 2 * period + 0.3, fit.cross_range_speed_mps, geom)
+    off = _fit_like(fit, fit.position_m, v_off, geom, 1.5 * rho * a)
+    assert duplicate_fits(tr, [fit, off]) == []
 
 
 def test_two_near_equal_lobes_are_reported():

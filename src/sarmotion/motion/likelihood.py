@@ -618,8 +618,14 @@ def fit_point_mover_at(
     )
 
 
+#: A weaker fit is a stronger one's echo when its amplitude is at most this many times
+#: what that echo makes at the weaker's point model (:func:`duplicate_fits`): half its
+#: amplitude or more can be the echo.
+ECHO_MARGIN = 2.0
+
+
 def duplicate_fits(traces: Acquisition | Traces, fits: Sequence[PointFit]) -> list[int]:
-    """Indices of the fits that repeat a stronger one: the same range history.
+    """Indices of the fits that repeat a stronger one: the same range history, or its echo.
 
     Two point movers whose ranges ``|r(s) - rho - s u|`` differ by less than a
     slant-range resolution ``c / (2 B)`` at every pulse of ``traces`` are within one
@@ -627,7 +633,17 @@ def duplicate_fits(traces: Acquisition | Traces, fits: Sequence[PointFit]) -> li
     to ``g(u)`` and to the separation, and what the point model leaves of a mover
     fitted on a side lobe (whose range history differs from the main lobe's by a few
     wavelengths of curvature) follows that trace, so a second fit of it is the same
-    mover. Of such a group the fit of largest ``|amplitude|`` is kept.
+    mover. A weaker fit ``k`` is also the stronger ``j``'s when ``j``'s echo can make
+    half its amplitude or more: ``|a_k| <= ECHO_MARGIN |a_j| |<m_j, m_k>| / <m_k, m_k>``,
+    ``m`` the unit point models (:func:`point_model`): what ``j``'s echo gives the
+    least-squares amplitude of ``k``'s model, phases included. At a range-speed alias of
+    ``j`` (range rates ``lambda PRF / 2`` apart, the same range at ``s = 0``) the two
+    models' phases agree at every pulse and only their envelopes part, a cell in
+    ``(c / 2B) / |u_k - u_j|`` of slow time: a strong mover's fit at its alias there
+    reads a few percent of its amplitude, a second fit the subtraction of the first
+    leaves to ``g(u)``. Movers of other range rates turn against each other in phase
+    and read little of each other. Of each group the fit of largest ``|amplitude|`` is
+    kept.
 
     Parameters
     ----------
@@ -643,10 +659,25 @@ def duplicate_fits(traces: Acquisition | Traces, fits: Sequence[PointFit]) -> li
     cell = 0.5 * C / traces.radar.bandwidth_hz
     order = sorted(range(len(fits)), key=lambda k: -abs(fits[k].amplitude))
     histories = [ranges_m(traces, f.position_m, f.velocity_mps) for f in fits]
+    models: dict[int, NDArray[np.complex128]] = {}
+
+    def model(k: int) -> NDArray[np.complex128]:
+        if k not in models:
+            models[k] = point_model(traces, fits[k].position_m, fits[k].velocity_mps, 1.0).ravel()
+        return models[k]
+
+    def echo(j: int, k: int) -> float:
+        """``|a_j| |<m_j, m_k>| / <m_k, m_k>``: what ``j``'s echo reads in ``k``'s model."""
+        mk = model(k)
+        norm = float(np.vdot(mk, mk).real)
+        return abs(fits[j].amplitude) * abs(np.vdot(mk, model(j))) / norm if norm > 0 else 0.0
+
     kept: list[int] = []
     drop: list[int] = []
     for k in order:
-        if any(np.max(np.abs(histories[k] - histories[j])) < cell for j in kept):
+        if any(np.max(np.abs(histories[k] - histories[j])) < cell for j in kept) or any(
+            abs(fits[k].amplitude) <= ECHO_MARGIN * echo(j, k) for j in kept
+        ):
             drop.append(k)
         else:
             kept.append(k)

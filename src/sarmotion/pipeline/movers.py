@@ -12,7 +12,8 @@ central sub-aperture:
 3. **refit** (:mod:`sarmotion.pipeline.refit`): the movers at their amplitude on the
    data, a stationary estimate of the data made without them (**re-separation**), and
    each re-fitted on the data minus it; a fit that repeats a stronger one's range
-   history (:func:`~sarmotion.motion.duplicate_fits`) is the same mover and is dropped;
+   history, or that the stronger one's echo can make (a fit at its range-speed alias),
+   is the same mover and is dropped (:func:`~sarmotion.motion.duplicate_fits`);
 4. **records** (:func:`mover_record`): ``g_perp`` at each fit, the noise level around
    it, its Cramér–Rao bound and its cross-range family;
 5. **whole aperture** (:func:`~sarmotion.motion.refine_on_aperture`): for a wide
@@ -206,7 +207,7 @@ def estimate_movers(
             fits, kept, data_sub = _refit(sub, detection, separated, timings)
     drop = set(duplicate_fits(sub, fits))  # one mover is not declared twice
     if drop:
-        log.info("%d fit(s) repeat a stronger mover's range history: merged", len(drop))
+        log.info("%d fit(s) repeat a stronger mover's range history or its echo: merged", len(drop))
         keep = [k for k in range(len(fits)) if k not in drop]
         fits, separated, found, kept = (
             [x[k] for k in keep] for x in (fits, separated, found, kept)
