@@ -465,12 +465,17 @@ def _bank_span(detection: DetectionResult) -> dict[str, float]:
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _Search:
-    """One aperture the bank searches: its traces, data left, first step and bank limit."""
+    """One aperture the bank searches: its traces, data left, first step, bank limit and cells.
+
+    ``cells``: the independent cells its bank tests (:func:`~sarmotion.motion.defocus.
+    screen_cells`), summed over the searches for their shared union bound.
+    """
 
     traces: Traces
     data: NDArray
     step_mps: float
     within_mps: float | None
+    cells: int
 
     def scan(self, detection: DetectionResult, cells: int) -> DefocusScan:
         return scan_detection(
@@ -492,11 +497,18 @@ def _searches(detection: DetectionResult, accepted: Sequence[PointFit]) -> list[
     large (the edge phase grows with the aperture's square), at ``|w| <= w_1`` only.
     """
     span = _bank_span(detection)
+    screen = {"band_mps": span["band_mps"], "half_span_s": span["half_span_s"]}
     sub = detection.sub
     central = cross_speed_bank(sub, span["max_speed_mps"])
     step = float(np.min(np.abs(central[central != 0.0])))
     out = [
-        _Search(traces=sub, data=search_data(detection, accepted), step_mps=step, within_mps=None)
+        _Search(
+            traces=sub,
+            data=search_data(detection, accepted),
+            step_mps=step,
+            within_mps=None,
+            cells=screen_cells(sub, central, **screen),
+        )
     ]
     wide = wide_pulses(detection) if detection.options.wide_defocus_search else None
     if wide is None:
@@ -511,6 +523,7 @@ def _searches(detection: DetectionResult, accepted: Sequence[PointFit]) -> list[
             data=search_data(detection, accepted, wide),
             step_mps=float(np.min(np.abs(fine[fine != 0.0]))),
             within_mps=step,
+            cells=screen_cells(tr, fine, **screen),
         )
     )
     return out
@@ -573,16 +586,7 @@ def defocused_movers(
     opts = detection.options
     sub = detection.sub
     searches = _searches(detection, accepted)
-    span = _bank_span(detection)
-    cells = sum(
-        screen_cells(
-            a.traces,
-            cross_speed_bank(a.traces, span["max_speed_mps"], within_mps=a.within_mps),
-            band_mps=span["band_mps"],
-            half_span_s=span["half_span_s"],
-        )
-        for a in searches
-    )
+    cells = sum(a.cells for a in searches)
     out: list[tuple[PointFit, MoverEvidence]] = []
     taken: list[DefocusCandidate] = []
     cell_s = 1.0 / sub.radar.bandwidth_hz
@@ -600,7 +604,7 @@ def defocused_movers(
                 if not any(_same_echo(e[0], t, cell_s, res_u) for t in taken)
             ]
         echoes.sort(key=lambda x: (-x[0], x[1]))
-        found = None
+        found: tuple[CandidateTest, DefocusScan] | None = None
         for _, _, a, here, scan, echo in echoes[:MAX_REJECTED]:
             for cell in cells_to_fit(echo):
                 test = test_candidate(
@@ -620,21 +624,21 @@ def defocused_movers(
                 break
         if found is None:
             break
-        found, scan = found
-        fit = found.fit
-        taken.append(found.candidate)  # what its model leaves there is not another mover
+        test, scan = found
+        fit = test.fit
+        taken.append(test.candidate)  # what its model leaves there is not another mover
         for a in searches:
             a.data[...] -= point_model(a.traces, fit.position_m, fit.velocity_mps, fit.amplitude)
-        out.append((fit, _evidence(sub.with_data(searches[0].data), detection, scan, found)))
+        out.append((fit, _evidence(sub.with_data(searches[0].data), detection, scan, test)))
         log.info(
             "defocus: mover at u_r %.2f m/s, u_p %.2f m/s (margin %.1f dB over the stationary "
             "smear, %.1f dB over its interference, %.2f of its amplitude left by the stationary "
             "points)",
             fit.range_speed_mps,
             fit.cross_range_speed_mps,
-            found.candidate.leak_db,
-            found.candidate.statistic_db,
-            found.joint_ratio,
+            test.candidate.leak_db,
+            test.candidate.statistic_db,
+            test.joint_ratio,
         )
     return out
 
